@@ -1,0 +1,299 @@
+//! The sketch atlas: the whole height map in main memory, in metres, with a mip pyramid.
+//!
+//! Rules:
+//! - Row 0 is the southern edge; texel (i, j) is the grid node at `origin + (i·dx, j·dy)`.
+//! - Every height is finite: nodata and NaN cells are filled from valid neighbours by the loader
+//!   ([`fill`]) and counted in [`Atlas::nodata`], never passed on.
+//! - Level l of the pyramid is a 2×2 box average of level l−1, so a level-l texel's centre lies at
+//!   level-0 coordinate `2^l·i + (2^l − 1)/2`. Sampling between levels is trilinear.
+//!
+//! Rejected alternative: resampling the sketch map straight from level 0 with a wide filter. At
+//! 50 km up a 128² sketch map spans thousands of atlas texels each; a per-frame wide filter would cost
+//! milliseconds, the pyramid costs one build at load time (a third more memory).
+
+mod asc;
+pub mod fill;
+mod hgt;
+mod image;
+pub mod synthetic;
+mod xyz;
+
+use crate::error::{Error, Result};
+use glam::DVec2;
+use std::path::Path;
+
+/// Mean Earth radius (IUGG), for converting geographic cells to metres at their mid latitude.
+pub const EARTH_RADIUS_M: f64 = 6_371_008.8;
+/// Larger grids are refused rather than allocated: 2^28 cells is 1 GiB of f32 before the pyramid.
+pub const MAX_CELLS: usize = 1 << 28;
+
+/// One level of the pyramid: a row-major grid of finite heights.
+#[derive(Clone, Debug)]
+pub struct Level {
+    pub width: usize,
+    pub height: usize,
+    pub data: Vec<f32>,
+}
+
+#[derive(Clone, Debug)]
+pub struct Atlas {
+    /// Grid spacing in metres along x (east) and y (north).
+    pub dx: f64,
+    pub dy: f64,
+    /// World position of the south-west node.
+    pub origin: DVec2,
+    /// Cells that held nodata or NaN in the file and were filled.
+    pub nodata: usize,
+    pub min_m: f32,
+    pub max_m: f32,
+    /// `levels[0]` is the atlas itself.
+    pub levels: Vec<Level>,
+}
+
+/// What a file does not say about itself, from the scene.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    pub spacing_m: Option<f64>,
+    pub origin_m: Option<DVec2>,
+    pub height_scale: Option<f64>,
+    /// For 8/16-bit images: the heights that pixel values 0 and the maximum stand for.
+    pub height_range_m: Option<[f64; 2]>,
+}
+
+/// A grid as a format reader produces it, before filling and the pyramid.
+pub(crate) struct RawGrid {
+    pub width: usize,
+    pub height: usize,
+    pub dx: f64,
+    pub dy: f64,
+    /// Row-major, row 0 south. Non-finite values are nodata.
+    pub data: Vec<f32>,
+}
+
+impl RawGrid {
+    /// Checks the size against the limits before a reader allocates.
+    pub fn check_size(path: &Path, width: i64, height: i64) -> Result<(usize, usize)> {
+        if width < 2 || height < 2 {
+            return Err(Error::sketch(
+                path,
+                format!("grid is {width}×{height}; a sketch needs at least 2×2 cells"),
+            ));
+        }
+        let cells = (width as u128) * (height as u128);
+        if cells > MAX_CELLS as u128 {
+            return Err(Error::sketch(
+                path,
+                format!("grid is {width}×{height}, more than the {MAX_CELLS} cells supported"),
+            ));
+        }
+        Ok((width as usize, height as usize))
+    }
+}
+
+/// Converts a geographic cell size (degrees) to metres at `lat_deg`: (east–west, north–south).
+pub fn degrees_to_metres(cell_x_deg: f64, cell_y_deg: f64, lat_deg: f64) -> (f64, f64) {
+    let m_per_deg = EARTH_RADIUS_M * std::f64::consts::PI / 180.0;
+    let east = cell_x_deg * m_per_deg * lat_deg.to_radians().cos();
+    (east, cell_y_deg * m_per_deg)
+}
+
+impl Atlas {
+    /// Reads a sketch file, choosing the reader by its extension.
+    pub fn load(path: &Path, opts: &LoadOptions) -> Result<Atlas> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .unwrap_or_default();
+        let raw = match ext.as_str() {
+            "asc" | "grd" => asc::read(path)?,
+            "hgt" => hgt::read(path)?,
+            "png" => image::read_png(path, opts)?,
+            "tif" | "tiff" => image::read_tiff(path)?,
+            "xyz" | "csv" | "txt" => xyz::read(path)?,
+            _ => {
+                return Err(Error::sketch(
+                    path,
+                    "unknown sketch format (expected .asc, .hgt, .png, .tif, .xyz)",
+                ));
+            }
+        };
+        Atlas::from_raw(raw, opts).map_err(|e| match e {
+            Error::Invalid(reason) => Error::sketch(path, reason),
+            e => e,
+        })
+    }
+
+    /// Fills nodata, applies the scene's overrides and builds the pyramid.
+    pub(crate) fn from_raw(mut raw: RawGrid, opts: &LoadOptions) -> Result<Atlas> {
+        if let Some(s) = opts.spacing_m {
+            raw.dx = s;
+            raw.dy = s;
+        }
+        if !(raw.dx.is_finite() && raw.dy.is_finite() && raw.dx > 0.0 && raw.dy > 0.0) {
+            return Err(Error::Invalid(format!(
+                "grid spacing {} × {} m is not positive and finite",
+                raw.dx, raw.dy
+            )));
+        }
+        let scale = opts.height_scale.unwrap_or(1.0) as f32;
+        let nodata = fill::fill_nodata(&mut raw.data, raw.width, raw.height);
+        let mut min_m = f32::INFINITY;
+        let mut max_m = f32::NEG_INFINITY;
+        for h in &mut raw.data {
+            *h *= scale;
+            if !h.is_finite() {
+                return Err(Error::Invalid(format!(
+                    "height {h} overflows after height_scale {scale}"
+                )));
+            }
+            min_m = min_m.min(*h);
+            max_m = max_m.max(*h);
+        }
+        let base = Level {
+            width: raw.width,
+            height: raw.height,
+            data: raw.data,
+        };
+        Ok(Atlas {
+            dx: raw.dx,
+            dy: raw.dy,
+            origin: opts.origin_m.unwrap_or(DVec2::ZERO),
+            nodata,
+            min_m,
+            max_m,
+            levels: build_pyramid(base),
+        })
+    }
+
+    pub fn width(&self) -> usize {
+        self.levels[0].width
+    }
+    pub fn height(&self) -> usize {
+        self.levels[0].height
+    }
+    /// `d_atlas`: the smaller grid spacing, the scale of octave 1.
+    pub fn d_atlas(&self) -> f64 {
+        self.dx.min(self.dy)
+    }
+    /// World position of the north-east node.
+    pub fn max_corner(&self) -> DVec2 {
+        self.origin
+            + DVec2::new(
+                (self.width() - 1) as f64 * self.dx,
+                (self.height() - 1) as f64 * self.dy,
+            )
+    }
+
+    /// Height at a position given in level-0 texel units, at mip level `lod` (fractional ≥ 0 is
+    /// trilinear; below 0 is level 0), clamped to the edge.
+    pub fn sample_texel(&self, u: f64, v: f64, lod: f64) -> f32 {
+        let lod = lod.clamp(0.0, (self.levels.len() - 1) as f64);
+        let l0 = lod.floor() as usize;
+        let t = (lod - l0 as f64) as f32;
+        let a = self.levels[l0].bilinear_at_level(u, v, l0);
+        if t == 0.0 || l0 + 1 >= self.levels.len() {
+            return a;
+        }
+        let b = self.levels[l0 + 1].bilinear_at_level(u, v, l0 + 1);
+        a + (b - a) * t
+    }
+}
+
+impl Level {
+    /// Bilinear sample at level-0 texel coordinates (u, v), this being level `l`.
+    fn bilinear_at_level(&self, u: f64, v: f64, l: usize) -> f32 {
+        let s = (1u64 << l) as f64;
+        let off = (s - 1.0) * 0.5;
+        self.bilinear((u - off) / s, (v - off) / s)
+    }
+
+    /// Bilinear sample at this level's texel coordinates, clamped to the edge.
+    pub fn bilinear(&self, u: f64, v: f64) -> f32 {
+        let u = u.clamp(0.0, (self.width - 1) as f64);
+        let v = v.clamp(0.0, (self.height - 1) as f64);
+        let i = (u.floor() as usize).min(self.width - 2);
+        let j = (v.floor() as usize).min(self.height - 2);
+        let fu = (u - i as f64) as f32;
+        let fv = (v - j as f64) as f32;
+        let w = self.width;
+        let r0 = &self.data[j * w + i..j * w + i + 2];
+        let r1 = &self.data[(j + 1) * w + i..(j + 1) * w + i + 2];
+        let a = r0[0] + (r0[1] - r0[0]) * fu;
+        let b = r1[0] + (r1[1] - r1[0]) * fu;
+        a + (b - a) * fv
+    }
+}
+
+/// Halves until a level is 2 texels on its shorter side; odd sizes round up, clamping at the edge.
+fn build_pyramid(base: Level) -> Vec<Level> {
+    let mut levels = vec![base];
+    loop {
+        let prev = levels.last().expect("pyramid has a base");
+        if prev.width.min(prev.height) <= 2 {
+            break;
+        }
+        let (w, h) = (prev.width.div_ceil(2), prev.height.div_ceil(2));
+        let mut data = Vec::with_capacity(w * h);
+        for j in 0..h {
+            let (j0, j1) = (2 * j, (2 * j + 1).min(prev.height - 1));
+            for i in 0..w {
+                let (i0, i1) = (2 * i, (2 * i + 1).min(prev.width - 1));
+                let at = |x: usize, y: usize| prev.data[y * prev.width + x];
+                data.push(0.25 * (at(i0, j0) + at(i1, j0) + at(i0, j1) + at(i1, j1)));
+            }
+        }
+        levels.push(Level {
+            width: w,
+            height: h,
+            data,
+        });
+    }
+    levels
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ramp(w: usize, h: usize) -> Atlas {
+        let data = (0..w * h).map(|k| (k % w) as f32).collect();
+        let raw = RawGrid {
+            width: w,
+            height: h,
+            dx: 10.0,
+            dy: 10.0,
+            data,
+        };
+        Atlas::from_raw(raw, &LoadOptions::default()).unwrap()
+    }
+
+    #[test]
+    fn pyramid_keeps_a_linear_ramp_in_place_at_every_level() {
+        // A ramp h = u must sample as u at every level, or the level offsets are wrong.
+        let a = ramp(64, 64);
+        for lod in [0.0, 1.0, 2.5, 4.0] {
+            let h = a.sample_texel(20.0, 30.0, lod);
+            assert!((h - 20.0).abs() < 1e-4, "lod {lod}: {h}");
+        }
+    }
+
+    #[test]
+    fn degrees_to_metres_matches_jacksboro() {
+        let (e, n) = degrees_to_metres(0.000833333333, 0.000833333333, 36.59);
+        assert!((e - 74.4).abs() < 0.5 && (n - 92.66).abs() < 0.1, "{e} {n}");
+    }
+}
+
+impl Atlas {
+    /// A synthetic sketch (see [`synthetic::NAMES`]), `size`² nodes.
+    pub fn synthetic(name: &str, size: usize, opts: &LoadOptions) -> Result<Atlas> {
+        if !(2..=4097).contains(&size) {
+            return Err(Error::Invalid(format!(
+                "synthetic size {size} is outside 2..=4097"
+            )));
+        }
+        let spacing = opts.spacing_m.unwrap_or(synthetic::DEFAULT_SPACING_M);
+        Atlas::from_raw(synthetic::generate(name, size, spacing)?, opts)
+    }
+}

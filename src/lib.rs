@@ -1,0 +1,21 @@
+//! `terrain`: large terrains whose rough shape comes from a height map (the *sketch*) and whose
+//! fine detail is procedural, rendered by geometry image warping (Dachsbacher & Stamminger).
+//!
+//! The CPU stage of a frame, in the order data flows through it:
+//! [`atlas`] (the sketch atlas) → [`sketch_map`] → [`importance`] → [`warp`] → Φ, measured by
+//! [`quality`]; [`detail`] is the procedural model the GPU adds on top.
+
+pub mod atlas;
+pub mod camera;
+pub mod cpu_stage;
+pub mod detail;
+pub mod error;
+pub mod figures;
+pub mod importance;
+pub mod output;
+pub mod quality;
+pub mod scene;
+pub mod sketch_map;
+pub mod warp;
+
+pub use error::{Error, Result};

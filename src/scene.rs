@@ -1,0 +1,365 @@
+//! The scene file (TOML): DESIGN.md's keys and this project's additions, read strictly.
+//!
+//! Rules: an unknown key is an error naming it (serde's `deny_unknown_fields`), every number is
+//! range-checked after parsing with the key's full dotted name in the message, and relative paths
+//! resolve against the scene file's folder. Defaults live in the `Default` impls, one place each.
+
+use crate::error::{Error, Result};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    pub sketch: SketchSection,
+    pub camera: CameraSection,
+    #[serde(default)]
+    pub detail: DetailSection,
+    #[serde(default)]
+    pub warp: WarpSection,
+    #[serde(default)]
+    pub importance: ImportanceSection,
+    #[serde(default)]
+    pub render: RenderSection,
+    pub path: Option<PathSection>,
+    /// The folder relative paths resolve against; not a key.
+    #[serde(skip)]
+    pub base_dir: PathBuf,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SketchSection {
+    pub path: Option<PathBuf>,
+    pub synthetic: Option<String>,
+    pub spacing_m: Option<f64>,
+    pub origin_m: Option<[f64; 2]>,
+    pub height_scale: Option<f64>,
+    pub size: Option<usize>,
+    /// For 8/16-bit PNG sketches: the heights that pixel value 0 and the maximum stand for.
+    pub height_range_m: Option<[f64; 2]>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSection {
+    pub position: [f64; 3],
+    pub look_at: [f64; 3],
+    #[serde(default = "default_fov")]
+    pub fov_y_deg: f64,
+    #[serde(default = "default_size")]
+    pub width: u32,
+    #[serde(default = "default_size")]
+    pub height: u32,
+    /// Far distance in metres; by default the farthest corner of the sketch.
+    pub far_m: Option<f64>,
+}
+fn default_fov() -> f64 {
+    60.0
+}
+fn default_size() -> u32 {
+    512
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DetailSection {
+    pub octaves: u32,
+    pub amplitude_m: f64,
+    pub gain: f64,
+    pub seed: u32,
+    /// Octaves subtracted from the split octave: the paper's "more conservative estimate".
+    pub bias: f64,
+}
+impl Default for DetailSection {
+    fn default() -> Self {
+        DetailSection {
+            octaves: 12,
+            amplitude_m: 30.0,
+            gain: 0.5,
+            seed: 7,
+            bias: 0.5,
+        }
+    }
+}
+
+/// How the warp keeps cells from folding; see `warp.rs`.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum WarpMethod {
+    /// The paper's single row pass then column pass, nothing more.
+    Plain,
+    /// Row then column pass, with the column warps relaxed toward their common mean where cells fold.
+    Guarded,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WarpSection {
+    pub quad_px: f64,
+    pub mesh: u32,
+    /// Sketch map and warp size (128 in the paper).
+    pub size: u32,
+    pub method: WarpMethod,
+    /// Largest change of log2(importance) between neighbouring texels; 0 turns the limit off.
+    pub max_log2_step: f64,
+}
+impl Default for WarpSection {
+    fn default() -> Self {
+        WarpSection {
+            quad_px: 2.0,
+            mesh: 512,
+            size: 128,
+            method: WarpMethod::Guarded,
+            max_log2_step: 0.0,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ImportanceSection {
+    /// I_v: view distance. Off: uniform.
+    pub view: bool,
+    /// S_f: the frustum with its safety margin.
+    pub frustum: bool,
+    /// S_b: back-facing slopes.
+    pub backface: bool,
+    /// I_s: the surface's upper bound, samples per metre, scene-wide.
+    pub max_per_m: Option<f64>,
+    /// I_s from a map over the sketch (any sketch format; values in samples per metre).
+    pub max_map: Option<PathBuf>,
+    /// I_floor as a fraction of the least importance of a visible texel.
+    pub floor: f64,
+    /// S_b's floor on back-facing slopes.
+    pub backface_floor: f64,
+}
+impl Default for ImportanceSection {
+    fn default() -> Self {
+        ImportanceSection {
+            view: true,
+            frustum: true,
+            backface: true,
+            max_per_m: None,
+            max_map: None,
+            floor: 0.1,
+            backface_floor: 0.15,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    Warped,
+    Geomipmap,
+    Bruteforce,
+    Reference,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RenderSection {
+    pub mode: Mode,
+}
+impl Default for RenderSection {
+    fn default() -> Self {
+        RenderSection { mode: Mode::Warped }
+    }
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PathSection {
+    #[serde(default = "default_speed")]
+    pub speed_mps: f64,
+    pub keys: Vec<PathKey>,
+}
+fn default_speed() -> f64 {
+    150.0
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PathKey {
+    pub position: [f64; 3],
+    pub look_at: Option<[f64; 3]>,
+}
+
+impl Scene {
+    pub fn load(path: &Path) -> Result<Scene> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
+        Scene::parse(&text, base).map_err(|reason| Error::Scene {
+            path: path.to_path_buf(),
+            reason,
+        })
+    }
+
+    /// Parses and checks a scene; the error is one line naming the key.
+    pub fn parse(text: &str, base_dir: PathBuf) -> std::result::Result<Scene, String> {
+        let mut scene: Scene = toml::from_str(text).map_err(|e| {
+            let line = e
+                .span()
+                .map(|s| format!("line {}: ", text[..s.start].matches('\n').count() + 1))
+                .unwrap_or_default();
+            format!("{line}{}", e.message().replace('\n', " "))
+        })?;
+        scene.base_dir = base_dir;
+        scene.check()?;
+        Ok(scene)
+    }
+
+    pub fn resolve(&self, p: &Path) -> PathBuf {
+        self.base_dir.join(p)
+    }
+
+    fn check(&self) -> std::result::Result<(), String> {
+        let s = &self.sketch;
+        match (&s.path, &s.synthetic) {
+            (Some(_), Some(_)) => return Err("sketch: give `path` or `synthetic`, not both".into()),
+            (None, None) => return Err("sketch: give `path` or `synthetic`".into()),
+            (None, Some(name)) if !crate::atlas::synthetic::NAMES.contains(&name.as_str()) => {
+                return Err(format!(
+                    "sketch.synthetic = \"{name}\": one of {}",
+                    crate::atlas::synthetic::NAMES.join(", ")
+                ));
+            }
+            (Some(_), None) if s.size.is_some() => {
+                return Err("sketch.size applies to synthetic sketches only".into());
+            }
+            _ => {}
+        }
+        positive("sketch.spacing_m", s.spacing_m)?;
+        positive("sketch.height_scale", s.height_scale)?;
+        if let Some(size) = s.size {
+            within("sketch.size", size as f64, 2.0, 4097.0)?;
+        }
+        if let Some(o) = s.origin_m {
+            finite_all("sketch.origin_m", &o)?;
+        }
+        if let Some(r) = s.height_range_m {
+            finite_all("sketch.height_range_m", &r)?;
+        }
+        let c = &self.camera;
+        finite_all("camera.position", &c.position)?;
+        finite_all("camera.look_at", &c.look_at)?;
+        if c.position == c.look_at {
+            return Err("camera.look_at equals camera.position: no view direction".into());
+        }
+        open_range("camera.fov_y_deg", c.fov_y_deg, 0.0, 180.0)?;
+        within("camera.width", c.width as f64, 1.0, 16384.0)?;
+        within("camera.height", c.height as f64, 1.0, 16384.0)?;
+        positive("camera.far_m", c.far_m)?;
+        let d = &self.detail;
+        within("detail.octaves", d.octaves as f64, 0.0, 24.0)?;
+        within("detail.amplitude_m", d.amplitude_m, 0.0, 1e5)?;
+        within("detail.gain", d.gain, 0.0, 1.0)?;
+        within("detail.bias", d.bias, -4.0, 8.0)?;
+        let w = &self.warp;
+        open_range("warp.quad_px", w.quad_px, 0.0, 1e4)?;
+        within("warp.mesh", w.mesh as f64, 2.0, 4096.0)?;
+        within("warp.size", w.size as f64, 2.0, 4096.0)?;
+        within("warp.max_log2_step", w.max_log2_step, 0.0, 64.0)?;
+        let i = &self.importance;
+        positive("importance.max_per_m", i.max_per_m)?;
+        open_range("importance.floor", i.floor, 0.0, 1.0 + f64::EPSILON)?;
+        open_range(
+            "importance.backface_floor",
+            i.backface_floor,
+            0.0,
+            1.0 + f64::EPSILON,
+        )?;
+        if let Some(p) = &self.path {
+            positive("path.speed_mps", Some(p.speed_mps))?;
+            if p.keys.len() < 2 {
+                return Err(format!(
+                    "path.keys: {} given, a path needs at least 2",
+                    p.keys.len()
+                ));
+            }
+            for (k, key) in p.keys.iter().enumerate() {
+                finite_all(&format!("path.keys[{k}].position"), &key.position)?;
+                if let Some(l) = key.look_at {
+                    finite_all(&format!("path.keys[{k}].look_at"), &l)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn finite_all(key: &str, v: &[f64]) -> std::result::Result<(), String> {
+    match v.iter().find(|x| !x.is_finite()) {
+        Some(x) => Err(format!("{key}: {x} is not a finite number")),
+        None => Ok(()),
+    }
+}
+
+fn within(key: &str, v: f64, lo: f64, hi: f64) -> std::result::Result<(), String> {
+    if v.is_finite() && (lo..=hi).contains(&v) {
+        Ok(())
+    } else {
+        Err(format!("{key} = {v}: must be in [{lo}, {hi}]"))
+    }
+}
+
+fn open_range(key: &str, v: f64, lo: f64, hi: f64) -> std::result::Result<(), String> {
+    if v.is_finite() && v > lo && v < hi {
+        Ok(())
+    } else {
+        Err(format!("{key} = {v}: must be in ({lo}, {hi})"))
+    }
+}
+
+fn positive(key: &str, v: Option<f64>) -> std::result::Result<(), String> {
+    match v {
+        Some(x) if !(x.is_finite() && x > 0.0) => {
+            Err(format!("{key} = {x}: must be a positive number"))
+        }
+        _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MIN: &str = "[sketch]\nsynthetic = \"gaussian\"\n[camera]\nposition = [0.0, 0.0, 900.0]\nlook_at = [100.0, 100.0, 0.0]\n";
+
+    fn err(extra: &str) -> String {
+        Scene::parse(&format!("{MIN}{extra}"), PathBuf::new()).unwrap_err()
+    }
+
+    #[test]
+    fn defaults_follow_design() {
+        let s = Scene::parse(MIN, PathBuf::new()).unwrap();
+        assert_eq!((s.warp.quad_px, s.warp.mesh, s.warp.size), (2.0, 512, 128));
+        assert_eq!((s.detail.octaves, s.detail.gain), (12, 0.5));
+        assert_eq!(s.render.mode, Mode::Warped);
+    }
+
+    #[test]
+    fn unknown_keys_and_bad_values_name_the_key() {
+        assert!(err("[warp]\nquadpx = 2\n").contains("quadpx"));
+        assert!(err("[detail]\ngain = 2.0\n").contains("detail.gain"));
+        assert!(err("[warp]\nquad_px = -1\n").contains("warp.quad_px"));
+        assert!(err("[render]\nmode = \"fast\"\n").contains("fast"));
+        assert!(err("[warp]\nmethod = \"magic\"\n").contains("magic"));
+        let nan = Scene::parse(&MIN.replace("900.0", "nan"), PathBuf::new()).unwrap_err();
+        assert!(nan.contains("camera.position"), "{nan}");
+        let same = MIN.replace("[100.0, 100.0, 0.0]", "[0.0, 0.0, 900.0]");
+        assert!(
+            Scene::parse(&same, PathBuf::new())
+                .unwrap_err()
+                .contains("look_at")
+        );
+        let fov = format!("{MIN}fov_y_deg = 180.0\n");
+        assert!(
+            Scene::parse(&fov, PathBuf::new())
+                .unwrap_err()
+                .contains("camera.fov_y_deg")
+        );
+        assert!(err("[path]\nkeys = [{ position = [0.0, 0.0, 1.0] }]\n").contains("path.keys"));
+    }
+}
