@@ -1,1 +1,59 @@
-fn main() {}
+//! The CPU stage at 128²: sketch map, importance and warp, each alone and together, on the bundled
+//! jacksboro scene near the ground (the hardest view for the warp) and from high up.
+//!
+//! `cargo bench --bench cpu_stage`; criterion prints the median of each.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use std::hint::black_box;
+use std::path::Path;
+use terrain::cpu_stage::{self, CpuStage};
+use terrain::scene::{Scene, WarpMethod};
+
+fn bench_scene(c: &mut Criterion, name: &str) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("sketches")
+        .join(format!("{name}.toml"));
+    let scene = Scene::load(&path).expect("bundled scene");
+    let atlas = cpu_stage::load_atlas(&scene).expect("bundled sketch");
+    let detail = cpu_stage::detail_of(&scene, &atlas);
+    let camera = cpu_stage::camera_of(&scene, &atlas).expect("bundled camera");
+    let mut stage = CpuStage::new(&scene, &detail).expect("stage");
+    stage.run(&atlas, &camera);
+    let bounds = (atlas.origin, atlas.max_corner());
+
+    let mut g = c.benchmark_group(name);
+    g.bench_function("stage", |b| {
+        b.iter(|| black_box(stage.run(&atlas, &camera)))
+    });
+    g.bench_function("sketch_map", |b| {
+        b.iter(|| {
+            stage
+                .sketch_map
+                .update(&atlas, &camera, stage.params.reach_m)
+        })
+    });
+    g.bench_function("importance", |b| {
+        b.iter(|| {
+            stage
+                .importance
+                .update(&stage.sketch_map, bounds, &camera, None, &stage.params)
+        })
+    });
+    let d0 = stage.sketch_map.spacing as f32;
+    for method in [WarpMethod::Guarded, WarpMethod::Plain] {
+        stage.warp.method = method;
+        let label = format!("warp_{method:?}").to_lowercase();
+        g.bench_function(label, |b| {
+            b.iter(|| stage.warp.run(&stage.importance.importance, d0))
+        });
+    }
+    g.finish();
+}
+
+fn cpu_stage(c: &mut Criterion) {
+    bench_scene(c, "jacksboro");
+    bench_scene(c, "jacksboro-high");
+}
+
+criterion_group!(benches, cpu_stage);
+criterion_main!(benches);

@@ -9,7 +9,7 @@ use crate::detail::Detail;
 use crate::error::{Error, Result};
 use crate::importance::{ImportanceMap, ImportanceParams};
 use crate::scene::Scene;
-use crate::sketch_map::{SketchMap, resample};
+use crate::sketch_map::{Resampler, SketchMap, resample};
 use crate::warp::Warp;
 use glam::{DVec2, DVec3};
 use std::time::Instant;
@@ -36,6 +36,7 @@ pub struct CpuStage {
     /// I_s as an atlas-like grid, when the scene gives a map.
     surface_max_atlas: Option<Atlas>,
     surface_max: Vec<f32>,
+    surface_resampler: Resampler,
     /// The ground position of the camera of the last run (for figures).
     pub last_eye: DVec2,
 }
@@ -68,6 +69,7 @@ impl CpuStage {
                 Vec::new()
             },
             surface_max_atlas,
+            surface_resampler: Resampler::default(),
             last_eye: DVec2::ZERO,
         })
     }
@@ -80,7 +82,14 @@ impl CpuStage {
         let n = self.sketch_map.n;
         if let Some(m) = &self.surface_max_atlas {
             let map = &self.sketch_map;
-            resample(m, map.origin, map.spacing, n, &mut self.surface_max);
+            resample(
+                m,
+                map.origin,
+                map.spacing,
+                n,
+                &mut self.surface_max,
+                &mut self.surface_resampler,
+            );
         }
         let t1 = Instant::now();
         let bounds = (atlas.origin, atlas.max_corner());

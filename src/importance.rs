@@ -16,7 +16,7 @@
 
 use crate::camera::Camera;
 use crate::sketch_map::SketchMap;
-use glam::{DVec2, DVec3, Vec3};
+use glam::DVec2;
 
 #[derive(Clone, Debug)]
 pub struct ImportanceParams {
@@ -41,6 +41,11 @@ pub struct ImportanceMap {
     /// Texels whose raw importance was NaN or infinite (replaced by the floor). Always 0 unless a
     /// bug lets one through; reported so that a bug shows.
     pub nonfinite: usize,
+    column_on_atlas: Vec<f32>,
+    // Row scratch: x of each column, dh/dx, 1/distance to the eye.
+    x: Vec<f32>,
+    gx: Vec<f32>,
+    inv_dist: Vec<f32>,
 }
 
 impl ImportanceMap {
@@ -50,11 +55,15 @@ impl ImportanceMap {
             importance: vec![1.0; n * n],
             frustum: vec![0.0; n * n],
             nonfinite: 0,
+            column_on_atlas: Vec::new(),
+            x: Vec::new(),
+            gx: Vec::new(),
+            inv_dist: Vec::new(),
         }
     }
 
     /// Fills the map for `camera` over `map`; `surface_max` is I_s per texel when a map gives it.
-    /// Allocates nothing.
+    /// Allocates nothing after the first frame.
     pub fn update(
         &mut self,
         map: &SketchMap,
@@ -65,82 +74,119 @@ impl ImportanceMap {
     ) {
         let n = map.n;
         let d0 = map.spacing;
-        let local = |w: DVec3| w - map.origin.extend(0.0);
-        let eye = local(camera.eye).as_vec3();
-        let planes = camera.planes().map(|pl| {
-            let d = pl.d + pl.n.dot(map.origin.extend(0.0));
-            (pl.n.as_vec3(), d as f32)
-        });
+        let corner = map.origin.extend(0.0);
+        let eye = (camera.eye - corner).as_vec3();
+        // Each plane's distance is linear in the texel's (x, y, z): a·x + b·y + c·z + d.
+        let planes = camera
+            .planes()
+            .map(|pl| (pl.n.as_vec3(), (pl.d + pl.n.dot(corner)) as f32));
         let k_view = (camera.f_px() / p.quad_px) as f32;
-        let d_min = (0.5 * d0) as f32;
+        let inv_d_min = (2.0 / d0) as f32;
         let centre = map.origin + DVec2::splat(0.5 * map.extent());
         let uniform_view = (camera.f_px()
             / (p.quad_px * (camera.eye - centre.extend(0.0)).length().max(d0)))
             as f32;
         let margin_base = (1.5 * d0 + p.reach_m) as f32;
-        // Texels outside the atlas: compare in texel units, with a tolerance for the snapping.
-        let inside = |a: f64, lo: f64, hi: f64| a >= lo - 1e-6 * d0 && a <= hi + 1e-6 * d0;
-        let i_s_const = p.max_per_m.map(|v| v as f32).unwrap_or(f32::INFINITY);
-        let inv_2d0 = (0.5 / d0) as f32;
+        let i_s_const = p.max_per_m.map_or(f32::INFINITY, |v| v as f32);
+        let d0f = d0 as f32;
+        let floor_b = p.backface_floor as f32;
+
+        // Which texels lie on the atlas: a range of columns and of rows.
+        let inside = |lo: f64, hi: f64, o: f64| {
+            let first = ((lo - o) / d0 - 1e-6).ceil().max(0.0);
+            let last = ((hi - o) / d0 + 1e-6).floor().min((n - 1) as f64);
+            (first as usize, last.max(first - 1.0) as isize)
+        };
+        let (i_first, i_last) = inside(atlas_bounds.0.x, atlas_bounds.1.x, map.origin.x);
+        let (j_first, j_last) = inside(atlas_bounds.0.y, atlas_bounds.1.y, map.origin.y);
+        self.column_on_atlas.resize(n, 0.0);
+        for (i, v) in self.column_on_atlas.iter_mut().enumerate() {
+            *v = if i >= i_first && (i as isize) <= i_last {
+                1.0
+            } else {
+                0.0
+            };
+        }
+        self.gx.resize(n, 0.0);
+        self.inv_dist.resize(n, 0.0);
+        self.x.resize(n, 0.0);
+        for (i, x) in self.x.iter_mut().enumerate() {
+            *x = i as f32 * d0f;
+        }
+
         let h = &map.heights;
         let mut min_visible = f32::INFINITY;
-        self.nonfinite = 0;
-
+        let mut nonfinite = 0;
+        let x: &[f32] = &self.x;
         for j in 0..n {
-            let y = (j as f64 * d0) as f32;
-            let y_in = inside(
-                map.origin.y + j as f64 * d0,
-                atlas_bounds.0.y,
-                atlas_bounds.1.y,
-            );
+            let y = j as f32 * d0f;
+            let row_on = if j >= j_first && (j as isize) <= j_last {
+                1.0
+            } else {
+                0.0
+            };
             let (jm, jp) = (j.saturating_sub(1), (j + 1).min(n - 1));
+            let row = &h[j * n..(j + 1) * n];
+            let (down, up) = (&h[jm * n..(jm + 1) * n], &h[jp * n..(jp + 1) * n]);
+            let dy = eye.y - y;
+            // Each part is a plain loop over the row, so that it vectorises.
             for i in 0..n {
-                let k = j * n + i;
-                let pos = Vec3::new((i as f64 * d0) as f32, y, h[k]);
-                let to_eye = eye - pos;
-                let dist = to_eye.length();
-                let i_v = if p.view {
-                    k_view / dist.max(d_min)
+                let (dx, dz) = (eye.x - x[i], eye.z - row[i]);
+                self.inv_dist[i] = 1.0 / (dx * dx + dy * dy + dz * dz).sqrt().max(1e-6);
+            }
+            let s_f = &mut self.frustum[j * n..(j + 1) * n];
+            for i in 0..n {
+                s_f[i] = row_on * self.column_on_atlas[i];
+            }
+            if p.frustum {
+                let plane_row = planes.map(|(pn, pd)| pn.y * y + pd);
+                for i in 0..n {
+                    let margin = margin_base + 0.05 / self.inv_dist[i];
+                    let inv_margin = 1.0 / margin;
+                    let mut f = s_f[i];
+                    for (k, (pn, _)) in planes.iter().enumerate() {
+                        let dist_p = pn.x * x[i] + pn.z * row[i] + plane_row[k];
+                        f *= smoothstep(dist_p * inv_margin + 1.0);
+                    }
+                    s_f[i] = f;
+                }
+            }
+            let out = &mut self.importance[j * n..(j + 1) * n];
+            for i in 0..n {
+                out[i] = if p.view {
+                    k_view * self.inv_dist[i].min(inv_d_min)
                 } else {
                     uniform_view
                 };
-                let x_in = inside(
-                    map.origin.x + i as f64 * d0,
-                    atlas_bounds.0.x,
-                    atlas_bounds.1.x,
-                );
-                let s_f = if !(x_in && y_in) {
-                    0.0
-                } else if p.frustum {
-                    let margin = margin_base + 0.05 * dist;
-                    planes.iter().fold(1.0, |acc, (pn, pd)| {
-                        acc * smoothstep((pn.dot(pos) + pd + margin) / margin)
-                    })
-                } else {
-                    1.0
-                };
-                let s_b = if p.backface {
-                    let (im, ip) = (i.saturating_sub(1), (i + 1).min(n - 1));
-                    let gx = (h[j * n + ip] - h[j * n + im]) * inv_2d0 * 2.0 / (ip - im) as f32;
-                    let gy = (h[jp * n + i] - h[jm * n + i]) * inv_2d0 * 2.0 / (jp - jm) as f32;
-                    let normal = Vec3::new(-gx, -gy, 1.0).normalize();
-                    backface(normal.dot(to_eye) / dist.max(1e-6), p.backface_floor as f32)
-                } else {
-                    1.0
-                };
-                let i_s = surface_max.map_or(i_s_const, |m| m[k].min(i_s_const));
-                let mut v = (i_v * s_f * s_b).min(i_s);
-                if !v.is_finite() || v < 0.0 {
-                    self.nonfinite += 1;
-                    v = 0.0;
-                }
-                self.importance[k] = v;
-                self.frustum[k] = s_f;
-                if s_f >= 0.5 && v > 0.0 {
-                    min_visible = min_visible.min(v);
+            }
+            if p.backface {
+                slope_x(row, d0f, &mut self.gx);
+                let gy_scale = 1.0 / ((jp - jm) as f32 * d0f);
+                for i in 0..n {
+                    let (gx, gy) = (self.gx[i], (up[i] - down[i]) * gy_scale);
+                    let (dx, dz) = (eye.x - x[i], eye.z - row[i]);
+                    let facing = (dz - gx * dx - gy * dy) * self.inv_dist[i];
+                    out[i] *= backface(facing / (gx * gx + gy * gy + 1.0).sqrt(), floor_b);
                 }
             }
+            let i_s_row = surface_max.map(|m| &m[j * n..(j + 1) * n]);
+            for i in 0..n {
+                let i_s = i_s_row.map_or(i_s_const, |m| m[i].min(i_s_const));
+                let mut v = (out[i] * s_f[i]).min(i_s);
+                if !(v.is_finite() && v >= 0.0) {
+                    nonfinite += 1;
+                    v = 0.0;
+                }
+                out[i] = v;
+                let candidate = if s_f[i] >= 0.5 && v > 0.0 {
+                    v
+                } else {
+                    f32::INFINITY
+                };
+                min_visible = min_visible.min(candidate);
+            }
         }
+        self.nonfinite = nonfinite;
         self.apply_floor(min_visible, p.floor as f32);
     }
 
@@ -168,6 +214,17 @@ impl ImportanceMap {
         let hi = at(i, j + 1) + (at(i + 1, j + 1) - at(i, j + 1)) * fx;
         lo + (hi - lo) * fy
     }
+}
+
+/// dh/dx along a row: central differences inside, one-sided at the ends.
+fn slope_x(row: &[f32], d0: f32, out: &mut [f32]) {
+    let n = row.len();
+    let half = 0.5 / d0;
+    for i in 1..n - 1 {
+        out[i] = (row[i + 1] - row[i - 1]) * half;
+    }
+    out[0] = (row[1] - row[0]) / d0;
+    out[n - 1] = (row[n - 1] - row[n - 2]) / d0;
 }
 
 fn smoothstep(t: f32) -> f32 {

@@ -28,6 +28,7 @@ pub struct SketchMap {
     pub heights: Vec<f32>,
     /// Whether any of the atlas is in view.
     pub visible: bool,
+    resampler: Resampler,
     /// The footprint's box (world), clipped to the atlas, when visible.
     pub footprint: Option<(DVec2, DVec2)>,
 }
@@ -41,6 +42,7 @@ impl SketchMap {
             heights: vec![0.0; n * n],
             visible: false,
             footprint: None,
+            resampler: Resampler::default(),
         }
     }
 
@@ -63,7 +65,14 @@ impl SketchMap {
         self.footprint = clipped;
         let (lo, hi) = clipped.unwrap_or((a_lo, a_hi));
         self.choose_region(atlas, lo, hi);
-        resample(atlas, self.origin, self.spacing, self.n, &mut self.heights);
+        resample(
+            atlas,
+            self.origin,
+            self.spacing,
+            self.n,
+            &mut self.heights,
+            &mut self.resampler,
+        );
     }
 
     fn choose_region(&mut self, atlas: &Atlas, lo: DVec2, hi: DVec2) {
@@ -98,18 +107,92 @@ impl SketchMap {
     }
 }
 
-/// Samples `atlas` on the n² lattice `origin + (i, j)·spacing` at the matching mip level.
-pub fn resample(atlas: &Atlas, origin: DVec2, spacing: f64, n: usize, out: &mut [f32]) {
-    let lod = (spacing / atlas.d_atlas()).log2();
+/// Bilinear taps of one level along one axis: for each output sample, the lower texel and the
+/// weight of the upper one. Sampling a lattice is separable, so a frame computes 2·n taps per level
+/// instead of a division and a floor per sample.
+#[derive(Clone, Debug, Default)]
+pub struct Taps {
+    index: Vec<u32>,
+    frac: Vec<f32>,
+}
+
+impl Taps {
+    /// Taps at level-0 texel coordinates `c0 + k·dc`, k < n, on a level `size` texels long that is
+    /// level `l` of the pyramid.
+    fn fill(&mut self, c0: f64, dc: f64, n: usize, l: usize, size: usize) {
+        let s = (1u64 << l) as f64;
+        let off = (s - 1.0) * 0.5;
+        self.index.resize(n, 0);
+        self.frac.resize(n, 0.0);
+        let hi = (size - 1) as f64;
+        for k in 0..n {
+            let c = ((c0 + k as f64 * dc - off) / s).clamp(0.0, hi);
+            let i = (c as usize).min(size - 2); // c ≥ 0: the cast is floor
+            self.index[k] = i as u32;
+            self.frac[k] = (c - i as f64) as f32;
+        }
+    }
+}
+
+/// Scratch for [`resample`]: taps for x and y at the two levels sampled.
+#[derive(Clone, Debug, Default)]
+pub struct Resampler {
+    x: [Taps; 2],
+    y: [Taps; 2],
+}
+
+/// Samples `atlas` on the n² lattice `origin + (i, j)·spacing`, trilinear between the two mip
+/// levels around the lattice's spacing.
+pub fn resample(
+    atlas: &Atlas,
+    origin: DVec2,
+    spacing: f64,
+    n: usize,
+    out: &mut [f32],
+    r: &mut Resampler,
+) {
+    let top = atlas.levels.len() - 1;
+    let lod = (spacing / atlas.d_atlas()).log2().clamp(0.0, top as f64);
+    let l0 = lod as usize;
+    let l1 = (l0 + 1).min(top);
+    let t = (lod - l0 as f64) as f32;
     let u0 = (origin.x - atlas.origin.x) / atlas.dx;
     let v0 = (origin.y - atlas.origin.y) / atlas.dy;
-    let (du, dv) = (spacing / atlas.dx, spacing / atlas.dy);
+    for (k, l) in [l0, l1].into_iter().enumerate() {
+        let level = &atlas.levels[l];
+        r.x[k].fill(u0, spacing / atlas.dx, n, l, level.width);
+        r.y[k].fill(v0, spacing / atlas.dy, n, l, level.height);
+    }
     for j in 0..n {
-        let v = v0 + j as f64 * dv;
         let row = &mut out[j * n..(j + 1) * n];
-        for (i, h) in row.iter_mut().enumerate() {
-            *h = atlas.sample_texel(u0 + i as f64 * du, v, lod);
+        sample_row(&atlas.levels[l0], &r.x[0], &r.y[0], j, row);
+        if t > 0.0 && l1 != l0 {
+            blend_row(&atlas.levels[l1], &r.x[1], &r.y[1], j, row, t);
         }
+    }
+}
+
+fn bilinear_tap(level: &crate::atlas::Level, tx: &Taps, ty: &Taps, i: usize, j: usize) -> f32 {
+    let w = level.width;
+    let (x, fx) = (tx.index[i] as usize, tx.frac[i]);
+    let (y, fy) = (ty.index[j] as usize, ty.frac[j]);
+    let r0 = &level.data[y * w + x..y * w + x + 2];
+    let r1 = &level.data[(y + 1) * w + x..(y + 1) * w + x + 2];
+    let a = r0[0] + (r0[1] - r0[0]) * fx;
+    let b = r1[0] + (r1[1] - r1[0]) * fx;
+    a + (b - a) * fy
+}
+
+fn sample_row(level: &crate::atlas::Level, tx: &Taps, ty: &Taps, j: usize, row: &mut [f32]) {
+    for (i, h) in row.iter_mut().enumerate() {
+        *h = bilinear_tap(level, tx, ty, i, j);
+    }
+}
+
+fn blend_row(level: &crate::atlas::Level, tx: &Taps, ty: &Taps, j: usize, row: &mut [f32], t: f32) {
+    for (i, h) in row.iter_mut().enumerate() {
+        let b = bilinear_tap(level, tx, ty, i, j);
+        *h += (b - *h) * t;
     }
 }
 
