@@ -268,7 +268,9 @@ mod tests {
         assert!((d.split_octave(7.5) - 1.5).abs() < 1e-6); // log2(30/7.5) − 0.5
         assert_eq!(octave_share(1, 3.0, 5.0), 1.0);
         assert_eq!(octave_share(7, 3.0, 5.0), 0.0);
-        assert!((octave_share(4, 3.5, 3.5) - 0.5).abs() < 1e-6);
+        // Half geometry, and the other half is bump up to the pixel octave's share.
+        assert!((octave_share(4, 3.5, 3.5) - 0.75).abs() < 1e-6);
+        assert_eq!(octave_share(4, 3.5, 5.0), 1.0);
         assert_eq!(d.last_octave(3.2), 4);
         assert_eq!(d.last_octave(-1.0), 0);
     }

@@ -85,17 +85,17 @@ impl SketchMap {
         let full = (n - 1.0) * d0;
         let centre = 0.5 * (lo + hi);
         let snap = |w: f64, o: f64| ((w - o) / d0).floor() * d0 + o;
-        let mut corner = DVec2::new(
-            snap(centre.x - 0.5 * full, atlas.origin.x),
-            snap(centre.y - 0.5 * full, atlas.origin.y),
-        );
-        // Keep the region inside the atlas where the atlas is wider than the region.
         let a_hi = atlas.max_corner();
+        let mut corner = DVec2::ZERO;
         for axis in 0..2 {
-            let last = snap(a_hi[axis] - full, atlas.origin[axis]);
-            if last >= atlas.origin[axis] {
-                corner[axis] = corner[axis].clamp(atlas.origin[axis], last);
+            let mut c = centre[axis] - 0.5 * full;
+            // Inside the atlas where the atlas is wider than the region.
+            if a_hi[axis] - atlas.origin[axis] >= full {
+                c = c.clamp(atlas.origin[axis], a_hi[axis] - full);
             }
+            // Any corner in [hi − full + d0, lo] still covers the footprint after snapping down.
+            c = c.clamp(hi[axis] - full + d0, lo[axis]);
+            corner[axis] = snap(c, atlas.origin[axis]);
         }
         self.origin = corner;
         self.spacing = d0;

@@ -9,9 +9,9 @@
 //!   warps each column of the row-warped image by that resampled importance.
 //! - `Plain` stops there: the paper's method. Where neighbouring columns want very different column
 //!   warps and the rows under them were warped differently too, cells fold.
-//! - `Guarded` (the default) keeps both triangles of every cell counter-clockwise. The mesh is drawn
-//!   with each cell split along its diagonal from (s, t) to (s+1, t+1); a cell that is merely
-//!   non-convex is harmless, a flipped triangle is a fold on screen. The guard gives the columns on
+//! - `Guarded` (the default) keeps both triangles of every cell counter-clockwise and every row of Φ
+//!   increasing in x. The mesh is drawn with each cell split along its diagonal from (s, t) to
+//!   (s+1, t+1); a cell that is merely non-convex is harmless, a flipped triangle is a fold on screen. The guard gives the columns on
 //!   either side of a folded cell (and one more each way) the *mean* column mapping `b̄`, that of the
 //!   row-summed importance, and repeats until nothing folds. A cell between two columns that both
 //!   follow `b̄` is a convex trapezoid between two rows of equal y and cannot fold, so the loop ends;
@@ -288,7 +288,7 @@ fn limit_gradient(v: &mut [f32], n: usize, factor: f32) {
     }
 }
 
-/// Whether no triangle of the cells between columns s and s+1 of Φ is flipped or degenerate.
+/// Whether every cell between columns s and s+1 of Φ is sound (see [`cell_turn`]).
 pub fn pair_unfolded(phi: &[[f32; 2]], n: usize, s: usize) -> bool {
     let mut least = f32::INFINITY;
     for t in 0..n - 1 {
@@ -297,16 +297,21 @@ pub fn pair_unfolded(phi: &[[f32; 2]], n: usize, s: usize) -> bool {
     least > 0.0
 }
 
-/// Twice the smaller signed area of cell (s, t)'s two triangles, split along the diagonal from
-/// (s, t) to (s+1, t+1) as the mesh is drawn: positive when neither triangle is flipped.
-/// f32 suffices: edges are at least 1/(n−1) of a texel long, coordinates at most n texels.
+/// Positive when cell (s, t) is sound: neither of its two triangles (split along the diagonal
+/// from (s, t) to (s+1, t+1), as the mesh is drawn) is flipped or degenerate, and its bottom and
+/// top edges run east, so every row of Φ increases in x as every column increases in y.
+/// Only the sign means anything. f32 suffices: edges are at least 1/(n−1) of a texel long,
+/// coordinates at most n texels.
 pub fn cell_turn(phi: &[[f32; 2]], n: usize, s: usize, t: usize) -> f32 {
     let (a, b) = (phi[t * n + s], phi[t * n + s + 1]);
     let (c, d) = (phi[(t + 1) * n + s + 1], phi[(t + 1) * n + s]);
     let turn = |p: [f32; 2], q: [f32; 2], r: [f32; 2]| {
         (q[0] - p[0]) * (r[1] - q[1]) - (q[1] - p[1]) * (r[0] - q[0])
     };
-    turn(a, b, c).min(turn(c, d, a))
+    turn(a, b, c)
+        .min(turn(c, d, a))
+        .min(b[0] - a[0])
+        .min(c[0] - d[0])
 }
 
 /// Signed area of cell (s, t) of Φ (shoelace), positive counter-clockwise.

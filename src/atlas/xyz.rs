@@ -111,7 +111,7 @@ mod tests {
     #[test]
     fn irregular_and_malformed_files_are_refused() {
         for (text, want) in [
-            ("0 0 1\n1 0 1\n0 1 1\n1.5 1 1\n", "off the regular spacing"),
+            ("0 0 1\n1 0 1\n0 1 1\n1.7 1 1\n", "off the regular spacing"),
             ("0 0 1\n1 0 1\n0 1 1\n1 1\n", "expected `x y z`"),
             ("0 0 1\n0 0 2\n1 1 1\n1 0 1\n", "twice"),
             ("0 0 1\n", "at least 2×2"),

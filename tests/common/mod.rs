@@ -1,0 +1,123 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+use terrain::atlas::Atlas;
+use terrain::camera::Camera;
+use terrain::cpu_stage::{self, CpuStage};
+use terrain::quality::{self, Quality};
+use terrain::scene::Scene;
+use terrain::warp::pair_unfolded;
+
+pub fn manifest_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A scratch folder under target/, emptied first.
+pub fn scratch(name: &str) -> PathBuf {
+    let d = manifest_dir()
+        .join("target")
+        .join("test-scratch")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("scratch dir");
+    d
+}
+
+pub fn scene(toml: &str, base: PathBuf) -> Scene {
+    Scene::parse(toml, base).unwrap_or_else(|e| panic!("scene: {e}\n{toml}"))
+}
+
+pub struct Run {
+    pub atlas: Atlas,
+    pub camera: Camera,
+    pub stage: CpuStage,
+    pub quality: Quality,
+}
+
+pub fn run(scene: &Scene) -> Run {
+    let atlas = cpu_stage::load_atlas(scene).expect("atlas");
+    run_with(scene, atlas)
+}
+
+pub fn run_with(scene: &Scene, atlas: Atlas) -> Run {
+    let detail = cpu_stage::detail_of(scene, &atlas);
+    let camera = cpu_stage::camera_of(scene, &atlas).expect("camera");
+    let mut stage = CpuStage::new(scene, &detail).expect("stage");
+    stage.run(&atlas, &camera);
+    let n = stage.sketch_map.n;
+    let mut ratios = Vec::new();
+    let quality = quality::measure(
+        &stage.warp.phi,
+        n,
+        stage.sketch_map.spacing,
+        &stage.importance,
+        &mut ratios,
+    );
+    Run {
+        atlas,
+        camera,
+        stage,
+        quality,
+    }
+}
+
+/// The properties every guarded warp must have: finite, inside the region, corners and edges kept,
+/// rows strictly increasing in x and columns in y, and no flipped triangle (so no flipped cell).
+pub fn assert_sound(r: &Run, what: &str) {
+    let n = r.stage.sketch_map.n;
+    let phi = &r.stage.warp.phi;
+    let extent = r.stage.sketch_map.extent() as f32;
+    let tol = 1e-4 * extent;
+    assert_eq!(r.quality.nonfinite, 0, "{what}: non-finite values");
+    assert!(
+        r.stage
+            .importance
+            .importance
+            .iter()
+            .all(|v| v.is_finite() && *v > 0.0),
+        "{what}: importance"
+    );
+    for (k, p) in phi.iter().enumerate() {
+        assert!(
+            p[0].is_finite() && p[1].is_finite(),
+            "{what}: Φ[{k}] = {p:?}"
+        );
+        assert!(
+            p[0] >= -tol && p[0] <= extent + tol && p[1] >= -tol && p[1] <= extent + tol,
+            "{what}: Φ[{k}] = {p:?} outside 0..{extent}"
+        );
+    }
+    for t in 0..n {
+        assert!(
+            phi[t * n][0].abs() <= tol && (phi[t * n + n - 1][0] - extent).abs() <= tol,
+            "{what}: row {t} loses its ends"
+        );
+        for s in 0..n - 1 {
+            assert!(
+                phi[t * n + s + 1][0] > phi[t * n + s][0],
+                "{what}: row {t} not increasing at {s}"
+            );
+        }
+    }
+    for s in 0..n {
+        assert!(
+            phi[s][1].abs() <= tol && (phi[(n - 1) * n + s][1] - extent).abs() <= tol,
+            "{what}: column {s} loses its ends"
+        );
+        for t in 0..n - 1 {
+            assert!(
+                phi[(t + 1) * n + s][1] > phi[t * n + s][1],
+                "{what}: column {s} not increasing at {t}"
+            );
+        }
+    }
+    assert_eq!(r.quality.flipped_cells, 0, "{what}: flipped cells");
+    for s in 0..n - 1 {
+        assert!(
+            pair_unfolded(phi, n, s),
+            "{what}: a flipped triangle between columns {s} and {}",
+            s + 1
+        );
+    }
+}
