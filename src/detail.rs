@@ -18,7 +18,7 @@
 use glam::{DVec2, IVec2, Vec2};
 
 /// Lattice cells per cycle of the octave's frequency (measured: see the spectrum test).
-pub const LATTICE_PER_CYCLE: f64 = 1.25;
+pub const LATTICE_PER_CYCLE: f64 = 1.6;
 /// Gradient noise with unit gradients spans about ±1/√2; this scales it to about ±1.
 const VALUE_SCALE: f32 = std::f32::consts::SQRT_2;
 
@@ -82,7 +82,7 @@ impl Detail {
 
     /// The highest octave with any share at octave level `o`: `b_k > 0 ⇔ k < o + 1`.
     pub fn last_octave(&self, o: f32) -> u32 {
-        if !(o > 0.0) {
+        if o.is_nan() || o <= 0.0 {
             return 0;
         }
         (o.ceil() as u32).min(self.octaves)
@@ -224,8 +224,8 @@ mod tests {
     #[test]
     fn exact_10_000_km_away_with_the_lattice_shifted() {
         let d = detail();
-        // A shift that is a whole number of cells of every octave: a multiple of d_atlas/1.25·…
-        // (the lattice of octave 1 has 1.25/d_atlas cells per metre; octave k 2^(k−1) times more).
+        // A shift that is a whole number of lattice cells of every octave: a whole number of
+        // octave 1's cells (d_atlas / LATTICE_PER_CYCLE metres), as octave k has 2^(k−1) per one.
         let cell1 = d.d_atlas / LATTICE_PER_CYCLE;
         let shift = DVec2::splat((1e7 / cell1).round() * cell1);
         let shifted = Detail {

@@ -64,6 +64,8 @@ impl ImportanceMap {
 
     /// Fills the map for `camera` over `map`; `surface_max` is I_s per texel when a map gives it.
     /// Allocates nothing after the first frame.
+    // The row loops index five parallel slices by column; zipped iterators would hide that.
+    #[allow(clippy::needless_range_loop)]
     pub fn update(
         &mut self,
         map: &SketchMap,

@@ -31,6 +31,7 @@ pub fn write_png_rgba(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Resu
         let mut enc = png::Encoder::new(&mut bytes, width, height);
         enc.set_color(png::ColorType::Rgba);
         enc.set_depth(png::BitDepth::Eight);
+        enc.set_compression(png::Compression::High);
         let mut w = enc
             .write_header()
             .map_err(|e| Error::io(path, std::io::Error::other(e)))?;

@@ -252,6 +252,19 @@ fn build_pyramid(base: Level) -> Vec<Level> {
     levels
 }
 
+impl Atlas {
+    /// A synthetic sketch (see [`synthetic::NAMES`]), `size`² nodes.
+    pub fn synthetic(name: &str, size: usize, opts: &LoadOptions) -> Result<Atlas> {
+        if !(2..=4097).contains(&size) {
+            return Err(Error::Invalid(format!(
+                "synthetic size {size} is outside 2..=4097"
+            )));
+        }
+        let spacing = opts.spacing_m.unwrap_or(synthetic::DEFAULT_SPACING_M);
+        Atlas::from_raw(synthetic::generate(name, size, spacing)?, opts)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -282,18 +295,5 @@ mod tests {
     fn degrees_to_metres_matches_jacksboro() {
         let (e, n) = degrees_to_metres(0.000833333333, 0.000833333333, 36.59);
         assert!((e - 74.4).abs() < 0.5 && (n - 92.66).abs() < 0.1, "{e} {n}");
-    }
-}
-
-impl Atlas {
-    /// A synthetic sketch (see [`synthetic::NAMES`]), `size`² nodes.
-    pub fn synthetic(name: &str, size: usize, opts: &LoadOptions) -> Result<Atlas> {
-        if !(2..=4097).contains(&size) {
-            return Err(Error::Invalid(format!(
-                "synthetic size {size} is outside 2..=4097"
-            )));
-        }
-        let spacing = opts.spacing_m.unwrap_or(synthetic::DEFAULT_SPACING_M);
-        Atlas::from_raw(synthetic::generate(name, size, spacing)?, opts)
     }
 }

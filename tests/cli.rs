@@ -1,0 +1,301 @@
+//! The command line on good and bad input: every bad input exits non-zero with one line on
+//! stderr naming the cause, and never panics.
+
+mod common;
+use common::*;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn terrain(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_terrain"))
+        .args(args)
+        .output()
+        .expect("run terrain");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Runs and checks the one-line failure naming `cause`.
+fn fails_with(args: &[&str], cause: &str) {
+    let (code, _, err) = terrain(args);
+    assert_ne!(code, 0, "{args:?} succeeded");
+    assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+    assert_eq!(
+        err.trim_end().lines().count(),
+        1,
+        "{args:?}: not one line: {err}"
+    );
+    assert!(
+        err.contains(cause),
+        "{args:?}: {err:?} does not name {cause:?}"
+    );
+}
+
+fn write(dir: &Path, name: &str, bytes: impl AsRef<[u8]>) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+const CAMERA: &str =
+    "[camera]\nposition = [-200.0, -200.0, 900.0]\nlook_at = [1000.0, 1000.0, 100.0]\n";
+
+fn scene_for(dir: &Path, sketch: &Path) -> PathBuf {
+    write(
+        dir,
+        &format!("{}.toml", sketch.file_name().unwrap().to_string_lossy()),
+        format!(
+            "[sketch]\npath = {:?}\n{CAMERA}",
+            sketch.file_name().unwrap()
+        ),
+    )
+}
+
+#[test]
+fn info_reads_the_bundled_sketch() {
+    let path = manifest_dir().join("sketches/jacksboro_fault_dem.asc");
+    let (code, out, _) = terrain(&["info", path.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(
+        (v["width"].as_u64(), v["height"].as_u64()),
+        (Some(403), Some(344))
+    );
+    assert_eq!(
+        (
+            v["min_m"].as_f64(),
+            v["max_m"].as_f64(),
+            v["nodata"].as_u64()
+        ),
+        (Some(236.0), Some(1076.0), Some(0))
+    );
+    let spacing = v["spacing_m"].as_f64().unwrap();
+    assert!((spacing - 74.4).abs() < 0.5, "{spacing}");
+}
+
+#[test]
+fn warp_writes_its_figures_and_statistics() {
+    let dir = scratch("cli-warp");
+    let scene = manifest_dir().join("sketches/jacksboro.toml");
+    let (code, out, err) = terrain(&[
+        "warp",
+        scene.to_str().unwrap(),
+        "--out-dir",
+        dir.to_str().unwrap(),
+        "--json",
+        "--repeat",
+        "2",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for key in [
+        "cells_visible",
+        "ratio_within_0_5_2",
+        "ratio_within_0_5_1",
+        "flipped_cells",
+        "nonfinite",
+        "cpu_stage_us",
+    ] {
+        assert!(v.get(key).is_some(), "missing {key}");
+    }
+    assert!(v["ratio_within_0_5_2"].as_f64().unwrap() >= 0.85);
+    assert_eq!(v["flipped_cells"].as_u64(), Some(0));
+    for f in ["importance.png", "mesh.png", "ratio.png"] {
+        let bytes = std::fs::read(dir.join(f)).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG"), "{f}");
+    }
+}
+
+#[test]
+fn malformed_sketches_fail_with_their_cause() {
+    let dir = scratch("cli-malformed");
+    let header = "ncols 4\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 30\n";
+    let cases: Vec<(PathBuf, &str)> = vec![
+        (
+            write(&dir, "truncated.asc", format!("{header}1 2 3 4\n5 6 7")),
+            "truncated",
+        ),
+        (
+            write(&dir, "header.asc", "ncols 4\nrows 3\ncellsize 30\n1 2 3 4"),
+            "unknown header key `rows`",
+        ),
+        (
+            write(&dir, "garbage.asc", [0u8, 159, 146, 150, 255, 0, 1, 2]),
+            "binary",
+        ),
+        (
+            write(&dir, "empty.asc", "ncols 0\nnrows 0\ncellsize 30\n"),
+            "0×0",
+        ),
+        (
+            write(&dir, "negative.asc", "ncols -4\nnrows 3\ncellsize 30\n"),
+            "-4×3",
+        ),
+        (
+            write(
+                &dir,
+                "text.asc",
+                format!("{header}1 2 x 4 5 6 7 8 9 10 11 12"),
+            ),
+            "not a number",
+        ),
+        (write(&dir, "short.hgt", vec![0u8; 1000]), "neither"),
+        (
+            write(&dir, "garbage.png", b"\x89PNG\r\n\x1a\nnot really"),
+            "PNG",
+        ),
+        (write(&dir, "garbage.tif", b"II*\0garbage"), "TIFF"),
+        (
+            write(&dir, "irregular.xyz", "0 0 1\n1 0 1\n0 1 1\n1.7 1 1\n"),
+            "regular spacing",
+        ),
+        (write(&dir, "unknown.dem", "1 2 3"), "unknown sketch format"),
+        (dir.join("missing.asc"), "No such file"),
+    ];
+    for (path, cause) in &cases {
+        fails_with(&["info", path.to_str().unwrap()], cause);
+        let scene = scene_for(&dir, path);
+        fails_with(
+            &[
+                "warp",
+                scene.to_str().unwrap(),
+                "--out-dir",
+                dir.join("out").to_str().unwrap(),
+            ],
+            cause,
+        );
+    }
+}
+
+#[test]
+fn malformed_scenes_fail_naming_the_key() {
+    let dir = scratch("cli-scenes");
+    let sketch = "[sketch]\nsynthetic = \"hills\"\n";
+    let cases = [
+        (
+            format!("{sketch}{CAMERA}fov = 60.0\n"),
+            "unknown field `fov`",
+        ),
+        (
+            format!("{sketch}{}", CAMERA.replace("900.0", "nan")),
+            "camera.position",
+        ),
+        (
+            format!(
+                "{sketch}{}",
+                CAMERA.replace("[1000.0, 1000.0, 100.0]", "[-200.0, -200.0, 900.0]")
+            ),
+            "look_at",
+        ),
+        (
+            format!("{sketch}{CAMERA}fov_y_deg = 0.0\n"),
+            "camera.fov_y_deg",
+        ),
+        (format!("{sketch}{CAMERA}width = 0\n"), "camera.width"),
+        (
+            format!("{sketch}{CAMERA}[warp]\nquad_px = 0.0\n"),
+            "warp.quad_px",
+        ),
+        (format!("{sketch}{CAMERA}[warp]\nsize = 1\n"), "warp.size"),
+        (
+            format!("{sketch}{CAMERA}[detail]\noctaves = 99\n"),
+            "detail.octaves",
+        ),
+        (
+            format!("[sketch]\nsynthetic = \"volcano\"\n{CAMERA}"),
+            "volcano",
+        ),
+        (
+            format!("[sketch]\nsynthetic = \"hills\"\nsize = 1\n{CAMERA}"),
+            "sketch.size",
+        ),
+        (
+            format!("{sketch}[camera]\nposition = [0.0, 0.0]\nlook_at = [1.0, 1.0, 1.0]\n"),
+            "line 4",
+        ),
+        (sketch.to_string(), "camera"),
+        ("this is not toml".to_string(), "line 1"),
+    ];
+    for (k, (text, cause)) in cases.iter().enumerate() {
+        let path = write(&dir, &format!("s{k}.toml"), text);
+        fails_with(
+            &[
+                "warp",
+                path.to_str().unwrap(),
+                "--out-dir",
+                dir.join("out").to_str().unwrap(),
+            ],
+            cause,
+        );
+    }
+}
+
+/// Each reader on a small valid file of its format, written here.
+#[test]
+fn every_format_reads() {
+    let dir = scratch("cli-formats");
+    // SRTM 3″: 1201² big-endian i16, rows north first, one void.
+    let mut hgt = Vec::with_capacity(1201 * 1201 * 2);
+    for k in 0..1201 * 1201 {
+        let v: i16 = if k == 5000 { -32768 } else { (k % 1201) as i16 };
+        hgt.extend_from_slice(&v.to_be_bytes());
+    }
+    write(&dir, "N36W084.hgt", &hgt);
+    // 16-bit grayscale PNG, 3×2.
+    let mut png_bytes = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut png_bytes, 3, 2);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::Sixteen);
+        let mut w = enc.write_header().unwrap();
+        let px: Vec<u8> = [0u16, 100, 65535, 10, 20, 30]
+            .iter()
+            .flat_map(|v| v.to_be_bytes())
+            .collect();
+        w.write_image_data(&px).unwrap();
+    }
+    write(&dir, "h16.png", &png_bytes);
+    // Float TIFF, 3×3, with a NaN.
+    let tif = dir.join("f32.tif");
+    {
+        let f = std::fs::File::create(&tif).unwrap();
+        let mut enc = tiff::encoder::TiffEncoder::new(f).unwrap();
+        let data = [1.0f32, 2.0, 3.0, 4.0, f32::NAN, 6.0, 7.0, 8.0, 9.0];
+        enc.write_image::<tiff::encoder::colortype::Gray32Float>(3, 3, &data)
+            .unwrap();
+    }
+    write(
+        &dir,
+        "grid.xyz",
+        "X;Y;Z\n100;200;5\n102;200;6\n100;202;7\n102;202;8\n",
+    );
+    let expect = [
+        ("N36W084.hgt", 1201, 1, 0.0, 1200.0),
+        ("h16.png", 3, 0, 0.0, 65535.0),
+        ("f32.tif", 3, 1, 1.0, 9.0),
+        ("grid.xyz", 2, 0, 5.0, 8.0),
+    ];
+    for (name, width, nodata, min, max) in expect {
+        let (code, out, err) = terrain(&["info", dir.join(name).to_str().unwrap(), "--json"]);
+        assert_eq!(code, 0, "{name}: {err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v["width"].as_u64(), Some(width), "{name}");
+        assert_eq!(v["nodata"].as_u64(), Some(nodata), "{name}");
+        assert_eq!(
+            (v["min_m"].as_f64(), v["max_m"].as_f64()),
+            (Some(min), Some(max)),
+            "{name}"
+        );
+    }
+    // SRTM 3″ at 36.5° N: 92.66 m north–south, 74.5 m east–west.
+    let (_, out, _) = terrain(&["info", dir.join("N36W084.hgt").to_str().unwrap(), "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(
+        (v["dy_m"].as_f64().unwrap() - 92.66).abs() < 0.05
+            && (v["dx_m"].as_f64().unwrap() - 74.5).abs() < 0.2,
+        "{v}"
+    );
+}

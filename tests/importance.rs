@@ -1,0 +1,161 @@
+//! The importance map and the density ratio against DESIGN.md's definitions.
+
+mod common;
+use common::*;
+
+/// Straight down from 1.5 km: the region lies inside the atlas.
+const DOWN: &str = "[sketch]\nsynthetic = \"flat\"\nsize = 129\n[camera]\nposition = [1920.0, 1920.0, 1500.0]\nlook_at = [1920.0, 1921.0, 0.0]\n";
+const BASE: &str = "[sketch]\nsynthetic = \"flat\"\nsize = 129\n[camera]\nposition = [1920.0, -400.0, 600.0]\nlook_at = [1920.0, 2500.0, 100.0]\n";
+
+#[test]
+fn view_importance_is_f_px_over_c_d_where_fully_in_view() {
+    let r = run(&scene(BASE, manifest_dir()));
+    let m = &r.stage.sketch_map;
+    let imp = &r.stage.importance;
+    let n = m.n;
+    let c = 2.0; // warp.quad_px default
+    let mut checked = 0;
+    for j in 0..n {
+        for i in 0..n {
+            let k = j * n + i;
+            if imp.frustum[k] < 1.0 {
+                continue;
+            }
+            let p = m.texel_world(i, j).extend(m.heights[k] as f64);
+            let d = (p - r.camera.eye).length().max(0.5 * m.spacing);
+            let want = r.camera.f_px() / (c * d);
+            let got = imp.importance[k] as f64;
+            // Flat ground seen from above is front-facing: S_b = 1.
+            assert!(
+                (got - want).abs() <= 1e-4 * want,
+                "texel ({i}, {j}): {got} vs {want}"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 1000, "{checked}");
+}
+
+#[test]
+fn factors_switch_off_and_the_floor_holds() {
+    let on = run(&scene(BASE, manifest_dir()));
+    let off = run(&scene(
+        &format!("{DOWN}[importance]\nfrustum = false\nview = false\n"),
+        manifest_dir(),
+    ));
+    // No frustum: every on-atlas texel is "in view"; no view term: one value everywhere.
+    assert!(off.stage.importance.frustum.iter().all(|&f| f == 1.0));
+    let first = off.stage.importance.importance[0];
+    assert!(off.stage.importance.importance.iter().all(|&v| v == first));
+    // With both on, texels out of view sit at the floor: 0.1 × the least visible importance.
+    let imp = &on.stage.importance;
+    let least_visible = imp
+        .importance
+        .iter()
+        .zip(&imp.frustum)
+        .filter(|(_, f)| **f >= 0.5)
+        .map(|(v, _)| *v)
+        .fold(f32::INFINITY, f32::min);
+    let least = imp.importance.iter().copied().fold(f32::INFINITY, f32::min);
+    assert!(
+        (least - 0.1 * least_visible).abs() <= 1e-6 * least_visible,
+        "{least} vs {least_visible}"
+    );
+}
+
+#[test]
+fn backfacing_slopes_are_reduced_but_not_below_the_floor() {
+    // Behind the gaussian's peak, seen from low on one side, the far slope faces away.
+    let toml = "[sketch]\nsynthetic = \"gaussian\"\n[camera]\nposition = [3840.0, 500.0, 300.0]\nlook_at = [3840.0, 7000.0, 800.0]\n";
+    let with = run(&scene(toml, manifest_dir()));
+    let without = run(&scene(
+        &format!("{toml}[importance]\nbackface = false\n"),
+        manifest_dir(),
+    ));
+    let (a, b) = (&with.stage.importance, &without.stage.importance);
+    let ratios: Vec<f32> = a
+        .importance
+        .iter()
+        .zip(&b.importance)
+        .zip(&a.frustum)
+        .filter(|(_, f)| **f >= 1.0)
+        .map(|((x, y), _)| x / y)
+        .collect();
+    let reduced = ratios.iter().filter(|&&q| q < 0.99).count();
+    assert!(reduced > 50, "only {reduced} texels reduced");
+    assert!(
+        ratios
+            .iter()
+            .all(|q| (0.15 - 1e-4..=1.0 + 1e-6).contains(q))
+    );
+}
+
+#[test]
+fn surface_bound_caps_importance_from_a_value_and_from_a_map() {
+    let capped = run(&scene(
+        &format!("{BASE}[importance]\nmax_per_m = 0.02\n"),
+        manifest_dir(),
+    ));
+    assert!(
+        capped
+            .stage
+            .importance
+            .importance
+            .iter()
+            .all(|&v| v <= 0.02 * (1.0 + 1e-6))
+    );
+    // A map: 0.01 samples per metre on the western half, unbounded (1e6) on the eastern.
+    let dir = scratch("importance-map");
+    let n = 129;
+    let mut text = format!("ncols {n}\nnrows {n}\nxllcorner 0\nyllcorner 0\ncellsize 30\n");
+    for _ in 0..n {
+        let row: Vec<&str> = (0..n)
+            .map(|i| if i < 64 { "0.01" } else { "1000000" })
+            .collect();
+        text += &(row.join(" ") + "\n");
+    }
+    std::fs::write(dir.join("max.asc"), text).unwrap();
+    let r = run(&scene(
+        &format!("{BASE}[importance]\nmax_map = \"max.asc\"\n"),
+        dir,
+    ));
+    let m = &r.stage.sketch_map;
+    let mut west = 0;
+    for j in 0..m.n {
+        for i in 0..m.n {
+            let x = m.texel_world(i, j).x;
+            let v = r.stage.importance.importance[j * m.n + i];
+            if x < 60.0 * 30.0 {
+                assert!(v <= 0.01 * (1.0 + 1e-5), "({i}, {j}) at x {x}: {v}");
+                west += 1;
+            }
+        }
+    }
+    assert!(west > 100);
+}
+
+#[test]
+fn uniform_importance_gives_the_budget_ratio_everywhere() {
+    let r = run(&scene(
+        &format!("{DOWN}[importance]\nfrustum = false\nview = false\nbackface = false\n"),
+        manifest_dir(),
+    ));
+    let n = r.stage.sketch_map.n as f64;
+    // Φ is the identity; k·I·d0 = (n−1)/n, so every cell's ratio is n/(n−1).
+    let mut ratios = Vec::new();
+    let st = &r.stage;
+    terrain::quality::measure(
+        &st.warp.phi,
+        st.sketch_map.n,
+        st.sketch_map.spacing,
+        &st.importance,
+        &mut ratios,
+    );
+    let want = (n / (n - 1.0)) as f32;
+    assert!(
+        ratios.iter().all(|&q| (q - want).abs() < 1e-3),
+        "{:?}",
+        &ratios[..4]
+    );
+    assert_eq!(r.quality.ratio_within_0_5_2, 1.0);
+}
