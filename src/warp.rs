@@ -11,11 +11,11 @@
 //!   warps and the rows under them were warped differently too, cells fold.
 //! - `Guarded` (the default) keeps both triangles of every cell counter-clockwise and every row of Φ
 //!   increasing in x. The mesh is drawn with each cell split along its diagonal from (s, t) to
-//!   (s+1, t+1); a cell that is merely non-convex is harmless, a flipped triangle is a fold on screen. The guard gives the columns on
-//!   either side of a folded cell (and one more each way) the *mean* column mapping `b̄`, that of the
-//!   row-summed importance, and repeats until nothing folds. A cell between two columns that both
-//!   follow `b̄` is a convex trapezoid between two rows of equal y and cannot fold, so the loop ends;
-//!   the other columns keep their own warp.
+//!   (s+1, t+1); a merely non-convex cell is harmless, a flipped triangle is a fold on screen. The
+//!   guard gives the columns on either side of a folded cell (and one more each way) the *mean*
+//!   column mapping `b̄`, that of the row-warped importance summed across columns, and repeats until
+//!   nothing folds. A cell between two columns that both follow `b̄` is a convex trapezoid between
+//!   two rows of equal y and cannot fold, so the loop ends; the other columns keep their own warp.
 //!   Measured alternative: moving columns toward `b̄` by halves (λ = ½, ¼, …) took twice the
 //!   instructions for the same share of cells within [0.5, 2] (`warp` on the six demo scenes).
 //! - An optional limit on the importance gradient (`max_log2_step`) raises low importance next to
@@ -48,7 +48,7 @@ pub struct Warp {
     folded: Vec<bool>,
     /// Φ: output (s, t) → region-local (x, y) metres, row-major with t the row.
     pub phi: Vec<[f32; 2]>,
-    /// Columns whose warp the guard relaxed in the last frame.
+    /// Columns the guard sent to the mean column warp in the last frame.
     pub guarded_columns: usize,
 }
 

@@ -8,7 +8,8 @@ use std::path::Path;
 
 const VOID: i16 = -32768;
 
-pub fn read(path: &Path) -> Result<RawGrid> {
+/// `spacing_given`: the scene sets the spacing, so a name without a latitude is no error.
+pub fn read(path: &Path, spacing_given: bool) -> Result<RawGrid> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let (side, arcsec) = match bytes.len() {
         n if n == 1201 * 1201 * 2 => (1201, 3.0),
@@ -22,12 +23,17 @@ pub fn read(path: &Path) -> Result<RawGrid> {
             ));
         }
     };
-    let lat = tile_latitude(path).ok_or_else(|| {
-        Error::sketch(
-            path,
-            "cannot tell the tile's latitude: name it like N36W084.hgt (or set sketch.spacing_m)",
-        )
-    })?;
+    let lat = match tile_latitude(path) {
+        Some(lat) => lat,
+        // The spacing computed here is replaced by the scene's.
+        None if spacing_given => 0.0,
+        None => {
+            return Err(Error::sketch(
+                path,
+                "cannot tell the tile's latitude: name it like N36W084.hgt (or set sketch.spacing_m)",
+            ));
+        }
+    };
     let cell = arcsec / 3600.0;
     let (dx, dy) = degrees_to_metres(cell, cell, lat + 0.5);
     let mut data = vec![0.0f32; side * side];

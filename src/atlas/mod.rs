@@ -107,7 +107,7 @@ impl Atlas {
             .unwrap_or_default();
         let raw = match ext.as_str() {
             "asc" | "grd" => asc::read(path)?,
-            "hgt" => hgt::read(path)?,
+            "hgt" => hgt::read(path, opts.spacing_m.is_some())?,
             "png" => image::read_png(path, opts)?,
             "tif" | "tiff" => image::read_tiff(path)?,
             "xyz" | "csv" | "txt" => xyz::read(path)?,
