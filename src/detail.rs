@@ -92,16 +92,13 @@ impl Detail {
     pub fn frame(&self, origin: DVec2) -> Vec<OctaveFrame> {
         (1..=self.octaves)
             .map(|k| {
-                let scale = self.lattice_scale(k);
-                let q = (origin - self.lattice_origin_m) * scale;
-                let c = q.floor();
-                OctaveFrame {
-                    lattice: IVec2::new(wrap_i32(c.x), wrap_i32(c.y)),
-                    phase: (q - c).as_vec2(),
-                    scale: scale as f32,
-                    weight: self.weight(k) as f32,
-                    seed: self.octave_seed(k),
-                }
+                let rel = origin - self.lattice_origin_m;
+                OctaveFrame::split(
+                    rel,
+                    self.lattice_scale(k),
+                    self.weight(k),
+                    self.octave_seed(k),
+                )
             })
             .collect()
     }
@@ -120,6 +117,22 @@ pub struct OctaveFrame {
     pub scale: f32,
     pub weight: f32,
     pub seed: u32,
+}
+
+impl OctaveFrame {
+    /// Splits `origin` (metres from the lattice origin, f64) into a whole cell and a fraction of a
+    /// lattice with `scale` cells per metre.
+    pub fn split(origin: DVec2, scale: f64, weight: f64, seed: u32) -> OctaveFrame {
+        let q = origin * scale;
+        let c = q.floor();
+        OctaveFrame {
+            lattice: IVec2::new(wrap_i32(c.x), wrap_i32(c.y)),
+            phase: (q - c).as_vec2(),
+            scale: scale as f32,
+            weight: weight as f32,
+            seed,
+        }
+    }
 }
 
 /// n_k and its gradient at `local` metres from the frame origin (the GPU's path).

@@ -20,6 +20,9 @@ pub enum Error {
     /// A camera that cannot be built (NaN, eye at its own target, zero-size image).
     #[error("camera: {0}")]
     Camera(String),
+    /// No adapter, a limit the adapter lacks, a lost device.
+    #[error("GPU: {0}")]
+    Gpu(String),
     /// A value that cannot be used (synthetic name, empty grid).
     #[error("{0}")]
     Invalid(String),

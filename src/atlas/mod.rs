@@ -4,8 +4,9 @@
 //! - Row 0 is the southern edge; texel (i, j) is the grid node at `origin + (i·dx, j·dy)`.
 //! - Every height is finite: nodata and NaN cells are filled from valid neighbours by the loader
 //!   ([`fill`]) and counted in [`Atlas::nodata`], never passed on.
-//! - Level l of the pyramid is a 2×2 box average of level l−1, so a level-l texel's centre lies at
-//!   level-0 coordinate `2^l·i + (2^l − 1)/2`. Sampling between levels is trilinear.
+//! - Level l of the pyramid is a 2×2 box average of level l−1 (sizes halved rounding down, as
+//!   texture mips are), so a level-l texel's centre lies at level-0 coordinate `2^l·i + (2^l − 1)/2`.
+//!   Sampling between levels is trilinear on the CPU, bicubic per level on the GPU.
 //!
 //! Rejected alternative: resampling the sketch map straight from level 0 with a wide filter. At
 //! 50 km up a 128² sketch map spans thousands of atlas texels each; a per-frame wide filter would cost
@@ -225,22 +226,22 @@ impl Level {
     }
 }
 
-/// Halves until a level is 2 texels on its shorter side; odd sizes round up, clamping at the edge.
+/// Halves (rounding down, as texture mip levels do, so the GPU holds the same pyramid) while the
+/// next level keeps 2 texels on its shorter side; an odd level's last row or column is dropped.
 fn build_pyramid(base: Level) -> Vec<Level> {
     let mut levels = vec![base];
     loop {
         let prev = levels.last().expect("pyramid has a base");
-        if prev.width.min(prev.height) <= 2 {
+        let (w, h) = (prev.width / 2, prev.height / 2);
+        if w.min(h) < 2 {
             break;
         }
-        let (w, h) = (prev.width.div_ceil(2), prev.height.div_ceil(2));
         let mut data = Vec::with_capacity(w * h);
         for j in 0..h {
-            let (j0, j1) = (2 * j, (2 * j + 1).min(prev.height - 1));
             for i in 0..w {
-                let (i0, i1) = (2 * i, (2 * i + 1).min(prev.width - 1));
                 let at = |x: usize, y: usize| prev.data[y * prev.width + x];
-                data.push(0.25 * (at(i0, j0) + at(i1, j0) + at(i0, j1) + at(i1, j1)));
+                let (x, y) = (2 * i, 2 * j);
+                data.push(0.25 * (at(x, y) + at(x + 1, y) + at(x, y + 1) + at(x + 1, y + 1)));
             }
         }
         levels.push(Level {

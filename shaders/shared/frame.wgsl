@@ -1,0 +1,33 @@
+// The per-frame uniform block, shared by every pass. Its Rust twin is `gpu::FrameUniforms`.
+// Positions are metres relative to the frame origin (the camera's ground point), f32.
+
+struct Octave {
+    lattice: vec2<i32>,   // whole lattice cell of the frame origin (f64 split on the CPU)
+    phase: vec2<f32>,     // fraction of the frame origin inside that cell
+    scale: f32,           // lattice cells per metre
+    weight: f32,          // w_k, metres
+    seed: u32,
+    pad: u32,
+}
+
+struct Frame {
+    view_proj: mat4x4<f32>,
+    inv_view_proj: mat4x4<f32>,
+    eye: vec4<f32>,              // xyz: eye; w: pixel scale (2·tan(fov/2)/height)
+    phi_offset: vec2<f32>,       // sketch-map region corner − frame origin
+    atlas_offset: vec2<f32>,     // frame origin − atlas origin
+    atlas_inv_spacing: vec2<f32>,
+    d_atlas: f32,
+    bias: f32,
+    n: u32,                      // warp size (128)
+    mesh: u32,                   // detailed geometry image size (512)
+    octaves: u32,
+    levels: u32,                 // atlas mip levels
+    sun: vec4<f32>,              // xyz: direction to the sun; w: sketch-map spacing d0
+    view: u32,                   // debug view: 0 shaded, 1 wireframe, 2 split octave, 3 importance, 4 normals
+    importance_max: f32,
+    pad0: u32,
+    pad1: u32,
+    octave: array<Octave, 24>,
+    turbulence: array<Octave, 2>,
+}

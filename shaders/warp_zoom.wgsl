@@ -1,0 +1,59 @@
+// Warp & zoom: Φ (n², from the CPU stage) upsampled bilinearly to the mesh size, the height
+// sampled from the atlas at Φ (bicubic, at the mip level of the local spacing), the split octave
+// from the largest distance to the four neighbours, and noise octaves added as displacement up to
+// it (octave ⌊o⌋+1 shared with the bump by g_k). Output: the detailed geometry image,
+// (x, y, z, split octave) per vertex, metres from the frame origin.
+// Rust twin: src/gpu/warp_zoom.rs (`vertex_cpu`).
+
+#import frame
+@group(0) @binding(0) var<uniform> frame: Frame;
+#import atlas
+#ifdef DETAIL
+#import noise
+#endif
+
+@group(0) @binding(2) var<storage, read> phi: array<vec2<f32>>;
+@group(0) @binding(3) var<storage, read_write> detailed: array<vec4<f32>>;
+
+// Φ at warp coordinates `st` (bilinear), metres from the frame origin.
+fn phi_at(st: vec2<f32>) -> vec2<f32> {
+    let n = frame.n;
+    let c = clamp(st, vec2<f32>(0.0), vec2<f32>(f32(n - 1u)));
+    let i = min(vec2<u32>(c), vec2<u32>(n - 2u));
+    let f = c - vec2<f32>(i);
+    let p00 = phi[i.y * n + i.x];
+    let p10 = phi[i.y * n + i.x + 1u];
+    let p01 = phi[(i.y + 1u) * n + i.x];
+    let p11 = phi[(i.y + 1u) * n + i.x + 1u];
+    return mix(mix(p00, p10, f.x), mix(p01, p11, f.x), f.y) + frame.phi_offset;
+}
+
+// The horizontal position of mesh vertex `ij` (clamped to the mesh).
+fn mesh_xy(ij: vec2<i32>) -> vec2<f32> {
+    let m = i32(frame.mesh);
+    let c = clamp(ij, vec2<i32>(0), vec2<i32>(m - 1));
+    return phi_at(vec2<f32>(c) * (f32(frame.n - 1u) / f32(frame.mesh - 1u)));
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= frame.mesh || id.y >= frame.mesh) {
+        return;
+    }
+    let ij = vec2<i32>(id.xy);
+    let p = mesh_xy(ij);
+    let d_max = max(
+        max(distance(p, mesh_xy(ij + vec2<i32>(1, 0))), distance(p, mesh_xy(ij - vec2<i32>(1, 0)))),
+        max(distance(p, mesh_xy(ij + vec2<i32>(0, 1))), distance(p, mesh_xy(ij - vec2<i32>(0, 1)))),
+    );
+    var z = atlas_height(p, d_max);
+    let o = log2(frame.d_atlas / max(d_max, 1e-6)) - frame.bias;
+#ifdef DETAIL
+    let last = min(frame.octaves, u32(max(ceil(o), 0.0)));
+    for (var k = 1u; k <= last; k++) {
+        let g = clamp(o - f32(k) + 1.0, 0.0, 1.0);
+        z += frame.octave[k - 1u].weight * g * octave_local(frame.octave[k - 1u], p).x;
+    }
+#endif
+    detailed[id.y * frame.mesh + id.x] = vec4<f32>(p, z, o);
+}

@@ -1,0 +1,94 @@
+//! The GPU context: a headless device on whatever adapter the machine has (`WGPU_BACKEND` chooses
+//! among backends; without a GPU, Mesa's llvmpipe through GL), its limits checked up front.
+
+use crate::error::{Error, Result};
+
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub adapter: wgpu::AdapterInfo,
+    /// Whether passes can be timed with timestamp queries.
+    pub timestamps: bool,
+    pub limits: wgpu::Limits,
+}
+
+/// What the renderer needs of a device, checked before anything is created.
+pub struct Needs {
+    pub atlas_side: u32,
+    pub storage_bytes: u64,
+}
+
+impl GpuContext {
+    pub fn new(needs: &Needs) -> Result<GpuContext> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: None,
+            apply_limit_buckets: false,
+        }))
+        .map_err(|e| {
+            Error::Gpu(format!(
+                "no GPU adapter ({e}); without a GPU install Mesa (Debian: apt-get install libegl1 libgl1-mesa-dri, or mesa-vulkan-drivers)"
+            ))
+        })?;
+        let info = adapter.get_info();
+        let limits = adapter.limits();
+        let name = &info.name;
+        if limits.max_texture_dimension_2d < needs.atlas_side {
+            return Err(Error::Gpu(format!(
+                "{name}: the sketch is {} texels on a side, the adapter's textures at most {}",
+                needs.atlas_side, limits.max_texture_dimension_2d
+            )));
+        }
+        if limits.max_storage_buffer_binding_size < needs.storage_bytes {
+            return Err(Error::Gpu(format!(
+                "{name}: the mesh needs {} MiB storage buffers, the adapter allows {} MiB",
+                needs.storage_bytes >> 20,
+                limits.max_storage_buffer_binding_size >> 20
+            )));
+        }
+        if limits.max_storage_buffers_per_shader_stage < 3 {
+            return Err(Error::Gpu(format!(
+                "{name}: needs 3 storage buffers per shader stage (vertex included), has {}",
+                limits.max_storage_buffers_per_shader_stage
+            )));
+        }
+        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let required_features = if timestamps {
+            wgpu::Features::TIMESTAMP_QUERY
+        } else {
+            wgpu::Features::empty()
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("terrain"),
+            required_features,
+            required_limits: limits.clone(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| Error::Gpu(format!("{name}: cannot open the device: {e}")))?;
+        Ok(GpuContext {
+            device,
+            queue,
+            adapter: info,
+            timestamps,
+            limits,
+        })
+    }
+
+    /// "name (backend)", for reports.
+    pub fn adapter_name(&self) -> String {
+        format!("{} ({:?})", self.adapter.name, self.adapter.backend)
+    }
+
+    /// Blocks until the queue is idle.
+    pub fn wait(&self) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| Error::Gpu(format!("device lost while waiting: {e}")))
+    }
+}

@@ -1,0 +1,85 @@
+//! The GPU half of a frame: warp & zoom → normals → terrain (with the sky), one struct per pass,
+//! each owning its pipeline, bind-group layout and resources, each with a WGSL file of the same
+//! name in `shaders/`. [`renderer::Renderer`] runs them as a flat list.
+
+pub mod context;
+pub mod normals;
+pub mod renderer;
+pub mod shaders;
+pub mod terrain;
+pub mod uniforms;
+pub mod warp_zoom;
+
+use crate::error::Result;
+
+/// A compute pipeline for pass `name` with `flags`, entry point `main`.
+pub(crate) fn compute_pipeline(
+    device: &wgpu::Device,
+    name: &str,
+    flags: &[&str],
+    layout: &wgpu::BindGroupLayout,
+) -> Result<wgpu::ComputePipeline> {
+    let module = shader_module(device, name, flags)?;
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(name),
+        bind_group_layouts: &[Some(layout)],
+        immediate_size: 0,
+    });
+    Ok(
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(name),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        }),
+    )
+}
+
+pub(crate) fn shader_module(
+    device: &wgpu::Device,
+    name: &str,
+    flags: &[&str],
+) -> Result<wgpu::ShaderModule> {
+    let source = shaders::compose(name, flags)?;
+    Ok(device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(name),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    }))
+}
+
+/// A bind-group-layout entry.
+pub(crate) fn entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BindingType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty,
+        count: None,
+    }
+}
+
+pub(crate) fn uniform() -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty: wgpu::BufferBindingType::Uniform,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
+}
+
+pub(crate) fn storage(read_only: bool) -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty: wgpu::BufferBindingType::Storage { read_only },
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
+}
+
+/// Dispatch size covering `mesh`² with 8×8 workgroups.
+pub(crate) fn groups(mesh: u32) -> u32 {
+    mesh.div_ceil(8)
+}

@@ -1,0 +1,76 @@
+//! Normals of the detailed geometry image (`shaders/normals.wgsl`).
+
+use super::{compute_pipeline, entry, groups, storage, uniform};
+use crate::error::Result;
+use wgpu::ShaderStages as S;
+
+pub struct NormalsPass {
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    /// mesh² vec4 (unit normal, 0).
+    pub normals: wgpu::Buffer,
+    mesh: u32,
+}
+
+impl NormalsPass {
+    pub fn new(
+        device: &wgpu::Device,
+        frame: &wgpu::Buffer,
+        detailed: &wgpu::Buffer,
+        mesh: u32,
+    ) -> Result<NormalsPass> {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("normals"),
+            entries: &[
+                entry(0, S::COMPUTE, uniform()),
+                entry(3, S::COMPUTE, storage(true)),
+                entry(4, S::COMPUTE, storage(false)),
+            ],
+        });
+        let pipeline = compute_pipeline(device, "normals", &[], &layout)?;
+        let normals = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("normals"),
+            size: (mesh * mesh) as u64 * 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("normals"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: frame.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: detailed.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: normals.as_entire_binding(),
+                },
+            ],
+        });
+        Ok(NormalsPass {
+            pipeline,
+            bind_group,
+            normals,
+            mesh,
+        })
+    }
+
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timestamps: Option<wgpu::ComputePassTimestampWrites>,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("normals"),
+            timestamp_writes: timestamps,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.dispatch_workgroups(groups(self.mesh), groups(self.mesh), 1);
+    }
+}

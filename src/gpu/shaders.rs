@@ -1,0 +1,101 @@
+//! The shader import step: each pass's WGSL file with its `#import name` lines replaced by
+//! `shaders/shared/name.wgsl`, and `#ifdef FLAG` / `#else` / `#endif` blocks kept or dropped by the
+//! variant's flags. That is all the preprocessing there is.
+//!
+//! Rules: an import is included once per shader; flags nest; an unknown import or an unbalanced
+//! block is an error naming the file and line (tests validate every variant with naga).
+//! Rejected alternative: override constants for variants. A loop bounded by `octaves = 0` still
+//! ships the noise code to the driver; dropping the text is what "no noise code" means.
+
+use crate::error::{Error, Result};
+
+const SHARED: [(&str, &str); 3] = [
+    ("frame", include_str!("../../shaders/shared/frame.wgsl")),
+    ("noise", include_str!("../../shaders/shared/noise.wgsl")),
+    ("atlas", include_str!("../../shaders/shared/atlas.wgsl")),
+];
+
+/// The passes' WGSL files, by name.
+pub const PASSES: [(&str, &str); 3] = [
+    ("warp_zoom", include_str!("../../shaders/warp_zoom.wgsl")),
+    ("normals", include_str!("../../shaders/normals.wgsl")),
+    ("terrain", include_str!("../../shaders/terrain.wgsl")),
+];
+
+/// Every flag any pass tests, for validating all variants.
+pub const FLAGS: [&str; 4] = ["DETAIL", "BUMP", "NOISE", "IMPORTANCE_VIEW"];
+
+/// The combined source of pass `name` with `flags` set.
+pub fn compose(name: &str, flags: &[&str]) -> Result<String> {
+    let source = PASSES
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, s)| *s)
+        .ok_or_else(|| Error::Invalid(format!("no shader named {name}")))?;
+    let mut out = String::new();
+    let mut imported: Vec<&str> = Vec::new();
+    expand(name, source, flags, &mut imported, &mut out)?;
+    Ok(out)
+}
+
+fn expand<'a>(
+    file: &str,
+    source: &'a str,
+    flags: &[&str],
+    imported: &mut Vec<&'a str>,
+    out: &mut String,
+) -> Result<()> {
+    // Each open block: (this block is kept, an enclosing block is kept).
+    let mut stack: Vec<(bool, bool)> = Vec::new();
+    let bad = |line: usize, what: &str| Error::Invalid(format!("{file}.wgsl:{}: {what}", line + 1));
+    for (k, line) in source.lines().enumerate() {
+        let trimmed = line.trim();
+        let live = stack.iter().all(|&(keep, _)| keep);
+        if let Some(flag) = trimmed.strip_prefix("#ifdef ") {
+            stack.push((flags.contains(&flag.trim()), live));
+        } else if trimmed == "#else" {
+            let top = stack
+                .last_mut()
+                .ok_or_else(|| bad(k, "#else without #ifdef"))?;
+            top.0 = !top.0;
+        } else if trimmed == "#endif" {
+            stack.pop().ok_or_else(|| bad(k, "#endif without #ifdef"))?;
+        } else if let Some(name) = trimmed.strip_prefix("#import ") {
+            if !live {
+                continue;
+            }
+            let name = name.trim();
+            let (key, text) = SHARED
+                .iter()
+                .find(|(n, _)| *n == name)
+                .ok_or_else(|| bad(k, &format!("unknown import `{name}`")))?;
+            if !imported.contains(key) {
+                imported.push(key);
+                expand(name, text, flags, imported, out)?;
+            }
+        } else if live {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    if !stack.is_empty() {
+        return Err(Error::Invalid(format!(
+            "{file}.wgsl: #ifdef without #endif"
+        )));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flags_drop_the_noise_code() {
+        let with = compose("warp_zoom", &["DETAIL"]).unwrap();
+        let without = compose("warp_zoom", &[]).unwrap();
+        assert!(with.contains("fn gradient_noise") && with.contains("octave_local("));
+        assert!(!without.contains("fn gradient_noise") && !without.contains("octave_local("));
+        assert_eq!(with.matches("struct Frame").count(), 1);
+    }
+}

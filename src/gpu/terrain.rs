@@ -1,0 +1,234 @@
+//! The terrain pass (`shaders/terrain.wgsl`): the sky as one full-screen triangle, then the
+//! detailed geometry image as an indexed quad mesh read from its storage buffers (no vertex upload).
+//! Reversed-Z depth with an infinite far plane. Owns the colour and depth targets.
+
+use super::{entry, shader_module, storage, uniform};
+use crate::error::Result;
+use wgpu::ShaderStages as S;
+
+pub const COLOUR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+pub struct TerrainPass {
+    sky: wgpu::RenderPipeline,
+    terrain: wgpu::RenderPipeline,
+    bind_group: wgpu::BindGroup,
+    index: wgpu::Buffer,
+    index_count: u32,
+    pub colour: wgpu::Texture,
+    colour_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+}
+
+/// Which variant of the fragment shader to build.
+pub struct Variant {
+    pub noise: bool,
+    pub bump: bool,
+    /// The importance debug view's buffer (n² f32), only when that view is drawn.
+    pub importance: Option<wgpu::Buffer>,
+}
+
+impl TerrainPass {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        device: &wgpu::Device,
+        frame: &wgpu::Buffer,
+        detailed: &wgpu::Buffer,
+        normals: &wgpu::Buffer,
+        mesh: u32,
+        width: u32,
+        height: u32,
+        variant: &Variant,
+    ) -> Result<TerrainPass> {
+        let mut entries = vec![
+            entry(0, S::VERTEX_FRAGMENT, uniform()),
+            entry(3, S::VERTEX, storage(true)),
+            entry(4, S::VERTEX, storage(true)),
+        ];
+        let mut flags = Vec::new();
+        if variant.noise {
+            flags.push("NOISE");
+        }
+        if variant.bump {
+            flags.push("BUMP");
+        }
+        if variant.importance.is_some() {
+            entries.push(entry(5, S::FRAGMENT, storage(true)));
+            flags.push("IMPORTANCE_VIEW");
+        }
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("terrain"),
+            entries: &entries,
+        });
+        let module = shader_module(device, "terrain", &flags)?;
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("terrain"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = |vs: &str, fs: &str, depth_write: bool, compare: wgpu::CompareFunction| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(vs),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(vs),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH,
+                    depth_write_enabled: Some(depth_write),
+                    depth_compare: Some(compare),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets: &[Some(COLOUR.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let sky = pipeline("sky_vs", "sky_fs", false, wgpu::CompareFunction::Always);
+        let terrain = pipeline(
+            "terrain_vs",
+            "terrain_fs",
+            true,
+            wgpu::CompareFunction::Greater,
+        );
+
+        let mut bind_entries = vec![
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: frame.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: detailed.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: normals.as_entire_binding(),
+            },
+        ];
+        if let Some(buffer) = &variant.importance {
+            bind_entries.push(wgpu::BindGroupEntry {
+                binding: 5,
+                resource: buffer.as_entire_binding(),
+            });
+        }
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("terrain"),
+            layout: &layout,
+            entries: &bind_entries,
+        });
+        let indices = quad_indices(mesh);
+        let index = wgpu::util::DeviceExt::create_buffer_init(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("quad mesh indices"),
+                contents: bytemuck::cast_slice(&indices),
+                usage: wgpu::BufferUsages::INDEX,
+            },
+        );
+        let target = |format, usage, label| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let colour = target(
+            COLOUR,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            "colour",
+        );
+        let depth = target(DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT, "depth");
+        Ok(TerrainPass {
+            sky,
+            terrain,
+            bind_group,
+            index_count: indices.len() as u32,
+            index,
+            colour_view: colour.create_view(&Default::default()),
+            depth_view: depth.create_view(&Default::default()),
+            colour,
+        })
+    }
+
+    pub fn triangles(&self) -> u64 {
+        self.index_count as u64 / 3
+    }
+
+    /// The sky, then the terrain unless nothing of it is in view.
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        draw_terrain: bool,
+        timestamps: Option<wgpu::RenderPassTimestampWrites>,
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("terrain"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &self.colour_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(0.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timestamps,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.set_pipeline(&self.sky);
+        pass.draw(0..3, 0..1);
+        if draw_terrain {
+            pass.set_pipeline(&self.terrain);
+            pass.set_index_buffer(self.index.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..self.index_count, 0, 0..1);
+        }
+    }
+}
+
+/// Two counter-clockwise triangles per cell, split along (s,t)–(s+1,t+1): the diagonal the warp's
+/// guard keeps unfolded.
+pub fn quad_indices(mesh: u32) -> Vec<u32> {
+    let mut v = Vec::with_capacity(((mesh - 1) * (mesh - 1) * 6) as usize);
+    for t in 0..mesh - 1 {
+        for s in 0..mesh - 1 {
+            let a = t * mesh + s;
+            let (b, c, d) = (a + 1, a + mesh + 1, a + mesh);
+            v.extend_from_slice(&[a, b, c, a, c, d]);
+        }
+    }
+    v
+}

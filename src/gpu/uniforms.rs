@@ -1,0 +1,165 @@
+//! The per-frame uniform block (`shaders/shared/frame.wgsl`'s `Frame`), built on the CPU in f64
+//! and handed to the GPU in f32 relative to the frame origin, the camera's ground point.
+
+use crate::atlas::Atlas;
+use crate::camera::Camera;
+use crate::detail::{Detail, OctaveFrame};
+use crate::sketch_map::SketchMap;
+use bytemuck::{Pod, Zeroable};
+use glam::{DMat4, DVec2, DVec3, DVec4};
+
+pub const MAX_OCTAVES: usize = 24;
+/// Nearest depth: with reversed-Z and an infinite far plane, depth precision does not suffer.
+const NEAR_M: f64 = 0.05;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct OctaveGpu {
+    pub lattice: [i32; 2],
+    pub phase: [f32; 2],
+    pub scale: f32,
+    pub weight: f32,
+    pub seed: u32,
+    pub pad: u32,
+}
+
+impl From<OctaveFrame> for OctaveGpu {
+    fn from(o: OctaveFrame) -> Self {
+        OctaveGpu {
+            lattice: o.lattice.to_array(),
+            phase: o.phase.to_array(),
+            scale: o.scale,
+            weight: o.weight,
+            seed: o.seed,
+            pad: 0,
+        }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct FrameUniforms {
+    pub view_proj: [[f32; 4]; 4],
+    pub inv_view_proj: [[f32; 4]; 4],
+    pub eye: [f32; 4],
+    pub phi_offset: [f32; 2],
+    pub atlas_offset: [f32; 2],
+    pub atlas_inv_spacing: [f32; 2],
+    pub d_atlas: f32,
+    pub bias: f32,
+    pub n: u32,
+    pub mesh: u32,
+    pub octaves: u32,
+    pub levels: u32,
+    pub sun: [f32; 4],
+    pub view: u32,
+    pub importance_max: f32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub octave: [OctaveGpu; MAX_OCTAVES],
+    pub turbulence: [OctaveGpu; 2],
+}
+
+/// The debug views of `render --view`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum View {
+    Shaded = 0,
+    Wireframe = 1,
+    SplitOctave = 2,
+    Importance = 3,
+    Normals = 4,
+}
+
+impl View {
+    pub fn parse(s: &str) -> Option<View> {
+        Some(match s {
+            "shaded" => View::Shaded,
+            "wireframe" => View::Wireframe,
+            "split-octave" => View::SplitOctave,
+            "importance" => View::Importance,
+            "normals" => View::Normals,
+            _ => return None,
+        })
+    }
+}
+
+/// The frame origin: the camera's ground point.
+pub fn frame_origin(camera: &Camera) -> DVec2 {
+    camera.eye.truncate()
+}
+
+/// The view-projection matrix relative to `origin`: right-handed, reversed-Z, infinite far plane.
+pub fn view_proj(camera: &Camera, origin: DVec2) -> DMat4 {
+    let eye = camera.eye - origin.extend(0.0);
+    let (r, u, f) = (camera.right, camera.up, camera.forward);
+    let view = DMat4::from_cols(
+        DVec4::new(r.x, u.x, -f.x, 0.0),
+        DVec4::new(r.y, u.y, -f.y, 0.0),
+        DVec4::new(r.z, u.z, -f.z, 0.0),
+        DVec4::new(-r.dot(eye), -u.dot(eye), f.dot(eye), 1.0),
+    );
+    let fy = 1.0 / camera.tan_half_y();
+    let proj = DMat4::from_cols(
+        DVec4::new(fy / camera.aspect(), 0.0, 0.0, 0.0),
+        DVec4::new(0.0, fy, 0.0, 0.0),
+        DVec4::new(0.0, 0.0, 0.0, -1.0),
+        DVec4::new(0.0, 0.0, NEAR_M, 0.0),
+    );
+    proj * view
+}
+
+pub struct FrameInputs<'a> {
+    pub camera: &'a Camera,
+    pub map: &'a SketchMap,
+    pub atlas: &'a Atlas,
+    pub detail: &'a Detail,
+    pub mesh: u32,
+    pub view: View,
+    pub importance_max: f32,
+}
+
+impl FrameUniforms {
+    pub fn new(f: &FrameInputs) -> FrameUniforms {
+        let origin = frame_origin(f.camera);
+        let vp = view_proj(f.camera, origin);
+        let eye = f.camera.eye - origin.extend(0.0);
+        let pixel_scale = 2.0 * f.camera.tan_half_y() / f.camera.height as f64;
+        let mut octave = [OctaveGpu::default(); MAX_OCTAVES];
+        for (slot, o) in octave.iter_mut().zip(f.detail.frame(origin)) {
+            *slot = o.into();
+        }
+        // Two octaves of turbulence, 600 m and 150 m, for the surface types' boundaries.
+        let turbulence_seed = crate::detail::hash(f.detail.seed ^ 0x5eed);
+        let turbulence = [600.0, 150.0].map(|wavelength: f64| {
+            let rel = origin - f.detail.lattice_origin_m;
+            OctaveFrame::split(rel, 1.6 / wavelength, 1.0, turbulence_seed).into()
+        });
+        let sun = DVec3::new(0.41, -0.71, 0.57).normalize();
+        FrameUniforms {
+            view_proj: vp.as_mat4().to_cols_array_2d(),
+            inv_view_proj: vp.inverse().as_mat4().to_cols_array_2d(),
+            eye: [eye.x as f32, eye.y as f32, eye.z as f32, pixel_scale as f32],
+            phi_offset: (f.map.origin - origin).as_vec2().to_array(),
+            atlas_offset: (origin - f.atlas.origin).as_vec2().to_array(),
+            atlas_inv_spacing: [(1.0 / f.atlas.dx) as f32, (1.0 / f.atlas.dy) as f32],
+            d_atlas: f.atlas.d_atlas() as f32,
+            bias: f.detail.bias as f32,
+            n: f.map.n as u32,
+            mesh: f.mesh,
+            octaves: f.detail.octaves.min(MAX_OCTAVES as u32),
+            levels: f.atlas.levels.len() as u32,
+            sun: [
+                sun.x as f32,
+                sun.y as f32,
+                sun.z as f32,
+                f.map.spacing as f32,
+            ],
+            view: f.view as u32,
+            importance_max: f.importance_max,
+            pad0: 0,
+            pad1: 0,
+            octave,
+            turbulence,
+        }
+    }
+}

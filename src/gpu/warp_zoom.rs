@@ -1,0 +1,213 @@
+//! Warp & zoom (`shaders/warp_zoom.wgsl`): Φ upsampled to the mesh, heights from the atlas at Φ,
+//! split octaves, displacement up to them. [`vertex_cpu`] is its CPU twin, used by the tests to
+//! hold the GPU to the CPU stage's definitions.
+
+use super::uniforms::FrameUniforms;
+use super::{compute_pipeline, entry, groups, storage, uniform};
+use crate::atlas::Atlas;
+use crate::detail::{OctaveFrame, gradient_noise};
+use crate::error::Result;
+use glam::{IVec2, Vec2};
+use wgpu::ShaderStages as S;
+
+pub struct WarpZoomPass {
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    /// Φ, n² vec2 f32, written each frame.
+    pub phi: wgpu::Buffer,
+    /// The detailed geometry image, mesh² vec4 (x, y, z, split octave).
+    pub detailed: wgpu::Buffer,
+    mesh: u32,
+}
+
+impl WarpZoomPass {
+    pub fn new(
+        device: &wgpu::Device,
+        frame: &wgpu::Buffer,
+        atlas: &wgpu::TextureView,
+        n: u32,
+        mesh: u32,
+        detail: bool,
+    ) -> Result<WarpZoomPass> {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("warp_zoom"),
+            entries: &[
+                entry(0, S::COMPUTE, uniform()),
+                entry(
+                    1,
+                    S::COMPUTE,
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                ),
+                entry(2, S::COMPUTE, storage(true)),
+                entry(3, S::COMPUTE, storage(false)),
+            ],
+        });
+        let flags: &[&str] = if detail { &["DETAIL"] } else { &[] };
+        let pipeline = compute_pipeline(device, "warp_zoom", flags, &layout)?;
+        let phi = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("phi"),
+            size: (n * n) as u64 * 8,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let detailed = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("detailed geometry image"),
+            size: (mesh * mesh) as u64 * 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("warp_zoom"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: frame.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(atlas),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: phi.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: detailed.as_entire_binding(),
+                },
+            ],
+        });
+        Ok(WarpZoomPass {
+            pipeline,
+            bind_group,
+            phi,
+            detailed,
+            mesh,
+        })
+    }
+
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timestamps: Option<wgpu::ComputePassTimestampWrites>,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("warp_zoom"),
+            timestamp_writes: timestamps,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.dispatch_workgroups(groups(self.mesh), groups(self.mesh), 1);
+    }
+}
+
+/// Φ at warp coordinates (bilinear), metres from the frame origin (`phi_at` in the shader).
+fn phi_at(f: &FrameUniforms, phi: &[[f32; 2]], st: Vec2) -> Vec2 {
+    let n = f.n;
+    let c = st.clamp(Vec2::ZERO, Vec2::splat((n - 1) as f32));
+    let i = c.as_uvec2().min(glam::UVec2::splat(n - 2));
+    let fr = c - i.as_vec2();
+    let at = |x: u32, y: u32| Vec2::from(phi[(y * n + x) as usize]);
+    let (p00, p10) = (at(i.x, i.y), at(i.x + 1, i.y));
+    let (p01, p11) = (at(i.x, i.y + 1), at(i.x + 1, i.y + 1));
+    p00.lerp(p10, fr.x).lerp(p01.lerp(p11, fr.x), fr.y) + Vec2::from(f.phi_offset)
+}
+
+fn mesh_xy(f: &FrameUniforms, phi: &[[f32; 2]], ij: IVec2) -> Vec2 {
+    let m = f.mesh as i32;
+    let c = ij.clamp(IVec2::ZERO, IVec2::splat(m - 1));
+    phi_at(
+        f,
+        phi,
+        c.as_vec2() * ((f.n - 1) as f32 / (f.mesh - 1) as f32),
+    )
+}
+
+fn catmull_rom(t: f32) -> [f32; 4] {
+    let (t2, t3) = (t * t, t * t * t);
+    [
+        -0.5 * t3 + t2 - 0.5 * t,
+        1.5 * t3 - 2.5 * t2 + 1.0,
+        -1.5 * t3 + 2.0 * t2 + 0.5 * t,
+        0.5 * t3 - 0.5 * t2,
+    ]
+}
+
+/// `atlas_level` in the shader: bicubic height on level l at level-0 texel coordinates.
+fn atlas_level(atlas: &Atlas, uv: Vec2, l: usize) -> f32 {
+    let level = &atlas.levels[l];
+    let s = (1u32 << l) as f32;
+    let x = (uv - Vec2::splat((s - 1.0) * 0.5)) / s;
+    let i = x.floor();
+    let fr = x - i;
+    let (wx, wy) = (catmull_rom(fr.x), catmull_rom(fr.y));
+    let mut h = 0.0;
+    for (b, wyb) in wy.iter().enumerate() {
+        let y = (i.y as i32 - 1 + b as i32).clamp(0, level.height as i32 - 1) as usize;
+        let mut row = 0.0;
+        for (a, wxa) in wx.iter().enumerate() {
+            let xx = (i.x as i32 - 1 + a as i32).clamp(0, level.width as i32 - 1) as usize;
+            row += wxa * level.data[y * level.width + xx];
+        }
+        h += wyb * row;
+    }
+    h
+}
+
+fn atlas_height(f: &FrameUniforms, atlas: &Atlas, local: Vec2, spacing: f32) -> f32 {
+    let uv = (local + Vec2::from(f.atlas_offset)) * Vec2::from(f.atlas_inv_spacing);
+    let lod = (spacing.max(1e-6) / f.d_atlas)
+        .log2()
+        .clamp(0.0, (f.levels - 1) as f32);
+    let l0 = lod as u32;
+    let t = lod - l0 as f32;
+    let a = atlas_level(atlas, uv, l0 as usize);
+    if t <= 0.0 || l0 + 1 >= f.levels {
+        return a;
+    }
+    a + (atlas_level(atlas, uv, l0 as usize + 1) - a) * t
+}
+
+fn octave_local(o: &super::uniforms::OctaveGpu, local: Vec2) -> f32 {
+    let frame = OctaveFrame {
+        lattice: IVec2::from(o.lattice),
+        phase: Vec2::from(o.phase),
+        scale: o.scale,
+        weight: o.weight,
+        seed: o.seed,
+    };
+    let q = local * frame.scale + frame.phase;
+    let c = q.floor();
+    gradient_noise(frame.lattice + c.as_ivec2(), q - c, frame.seed).0
+}
+
+/// The CPU twin of one invocation of `warp_zoom.wgsl`: vertex `ij` of the detailed geometry image.
+pub fn vertex_cpu(
+    f: &FrameUniforms,
+    phi: &[[f32; 2]],
+    atlas: &Atlas,
+    detail: bool,
+    ij: IVec2,
+) -> [f32; 4] {
+    let p = mesh_xy(f, phi, ij);
+    let d = |o: IVec2| p.distance(mesh_xy(f, phi, ij + o));
+    let d_max = d(IVec2::X)
+        .max(d(-IVec2::X))
+        .max(d(IVec2::Y).max(d(-IVec2::Y)));
+    let mut z = atlas_height(f, atlas, p, d_max);
+    let o = (f.d_atlas / d_max.max(1e-6)).log2() - f.bias;
+    if detail {
+        let last = f.octaves.min(o.ceil().max(0.0) as u32);
+        for k in 1..=last {
+            let g = (o - k as f32 + 1.0).clamp(0.0, 1.0);
+            let oct = &f.octave[(k - 1) as usize];
+            z += oct.weight * g * octave_local(oct, p);
+        }
+    }
+    [p.x, p.y, z, o]
+}
