@@ -146,6 +146,17 @@ pub fn load_atlas(scene: &Scene) -> Result<Atlas> {
     }
 }
 
+/// The sketch's height under a world position, if the position is over the sketch.
+pub fn ground_under(atlas: &Atlas, p: DVec2) -> Option<f64> {
+    let (lo, hi) = (atlas.origin, atlas.max_corner());
+    if p.x < lo.x || p.y < lo.y || p.x > hi.x || p.y > hi.y {
+        return None;
+    }
+    let u = (p.x - atlas.origin.x) / atlas.dx;
+    let v = (p.y - atlas.origin.y) / atlas.dy;
+    Some(atlas.sample_texel(u, v, 0.0) as f64)
+}
+
 /// The scene's detail parameters over `atlas`.
 pub fn detail_of(scene: &Scene, atlas: &Atlas) -> Detail {
     let d = &scene.detail;
@@ -156,14 +167,26 @@ pub fn detail_of(scene: &Scene, atlas: &Atlas) -> Detail {
         seed: d.seed,
         bias: d.bias,
         d_atlas: atlas.d_atlas(),
-        lattice_origin_m: DVec2::ZERO,
+        // Anchored to the sketch, so the same sketch anywhere on Earth has the same detail.
+        lattice_origin_m: atlas.origin,
     }
 }
 
-/// The scene's camera; the far distance defaults to the sketch's farthest corner.
+/// The scene's camera; the far distance defaults to the sketch's farthest corner. A camera below
+/// the sketch's surface is an error: every view from there shows the underside of the ground.
 pub fn camera_of(scene: &Scene, atlas: &Atlas) -> Result<Camera> {
     let c = &scene.camera;
     let eye = DVec3::from(c.position);
+    if let Some(ground) = ground_under(atlas, eye.truncate())
+        && eye.z < ground
+    {
+        return Err(Error::Camera(format!(
+            "camera.position is {:.1} m below the ground ({ground:.1} m at {:.1}, {:.1})",
+            ground - eye.z,
+            eye.x,
+            eye.y
+        )));
+    }
     let far = c.far_m.unwrap_or_else(|| {
         let (lo, hi) = (atlas.origin, atlas.max_corner());
         let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];

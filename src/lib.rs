@@ -15,6 +15,7 @@ pub mod gpu;
 pub mod importance;
 pub mod output;
 pub mod quality;
+pub mod render;
 pub mod scene;
 pub mod sketch_map;
 pub mod warp;

@@ -7,8 +7,10 @@ use serde_json::json;
 use std::path::{Path, PathBuf};
 use terrain::atlas::{Atlas, LoadOptions};
 use terrain::cpu_stage::{self, CpuStage, StageTimes};
-use terrain::scene::{Scene, WarpMethod};
-use terrain::{figures, quality};
+use terrain::gpu::uniforms::View;
+use terrain::render::WarpedRenderer;
+use terrain::scene::{Mode, Scene, WarpMethod};
+use terrain::{figures, output, quality};
 
 #[derive(Parser)]
 #[command(
@@ -49,6 +51,22 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Renders a snapshot of the scene from its camera (headless, on whatever adapter there is).
+    Render {
+        scene: PathBuf,
+        #[arg(short = 'o', long = "output")]
+        output: PathBuf,
+        /// Overrides the scene's render.mode.
+        #[arg(long, value_parser = ["warped", "geomipmap", "bruteforce", "reference"])]
+        mode: Option<String>,
+        #[arg(long, default_value = "shaded", value_parser = ["shaded", "wireframe", "split-octave", "importance", "normals"])]
+        view: String,
+        /// Frames rendered after one warm-up frame; medians are reported, the last is written.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+        repeat: u32,
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 fn main() {
@@ -74,6 +92,14 @@ fn main() {
             !no_figures,
             json,
         ),
+        Command::Render {
+            scene,
+            output,
+            mode,
+            view,
+            repeat,
+            json,
+        } => render(&scene, &output, mode.as_deref(), &view, repeat, json),
     };
     if let Err(e) = result {
         eprintln!("error: {}", format!("{e:#}").replace('\n', " "));
@@ -192,4 +218,94 @@ fn warp(
         );
     }
     Ok(())
+}
+
+fn render(
+    scene_path: &Path,
+    out: &Path,
+    mode: Option<&str>,
+    view: &str,
+    repeat: u32,
+    json: bool,
+) -> Result<()> {
+    let scene = Scene::load(scene_path)?;
+    let mode = match mode {
+        Some("warped") => Mode::Warped,
+        Some(m) => anyhow::bail!("mode {m} is not part of this build yet; only warped renders"),
+        None => scene.render.mode,
+    };
+    if mode != Mode::Warped {
+        anyhow::bail!("render.mode = {mode:?} is not part of this build yet; only warped renders");
+    }
+    let view = View::parse(view).context("unknown view")?;
+    let mut r = WarpedRenderer::new(&scene, view)?;
+    let camera = cpu_stage::camera_of(&scene, &r.atlas)?;
+    r.render(&camera)?; // warm-up: shader compilation and first-use allocation
+    let mut frames = Vec::with_capacity(repeat as usize);
+    for _ in 0..repeat {
+        frames.push(r.render(&camera)?);
+    }
+    let median = |f: &dyn Fn(&terrain::render::Frame) -> f64| {
+        let mut v: Vec<f64> = frames.iter().map(f).collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let cpu_us = median(&|f| f.cpu.total_us());
+    let gpu_ms = median(&|f| f.gpu.gpu_ms);
+    let pass = |get: fn(&terrain::gpu::renderer::PassTimes) -> Option<f64>| {
+        frames[0]
+            .gpu
+            .passes
+            .warp_zoom_ms
+            .map(|_| median(&|f| get(&f.gpu.passes).unwrap_or(0.0)))
+    };
+    let last = frames.last().context("no frame rendered")?;
+    output::write_png_rgba(out, last.width, last.height, &last.rgba)?;
+    let report = json!({
+        "adapter": r.ctx.adapter_name(),
+        "mode": "warped",
+        "view": view_name(view),
+        "width": last.width,
+        "height": last.height,
+        "visible": r.stage.sketch_map.visible,
+        "triangles": last.gpu.triangles,
+        "cpu_stage_us": cpu_us,
+        "gpu_ms": gpu_ms,
+        "frame_ms": gpu_ms + cpu_us * 1e-3,
+        "gpu_timing": if r.ctx.timestamps { "timestamp queries" } else { "wall time around submit" },
+        "passes_ms": {
+            "warp_zoom": pass(|p| p.warp_zoom_ms),
+            "normals": pass(|p| p.normals_ms),
+            "terrain": pass(|p| p.terrain_ms),
+        },
+        "gpu_memory_bytes": r.renderer.gpu_bytes,
+        "frames": repeat,
+        "output": out.display().to_string(),
+    });
+    if json {
+        println!("{report}");
+    } else {
+        println!(
+            "{}: {} × {} on {}, {} triangles; CPU stage {:.0} µs, GPU {:.2} ms ({})",
+            out.display(),
+            last.width,
+            last.height,
+            r.ctx.adapter_name(),
+            last.gpu.triangles,
+            cpu_us,
+            gpu_ms,
+            report["gpu_timing"].as_str().unwrap_or_default()
+        );
+    }
+    Ok(())
+}
+
+fn view_name(v: View) -> &'static str {
+    match v {
+        View::Shaded => "shaded",
+        View::Wireframe => "wireframe",
+        View::SplitOctave => "split-octave",
+        View::Importance => "importance",
+        View::Normals => "normals",
+    }
 }

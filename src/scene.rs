@@ -70,6 +70,8 @@ pub struct DetailSection {
     pub seed: u32,
     /// Octaves subtracted from the split octave: the paper's "more conservative estimate".
     pub bias: f64,
+    /// Per-pixel bump detail past the split octave; off leaves its code out of the shader.
+    pub bump: bool,
 }
 impl Default for DetailSection {
     fn default() -> Self {
@@ -79,6 +81,7 @@ impl Default for DetailSection {
             gain: 0.5,
             seed: 7,
             bias: 0.5,
+            bump: true,
         }
     }
 }

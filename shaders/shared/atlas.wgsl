@@ -1,7 +1,12 @@
-// Sampling the sketch atlas: Catmull-Rom bicubic on one mip level, linear between two.
-// The twin of src/gpu/cpu_twin.rs's `atlas_height`.
+// Sampling the sketch atlas: Catmull-Rom bicubic on one pyramid level, linear between two.
+// The twin of src/gpu/warp_zoom.rs's `atlas_height`.
+//
+// The pyramid lives in a read-only storage buffer, its levels one after another. A mip-mapped
+// float texture read with textureLoad returned wrong texels on llvmpipe whenever the lanes of a
+// workgroup read different mip levels (measured: lane 7 of each 8-wide row, heights off by
+// hundreds of metres), and the split octave makes levels differ from vertex to vertex.
 
-@group(0) @binding(1) var atlas: texture_2d<f32>;
+@group(0) @binding(1) var<storage, read> atlas: array<f32>;
 
 fn catmull_rom(f: f32) -> vec4<f32> {
     let f2 = f * f;
@@ -14,25 +19,37 @@ fn catmull_rom(f: f32) -> vec4<f32> {
     );
 }
 
+fn atlas_texel(x: i32, y: i32, l: u32, size: vec2<i32>) -> f32 {
+    let c = vec2<u32>(clamp(vec2<i32>(x, y), vec2<i32>(0), size - 1));
+    return atlas[frame.level[l].z + c.y * frame.level[l].x + c.x];
+}
+
+// One row of four taps.
+fn atlas_row(x: i32, y: i32, l: u32, size: vec2<i32>, w: vec4<f32>) -> f32 {
+    var r = 0.0;
+    r += w.x * atlas_texel(x - 1, y, l, size);
+    r += w.y * atlas_texel(x, y, l, size);
+    r += w.z * atlas_texel(x + 1, y, l, size);
+    r += w.w * atlas_texel(x + 2, y, l, size);
+    return r;
+}
+
 // Bicubic height on level `l` at level-0 texel coordinates `uv`.
 fn atlas_level(uv: vec2<f32>, l: u32) -> f32 {
     let s = f32(1u << l);
     let x = (uv - vec2<f32>((s - 1.0) * 0.5)) / s;
-    let size = vec2<i32>(textureDimensions(atlas, l));
+    let size = vec2<i32>(frame.level[l].xy);
     let i = floor(x);
     let f = x - i;
     let wx = catmull_rom(f.x);
     let wy = catmull_rom(f.y);
+    let ix = i32(i.x);
+    let iy = i32(i.y);
     var h = 0.0;
-    for (var b = 0; b < 4; b++) {
-        let y = clamp(i32(i.y) - 1 + b, 0, size.y - 1);
-        var row = 0.0;
-        for (var a = 0; a < 4; a++) {
-            let xx = clamp(i32(i.x) - 1 + a, 0, size.x - 1);
-            row += wx[a] * textureLoad(atlas, vec2<i32>(xx, y), i32(l)).r;
-        }
-        h += wy[b] * row;
-    }
+    h += wy.x * atlas_row(ix, iy - 1, l, size, wx);
+    h += wy.y * atlas_row(ix, iy, l, size, wx);
+    h += wy.z * atlas_row(ix, iy + 1, l, size, wx);
+    h += wy.w * atlas_row(ix, iy + 2, l, size, wx);
     return h;
 }
 

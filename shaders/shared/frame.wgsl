@@ -30,4 +30,6 @@ struct Frame {
     pad1: u32,
     octave: array<Octave, 24>,
     turbulence: array<Octave, 2>,
+    // The atlas pyramid's levels in the atlas buffer: (width, height, first texel, 0).
+    level: array<vec4<u32>, 16>,
 }

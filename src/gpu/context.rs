@@ -14,7 +14,7 @@ pub struct GpuContext {
 
 /// What the renderer needs of a device, checked before anything is created.
 pub struct Needs {
-    pub atlas_side: u32,
+    /// The largest storage buffer: the atlas pyramid or the detailed geometry image.
     pub storage_bytes: u64,
 }
 
@@ -36,15 +36,9 @@ impl GpuContext {
         let info = adapter.get_info();
         let limits = adapter.limits();
         let name = &info.name;
-        if limits.max_texture_dimension_2d < needs.atlas_side {
-            return Err(Error::Gpu(format!(
-                "{name}: the sketch is {} texels on a side, the adapter's textures at most {}",
-                needs.atlas_side, limits.max_texture_dimension_2d
-            )));
-        }
         if limits.max_storage_buffer_binding_size < needs.storage_bytes {
             return Err(Error::Gpu(format!(
-                "{name}: the mesh needs {} MiB storage buffers, the adapter allows {} MiB",
+                "{name}: the sketch's pyramid or the mesh needs a {} MiB storage buffer, the adapter allows {} MiB",
                 needs.storage_bytes >> 20,
                 limits.max_storage_buffer_binding_size >> 20
             )));

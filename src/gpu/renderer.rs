@@ -40,7 +40,7 @@ pub struct Options {
 
 pub struct Renderer {
     frame: wgpu::Buffer,
-    _atlas: wgpu::Texture,
+    _atlas: wgpu::Buffer,
     warp_zoom: WarpZoomPass,
     normals: NormalsPass,
     terrain: TerrainPass,
@@ -71,10 +71,9 @@ impl Renderer {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let (atlas_texture, atlas_bytes) = upload_atlas(ctx, atlas);
-        let atlas_view = atlas_texture.create_view(&Default::default());
+        let (atlas_buffer, atlas_bytes) = upload_atlas(ctx, atlas);
         let detail = o.octaves > 0;
-        let warp_zoom = WarpZoomPass::new(device, &frame, &atlas_view, o.n, o.mesh, detail)?;
+        let warp_zoom = WarpZoomPass::new(device, &frame, &atlas_buffer, o.n, o.mesh, detail)?;
         let normals = NormalsPass::new(device, &frame, &warp_zoom.detailed, o.mesh)?;
         let importance = (o.view == View::Importance).then(|| {
             device.create_buffer(&wgpu::BufferDescriptor {
@@ -137,7 +136,7 @@ impl Renderer {
             + importance.as_ref().map_or(0, |b| b.size());
         Ok(Renderer {
             frame,
-            _atlas: atlas_texture,
+            _atlas: atlas_buffer,
             warp_zoom,
             normals,
             terrain,
@@ -204,8 +203,10 @@ impl Renderer {
             },
         );
         if let Some(t) = &self.timer {
+            // A sky-only frame wrote only the terrain pass's pair; resolve offsets must be aligned,
+            // so it goes to the start of the buffer.
             let used = if visible { 0..2 * PASSES } else { 4..6 };
-            encoder.resolve_query_set(&t.queries, used.clone(), &t.resolve, used.start as u64 * 8);
+            encoder.resolve_query_set(&t.queries, used, &t.resolve, 0);
             encoder.copy_buffer_to_buffer(&t.resolve, 0, &t.read, 0, 16 * PASSES as u64);
         }
         let start = Instant::now();
@@ -263,47 +264,19 @@ impl Renderer {
     }
 }
 
-/// The atlas and its pyramid as an R32Float texture with one mip level per pyramid level.
-fn upload_atlas(ctx: &GpuContext, atlas: &Atlas) -> (wgpu::Texture, u64) {
-    let base = &atlas.levels[0];
-    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("sketch atlas"),
-        size: wgpu::Extent3d {
-            width: base.width as u32,
-            height: base.height as u32,
-            depth_or_array_layers: 1,
+/// The atlas pyramid in a read-only storage buffer (see `shaders/shared/atlas.wgsl` for why not
+/// a texture).
+fn upload_atlas(ctx: &GpuContext, atlas: &Atlas) -> (wgpu::Buffer, u64) {
+    let texels = super::uniforms::atlas_texels(atlas);
+    let buffer = wgpu::util::DeviceExt::create_buffer_init(
+        &ctx.device,
+        &wgpu::util::BufferInitDescriptor {
+            label: Some("sketch atlas"),
+            contents: bytemuck::cast_slice(&texels),
+            usage: wgpu::BufferUsages::STORAGE,
         },
-        mip_level_count: atlas.levels.len() as u32,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::R32Float,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
-    let mut bytes = 0;
-    for (l, level) in atlas.levels.iter().enumerate() {
-        ctx.queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: &texture,
-                mip_level: l as u32,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            bytemuck::cast_slice(&level.data),
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(level.width as u32 * 4),
-                rows_per_image: None,
-            },
-            wgpu::Extent3d {
-                width: level.width as u32,
-                height: level.height as u32,
-                depth_or_array_layers: 1,
-            },
-        );
-        bytes += level.data.len() as u64 * 4;
-    }
-    (texture, bytes)
+    );
+    (buffer, texels.len() as u64 * 4)
 }
 
 fn padded_row(width: u32) -> u32 {

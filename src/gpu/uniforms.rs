@@ -9,6 +9,8 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DVec2, DVec3, DVec4};
 
 pub const MAX_OCTAVES: usize = 24;
+/// Pyramid levels the GPU sees (a 32768² atlas has 15).
+pub const MAX_LEVELS: usize = 16;
 /// Nearest depth: with reversed-Z and an infinite far plane, depth precision does not suffer.
 const NEAR_M: f64 = 0.05;
 
@@ -58,6 +60,8 @@ pub struct FrameUniforms {
     pub pad1: u32,
     pub octave: [OctaveGpu; MAX_OCTAVES],
     pub turbulence: [OctaveGpu; 2],
+    /// The atlas pyramid's levels in the atlas buffer: width, height, first texel, 0.
+    pub level: [[u32; 4]; MAX_LEVELS],
 }
 
 /// The debug views of `render --view`.
@@ -147,7 +151,7 @@ impl FrameUniforms {
             n: f.map.n as u32,
             mesh: f.mesh,
             octaves: f.detail.octaves.min(MAX_OCTAVES as u32),
-            levels: f.atlas.levels.len() as u32,
+            levels: f.atlas.levels.len().min(MAX_LEVELS) as u32,
             sun: [
                 sun.x as f32,
                 sun.y as f32,
@@ -160,6 +164,28 @@ impl FrameUniforms {
             pad1: 0,
             octave,
             turbulence,
+            level: level_table(f.atlas),
         }
     }
+}
+
+/// Width, height and first texel of each pyramid level, concatenated as [`atlas_texels`] lays them.
+pub fn level_table(atlas: &Atlas) -> [[u32; 4]; MAX_LEVELS] {
+    let mut table = [[0; 4]; MAX_LEVELS];
+    let mut first = 0;
+    for (slot, level) in table.iter_mut().zip(&atlas.levels) {
+        *slot = [level.width as u32, level.height as u32, first as u32, 0];
+        first += level.data.len();
+    }
+    table
+}
+
+/// The pyramid's levels one after another, as the atlas storage buffer holds them.
+pub fn atlas_texels(atlas: &Atlas) -> Vec<f32> {
+    atlas
+        .levels
+        .iter()
+        .take(MAX_LEVELS)
+        .flat_map(|l| l.data.iter().copied())
+        .collect()
 }

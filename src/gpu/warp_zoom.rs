@@ -24,7 +24,7 @@ impl WarpZoomPass {
     pub fn new(
         device: &wgpu::Device,
         frame: &wgpu::Buffer,
-        atlas: &wgpu::TextureView,
+        atlas: &wgpu::Buffer,
         n: u32,
         mesh: u32,
         detail: bool,
@@ -33,15 +33,7 @@ impl WarpZoomPass {
             label: Some("warp_zoom"),
             entries: &[
                 entry(0, S::COMPUTE, uniform()),
-                entry(
-                    1,
-                    S::COMPUTE,
-                    wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                ),
+                entry(1, S::COMPUTE, storage(true)),
                 entry(2, S::COMPUTE, storage(true)),
                 entry(3, S::COMPUTE, storage(false)),
             ],
@@ -70,7 +62,7 @@ impl WarpZoomPass {
                 },
                 wgpu::BindGroupEntry {
                     binding: 1,
-                    resource: wgpu::BindingResource::TextureView(atlas),
+                    resource: atlas.as_entire_binding(),
                 },
                 wgpu::BindGroupEntry {
                     binding: 2,

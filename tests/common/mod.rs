@@ -121,3 +121,44 @@ pub fn assert_sound(r: &Run, what: &str) {
         );
     }
 }
+
+/// PSNR in dB between two RGBA8 images of one size, over RGB; infinity when identical.
+pub fn psnr(a: &[u8], b: &[u8]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let (mut sum, mut count) = (0.0f64, 0usize);
+    for (pa, pb) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
+        for c in 0..3 {
+            let d = pa[c] as f64 - pb[c] as f64;
+            sum += d * d;
+            count += 1;
+        }
+    }
+    let mse = sum / count as f64;
+    if mse == 0.0 {
+        f64::INFINITY
+    } else {
+        10.0 * (255.0f64 * 255.0 / mse).log10()
+    }
+}
+
+/// An image of |a − b| × 4, for looking at where two renders differ.
+pub fn difference(a: &[u8], b: &[u8]) -> Vec<u8> {
+    a.chunks_exact(4)
+        .zip(b.chunks_exact(4))
+        .flat_map(|(pa, pb)| {
+            let d = |c: usize| ((pa[c] as i32 - pb[c] as i32).unsigned_abs() * 4).min(255) as u8;
+            [d(0), d(1), d(2), 255]
+        })
+        .collect()
+}
+
+pub fn read_png(path: &std::path::Path) -> Option<(u32, u32, Vec<u8>)> {
+    let file = std::fs::File::open(path).ok()?;
+    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .ok()?;
+    let mut buf = vec![0; reader.output_buffer_size()?];
+    let info = reader.next_frame(&mut buf).ok()?;
+    (info.color_type == png::ColorType::Rgba)
+        .then(|| (info.width, info.height, buf[..info.buffer_size()].to_vec()))
+}

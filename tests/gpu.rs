@@ -1,0 +1,199 @@
+//! The warped-mode renderer on the machine's adapter (llvmpipe without a GPU): the GPU's warp &
+//! zoom against its CPU twin, snapshots against committed references, a scene moved 4,000 km,
+//! determinism, and extreme cameras.
+//!
+//! Snapshot metric: PSNR over RGB ≥ 30 dB against `tests/snapshots/<name>.png` (llvmpipe renders
+//! these within 0.5 dB run to run; other adapters differ in rounding, not in content). On failure
+//! the actual image and a ×4 difference image are written to `target/test-scratch/snapshots/`.
+//! `UPDATE_SNAPSHOTS=1 cargo test --release --test gpu` rewrites the references.
+
+mod common;
+use common::*;
+use glam::IVec2;
+use terrain::gpu::uniforms::View;
+use terrain::gpu::warp_zoom::vertex_cpu;
+use terrain::render::WarpedRenderer;
+use terrain::scene::Scene;
+
+fn bundled(name: &str, size: u32, mesh: u32) -> Scene {
+    let path = manifest_dir().join("sketches").join(format!("{name}.toml"));
+    let mut s = Scene::load(&path).unwrap();
+    s.camera.width = size;
+    s.camera.height = size;
+    s.warp.mesh = mesh;
+    s
+}
+
+fn render(scene: &Scene, view: View) -> (WarpedRenderer, terrain::render::Frame) {
+    let mut r = WarpedRenderer::new(scene, view).expect("renderer");
+    let camera = terrain::cpu_stage::camera_of(scene, &r.atlas).unwrap();
+    let frame = r.render(&camera).expect("frame");
+    (r, frame)
+}
+
+#[test]
+fn gpu_warp_and_zoom_matches_its_cpu_twin() {
+    for name in ["jacksboro", "gaussian-high", "hills"] {
+        let scene = bundled(name, 64, 512);
+        let (r, _) = render(&scene, View::Shaded);
+        let camera = terrain::cpu_stage::camera_of(&scene, &r.atlas).unwrap();
+        let uniforms = r.uniforms(&camera);
+        let gpu = r.renderer.read_detailed(&r.ctx).unwrap();
+        let range = (r.atlas.max_m - r.atlas.min_m) as f64;
+        let m = scene.warp.mesh as i32;
+        let (mut worst_z, mut worst_xy, mut checked) = (0.0f64, 0.0f64, 0);
+        for j in (0..m).step_by(7).chain([m - 1]) {
+            for i in (0..m).step_by(7).chain([m - 1]) {
+                let cpu = vertex_cpu(
+                    &uniforms,
+                    &r.stage.warp.phi,
+                    &r.atlas,
+                    true,
+                    IVec2::new(i, j),
+                );
+                let g = gpu[(j * m + i) as usize];
+                worst_z = worst_z.max((g[2] - cpu[2]).abs() as f64);
+                // Φ interpolates coordinates as large as the region: f32 rounding (fused or not)
+                // scales with the region's extent.
+                let extent = r.stage.sketch_map.extent();
+                worst_xy =
+                    worst_xy.max((g[0] - cpu[0]).abs().max((g[1] - cpu[1]).abs()) as f64 / extent);
+                assert!(
+                    (g[3] - cpu[3]).abs() < 1e-3,
+                    "{name} ({i}, {j}): split octave {} vs {}",
+                    g[3],
+                    cpu[3]
+                );
+                checked += 1;
+            }
+        }
+        eprintln!(
+            "{name}: {checked} vertices, worst height difference {worst_z:.2e} m = {:.2e} of the range",
+            worst_z / range
+        );
+        assert!(
+            worst_z <= 1e-4 * range,
+            "{name}: heights differ by {worst_z} m"
+        );
+        assert!(
+            worst_xy <= 1e-6,
+            "{name}: positions differ by {worst_xy} of the region"
+        );
+    }
+}
+
+#[test]
+fn snapshots_match_their_references() {
+    let dir = manifest_dir().join("tests").join("snapshots");
+    let out = scratch("snapshots");
+    let update = std::env::var_os("UPDATE_SNAPSHOTS").is_some();
+    for name in ["jacksboro", "gaussian-high", "hills"] {
+        let (_, frame) = render(&bundled(name, 192, 256), View::Shaded);
+        let reference = dir.join(format!("{name}.png"));
+        if update {
+            std::fs::create_dir_all(&dir).unwrap();
+            terrain::output::write_png_rgba(&reference, frame.width, frame.height, &frame.rgba)
+                .unwrap();
+            continue;
+        }
+        let (w, h, expected) = read_png(&reference).unwrap_or_else(|| {
+            panic!(
+                "{}: missing; run with UPDATE_SNAPSHOTS=1",
+                reference.display()
+            )
+        });
+        assert_eq!((w, h), (frame.width, frame.height), "{name}: size");
+        let db = psnr(&frame.rgba, &expected);
+        eprintln!("{name}: {db:.1} dB");
+        if db < 30.0 {
+            let actual = out.join(format!("{name}.png"));
+            terrain::output::write_png_rgba(&actual, w, h, &frame.rgba).unwrap();
+            terrain::output::write_png_rgba(
+                &out.join(format!("{name}-diff.png")),
+                w,
+                h,
+                &difference(&frame.rgba, &expected),
+            )
+            .unwrap();
+            panic!(
+                "{name}: {db:.1} dB < 30 dB against {}; actual and difference in {}",
+                reference.display(),
+                out.display()
+            );
+        }
+    }
+}
+
+#[test]
+fn a_scene_moved_4000_km_renders_the_same() {
+    let near = bundled("hills", 160, 256);
+    let mut far = near.clone();
+    let off = 4_000_000.0;
+    far.sketch.origin_m = Some([off, off]);
+    for v in [&mut far.camera.position, &mut far.camera.look_at] {
+        v[0] += off;
+        v[1] += off;
+    }
+    let (_, a) = render(&near, View::Shaded);
+    let (_, b) = render(&far, View::Shaded);
+    let db = psnr(&a.rgba, &b.rgba);
+    eprintln!("moved 4000 km: {db:.1} dB");
+    assert!(db >= 40.0, "{db:.1} dB");
+}
+
+#[test]
+fn two_renders_are_identical() {
+    let scene = bundled("gaussian", 128, 256);
+    let (mut r, a) = render(&scene, View::Shaded);
+    let camera = terrain::cpu_stage::camera_of(&scene, &r.atlas).unwrap();
+    let b = r.render(&camera).unwrap();
+    assert!(a.rgba == b.rgba, "PSNR {:.1} dB", psnr(&a.rgba, &b.rgba));
+}
+
+#[test]
+fn extreme_cameras_render_without_holes() {
+    let cases = [
+        (
+            "cliff",
+            "[sketch]\nsynthetic = \"cliff\"\n[camera]\nposition = [3841.0, 3000.0, 501.0]\nlook_at = [1841.0, 4000.0, 100.0]\n",
+        ),
+        (
+            "down",
+            "[sketch]\nsynthetic = \"hills\"\n[camera]\nposition = [3840.0, 3840.0, 3000.0]\nlook_at = [3840.0, 3840.0, 0.0]\n",
+        ),
+        (
+            "high",
+            "[sketch]\nsynthetic = \"hills\"\n[camera]\nposition = [3840.0, 3000.0, 50000.0]\nlook_at = [3840.0, 3100.0, 0.0]\n",
+        ),
+        (
+            "sky",
+            "[sketch]\nsynthetic = \"hills\"\n[camera]\nposition = [3000.0, 3000.0, 2000.0]\nlook_at = [3000.0, 3100.0, 5000.0]\n",
+        ),
+    ];
+    for (name, toml) in cases {
+        let scene = scene(
+            &format!("{toml}width = 128\nheight = 128\n[warp]\nmesh = 256\n"),
+            manifest_dir(),
+        );
+        let (r, frame) = render(&scene, View::Shaded);
+        let detailed = r.renderer.read_detailed(&r.ctx).unwrap();
+        if name == "sky" {
+            assert_eq!(frame.gpu.triangles, 0, "sky view drew terrain");
+            continue;
+        }
+        assert!(
+            detailed.iter().all(|v| v.iter().all(|c| c.is_finite())),
+            "{name}: non-finite vertex"
+        );
+        assert!(frame.gpu.triangles > 0);
+        if name == "down" {
+            // Straight down from 3 km the 7.7 km sketch fills the view: no sky may show through.
+            let sky = frame
+                .rgba
+                .chunks_exact(4)
+                .filter(|p| p[2] > p[1] + 25 && p[2] > 150)
+                .count();
+            assert_eq!(sky, 0, "{name}: {sky} sky pixels inside the terrain");
+        }
+    }
+}
