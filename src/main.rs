@@ -48,6 +48,9 @@ enum Command {
         /// Skips writing the figures (the statistics only).
         #[arg(long)]
         no_figures: bool,
+        /// Overrides a scene key, e.g. `--set warp.quad_px=4` (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
         #[arg(long)]
         json: bool,
     },
@@ -61,6 +64,9 @@ enum Command {
         mode: Option<String>,
         #[arg(long, default_value = "shaded", value_parser = ["shaded", "wireframe", "split-octave", "importance", "normals"])]
         view: String,
+        /// Overrides a scene key, e.g. `--set detail.octaves=0` (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
         /// Frames rendered after one warm-up frame; medians are reported, the last is written.
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
         repeat: u32,
@@ -83,9 +89,11 @@ fn main() {
             method,
             repeat,
             no_figures,
+            set,
             json,
         } => warp(
             &scene,
+            &set,
             &out_dir,
             method.as_deref(),
             repeat,
@@ -97,9 +105,10 @@ fn main() {
             output,
             mode,
             view,
+            set,
             repeat,
             json,
-        } => render(&scene, &output, mode.as_deref(), &view, repeat, json),
+        } => render(&scene, &set, &output, mode.as_deref(), &view, repeat, json),
     };
     if let Err(e) = result {
         eprintln!("error: {}", format!("{e:#}").replace('\n', " "));
@@ -146,13 +155,14 @@ fn info(file: &Path, spacing_m: Option<f64>, json: bool) -> Result<()> {
 
 fn warp(
     scene_path: &Path,
+    set: &[String],
     out_dir: &Path,
     method: Option<&str>,
     repeat: u32,
     figures_on: bool,
     json: bool,
 ) -> Result<()> {
-    let mut scene = Scene::load(scene_path)?;
+    let mut scene = Scene::load_with(scene_path, set)?;
     if let Some(m) = method {
         scene.warp.method = if m == "plain" {
             WarpMethod::Plain
@@ -222,13 +232,14 @@ fn warp(
 
 fn render(
     scene_path: &Path,
+    set: &[String],
     out: &Path,
     mode: Option<&str>,
     view: &str,
     repeat: u32,
     json: bool,
 ) -> Result<()> {
-    let scene = Scene::load(scene_path)?;
+    let scene = Scene::load_with(scene_path, set)?;
     let mode = match mode {
         Some("warped") => Mode::Warped,
         Some(m) => anyhow::bail!("mode {m} is not part of this build yet; only warped renders"),
@@ -252,6 +263,7 @@ fn render(
     };
     let cpu_us = median(&|f| f.cpu.total_us());
     let gpu_ms = median(&|f| f.gpu.gpu_ms);
+    let gpu_wall_ms = median(&|f| f.gpu.gpu_wall_ms);
     let pass = |get: fn(&terrain::gpu::renderer::PassTimes) -> Option<f64>| {
         frames[0]
             .gpu
@@ -272,6 +284,7 @@ fn render(
         "cpu_stage_us": cpu_us,
         "gpu_ms": gpu_ms,
         "frame_ms": gpu_ms + cpu_us * 1e-3,
+        "gpu_wall_ms": gpu_wall_ms,
         "gpu_timing": if r.ctx.timestamps { "timestamp queries" } else { "wall time around submit" },
         "passes_ms": {
             "warp_zoom": pass(|p| p.warp_zoom_ms),

@@ -201,13 +201,49 @@ impl Scene {
 
     /// Parses and checks a scene; the error is one line naming the key.
     pub fn parse(text: &str, base_dir: PathBuf) -> std::result::Result<Scene, String> {
-        let mut scene: Scene = toml::from_str(text).map_err(|e| {
+        Scene::parse_with(text, base_dir, &[])
+    }
+
+    /// Like [`Scene::load`], with `key.path=value` overrides (TOML values; bare words are strings)
+    /// applied before the scene is checked, as `--set` gives them.
+    pub fn load_with(path: &Path, overrides: &[String]) -> Result<Scene> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
+        Scene::parse_with(&text, base, overrides).map_err(|reason| Error::Scene {
+            path: path.to_path_buf(),
+            reason,
+        })
+    }
+
+    pub fn parse_with(
+        text: &str,
+        base_dir: PathBuf,
+        overrides: &[String],
+    ) -> std::result::Result<Scene, String> {
+        let one_line = |e: toml::de::Error, text: &str| {
             let line = e
                 .span()
-                .map(|s| format!("line {}: ", text[..s.start].matches('\n').count() + 1))
+                .filter(|_| !text.is_empty())
+                .map(|s| {
+                    format!(
+                        "line {}: ",
+                        text[..s.start.min(text.len())].matches('\n').count() + 1
+                    )
+                })
                 .unwrap_or_default();
             format!("{line}{}", e.message().replace('\n', " "))
-        })?;
+        };
+        let mut scene: Scene = if overrides.is_empty() {
+            toml::from_str(text).map_err(|e| one_line(e, text))?
+        } else {
+            let mut table: toml::Table = toml::from_str(text).map_err(|e| one_line(e, text))?;
+            for o in overrides {
+                apply_override(&mut table, o)?;
+            }
+            toml::Value::Table(table)
+                .try_into()
+                .map_err(|e: toml::de::Error| one_line(e, ""))?
+        };
         scene.base_dir = base_dir;
         scene.check()?;
         Ok(scene)
@@ -292,6 +328,31 @@ impl Scene {
     }
 }
 
+/// Sets `a.b.c=value` in a TOML table, creating the tables on the way.
+fn apply_override(table: &mut toml::Table, o: &str) -> std::result::Result<(), String> {
+    let (key, value) = o
+        .split_once('=')
+        .ok_or_else(|| format!("--set {o}: expected key.path=value"))?;
+    let value = toml::from_str::<toml::Table>(&format!("v = {value}"))
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(value.trim().to_string()));
+    let parts: Vec<&str> = key.trim().split('.').collect();
+    let (last, path) = parts
+        .split_last()
+        .ok_or_else(|| format!("--set {o}: empty key"))?;
+    let mut here = table;
+    for p in path {
+        here = here
+            .entry(p.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            .as_table_mut()
+            .ok_or_else(|| format!("--set {o}: `{p}` is not a table"))?;
+    }
+    here.insert(last.to_string(), value);
+    Ok(())
+}
+
 fn finite_all(key: &str, v: &[f64]) -> std::result::Result<(), String> {
     match v.iter().find(|x| !x.is_finite()) {
         Some(x) => Err(format!("{key}: {x} is not a finite number")),
@@ -364,5 +425,21 @@ mod tests {
                 .contains("camera.fov_y_deg")
         );
         assert!(err("[path]\nkeys = [{ position = [0.0, 0.0, 1.0] }]\n").contains("path.keys"));
+    }
+
+    #[test]
+    fn overrides_set_keys_and_are_checked() {
+        let set = |o: &[&str]| {
+            let o: Vec<String> = o.iter().map(|s| s.to_string()).collect();
+            Scene::parse_with(MIN, PathBuf::new(), &o)
+        };
+        let s = set(&["detail.octaves=0", "warp.method=plain", "camera.width = 64"]).unwrap();
+        assert_eq!(
+            (s.detail.octaves, s.warp.method, s.camera.width),
+            (0, WarpMethod::Plain, 64)
+        );
+        assert!(set(&["detail.gain=3"]).unwrap_err().contains("detail.gain"));
+        assert!(set(&["detail.octave=3"]).unwrap_err().contains("octave"));
+        assert!(set(&["nonsense"]).unwrap_err().contains("key.path=value"));
     }
 }

@@ -2,8 +2,11 @@
 //! zoom against its CPU twin, snapshots against committed references, a scene moved 4,000 km,
 //! determinism, and extreme cameras.
 //!
-//! Snapshot metric: PSNR over RGB ≥ 30 dB against `tests/snapshots/<name>.png` (llvmpipe renders
-//! these within 0.5 dB run to run; other adapters differ in rounding, not in content). On failure
+//! Snapshot metric: PSNR over RGB ≥ 40 dB against `tests/snapshots/<name>.png`, made on llvmpipe,
+//! which renders them bit-identically run to run. Measured against the jacksboro reference, small
+//! mistakes fall well below: bump detail off 31.9 dB, no detail 29.7 dB, fov 58° instead of 60°
+//! 27.5 dB, another noise seed 26.7 dB. A GPU rounds differently from llvmpipe and may need its own
+//! references (`UPDATE_SNAPSHOTS=1`). On failure
 //! the actual image and a ×4 difference image are written to `target/test-scratch/snapshots/`.
 //! `UPDATE_SNAPSHOTS=1 cargo test --release --test gpu` rewrites the references.
 
@@ -67,8 +70,20 @@ fn gpu_warp_and_zoom_matches_its_cpu_twin() {
                 checked += 1;
             }
         }
+        // The normals pass against its twin, fed the GPU's own vertices.
+        let normals = r.renderer.read_normals(&r.ctx).unwrap();
+        let mut worst_n = 0.0f32;
+        for j in (0..m).step_by(7) {
+            for i in (0..m).step_by(7) {
+                let cpu =
+                    terrain::gpu::normals::normal_cpu(&gpu, scene.warp.mesh, IVec2::new(i, j));
+                let g = normals[(j * m + i) as usize];
+                worst_n = worst_n.max((0..3).map(|c| (g[c] - cpu[c]).abs()).fold(0.0, f32::max));
+            }
+        }
+        assert!(worst_n < 1e-4, "{name}: normals differ by {worst_n}");
         eprintln!(
-            "{name}: {checked} vertices, worst height difference {worst_z:.2e} m = {:.2e} of the range",
+            "{name}: {checked} vertices, worst height difference {worst_z:.2e} m = {:.2e} of the range; normals {worst_n:.1e}",
             worst_z / range
         );
         assert!(
@@ -105,7 +120,7 @@ fn snapshots_match_their_references() {
         assert_eq!((w, h), (frame.width, frame.height), "{name}: size");
         let db = psnr(&frame.rgba, &expected);
         eprintln!("{name}: {db:.1} dB");
-        if db < 30.0 {
+        if db < 40.0 {
             let actual = out.join(format!("{name}.png"));
             terrain::output::write_png_rgba(&actual, w, h, &frame.rgba).unwrap();
             terrain::output::write_png_rgba(
@@ -116,7 +131,7 @@ fn snapshots_match_their_references() {
             )
             .unwrap();
             panic!(
-                "{name}: {db:.1} dB < 30 dB against {}; actual and difference in {}",
+                "{name}: {db:.1} dB < 40 dB against {}; actual and difference in {}",
                 reference.display(),
                 out.display()
             );
@@ -195,5 +210,28 @@ fn extreme_cameras_render_without_holes() {
                 .count();
             assert_eq!(sky, 0, "{name}: {sky} sky pixels inside the terrain");
         }
+    }
+}
+
+#[test]
+fn every_debug_view_renders() {
+    let scene = bundled("hills", 64, 128);
+    let mut last: Option<Vec<u8>> = None;
+    for view in [
+        View::Shaded,
+        View::Wireframe,
+        View::SplitOctave,
+        View::Importance,
+        View::Normals,
+    ] {
+        let (_, frame) = render(&scene, view);
+        assert_eq!(frame.rgba.len(), 64 * 64 * 4);
+        if let Some(prev) = &last {
+            assert!(
+                prev != &frame.rgba,
+                "{view:?} looks like the view before it"
+            );
+        }
+        last = Some(frame.rgba);
     }
 }

@@ -74,3 +74,23 @@ impl NormalsPass {
         pass.dispatch_workgroups(groups(self.mesh), groups(self.mesh), 1);
     }
 }
+
+/// The CPU twin of one invocation of `normals.wgsl`: the normal of vertex `ij` of `detailed`
+/// (mesh², row-major).
+pub fn normal_cpu(detailed: &[[f32; 4]], mesh: u32, ij: glam::IVec2) -> [f32; 3] {
+    let m = mesh as i32;
+    let vertex = |p: glam::IVec2| {
+        let c = p.clamp(glam::IVec2::ZERO, glam::IVec2::splat(m - 1));
+        let v = detailed[(c.y * m + c.x) as usize];
+        glam::Vec3::new(v[0], v[1], v[2])
+    };
+    let ds = vertex(ij + glam::IVec2::X) - vertex(ij - glam::IVec2::X);
+    let dt = vertex(ij + glam::IVec2::Y) - vertex(ij - glam::IVec2::Y);
+    let c = ds.cross(dt);
+    let len = c.length();
+    if len > 0.0 {
+        (c / len).to_array()
+    } else {
+        [0.0, 0.0, 1.0]
+    }
+}

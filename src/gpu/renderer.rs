@@ -24,6 +24,8 @@ pub struct PassTimes {
 pub struct FrameStats {
     /// GPU time of the frame: the passes' sum with timestamps, else submit-to-idle wall time.
     pub gpu_ms: f64,
+    /// Submit to readback done, always measured: llvmpipe may run a pass after its end timestamp.
+    pub gpu_wall_ms: f64,
     pub passes: PassTimes,
     pub triangles: u64,
 }
@@ -242,6 +244,7 @@ impl Renderer {
             } else {
                 wall_ms
             },
+            gpu_wall_ms: wall_ms,
             passes,
             triangles: if visible { self.terrain.triangles() } else { 0 },
         };
@@ -250,7 +253,18 @@ impl Renderer {
 
     /// The detailed geometry image of the last frame, read back (for tests).
     pub fn read_detailed(&self, ctx: &GpuContext) -> Result<Vec<[f32; 4]>> {
-        let size = self.warp_zoom.detailed.size();
+        read_vec4(ctx, &self.warp_zoom.detailed)
+    }
+
+    /// The normals of the last frame, read back (for tests).
+    pub fn read_normals(&self, ctx: &GpuContext) -> Result<Vec<[f32; 4]>> {
+        read_vec4(ctx, &self.normals.normals)
+    }
+}
+
+fn read_vec4(ctx: &GpuContext, source: &wgpu::Buffer) -> Result<Vec<[f32; 4]>> {
+    {
+        let size = source.size();
         let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("detailed readback"),
             size,
@@ -258,7 +272,7 @@ impl Renderer {
             mapped_at_creation: false,
         });
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(&self.warp_zoom.detailed, 0, &staging, 0, size);
+        encoder.copy_buffer_to_buffer(source, 0, &staging, 0, size);
         ctx.queue.submit([encoder.finish()]);
         read_buffer(ctx, &staging, |b| bytemuck::cast_slice(b).to_vec())
     }
