@@ -102,7 +102,7 @@ fn albedo(local: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 @fragment
 fn terrain_fs(in: VsOut) -> @location(0) vec4<f32> {
     let to_eye = frame.eye.xyz - in.local;
-    let dist = length(to_eye);
+    let dist = max(length(to_eye), 1e-3);
     var n = normalize(in.normal);
 #ifdef BUMP
     // Bump detail: octaves from the vertex's split octave up to the pixel's own octave; the

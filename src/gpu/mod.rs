@@ -79,7 +79,28 @@ pub(crate) fn storage(read_only: bool) -> wgpu::BindingType {
     }
 }
 
-/// Dispatch size covering `mesh`² with 8×8 workgroups.
-pub(crate) fn groups(mesh: u32) -> u32 {
-    mesh.div_ceil(8)
+/// A bind-group entry for a whole buffer.
+pub(crate) fn bind(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: buffer.as_entire_binding(),
+    }
+}
+
+/// Records a compute pass running `pipeline` once per vertex of a `mesh`² grid (8×8 workgroups).
+pub(crate) fn dispatch_mesh(
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    pipeline: &wgpu::ComputePipeline,
+    bind_group: &wgpu::BindGroup,
+    mesh: u32,
+    timestamps: Option<wgpu::ComputePassTimestampWrites>,
+) {
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: timestamps,
+    });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, bind_group, &[]);
+    pass.dispatch_workgroups(mesh.div_ceil(8), mesh.div_ceil(8), 1);
 }

@@ -1,6 +1,6 @@
 //! Normals of the detailed geometry image (`shaders/normals.wgsl`).
 
-use super::{compute_pipeline, entry, groups, storage, uniform};
+use super::{bind, compute_pipeline, dispatch_mesh, entry, storage, uniform};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
 
@@ -37,20 +37,7 @@ impl NormalsPass {
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("normals"),
             layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: frame.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: detailed.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: normals.as_entire_binding(),
-                },
-            ],
+            entries: &[bind(0, frame), bind(3, detailed), bind(4, &normals)],
         });
         Ok(NormalsPass {
             pipeline,
@@ -65,13 +52,8 @@ impl NormalsPass {
         encoder: &mut wgpu::CommandEncoder,
         timestamps: Option<wgpu::ComputePassTimestampWrites>,
     ) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("normals"),
-            timestamp_writes: timestamps,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.bind_group, &[]);
-        pass.dispatch_workgroups(groups(self.mesh), groups(self.mesh), 1);
+        let (p, b) = (&self.pipeline, &self.bind_group);
+        dispatch_mesh(encoder, "normals", p, b, self.mesh, timestamps);
     }
 }
 

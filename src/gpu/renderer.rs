@@ -24,7 +24,7 @@ pub struct PassTimes {
 pub struct FrameStats {
     /// GPU time of the frame: the passes' sum with timestamps, else submit-to-idle wall time.
     pub gpu_ms: f64,
-    /// Submit to readback done, always measured: llvmpipe may run a pass after its end timestamp.
+    /// Submit to readback done, always measured (it includes the readback copy and the wait).
     pub gpu_wall_ms: f64,
     pub passes: PassTimes,
     pub triangles: u64,
@@ -217,23 +217,7 @@ impl Renderer {
             unpad(bytes, self.width, self.height)
         })?;
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        let passes = match &self.timer {
-            Some(t) => {
-                let ticks: Vec<u64> =
-                    read_buffer(ctx, &t.read, |b| bytemuck::cast_slice(b).to_vec())?;
-                let ms = |k: usize| {
-                    Some(
-                        (ticks[2 * k + 1].saturating_sub(ticks[2 * k])) as f64 * t.period_ns * 1e-6,
-                    )
-                };
-                PassTimes {
-                    warp_zoom_ms: if visible { ms(0) } else { Some(0.0) },
-                    normals_ms: if visible { ms(1) } else { Some(0.0) },
-                    terrain_ms: ms(2),
-                }
-            }
-            None => PassTimes::default(),
-        };
+        let passes = self.pass_times(ctx, visible)?;
         let summed = [passes.warp_zoom_ms, passes.normals_ms, passes.terrain_ms]
             .iter()
             .map(|v| v.unwrap_or(0.0))
@@ -249,6 +233,32 @@ impl Renderer {
             triangles: if visible { self.terrain.triangles() } else { 0 },
         };
         Ok((pixels, stats))
+    }
+
+    /// Milliseconds per pass from the timestamp queries of the frame just rendered. A sky-only
+    /// frame resolved only the terrain pass's pair, to the start of the buffer.
+    fn pass_times(&self, ctx: &GpuContext, visible: bool) -> Result<PassTimes> {
+        let Some(t) = &self.timer else {
+            return Ok(PassTimes::default());
+        };
+        let ticks: Vec<u64> = read_buffer(ctx, &t.read, |b| bytemuck::cast_slice(b).to_vec())?;
+        let ms = |k: usize| {
+            let dt = ticks[2 * k + 1].saturating_sub(ticks[2 * k]);
+            Some(dt as f64 * t.period_ns * 1e-6)
+        };
+        Ok(if visible {
+            PassTimes {
+                warp_zoom_ms: ms(0),
+                normals_ms: ms(1),
+                terrain_ms: ms(2),
+            }
+        } else {
+            PassTimes {
+                warp_zoom_ms: Some(0.0),
+                normals_ms: Some(0.0),
+                terrain_ms: ms(0),
+            }
+        })
     }
 
     /// The detailed geometry image of the last frame, read back (for tests).

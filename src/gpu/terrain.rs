@@ -2,7 +2,7 @@
 //! detailed geometry image as an indexed quad mesh read from its storage buffers (no vertex upload).
 //! Reversed-Z depth with an infinite far plane. Owns the colour and depth targets.
 
-use super::{entry, shader_module, storage, uniform};
+use super::{bind, entry, shader_module, storage, uniform};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
 
@@ -106,25 +106,9 @@ impl TerrainPass {
             wgpu::CompareFunction::Greater,
         );
 
-        let mut bind_entries = vec![
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: frame.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: detailed.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: normals.as_entire_binding(),
-            },
-        ];
+        let mut bind_entries = vec![bind(0, frame), bind(3, detailed), bind(4, normals)];
         if let Some(buffer) = &variant.importance {
-            bind_entries.push(wgpu::BindGroupEntry {
-                binding: 5,
-                resource: buffer.as_entire_binding(),
-            });
+            bind_entries.push(bind(5, buffer));
         }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("terrain"),

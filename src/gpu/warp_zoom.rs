@@ -3,7 +3,7 @@
 //! hold the GPU to the CPU stage's definitions.
 
 use super::uniforms::FrameUniforms;
-use super::{compute_pipeline, entry, groups, storage, uniform};
+use super::{bind, compute_pipeline, dispatch_mesh, entry, storage, uniform};
 use crate::atlas::Atlas;
 use crate::detail::{OctaveFrame, gradient_noise};
 use crate::error::Result;
@@ -56,22 +56,10 @@ impl WarpZoomPass {
             label: Some("warp_zoom"),
             layout: &layout,
             entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: frame.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: atlas.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: phi.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: detailed.as_entire_binding(),
-                },
+                bind(0, frame),
+                bind(1, atlas),
+                bind(2, &phi),
+                bind(3, &detailed),
             ],
         });
         Ok(WarpZoomPass {
@@ -88,13 +76,8 @@ impl WarpZoomPass {
         encoder: &mut wgpu::CommandEncoder,
         timestamps: Option<wgpu::ComputePassTimestampWrites>,
     ) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("warp_zoom"),
-            timestamp_writes: timestamps,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.bind_group, &[]);
-        pass.dispatch_workgroups(groups(self.mesh), groups(self.mesh), 1);
+        let (p, b) = (&self.pipeline, &self.bind_group);
+        dispatch_mesh(encoder, "warp_zoom", p, b, self.mesh, timestamps);
     }
 }
 
