@@ -46,6 +46,9 @@ fn sky_vs(@builtin(vertex_index) vi: u32) -> SkyOut {
 
 @fragment
 fn sky_fs(in: SkyOut) -> @location(0) vec4<f32> {
+    if (frame.view == 5u) {
+        return vec4<f32>(0.0, 0.0, 0.0, 1.0);
+    }
     let far = frame.inv_view_proj * vec4<f32>(in.ndc, 0.5, 1.0);
     let dir = normalize(far.xyz / far.w - frame.eye.xyz);
     return vec4<f32>(sky_colour(dir), 1.0);
@@ -59,6 +62,69 @@ struct VsOut {
     @location(3) grid: vec2<f32>,
 }
 
+#ifdef GEOMIPMAP
+// A block drawn this frame (the twin of geomipmap.rs's `BlockGpu`).
+struct Block {
+    origin: vec2<u32>,
+    level: u32,
+    pad: u32,
+    side_level: vec4<u32>,   // the level governing each edge: S, E, N, W
+    morph: vec4<f32>,        // own morph range: start, end
+    side_start: vec4<f32>,
+    side_end: vec4<f32>,
+}
+@group(0) @binding(6) var<storage, read> blocks: array<Block>;
+
+fn grid_index(g: vec2<u32>) -> u32 {
+    return g.y * frame.mesh + g.x;
+}
+
+// Index = block slot << 11 | (j·33 + i). Vertices that the next level drops move toward the
+// midpoint of their two neighbours on it (Wagner's geomorph); edge vertices follow the level and
+// morph range of the coarser block of their edge, so neighbours agree on them.
+@vertex
+fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
+    let b = blocks[vi >> 11u];
+    let local = vi & 2047u;
+    let l2 = vec2<u32>(local % 33u, local / 33u);
+    let g = b.origin + l2;
+    var p = detailed[grid_index(g)];
+    var n = normals[grid_index(g)].xyz;
+    var level = b.level;
+    var start = b.morph.x;
+    var end = b.morph.y;
+    var side = 4u;
+    if (l2.y == 0u) { side = 0u; } else if (l2.x == 32u) { side = 1u; } else if (l2.y == 32u) { side = 2u; } else if (l2.x == 0u) { side = 3u; }
+    if (side < 4u && b.side_level[side] >= level) {
+        level = b.side_level[side];
+        start = b.side_start[side];
+        end = b.side_end[side];
+    }
+    let s = 1u << level;
+    let s2 = 2u << level;
+    if (level < 5u && (g.x % s2 != 0u || g.y % s2 != 0u)) {
+        let d = vec2<u32>(select(0u, s, g.x % s2 != 0u), select(0u, s, g.y % s2 != 0u));
+        let a = detailed[grid_index(g - d)];
+        let c = detailed[grid_index(g + d)];
+        let eye_d = distance(p.xyz + vec3<f32>(frame.mesh_offset, 0.0), frame.eye.xyz);
+        var m = 0.0;
+        if (end > start) {
+            m = clamp((eye_d - start) / (end - start), 0.0, 1.0);
+        }
+        p.z = mix(p.z, 0.5 * (a.z + c.z), m);
+        let nc = normals[grid_index(g - d)].xyz + normals[grid_index(g + d)].xyz;
+        n = normalize(mix(n, normalize(nc), m));
+    }
+    let local_pos = p.xyz + vec3<f32>(frame.mesh_offset, 0.0);
+    var out: VsOut;
+    out.clip = frame.view_proj * vec4<f32>(local_pos, 1.0);
+    out.local = local_pos;
+    out.normal = n;
+    out.split = p.w;
+    out.grid = vec2<f32>(g);
+    return out;
+}
+#else
 @vertex
 fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     let p = detailed[vi];
@@ -70,6 +136,7 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     out.grid = vec2<f32>(f32(vi % frame.mesh), f32(vi / frame.mesh));
     return out;
 }
+#endif
 
 // Low-frequency turbulence that moves the boundaries between surface types.
 fn turbulence(local: vec2<f32>) -> f32 {
@@ -138,6 +205,8 @@ fn terrain_fs(in: VsOut) -> @location(0) vec4<f32> {
         colour = mix(vec3<f32>(0.1, 0.1, 0.6), vec3<f32>(1.0, 0.9, 0.1), t);
     } else if (frame.view == 4u) {
         colour = n * 0.5 + 0.5;
+    } else if (frame.view == 5u) {
+        return vec4<f32>(1.0, 1.0, 1.0, 1.0);
     }
 #ifdef IMPORTANCE_VIEW
     let texel = (in.local.xy - frame.phi_offset) / frame.sun.w;

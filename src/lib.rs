@@ -11,6 +11,7 @@ pub mod cpu_stage;
 pub mod detail;
 pub mod error;
 pub mod figures;
+pub mod geomipmap;
 pub mod gpu;
 pub mod importance;
 pub mod output;

@@ -62,7 +62,7 @@ enum Command {
         /// Overrides the scene's render.mode.
         #[arg(long, value_parser = ["warped", "geomipmap", "bruteforce", "reference"])]
         mode: Option<String>,
-        #[arg(long, default_value = "shaded", value_parser = ["shaded", "wireframe", "split-octave", "importance", "normals"])]
+        #[arg(long, default_value = "shaded", value_parser = ["shaded", "wireframe", "split-octave", "importance", "normals", "coverage"])]
         view: String,
         /// Overrides a scene key, e.g. `--set detail.octaves=0` (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -320,5 +320,6 @@ fn view_name(v: View) -> &'static str {
         View::SplitOctave => "split-octave",
         View::Importance => "importance",
         View::Normals => "normals",
+        View::Coverage => "coverage",
     }
 }

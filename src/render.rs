@@ -83,7 +83,8 @@ impl WarpedRenderer {
             .fold(0.0, f32::max);
         FrameUniforms::new(&FrameInputs {
             camera,
-            map: &self.stage.sketch_map,
+            map: Some(&self.stage.sketch_map),
+            mesh_origin: None,
             atlas: &self.atlas,
             detail: &self.detail,
             mesh: self.mesh,

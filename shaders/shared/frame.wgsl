@@ -24,10 +24,9 @@ struct Frame {
     octaves: u32,
     levels: u32,                 // atlas mip levels
     sun: vec4<f32>,              // xyz: direction to the sun; w: sketch-map spacing d0
-    view: u32,                   // debug view: 0 shaded, 1 wireframe, 2 split octave, 3 importance, 4 normals
+    view: u32,                   // debug view: 0 shaded, 1 wireframe, 2 split octave, 3 importance, 4 normals, 5 coverage
     importance_max: f32,
-    pad0: u32,
-    pad1: u32,
+    mesh_offset: vec2<f32>,      // origin of the mesh's coordinates − frame origin (0 for warped)
     octave: array<Octave, 24>,
     turbulence: array<Octave, 2>,
     // The atlas pyramid's levels in the atlas buffer: (width, height, first texel, 0).

@@ -3,6 +3,7 @@
 //! name in `shaders/`. [`renderer::Renderer`] runs them as a flat list.
 
 pub mod context;
+pub mod frame_io;
 pub mod normals;
 pub mod renderer;
 pub mod shaders;

@@ -23,7 +23,7 @@ pub const PASSES: [(&str, &str); 3] = [
 ];
 
 /// Every flag any pass tests, for validating all variants.
-pub const FLAGS: [&str; 4] = ["DETAIL", "BUMP", "NOISE", "IMPORTANCE_VIEW"];
+pub const FLAGS: [&str; 5] = ["DETAIL", "BUMP", "NOISE", "IMPORTANCE_VIEW", "GEOMIPMAP"];
 
 /// The combined source of pass `name` with `flags` set.
 pub fn compose(name: &str, flags: &[&str]) -> Result<String> {

@@ -18,14 +18,18 @@ pub struct TerrainPass {
     pub colour: wgpu::Texture,
     colour_view: wgpu::TextureView,
     depth_view: wgpu::TextureView,
+    target_bytes: u64,
 }
 
-/// Which variant of the fragment shader to build.
+/// Which variant of the shaders to build.
 pub struct Variant {
     pub noise: bool,
     pub bump: bool,
     /// The importance debug view's buffer (n² f32), only when that view is drawn.
     pub importance: Option<wgpu::Buffer>,
+    /// GeoMipMap: the per-frame block records and the most indices a frame can draw. The index
+    /// buffer is then rewritten every frame instead of holding the warped mesh's quads.
+    pub geomipmap: Option<(wgpu::Buffer, u64)>,
 }
 
 impl TerrainPass {
@@ -55,6 +59,10 @@ impl TerrainPass {
         if variant.importance.is_some() {
             entries.push(entry(5, S::FRAGMENT, storage(true)));
             flags.push("IMPORTANCE_VIEW");
+        }
+        if variant.geomipmap.is_some() {
+            entries.push(entry(6, S::VERTEX, storage(true)));
+            flags.push("GEOMIPMAP");
         }
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("terrain"),
@@ -110,20 +118,37 @@ impl TerrainPass {
         if let Some(buffer) = &variant.importance {
             bind_entries.push(bind(5, buffer));
         }
+        if let Some((blocks, _)) = &variant.geomipmap {
+            bind_entries.push(bind(6, blocks));
+        }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("terrain"),
             layout: &layout,
             entries: &bind_entries,
         });
-        let indices = quad_indices(mesh);
-        let index = wgpu::util::DeviceExt::create_buffer_init(
-            device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("quad mesh indices"),
-                contents: bytemuck::cast_slice(&indices),
-                usage: wgpu::BufferUsages::INDEX,
-            },
-        );
+        let (index, index_count) = match &variant.geomipmap {
+            Some((_, capacity)) => {
+                let index = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("block indices"),
+                    size: capacity * 4,
+                    usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                (index, 0)
+            }
+            None => {
+                let indices = quad_indices(mesh);
+                let index = wgpu::util::DeviceExt::create_buffer_init(
+                    device,
+                    &wgpu::util::BufferInitDescriptor {
+                        label: Some("quad mesh indices"),
+                        contents: bytemuck::cast_slice(&indices),
+                        usage: wgpu::BufferUsages::INDEX,
+                    },
+                );
+                (index, indices.len() as u32)
+            }
+        };
         let target = |format, usage, label| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
@@ -150,16 +175,28 @@ impl TerrainPass {
             sky,
             terrain,
             bind_group,
-            index_count: indices.len() as u32,
+            index_count,
             index,
             colour_view: colour.create_view(&Default::default()),
             depth_view: depth.create_view(&Default::default()),
+            target_bytes: 2 * width as u64 * height as u64 * 4,
             colour,
         })
     }
 
     pub fn triangles(&self) -> u64 {
         self.index_count as u64 / 3
+    }
+
+    /// Bytes of the colour and depth targets.
+    pub fn target_bytes(&self) -> u64 {
+        self.target_bytes
+    }
+
+    /// The GeoMipMap variant's indices for this frame.
+    pub fn write_indices(&mut self, queue: &wgpu::Queue, indices: &[u32]) {
+        queue.write_buffer(&self.index, 0, bytemuck::cast_slice(indices));
+        self.index_count = indices.len() as u32;
     }
 
     /// The sky, then the terrain unless nothing of it is in view.

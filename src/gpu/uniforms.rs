@@ -56,8 +56,7 @@ pub struct FrameUniforms {
     pub sun: [f32; 4],
     pub view: u32,
     pub importance_max: f32,
-    pub pad0: u32,
-    pub pad1: u32,
+    pub mesh_offset: [f32; 2],
     pub octave: [OctaveGpu; MAX_OCTAVES],
     pub turbulence: [OctaveGpu; 2],
     /// The atlas pyramid's levels in the atlas buffer: width, height, first texel, 0.
@@ -72,6 +71,8 @@ pub enum View {
     SplitOctave = 2,
     Importance = 3,
     Normals = 4,
+    /// Terrain white, sky black: for finding holes.
+    Coverage = 5,
 }
 
 impl View {
@@ -82,6 +83,7 @@ impl View {
             "split-octave" => View::SplitOctave,
             "importance" => View::Importance,
             "normals" => View::Normals,
+            "coverage" => View::Coverage,
             _ => return None,
         })
     }
@@ -114,7 +116,10 @@ pub fn view_proj(camera: &Camera, origin: DVec2) -> DMat4 {
 
 pub struct FrameInputs<'a> {
     pub camera: &'a Camera,
-    pub map: &'a SketchMap,
+    /// The warped mode's sketch map (Φ is relative to its corner); `None` for the baselines.
+    pub map: Option<&'a SketchMap>,
+    /// World position the mesh's coordinates are relative to; `None`: the frame origin.
+    pub mesh_origin: Option<DVec2>,
     pub atlas: &'a Atlas,
     pub detail: &'a Detail,
     pub mesh: u32,
@@ -143,12 +148,14 @@ impl FrameUniforms {
             view_proj: vp.as_mat4().to_cols_array_2d(),
             inv_view_proj: vp.inverse().as_mat4().to_cols_array_2d(),
             eye: [eye.x as f32, eye.y as f32, eye.z as f32, pixel_scale as f32],
-            phi_offset: (f.map.origin - origin).as_vec2().to_array(),
+            phi_offset: f
+                .map
+                .map_or([0.0; 2], |m| (m.origin - origin).as_vec2().to_array()),
             atlas_offset: (origin - f.atlas.origin).as_vec2().to_array(),
             atlas_inv_spacing: [(1.0 / f.atlas.dx) as f32, (1.0 / f.atlas.dy) as f32],
             d_atlas: f.atlas.d_atlas() as f32,
             bias: f.detail.bias as f32,
-            n: f.map.n as u32,
+            n: f.map.map_or(0, |m| m.n as u32),
             mesh: f.mesh,
             octaves: f.detail.octaves.min(MAX_OCTAVES as u32),
             levels: f.atlas.levels.len().min(MAX_LEVELS) as u32,
@@ -156,12 +163,13 @@ impl FrameUniforms {
                 sun.x as f32,
                 sun.y as f32,
                 sun.z as f32,
-                f.map.spacing as f32,
+                f.map.map_or(0.0, |m| m.spacing as f32),
             ],
             view: f.view as u32,
             importance_max: f.importance_max,
-            pad0: 0,
-            pad1: 0,
+            mesh_offset: f
+                .mesh_origin
+                .map_or([0.0; 2], |m| (m - origin).as_vec2().to_array()),
             octave,
             turbulence,
             level: level_table(f.atlas),
@@ -188,4 +196,36 @@ pub fn atlas_texels(atlas: &Atlas) -> Vec<f32> {
         .take(MAX_LEVELS)
         .flat_map(|l| l.data.iter().copied())
         .collect()
+}
+
+impl FrameUniforms {
+    /// The block for baking the terrain function on a regular `n`² grid of `spacing` metres with
+    /// warp & zoom: Φ is the identity grid relative to `origin`, which is also the frame origin.
+    pub fn for_bake(atlas: &Atlas, detail: &Detail, origin: DVec2, n: u32) -> FrameUniforms {
+        let mut octave = [OctaveGpu::default(); MAX_OCTAVES];
+        for (slot, o) in octave.iter_mut().zip(detail.frame(origin)) {
+            *slot = o.into();
+        }
+        FrameUniforms {
+            view_proj: [[0.0; 4]; 4],
+            inv_view_proj: [[0.0; 4]; 4],
+            eye: [0.0; 4],
+            phi_offset: [0.0; 2],
+            atlas_offset: (origin - atlas.origin).as_vec2().to_array(),
+            atlas_inv_spacing: [(1.0 / atlas.dx) as f32, (1.0 / atlas.dy) as f32],
+            d_atlas: atlas.d_atlas() as f32,
+            bias: detail.bias as f32,
+            n,
+            mesh: n,
+            octaves: detail.octaves.min(MAX_OCTAVES as u32),
+            levels: atlas.levels.len().min(MAX_LEVELS) as u32,
+            sun: [0.0; 4],
+            view: 0,
+            importance_max: 0.0,
+            mesh_offset: [0.0; 2],
+            octave,
+            turbulence: [OctaveGpu::default(); 2],
+            level: level_table(atlas),
+        }
+    }
 }

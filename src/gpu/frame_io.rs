@@ -1,0 +1,245 @@
+//! What every renderer does around its passes: the uniform buffer, the atlas upload, timing with
+//! timestamp queries, and reading the image back.
+
+use super::context::GpuContext;
+use super::uniforms::FrameUniforms;
+use crate::atlas::Atlas;
+use crate::error::{Error, Result};
+use serde::Serialize;
+
+/// Milliseconds per pass (`None` where the adapter cannot time passes).
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct PassTimes {
+    pub warp_zoom_ms: Option<f64>,
+    pub normals_ms: Option<f64>,
+    pub terrain_ms: Option<f64>,
+}
+
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct FrameStats {
+    /// GPU time of the frame: the passes' sum with timestamps, else submit-to-idle wall time.
+    pub gpu_ms: f64,
+    /// Submit to readback done, always measured (it includes the readback copy and the wait).
+    pub gpu_wall_ms: f64,
+    pub passes: PassTimes,
+    pub triangles: u64,
+}
+
+impl FrameStats {
+    pub fn new(passes: PassTimes, timed: bool, wall_ms: f64, triangles: u64) -> FrameStats {
+        let summed = [passes.warp_zoom_ms, passes.normals_ms, passes.terrain_ms]
+            .iter()
+            .map(|v| v.unwrap_or(0.0))
+            .sum::<f64>();
+        FrameStats {
+            gpu_ms: if timed { summed } else { wall_ms },
+            gpu_wall_ms: wall_ms,
+            passes,
+            triangles,
+        }
+    }
+}
+
+pub fn uniform_buffer(device: &wgpu::Device) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("frame"),
+        size: std::mem::size_of::<FrameUniforms>() as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// The atlas pyramid in a read-only storage buffer (see `shaders/shared/atlas.wgsl` for why not
+/// a texture), and its size in bytes.
+pub fn upload_atlas(ctx: &GpuContext, atlas: &Atlas) -> (wgpu::Buffer, u64) {
+    let texels = super::uniforms::atlas_texels(atlas);
+    let buffer = wgpu::util::DeviceExt::create_buffer_init(
+        &ctx.device,
+        &wgpu::util::BufferInitDescriptor {
+            label: Some("sketch atlas"),
+            contents: bytemuck::cast_slice(&texels),
+            usage: wgpu::BufferUsages::STORAGE,
+        },
+    );
+    (buffer, texels.len() as u64 * 4)
+}
+
+/// Timestamp queries for three passes (warp & zoom, normals, terrain): pairs 0, 1, 2.
+pub struct Timer {
+    queries: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    read: wgpu::Buffer,
+    period_ns: f64,
+}
+
+const PASSES: u32 = 3;
+
+impl Timer {
+    pub fn new(ctx: &GpuContext) -> Option<Timer> {
+        let device = &ctx.device;
+        let buffer = |label, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: 16 * PASSES as u64,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        ctx.timestamps.then(|| Timer {
+            queries: device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("pass times"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2 * PASSES,
+            }),
+            resolve: buffer(
+                "timestamps",
+                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            ),
+            read: buffer(
+                "timestamps read",
+                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            ),
+            period_ns: ctx.queue.get_timestamp_period() as f64,
+        })
+    }
+
+    pub fn compute(&self, pass: u32) -> wgpu::ComputePassTimestampWrites<'_> {
+        wgpu::ComputePassTimestampWrites {
+            query_set: &self.queries,
+            beginning_of_pass_write_index: Some(2 * pass),
+            end_of_pass_write_index: Some(2 * pass + 1),
+        }
+    }
+
+    pub fn render(&self, pass: u32) -> wgpu::RenderPassTimestampWrites<'_> {
+        wgpu::RenderPassTimestampWrites {
+            query_set: &self.queries,
+            beginning_of_pass_write_index: Some(2 * pass),
+            end_of_pass_write_index: Some(2 * pass + 1),
+        }
+    }
+
+    /// Resolves the pairs `first..3` (those written this frame) to the start of the buffer;
+    /// resolve offsets must be aligned, so skipped passes cannot keep their slots.
+    pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder, first: u32) {
+        encoder.resolve_query_set(&self.queries, 2 * first..2 * PASSES, &self.resolve, 0);
+        encoder.copy_buffer_to_buffer(&self.resolve, 0, &self.read, 0, 16 * PASSES as u64);
+    }
+
+    /// Milliseconds of the passes `first..3`, after the frame's submission completed.
+    pub fn read(&self, ctx: &GpuContext, first: u32) -> Result<PassTimes> {
+        let ticks: Vec<u64> = read_buffer(ctx, &self.read, |b| bytemuck::cast_slice(b).to_vec())?;
+        let ms = |pass: u32| {
+            if pass < first {
+                return Some(0.0);
+            }
+            let k = 2 * (pass - first) as usize;
+            Some(ticks[k + 1].saturating_sub(ticks[k]) as f64 * self.period_ns * 1e-6)
+        };
+        Ok(PassTimes {
+            warp_zoom_ms: ms(0),
+            normals_ms: ms(1),
+            terrain_ms: ms(2),
+        })
+    }
+}
+
+/// The colour target copied to a mappable buffer, rows padded to the copy alignment.
+pub struct ColourReadback {
+    buffer: wgpu::Buffer,
+    width: u32,
+    height: u32,
+}
+
+impl ColourReadback {
+    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> ColourReadback {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: padded_row(width) as u64 * height as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        ColourReadback {
+            buffer,
+            width,
+            height,
+        }
+    }
+
+    pub fn bytes(&self) -> u64 {
+        self.buffer.size()
+    }
+
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, colour: &wgpu::Texture) {
+        encoder.copy_texture_to_buffer(
+            colour.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded_row(self.width)),
+                    rows_per_image: None,
+                },
+            },
+            wgpu::Extent3d {
+                width: self.width,
+                height: self.height,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+
+    /// RGBA8 rows, top first, without the padding.
+    pub fn read(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
+        let padded = padded_row(self.width) as usize;
+        let row = self.width as usize * 4;
+        read_buffer(ctx, &self.buffer, |bytes| {
+            (0..self.height as usize)
+                .flat_map(|y| bytes[y * padded..y * padded + row].iter().copied())
+                .collect()
+        })
+    }
+}
+
+fn padded_row(width: u32) -> u32 {
+    (width * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT
+}
+
+/// A storage buffer of vec4 f32 copied back (tests, and the baseline's δ computation).
+pub fn read_vec4(ctx: &GpuContext, source: &wgpu::Buffer) -> Result<Vec<[f32; 4]>> {
+    let size = source.size();
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(source, 0, &staging, 0, size);
+    ctx.queue.submit([encoder.finish()]);
+    read_buffer(ctx, &staging, |b| bytemuck::cast_slice(b).to_vec())
+}
+
+fn read_buffer<T>(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    f: impl FnOnce(&[u8]) -> T,
+) -> Result<T> {
+    let slice = buffer.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.wait()?;
+    rx.recv()
+        .map_err(|_| Error::Gpu("readback callback never ran".into()))?
+        .map_err(|e| Error::Gpu(format!("readback failed: {e}")))?;
+    let out = {
+        let view = slice
+            .get_mapped_range()
+            .map_err(|e| Error::Gpu(format!("readback mapping: {e}")))?;
+        f(&view)
+    };
+    buffer.unmap();
+    Ok(out)
+}
