@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use terrain::atlas::{Atlas, LoadOptions};
 use terrain::cpu_stage::{self, CpuStage, StageTimes};
 use terrain::gpu::uniforms::View;
-use terrain::render::WarpedRenderer;
+use terrain::render::SceneRenderer;
 use terrain::scene::{Mode, Scene, WarpMethod};
 use terrain::{figures, output, quality};
 
@@ -64,6 +64,9 @@ enum Command {
         mode: Option<String>,
         #[arg(long, default_value = "shaded", value_parser = ["shaded", "wireframe", "split-octave", "importance", "normals", "coverage"])]
         view: String,
+        /// GeoMipMap's τ: the largest projected vertex error, pixels (overrides geomipmap.tau).
+        #[arg(long)]
+        tau: Option<f64>,
         /// Overrides a scene key, e.g. `--set detail.octaves=0` (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
@@ -105,10 +108,22 @@ fn main() {
             output,
             mode,
             view,
+            tau,
             set,
             repeat,
             json,
-        } => render(&scene, &set, &output, mode.as_deref(), &view, repeat, json),
+        } => render(
+            &scene,
+            &set,
+            &output,
+            &RenderOpts {
+                mode,
+                view,
+                tau,
+                repeat,
+            },
+            json,
+        ),
     };
     if let Err(e) = result {
         eprintln!("error: {}", format!("{e:#}").replace('\n', " "));
@@ -234,26 +249,30 @@ fn render(
     scene_path: &Path,
     set: &[String],
     out: &Path,
-    mode: Option<&str>,
-    view: &str,
-    repeat: u32,
+    opts: &RenderOpts,
     json: bool,
 ) -> Result<()> {
-    let scene = Scene::load_with(scene_path, set)?;
-    let mode = match mode {
+    let mut scene = Scene::load_with(scene_path, set)?;
+    let mode = match opts.mode.as_deref() {
         Some("warped") => Mode::Warped,
-        Some(m) => anyhow::bail!("mode {m} is not part of this build yet; only warped renders"),
+        Some("geomipmap") => Mode::Geomipmap,
+        Some("bruteforce") => Mode::Bruteforce,
+        Some(m) => anyhow::bail!("mode {m} is not part of this build yet"),
         None => scene.render.mode,
     };
-    if mode != Mode::Warped {
-        anyhow::bail!("render.mode = {mode:?} is not part of this build yet; only warped renders");
+    if let Some(tau) = opts.tau {
+        anyhow::ensure!(
+            tau.is_finite() && tau > 0.0,
+            "--tau {tau}: must be a positive number of pixels"
+        );
+        scene.geomipmap.tau = tau;
     }
-    let view = View::parse(view).context("unknown view")?;
-    let mut r = WarpedRenderer::new(&scene, view)?;
-    let camera = cpu_stage::camera_of(&scene, &r.atlas)?;
+    let view = View::parse(&opts.view).context("unknown view")?;
+    let mut r = SceneRenderer::new(&scene, mode, view)?;
+    let camera = cpu_stage::camera_of(&scene, r.atlas())?;
     r.render(&camera)?; // warm-up: shader compilation and first-use allocation
-    let mut frames = Vec::with_capacity(repeat as usize);
-    for _ in 0..repeat {
+    let mut frames = Vec::with_capacity(opts.repeat as usize);
+    for _ in 0..opts.repeat {
         frames.push(r.render(&camera)?);
     }
     let median = |f: &dyn Fn(&terrain::render::Frame) -> f64| {
@@ -261,49 +280,53 @@ fn render(
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
-    let cpu_us = median(&|f| f.cpu.total_us());
+    let cpu_us = median(&|f| f.cpu_us);
     let gpu_ms = median(&|f| f.gpu.gpu_ms);
     let gpu_wall_ms = median(&|f| f.gpu.gpu_wall_ms);
+    let timed = r.ctx().timestamps;
     let pass = |get: fn(&terrain::gpu::renderer::PassTimes) -> Option<f64>| {
-        frames[0]
-            .gpu
-            .passes
-            .warp_zoom_ms
-            .map(|_| median(&|f| get(&f.gpu.passes).unwrap_or(0.0)))
+        timed.then(|| median(&|f| get(&f.gpu.passes).unwrap_or(0.0)))
     };
     let last = frames.last().context("no frame rendered")?;
     output::write_png_rgba(out, last.width, last.height, &last.rgba)?;
-    let report = json!({
-        "adapter": r.ctx.adapter_name(),
-        "mode": "warped",
+    let mode_name = format!("{mode:?}").to_lowercase();
+    let mut report = json!({
+        "adapter": r.ctx().adapter_name(),
+        "mode": mode_name,
         "view": view_name(view),
         "width": last.width,
         "height": last.height,
-        "visible": r.stage.sketch_map.visible,
+        "visible": r.visible(),
         "triangles": last.gpu.triangles,
         "cpu_stage_us": cpu_us,
         "gpu_ms": gpu_ms,
         "frame_ms": gpu_ms + cpu_us * 1e-3,
         "gpu_wall_ms": gpu_wall_ms,
-        "gpu_timing": if r.ctx.timestamps { "timestamp queries" } else { "wall time around submit" },
+        "gpu_timing": if timed { "timestamp queries" } else { "wall time around submit" },
         "passes_ms": {
             "warp_zoom": pass(|p| p.warp_zoom_ms),
             "normals": pass(|p| p.normals_ms),
             "terrain": pass(|p| p.terrain_ms),
         },
-        "gpu_memory_bytes": r.renderer.gpu_bytes,
-        "frames": repeat,
+        "gpu_memory_bytes": r.gpu_bytes(),
+        "frames": opts.repeat,
         "output": out.display().to_string(),
     });
+    if let Some((ms, bytes)) = r.precompute() {
+        report["blocks_visible"] = json!(last.blocks);
+        report["precompute_ms"] = json!(ms);
+        report["precompute_bytes"] = json!(bytes);
+        report["tau_px"] = json!(scene.geomipmap.tau);
+    }
     if json {
         println!("{report}");
     } else {
         println!(
-            "{}: {} × {} on {}, {} triangles; CPU stage {:.0} µs, GPU {:.2} ms ({})",
+            "{}: {} × {} {mode_name} on {}, {} triangles; CPU {:.0} µs, GPU {:.2} ms ({})",
             out.display(),
             last.width,
             last.height,
-            r.ctx.adapter_name(),
+            r.ctx().adapter_name(),
             last.gpu.triangles,
             cpu_us,
             gpu_ms,
@@ -311,6 +334,13 @@ fn render(
         );
     }
     Ok(())
+}
+
+struct RenderOpts {
+    mode: Option<String>,
+    view: String,
+    tau: Option<f64>,
+    repeat: u32,
 }
 
 fn view_name(v: View) -> &'static str {

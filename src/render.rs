@@ -5,11 +5,13 @@ use crate::atlas::Atlas;
 use crate::camera::Camera;
 use crate::cpu_stage::{self, CpuStage, StageTimes};
 use crate::detail::Detail;
-use crate::error::Result;
+use crate::error::{Error, Result};
+use crate::geomipmap::LodParams;
+use crate::gpu::baseline::{Baseline, BaselineOptions, BaselineRenderer, default_k};
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::renderer::{FrameStats, Options, Renderer};
 use crate::gpu::uniforms::{FrameInputs, FrameUniforms, View};
-use crate::scene::Scene;
+use crate::scene::{Mode, Scene};
 
 pub struct WarpedRenderer {
     pub ctx: GpuContext,
@@ -26,8 +28,13 @@ pub struct Frame {
     pub rgba: Vec<u8>,
     pub width: u32,
     pub height: u32,
+    /// The warped mode's CPU stage; zero for the baselines.
     pub cpu: StageTimes,
+    /// CPU time per frame: the CPU stage, or the baselines' block selection (µs).
+    pub cpu_us: f64,
     pub gpu: FrameStats,
+    /// Blocks drawn (GeoMipMap and brute force).
+    pub blocks: Option<usize>,
 }
 
 impl WarpedRenderer {
@@ -112,7 +119,166 @@ impl WarpedRenderer {
             width: camera.width,
             height: camera.height,
             cpu,
+            cpu_us: cpu.total_us(),
             gpu,
+            blocks: None,
         })
+    }
+}
+
+/// GeoMipMap and brute-force snapshots: the baked grid and its blocks built once, then frames.
+pub struct BaselineSceneRenderer {
+    pub ctx: GpuContext,
+    pub renderer: BaselineRenderer,
+    pub atlas: Atlas,
+    pub detail: Detail,
+    pub lod: LodParams,
+    view: View,
+}
+
+impl BaselineSceneRenderer {
+    pub fn new(scene: &Scene, view: View, kind: Baseline) -> Result<BaselineSceneRenderer> {
+        let atlas = cpu_stage::load_atlas(scene)?;
+        let detail = cpu_stage::detail_of(scene, &atlas);
+        let k = scene.geomipmap.k.unwrap_or_else(|| default_k(&atlas));
+        let atlas_bytes = atlas
+            .levels
+            .iter()
+            .map(|l| l.data.len() as u64 * 4)
+            .sum::<u64>();
+        let ctx = GpuContext::new(&Needs {
+            storage_bytes: atlas_bytes,
+        })?;
+        let options = BaselineOptions {
+            width: scene.camera.width,
+            height: scene.camera.height,
+            bump: scene.detail.bump,
+            view,
+            k,
+            kind,
+        };
+        let renderer = BaselineRenderer::new(&ctx, &atlas, &detail, &options)?;
+        let g = &scene.geomipmap;
+        let lod = LodParams {
+            tau: g.tau,
+            exact: g.exact,
+            morph: g.morph,
+            reach_m: detail.reach_m(),
+        };
+        Ok(BaselineSceneRenderer {
+            ctx,
+            renderer,
+            atlas,
+            detail,
+            lod,
+            view,
+        })
+    }
+
+    pub fn uniforms(&self, camera: &Camera) -> FrameUniforms {
+        FrameUniforms::new(&FrameInputs {
+            camera,
+            map: None,
+            mesh_origin: Some(self.renderer.bake.grid.origin),
+            atlas: &self.atlas,
+            detail: &self.detail,
+            mesh: self.renderer.bake.grid.n as u32,
+            view: self.view,
+            importance_max: 0.0,
+        })
+    }
+
+    /// Block selection for `camera`, then the GPU pass.
+    pub fn render(&mut self, camera: &Camera) -> Result<Frame> {
+        let cpu_us = self.renderer.select(camera, &self.lod);
+        self.draw(camera, cpu_us)
+    }
+
+    /// The GPU pass for the current selection (tests set levels by hand, then draw).
+    pub fn draw(&mut self, camera: &Camera, cpu_us: f64) -> Result<Frame> {
+        let uniforms = self.uniforms(camera);
+        let (rgba, gpu) = self.renderer.render(&self.ctx, &uniforms)?;
+        Ok(Frame {
+            rgba,
+            width: camera.width,
+            height: camera.height,
+            cpu: StageTimes::default(),
+            cpu_us,
+            gpu,
+            blocks: Some(self.renderer.selection.gpu.len()),
+        })
+    }
+}
+
+/// Any mode's renderer for a scene.
+pub enum SceneRenderer {
+    Warped(Box<WarpedRenderer>),
+    Baseline(Box<BaselineSceneRenderer>),
+}
+
+impl SceneRenderer {
+    pub fn new(scene: &Scene, mode: Mode, view: View) -> Result<SceneRenderer> {
+        Ok(match mode {
+            Mode::Warped => SceneRenderer::Warped(Box::new(WarpedRenderer::new(scene, view)?)),
+            Mode::Geomipmap => SceneRenderer::Baseline(Box::new(BaselineSceneRenderer::new(
+                scene,
+                view,
+                Baseline::GeoMipMap,
+            )?)),
+            Mode::Bruteforce => SceneRenderer::Baseline(Box::new(BaselineSceneRenderer::new(
+                scene,
+                view,
+                Baseline::BruteForce,
+            )?)),
+            Mode::Reference => {
+                return Err(Error::Invalid(
+                    "render.mode = reference is not part of this build yet (the comparison issue adds it)".into(),
+                ));
+            }
+        })
+    }
+
+    pub fn atlas(&self) -> &Atlas {
+        match self {
+            SceneRenderer::Warped(r) => &r.atlas,
+            SceneRenderer::Baseline(r) => &r.atlas,
+        }
+    }
+
+    pub fn ctx(&self) -> &GpuContext {
+        match self {
+            SceneRenderer::Warped(r) => &r.ctx,
+            SceneRenderer::Baseline(r) => &r.ctx,
+        }
+    }
+
+    pub fn render(&mut self, camera: &Camera) -> Result<Frame> {
+        match self {
+            SceneRenderer::Warped(r) => r.render(camera),
+            SceneRenderer::Baseline(r) => r.render(camera),
+        }
+    }
+
+    pub fn gpu_bytes(&self) -> u64 {
+        match self {
+            SceneRenderer::Warped(r) => r.renderer.gpu_bytes,
+            SceneRenderer::Baseline(r) => r.renderer.gpu_bytes,
+        }
+    }
+
+    /// The baselines' precomputation: milliseconds and bytes of the baked grid.
+    pub fn precompute(&self) -> Option<(f64, u64)> {
+        match self {
+            SceneRenderer::Warped(_) => None,
+            SceneRenderer::Baseline(r) => Some((r.renderer.precompute_ms, r.renderer.bake.bytes)),
+        }
+    }
+
+    /// Whether any terrain was in view in the last frame.
+    pub fn visible(&self) -> bool {
+        match self {
+            SceneRenderer::Warped(r) => r.stage.sketch_map.visible,
+            SceneRenderer::Baseline(r) => !r.renderer.selection.visible.is_empty(),
+        }
     }
 }

@@ -21,6 +21,8 @@ pub struct Scene {
     pub importance: ImportanceSection,
     #[serde(default)]
     pub render: RenderSection,
+    #[serde(default)]
+    pub geomipmap: GeoMipMapSection,
     pub path: Option<PathSection>,
     /// The folder relative paths resolve against; not a key.
     #[serde(skip)]
@@ -147,6 +149,30 @@ impl Default for ImportanceSection {
             max_map: None,
             floor: 0.1,
             backface_floor: 0.15,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GeoMipMapSection {
+    /// τ: the largest projected vertex error allowed, pixels.
+    pub tau: f64,
+    /// Octaves baked into the grid (spacing d_atlas / 2^k); by default the finest within 2^22
+    /// vertices, up to 3.
+    pub k: Option<u32>,
+    /// Choose levels by the blocks' least depth (τ guaranteed) rather than de Boer's distance.
+    pub exact: bool,
+    /// Geomorphing (trilinear GeoMipMapping).
+    pub morph: bool,
+}
+impl Default for GeoMipMapSection {
+    fn default() -> Self {
+        GeoMipMapSection {
+            tau: 1.0,
+            k: None,
+            exact: false,
+            morph: true,
         }
     }
 }
@@ -300,6 +326,11 @@ impl Scene {
         within("warp.mesh", w.mesh as f64, 2.0, 4096.0)?;
         within("warp.size", w.size as f64, 2.0, 4096.0)?;
         within("warp.max_log2_step", w.max_log2_step, 0.0, 64.0)?;
+        let g = &self.geomipmap;
+        open_range("geomipmap.tau", g.tau, 0.0, 1e6)?;
+        if let Some(k) = g.k {
+            within("geomipmap.k", k as f64, 0.0, 6.0)?;
+        }
         let i = &self.importance;
         positive("importance.max_per_m", i.max_per_m)?;
         open_range("importance.floor", i.floor, 0.0, 1.0 + f64::EPSILON)?;

@@ -76,3 +76,9 @@ pub fn normal_cpu(detailed: &[[f32; 4]], mesh: u32, ij: glam::IVec2) -> [f32; 3]
         [0.0, 0.0, 1.0]
     }
 }
+
+impl NormalsPass {
+    pub fn into_normals(self) -> wgpu::Buffer {
+        self.normals
+    }
+}

@@ -186,3 +186,10 @@ pub fn vertex_cpu(
     }
     [p.x, p.y, z, o]
 }
+
+impl WarpZoomPass {
+    /// The detailed geometry image, keeping nothing else (the bake's Φ is dropped).
+    pub fn into_detailed(self) -> wgpu::Buffer {
+        self.detailed
+    }
+}
