@@ -69,7 +69,7 @@ struct Block {
     level: u32,
     pad: u32,
     side_level: vec4<u32>,   // the level governing each edge: S, E, N, W
-    morph: vec4<f32>,        // own morph range: start, end
+    morph: vec4<f32>,        // own morph range: start, end; the interior's morph factor
     side_start: vec4<f32>,
     side_end: vec4<f32>,
 }
@@ -95,7 +95,7 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     var end = b.morph.y;
     var side = 4u;
     if (l2.y == 0u) { side = 0u; } else if (l2.x == 32u) { side = 1u; } else if (l2.y == 32u) { side = 2u; } else if (l2.x == 0u) { side = 3u; }
-    if (side < 4u && b.side_level[side] >= level) {
+    if (side < 4u) {
         level = b.side_level[side];
         start = b.side_start[side];
         end = b.side_end[side];
@@ -106,10 +106,15 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
         let d = vec2<u32>(select(0u, s, g.x % s2 != 0u), select(0u, s, g.y % s2 != 0u));
         let a = detailed[grid_index(g - d)];
         let c = detailed[grid_index(g + d)];
-        let eye_d = distance(p.xyz + vec3<f32>(frame.mesh_offset, 0.0), frame.eye.xyz);
-        var m = 0.0;
-        if (end > start) {
-            m = clamp((eye_d - start) / (end - start), 0.0, 1.0);
+        // Inside: the block's factor (continuous when it changes level); on an edge: the
+        // vertex's own distance over the edge's shared range (both blocks compute the same).
+        var m = b.morph.z;
+        if (side < 4u) {
+            let eye_d = distance(p.xyz + vec3<f32>(frame.mesh_offset, 0.0), frame.eye.xyz);
+            m = 0.0;
+            if (end > start) {
+                m = clamp((eye_d - start) / (end - start), 0.0, 1.0);
+            }
         }
         p.z = mix(p.z, 0.5 * (a.z + c.z), m);
         let nc = normals[grid_index(g - d)].xyz + normals[grid_index(g + d)].xyz;

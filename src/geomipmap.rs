@@ -5,17 +5,20 @@
 //!   `d_atlas / 2^K`, `32·B + 1` vertices a side; block (bx, by) owns vertices
 //!   `[32·bx, 32·bx + 32] × [32·by, 32·by + 32]` (neighbours share their edge).
 //! - Level l draws every `2^l`-th vertex (l = 0..5). δ_l is the largest vertical distance between
-//!   a level-0 vertex and the level-l surface (cells split along (i, j)–(i+s, j+s), as drawn), made
-//!   non-decreasing in l; `D_l = δ_l · f_px / τ` (de Boer's equations 1–2).
+//!   a level-0 vertex and the level-l surface (cells split along (i, j)–(i+s, j+s), as drawn), raised
+//!   to at least twice δ_{l−1}; `D_l = δ_l · f_px / τ` (de Boer's equations 1–2). The doubling
+//!   over-estimates errors (τ still holds) and gives every level a distance range to morph over.
 //! - A visible block takes the coarsest level with `D_l ≤ d`. `d` is the distance from the eye to
 //!   the block's box (de Boer's horizontal-camera simplification) or, with `exact`, the box's
-//!   least depth along the view axis, which bounds every projected error by τ.
+//!   least depth along the view axis over the secant of the half-diagonal field of view, which
+//!   bounds every projected error by τ.
 //! - Stitching: a block whose neighbour is coarser draws the shared edge with the neighbour's
 //!   vertices only, as a zipper between the edge and the first inner row; templates per
 //!   (level, neighbour level) are built once. A finer neighbour stitches itself, so no T-junction.
 //! - Geomorphing (Wagner): a vertex that level l+1 drops moves toward the midpoint of its two
-//!   level-(l+1) neighbours as its distance goes from `start` to `end = D_{l+1}`, reaching it when
-//!   the block switches. Edge vertices use parameters shared by both blocks of the edge (the
+//!   level-(l+1) neighbours as its own distance goes from `start = D_l + the block's diameter` to
+//!   `end = D_{l+1}`: unmorphed when the block arrives at level l, fully morphed when it leaves.
+//!   Where D_{l+1} − D_l is shorter than a block, there is no room, and the morph is a step. Edge vertices use parameters shared by both blocks of the edge (the
 //!   coarser one's, or the smaller of two equal ones), so the border follows the coarser neighbour.
 //!
 //! Rejected alternative: one index buffer per (level, four neighbour levels): 2,275 buffers of up
@@ -76,6 +79,8 @@ impl Grid {
 #[derive(Clone, Debug)]
 pub struct Blocks {
     pub per_side: usize,
+    /// Grid spacing, metres (for the blocks' diameters).
+    pub spacing: f64,
     pub delta: Vec<[f32; LEVELS]>,
     pub z_range: Vec<(f32, f32)>,
     /// Quadtree over blocks: levels of boxes, coarsest last.
@@ -100,8 +105,10 @@ impl Blocks {
                         }
                     }
                 }
-                for l in 1..LEVELS {
-                    delta[k][l] = delta[k][l].max(delta[k][l - 1]);
+                // At least double per level (an over-estimate, so τ still holds): each level then
+                // spans a distance range at least as long as the one before, room to morph in.
+                for l in 2..LEVELS {
+                    delta[k][l] = delta[k][l].max(2.0 * delta[k][l - 1]);
                 }
             }
         }
@@ -123,6 +130,7 @@ impl Blocks {
         }
         Blocks {
             per_side: b,
+            spacing: grid.spacing,
             delta,
             z_range,
             tree,
@@ -151,7 +159,7 @@ pub struct BlockGpu {
     pub pad: u32,
     /// The level governing each edge's vertices: S, E, N, W.
     pub side_level: [u32; 4],
-    /// Own morph range: start, end (metres of eye distance); pad.
+    /// Own morph range: start, end (metres of eye distance); the interior's morph factor; pad.
     pub morph: [f32; 4],
     pub side_start: [f32; 4],
     pub side_end: [f32; 4],
@@ -164,13 +172,18 @@ pub struct Selection {
     pub level: Vec<u8>,
     pub visible: Vec<usize>,
     pub gpu: Vec<BlockGpu>,
+    /// The distance each block's level was chosen by (empty when levels were set by hand).
+    pub distance: Vec<f64>,
 }
 
 /// Distance used for block `k`'s level: to its box, or its least depth along the view axis.
 fn block_distance(grid: &Grid, blocks: &Blocks, k: usize, cam: &Camera, p: &LodParams) -> f64 {
     let (lo, hi) = box_of(grid, blocks.per_side, k, blocks.z_range[k], p.reach_m);
     if p.exact {
-        // Least of (q − eye)·forward over the box's corners.
+        // A vertical error δ at depth z shows at most f_px·δ·sec(half-diagonal fov)/z pixels
+        // anywhere in the image (its shift along the view axis moves off-axis points too), so
+        // the least depth over the box's corners, divided by that secant, bounds every error.
+        let secant = (1.0 + cam.tan_half_x().powi(2) + cam.tan_half_y().powi(2)).sqrt();
         let mut least = f64::INFINITY;
         for c in 0..8 {
             let q = DVec3::new(
@@ -180,7 +193,7 @@ fn block_distance(grid: &Grid, blocks: &Blocks, k: usize, cam: &Camera, p: &LodP
             );
             least = least.min((q - cam.eye).dot(cam.forward));
         }
-        least
+        least / secant
     } else {
         (cam.eye.clamp(lo, hi) - cam.eye).length()
     }
@@ -256,8 +269,11 @@ impl Selection {
         }
         self.visible.sort_unstable();
         let f_px = cam.f_px();
+        self.distance.clear();
+        self.distance.resize(b * b, 0.0);
         for &k in &self.visible {
             let d = block_distance(grid, blocks, k, cam, p);
+            self.distance[k] = d;
             self.level[k] = choose_level(blocks, k, d, f_px, p.tau) as u8;
         }
         self.fill_gpu(blocks, f_px, p);
@@ -268,6 +284,7 @@ impl Selection {
         let b = grid.blocks_per_side();
         self.level = vec![level; b * b];
         self.visible = (0..b * b).collect();
+        self.distance.clear();
         let p = LodParams {
             tau: 1.0,
             exact: false,
@@ -286,7 +303,17 @@ impl Selection {
             }
             let lo = d_of(blocks, k, l, f_px, p.tau);
             let hi = d_of(blocks, k, l + 1, f_px, p.tau);
-            ((lo + 0.5 * (hi - lo)) as f32, hi as f32)
+            (lo as f32, hi as f32)
+        };
+        // The interior's morph follows the distance that chose the level: 0 on arrival at
+        // level l (d = D_l), 1 on leaving it (d = D_{l+1}).
+        let block_morph = |k: usize, (lo, hi): (f32, f32)| -> f32 {
+            match self.distance.get(k) {
+                Some(&d) if hi > lo && hi < f32::MAX => {
+                    ((d as f32 - lo) / (hi - lo)).clamp(0.0, 1.0)
+                }
+                _ => 0.0,
+            }
         };
         self.gpu.clear();
         for &k in &self.visible {
@@ -296,7 +323,7 @@ impl Selection {
             let mut rec = BlockGpu {
                 origin: [(bx * BLOCK) as u32, (by * BLOCK) as u32],
                 level: l as u32,
-                morph: [own.0, own.1, 0.0, 0.0],
+                morph: [own.0, own.1, block_morph(k, own), 0.0],
                 ..Default::default()
             };
             let neighbours = [
@@ -484,9 +511,7 @@ pub fn morphed_height(grid: &Grid, g: &BlockGpu, i: usize, j: usize, eye: DVec3)
         None
     };
     let (mut level, mut start, mut end) = (g.level as usize, g.morph[0], g.morph[1]);
-    if let Some(k) = side
-        && g.side_level[k] as usize >= level
-    {
+    if let Some(k) = side {
         level = g.side_level[k] as usize;
         start = g.side_start[k];
         end = g.side_end[k];
@@ -497,12 +522,19 @@ pub fn morphed_height(grid: &Grid, g: &BlockGpu, i: usize, j: usize, eye: DVec3)
     }
     let dx = if gi % s2 != 0 { s } else { 0 };
     let dy = if gj % s2 != 0 { s } else { 0 };
+    if gi < dx || gj < dy || gi + dx >= grid.n || gj + dy >= grid.n {
+        // Not a vertex this level draws (stitching leaves it out): no morph.
+        return (z, 0.0);
+    }
     let coarse = 0.5 * (grid.z(gi - dx, gj - dy) + grid.z(gi + dx, gj + dy));
-    let d = (grid.world(gi, gj) - eye).length() as f32;
-    let m = if end > start {
-        ((d - start) / (end - start)).clamp(0.0, 1.0)
-    } else {
-        0.0
+    // Inside: the block's factor; on an edge: the vertex's own distance over the edge's range.
+    let m = match side {
+        None => g.morph[2],
+        Some(_) if end > start => {
+            let d = (grid.world(gi, gj) - eye).length() as f32;
+            ((d - start) / (end - start)).clamp(0.0, 1.0)
+        }
+        Some(_) => 0.0,
     };
     (z + (coarse - z) * m, m)
 }
