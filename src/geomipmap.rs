@@ -27,6 +27,8 @@
 use crate::camera::{Camera, Plane};
 use glam::{DVec2, DVec3};
 
+/// Where in [D_l, D_{l+1}] the morph toward level l+1 begins.
+pub const MORPH_START: f64 = 0.7;
 /// Cells per block side (blocks of 33 vertices).
 pub const BLOCK: usize = 32;
 pub const LEVELS: usize = 6;
@@ -297,13 +299,16 @@ impl Selection {
     /// Re-derives the GPU records after `level` was set (tests force level patterns this way).
     pub fn fill_gpu(&mut self, blocks: &Blocks, f_px: f64, p: &LodParams) {
         let b = blocks.per_side;
+        // Morph over the last part of each level's range only: a morphing vertex adds up to its
+        // share of the next level's error, so the less terrain is mid-morph, the closer the image
+        // stays to the chosen level's.
         let range = |k: usize, l: usize| -> (f32, f32) {
             if !p.morph || l + 1 >= LEVELS {
                 return (f32::MAX, f32::MAX);
             }
             let lo = d_of(blocks, k, l, f_px, p.tau);
             let hi = d_of(blocks, k, l + 1, f_px, p.tau);
-            (lo as f32, hi as f32)
+            ((lo + MORPH_START * (hi - lo)) as f32, hi as f32)
         };
         // The interior's morph follows the distance that chose the level: 0 on arrival at
         // level l (d = D_l), 1 on leaving it (d = D_{l+1}).

@@ -1,0 +1,132 @@
+//! The baselines on the machine's adapter (llvmpipe without a GPU): no cracks when neighbouring
+//! blocks differ by 1, 2 or 3 levels, and GeoMipMap at τ = 0.5 px against brute force.
+
+mod common;
+use common::*;
+use terrain::gpu::baseline::Baseline;
+use terrain::gpu::uniforms::View;
+use terrain::render::BaselineSceneRenderer;
+use terrain::scene::Scene;
+
+/// Background pixels below the first terrain pixel of their column in a coverage image (terrain
+/// white, sky black). Over a height field seen from above it, every ray below one that hits the
+/// ground hits it too, so each of these is a hole.
+fn holes(rgba: &[u8], width: usize) -> usize {
+    let height = rgba.len() / 4 / width;
+    let terrain = |x: usize, y: usize| rgba[(y * width + x) * 4] > 127;
+    (0..width)
+        .map(|x| match (0..height).find(|&y| terrain(x, y)) {
+            Some(top) => (top..height).filter(|&y| !terrain(x, y)).count(),
+            None => 0,
+        })
+        .sum()
+}
+
+#[test]
+fn no_cracks_between_blocks_any_levels_apart() {
+    let views = [
+        (
+            "cliff",
+            "down",
+            [1920.0, 1920.0, 2500.0],
+            [1920.0, 1921.0, 0.0],
+        ),
+        (
+            "cliff",
+            "grazing",
+            [1800.0, 150.0, 520.0],
+            [1800.0, 3500.0, 300.0],
+        ),
+        (
+            "ridges",
+            "down",
+            [1920.0, 1920.0, 3000.0],
+            [1920.0, 1921.0, 0.0],
+        ),
+        (
+            "ridges",
+            "grazing",
+            [1920.0, 150.0, 1300.0],
+            [1920.0, 3500.0, 700.0],
+        ),
+    ];
+    for (sketch, what, eye, at) in views {
+        let toml = format!(
+            "[sketch]\nsynthetic = \"{sketch}\"\nsize = 129\n[camera]\nposition = {eye:?}\nlook_at = {at:?}\nwidth = 160\nheight = 160\n[geomipmap]\nk = 1\n"
+        );
+        let s = scene(&toml, manifest_dir());
+        let mut r = BaselineSceneRenderer::new(&s, View::Coverage, Baseline::GeoMipMap).unwrap();
+        let cam = terrain::cpu_stage::camera_of(&s, &r.atlas).unwrap();
+        let chosen = r.render(&cam).unwrap();
+        assert_eq!(
+            holes(&chosen.rgba, 160),
+            0,
+            "{sketch} {what}: holes at the chosen levels"
+        );
+        let per_side = r.renderer.blocks.per_side;
+        for d in 1..=3u8 {
+            let sel = &mut r.renderer.selection;
+            for k in 0..per_side * per_side {
+                if sel.level[k] != u8::MAX {
+                    sel.level[k] = 1 + d * ((k % per_side + k / per_side) % 2) as u8;
+                }
+            }
+            sel.fill_gpu(&r.renderer.blocks, cam.f_px(), &r.lod);
+            let frame = r.draw(&cam, 0.0).unwrap();
+            let n = holes(&frame.rgba, 160);
+            if n > 0 {
+                let out = scratch(&format!("cracks-{sketch}-{what}-{d}"));
+                terrain::output::write_png_rgba(&out.join("coverage.png"), 160, 160, &frame.rgba)
+                    .unwrap();
+            }
+            assert_eq!(
+                n, 0,
+                "{sketch} {what}: {n} hole pixels with neighbours {d} levels apart"
+            );
+            let white = frame.rgba.chunks_exact(4).filter(|p| p[0] > 127).count();
+            assert!(
+                white > 160 * 40,
+                "{sketch} {what}: too little terrain in view to test ({white} px)"
+            );
+        }
+    }
+}
+
+fn bundled(name: &str) -> Scene {
+    let path = manifest_dir().join("sketches").join(format!("{name}.toml"));
+    let o: Vec<String> = [
+        "camera.width=160",
+        "camera.height=160",
+        "geomipmap.k=1",
+        "geomipmap.tau=0.5",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    Scene::load_with(&path, &o).unwrap()
+}
+
+#[test]
+fn geomipmap_at_half_a_pixel_matches_brute_force_with_far_fewer_triangles() {
+    for name in ["jacksboro", "gaussian", "hills"] {
+        let s = bundled(name);
+        let mut lod = BaselineSceneRenderer::new(&s, View::Shaded, Baseline::GeoMipMap).unwrap();
+        let cam = terrain::cpu_stage::camera_of(&s, &lod.atlas).unwrap();
+        let a = lod.render(&cam).unwrap();
+        drop(lod);
+        let mut brute = BaselineSceneRenderer::new(&s, View::Shaded, Baseline::BruteForce).unwrap();
+        let b = brute.render(&cam).unwrap();
+        let db = psnr(&a.rgba, &b.rgba);
+        eprintln!(
+            "{name}: {db:.1} dB; {} triangles against {}",
+            a.gpu.triangles, b.gpu.triangles
+        );
+        assert!(db >= 35.0, "{name}: {db:.1} dB");
+        assert!(
+            a.gpu.triangles * 3 < b.gpu.triangles,
+            "{name}: {} vs {}",
+            a.gpu.triangles,
+            b.gpu.triangles
+        );
+    }
+}
