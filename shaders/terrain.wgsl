@@ -79,14 +79,15 @@ fn grid_index(g: vec2<u32>) -> u32 {
     return g.y * frame.mesh + g.x;
 }
 
-// Index = block slot << 11 | (j·33 + i). Vertices that the next level drops move toward the
+// Index = block slot << bits | (j·(cells+1) + i), with cells and bits from frame.block. Vertices that the next level drops move toward the
 // midpoint of their two neighbours on it (Wagner's geomorph); edge vertices follow the level and
 // morph range of the coarser block of their edge, so neighbours agree on them.
 @vertex
 fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
-    let b = blocks[vi >> 11u];
-    let local = vi & 2047u;
-    let l2 = vec2<u32>(local % 33u, local / 33u);
+    let cells = frame.block.x;
+    let b = blocks[vi >> frame.block.y];
+    let local = vi & ((1u << frame.block.y) - 1u);
+    let l2 = vec2<u32>(local % (cells + 1u), local / (cells + 1u));
     let g = b.origin + l2;
     var p = detailed[grid_index(g)];
     var n = normals[grid_index(g)].xyz;
@@ -94,7 +95,7 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     var start = b.morph.x;
     var end = b.morph.y;
     var side = 4u;
-    if (l2.y == 0u) { side = 0u; } else if (l2.x == 32u) { side = 1u; } else if (l2.y == 32u) { side = 2u; } else if (l2.x == 0u) { side = 3u; }
+    if (l2.y == 0u) { side = 0u; } else if (l2.x == cells) { side = 1u; } else if (l2.y == cells) { side = 2u; } else if (l2.x == 0u) { side = 3u; }
     if (side < 4u) {
         level = b.side_level[side];
         start = b.side_start[side];
@@ -102,7 +103,7 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     }
     let s = 1u << level;
     let s2 = 2u << level;
-    if (level < 5u && (g.x % s2 != 0u || g.y % s2 != 0u)) {
+    if (level + 1u < frame.block.z && (g.x % s2 != 0u || g.y % s2 != 0u)) {
         let d = vec2<u32>(select(0u, s, g.x % s2 != 0u), select(0u, s, g.y % s2 != 0u));
         let a = detailed[grid_index(g - d)];
         let c = detailed[grid_index(g + d)];

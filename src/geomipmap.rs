@@ -29,18 +29,18 @@ use glam::{DVec2, DVec3};
 
 /// Where in [D_l, D_{l+1}] the morph toward level l+1 begins.
 pub const MORPH_START: f64 = 0.7;
-/// Cells per block side (blocks of 33 vertices).
-pub const BLOCK: usize = 32;
-pub const LEVELS: usize = 6;
-/// Vertex index = slot << SLOT_SHIFT | (local j · 33 + local i).
-pub const SLOT_SHIFT: u32 = 11;
-const SIDE: usize = BLOCK + 1;
+/// Cells per block side by default (blocks of 33 vertices); 16, 32, 64 and 128 are allowed.
+pub const DEFAULT_CELLS: usize = 32;
+/// Levels of the largest block (128 cells: levels 0..=7).
+pub const MAX_LEVELS: usize = 8;
 
 /// The baked grid's heights and where it lies.
 #[derive(Clone, Debug)]
 pub struct Grid {
-    /// Vertices per side: 32·blocks + 1.
+    /// Vertices per side: cells·blocks + 1.
     pub n: usize,
+    /// Cells per block side (a power of two, 16..=128).
+    pub cells: usize,
     pub spacing: f64,
     /// World position of vertex (0, 0).
     pub origin: DVec2,
@@ -49,7 +49,16 @@ pub struct Grid {
 
 impl Grid {
     pub fn blocks_per_side(&self) -> usize {
-        (self.n - 1) / BLOCK
+        (self.n - 1) / self.cells
+    }
+    /// Levels per block: 0 (every vertex) to log2(cells) (the corners only).
+    pub fn levels(&self) -> usize {
+        self.cells.trailing_zeros() as usize + 1
+    }
+    /// Bits of the block-local vertex number in an index; the block's slot takes the rest.
+    pub fn slot_shift(&self) -> u32 {
+        let side = (self.cells + 1) as u32;
+        32 - (side * side - 1).leading_zeros()
     }
     pub fn z(&self, i: usize, j: usize) -> f32 {
         self.heights[j * self.n + i]
@@ -81,9 +90,11 @@ impl Grid {
 #[derive(Clone, Debug)]
 pub struct Blocks {
     pub per_side: usize,
+    pub cells: usize,
+    pub levels: usize,
     /// Grid spacing, metres (for the blocks' diameters).
     pub spacing: f64,
-    pub delta: Vec<[f32; LEVELS]>,
+    pub delta: Vec<[f32; MAX_LEVELS]>,
     pub z_range: Vec<(f32, f32)>,
     /// Quadtree over blocks: levels of boxes, coarsest last.
     tree: Vec<Vec<(f32, f32)>>,
@@ -92,24 +103,25 @@ pub struct Blocks {
 impl Blocks {
     pub fn new(grid: &Grid) -> Blocks {
         let b = grid.blocks_per_side();
-        let mut delta = vec![[0.0f32; LEVELS]; b * b];
+        let (c, levels) = (grid.cells, grid.levels());
+        let mut delta = vec![[0.0f32; MAX_LEVELS]; b * b];
         let mut z_range = vec![(f32::INFINITY, f32::NEG_INFINITY); b * b];
         for by in 0..b {
             for bx in 0..b {
                 let k = by * b + bx;
-                for j in by * BLOCK..=by * BLOCK + BLOCK {
-                    for i in bx * BLOCK..=bx * BLOCK + BLOCK {
+                for j in by * c..=by * c + c {
+                    for i in bx * c..=bx * c + c {
                         let z = grid.z(i, j);
                         z_range[k].0 = z_range[k].0.min(z);
                         z_range[k].1 = z_range[k].1.max(z);
-                        for (l, d) in delta[k].iter_mut().enumerate().skip(1) {
+                        for (l, d) in delta[k].iter_mut().enumerate().take(levels).skip(1) {
                             *d = d.max((z - grid.level_height(i, j, l)).abs());
                         }
                     }
                 }
                 // At least double per level (an over-estimate, so τ still holds): each level then
                 // spans a distance range at least as long as the one before, room to morph in.
-                for l in 2..LEVELS {
+                for l in 2..levels {
                     delta[k][l] = delta[k][l].max(2.0 * delta[k][l - 1]);
                 }
             }
@@ -132,6 +144,8 @@ impl Blocks {
         }
         Blocks {
             per_side: b,
+            cells: c,
+            levels,
             spacing: grid.spacing,
             delta,
             z_range,
@@ -180,7 +194,7 @@ pub struct Selection {
 
 /// Distance used for block `k`'s level: to its box, or its least depth along the view axis.
 fn block_distance(grid: &Grid, blocks: &Blocks, k: usize, cam: &Camera, p: &LodParams) -> f64 {
-    let (lo, hi) = box_of(grid, blocks.per_side, k, blocks.z_range[k], p.reach_m);
+    let (lo, hi) = box_of(grid, blocks, k, p.reach_m);
     if p.exact {
         // A vertical error δ at depth z shows at most f_px·δ·sec(half-diagonal fov)/z pixels
         // anywhere in the image (its shift along the view axis moves off-axis points too), so
@@ -201,9 +215,10 @@ fn block_distance(grid: &Grid, blocks: &Blocks, k: usize, cam: &Camera, p: &LodP
     }
 }
 
-fn box_of(grid: &Grid, per_side: usize, k: usize, z: (f32, f32), reach: f64) -> (DVec3, DVec3) {
-    let (bx, by) = (k % per_side, k / per_side);
-    let size = BLOCK as f64 * grid.spacing;
+fn box_of(grid: &Grid, blocks: &Blocks, k: usize, reach: f64) -> (DVec3, DVec3) {
+    let (bx, by) = (k % blocks.per_side, k / blocks.per_side);
+    let z = blocks.z_range[k];
+    let size = blocks.cells as f64 * grid.spacing;
     let lo = grid.origin + DVec2::new(bx as f64, by as f64) * size;
     (
         lo.extend(z.0 as f64 - reach),
@@ -229,7 +244,7 @@ pub fn d_of(blocks: &Blocks, k: usize, l: usize, f_px: f64, tau: f64) -> f64 {
 
 /// The coarsest level whose D is within `d`.
 pub fn choose_level(blocks: &Blocks, k: usize, d: f64, f_px: f64, tau: f64) -> usize {
-    (0..LEVELS)
+    (0..blocks.levels)
         .rev()
         .find(|&l| d_of(blocks, k, l, f_px, tau) <= d)
         .unwrap_or(0)
@@ -252,7 +267,7 @@ impl Selection {
             }
             let span = 1usize << depth;
             let z = blocks.tree[depth][y * side + x];
-            let size = (span * BLOCK) as f64 * grid.spacing;
+            let size = (span * blocks.cells) as f64 * grid.spacing;
             let lo = grid.origin + DVec2::new(x as f64, y as f64) * size;
             let (blo, bhi) = (
                 lo.extend(z.0 as f64 - p.reach_m),
@@ -303,7 +318,7 @@ impl Selection {
         // share of the next level's error, so the less terrain is mid-morph, the closer the image
         // stays to the chosen level's.
         let range = |k: usize, l: usize| -> (f32, f32) {
-            if !p.morph || l + 1 >= LEVELS {
+            if !p.morph || l + 1 >= blocks.levels {
                 return (f32::MAX, f32::MAX);
             }
             let lo = d_of(blocks, k, l, f_px, p.tau);
@@ -326,7 +341,7 @@ impl Selection {
             let l = self.level[k] as usize;
             let own = range(k, l);
             let mut rec = BlockGpu {
-                origin: [(bx * BLOCK) as u32, (by * BLOCK) as u32],
+                origin: [(bx * blocks.cells) as u32, (by * blocks.cells) as u32],
                 level: l as u32,
                 morph: [own.0, own.1, block_morph(k, own), 0.0],
                 ..Default::default()
@@ -369,34 +384,40 @@ fn tree_side(b: usize, depth: usize) -> usize {
     side
 }
 
-/// Triangle templates in block-local vertex numbers (j·33 + i), built once.
+/// Triangle templates in block-local vertex numbers (j·(cells+1) + i), built once per block size.
 pub struct Templates {
+    cells: usize,
+    shift: u32,
     interior: Vec<Vec<u32>>,
     /// `strip[side][level][neighbour level]`.
     strip: Vec<Vec<Vec<Vec<u32>>>>,
 }
 
-impl Default for Templates {
-    fn default() -> Self {
-        Templates::new()
-    }
-}
-
 impl Templates {
-    pub fn new() -> Templates {
-        let interior = (0..LEVELS).map(interior_template).collect();
+    pub fn new(grid: &Grid) -> Templates {
+        let (c, levels) = (grid.cells, grid.levels());
+        let interior = (0..levels).map(|l| interior_template(l, c)).collect();
         let strip = (0..4)
             .map(|side| {
-                (0..LEVELS)
+                (0..levels)
                     .map(|l| {
-                        (0..LEVELS)
-                            .map(|nl| strip_template(side, l, nl.max(l)))
+                        (0..levels)
+                            .map(|nl| strip_template(side, l, nl.max(l), c))
                             .collect()
                     })
                     .collect()
             })
             .collect();
-        Templates { interior, strip }
+        Templates {
+            cells: c,
+            shift: grid.slot_shift(),
+            interior,
+            strip,
+        }
+    }
+
+    pub fn cells(&self) -> usize {
+        self.cells
     }
 
     fn parts<'a>(&'a self, g: &BlockGpu) -> impl Iterator<Item = &'a Vec<u32>> + 'a {
@@ -414,7 +435,7 @@ impl Templates {
     pub fn append(&self, blocks: &[BlockGpu], out: &mut Vec<u32>) {
         out.clear();
         for (slot, g) in blocks.iter().enumerate() {
-            let high = (slot as u32) << SLOT_SHIFT;
+            let high = (slot as u32) << self.shift;
             for part in self.parts(g) {
                 out.extend(part.iter().map(|&v| v | high));
             }
@@ -422,36 +443,31 @@ impl Templates {
     }
 }
 
-fn local(i: usize, j: usize) -> u32 {
-    (j * SIDE + i) as u32
+fn local(i: usize, j: usize, c: usize) -> u32 {
+    (j * (c + 1) + i) as u32
 }
 
-fn interior_template(l: usize) -> Vec<u32> {
+fn interior_template(l: usize, c: usize) -> Vec<u32> {
     let s = 1 << l;
     let mut v = Vec::new();
-    if s == BLOCK {
+    if s == c {
         // One cell, no inner ring: two triangles over the corners.
-        v.extend_from_slice(&[
-            local(0, 0),
-            local(32, 0),
-            local(32, 32),
-            local(0, 0),
-            local(32, 32),
-            local(0, 32),
-        ]);
+        let (a, b, cc, d) = (
+            local(0, 0, c),
+            local(c, 0, c),
+            local(c, c, c),
+            local(0, c, c),
+        );
+        v.extend_from_slice(&[a, b, cc, a, cc, d]);
         return v;
     }
     let mut j = s;
-    while j + s <= BLOCK - s {
+    while j + s <= c - s {
         let mut i = s;
-        while i + s <= BLOCK - s {
-            let (a, b, c, d) = (
-                local(i, j),
-                local(i + s, j),
-                local(i + s, j + s),
-                local(i, j + s),
-            );
-            v.extend_from_slice(&[a, b, c, a, c, d]);
+        while i + s <= c - s {
+            let (a, b) = (local(i, j, c), local(i + s, j, c));
+            let (cc, d) = (local(i + s, j + s, c), local(i, j + s, c));
+            v.extend_from_slice(&[a, b, cc, a, cc, d]);
             i += s;
         }
         j += s;
@@ -461,27 +477,27 @@ fn interior_template(l: usize) -> Vec<u32> {
 
 /// (a, b) in the south strip's frame to block-local (i, j) for side 0..4 (S, E, N, W): each side
 /// is the south one turned 90° counter-clockwise, which keeps triangles counter-clockwise.
-fn rotate(side: usize, a: usize, b: usize) -> (usize, usize) {
+fn rotate(side: usize, a: usize, b: usize, c: usize) -> (usize, usize) {
     match side {
         0 => (a, b),
-        1 => (BLOCK - b, a),
-        2 => (BLOCK - a, BLOCK - b),
-        _ => (b, BLOCK - a),
+        1 => (c - b, a),
+        2 => (c - a, c - b),
+        _ => (b, c - a),
     }
 }
 
 /// The trapezoid between a block's edge (drawn at level `outer_l`) and its first inner row (at
 /// `l`), zipped: each step advances whichever polyline's next vertex comes first.
-fn strip_template(side: usize, l: usize, outer_l: usize) -> Vec<u32> {
+fn strip_template(side: usize, l: usize, outer_l: usize, c: usize) -> Vec<u32> {
     let (s, big) = (1usize << l, 1usize << outer_l);
-    if s == BLOCK {
-        return Vec::new(); // level 5 is one cell, drawn by its interior template
+    if s == c {
+        return Vec::new(); // the coarsest level is one cell, drawn by its interior template
     }
-    let outer: Vec<usize> = (0..=BLOCK).step_by(big).collect();
-    let inner: Vec<usize> = (s..=BLOCK - s).step_by(s).collect();
+    let outer: Vec<usize> = (0..=c).step_by(big).collect();
+    let inner: Vec<usize> = (s..=c - s).step_by(s).collect();
     let at = |a: usize, b: usize| {
-        let (i, j) = rotate(side, a, b);
-        local(i, j)
+        let (i, j) = rotate(side, a, b, c);
+        local(i, j, c)
     };
     let (mut o, mut q) = (0, 0);
     let mut v = Vec::new();
@@ -504,11 +520,12 @@ fn strip_template(side: usize, l: usize, outer_l: usize) -> Vec<u32> {
 pub fn morphed_height(grid: &Grid, g: &BlockGpu, i: usize, j: usize, eye: DVec3) -> (f32, f32) {
     let (gi, gj) = (g.origin[0] as usize + i, g.origin[1] as usize + j);
     let z = grid.z(gi, gj);
+    let c = grid.cells;
     let side = if j == 0 {
         Some(0)
-    } else if i == BLOCK {
+    } else if i == c {
         Some(1)
-    } else if j == BLOCK {
+    } else if j == c {
         Some(2)
     } else if i == 0 {
         Some(3)
@@ -522,7 +539,7 @@ pub fn morphed_height(grid: &Grid, g: &BlockGpu, i: usize, j: usize, eye: DVec3)
         end = g.side_end[k];
     }
     let (s, s2) = (1usize << level, 2usize << level);
-    if level + 1 >= LEVELS || (gi % s2 == 0 && gj % s2 == 0) {
+    if level + 1 >= grid.levels() || (gi % s2 == 0 && gj % s2 == 0) {
         return (z, 0.0);
     }
     let dx = if gi % s2 != 0 { s } else { 0 };
@@ -549,39 +566,52 @@ mod tests {
     use super::*;
 
     #[test]
-    fn templates_cover_each_block_exactly_once_for_every_neighbour_level() {
-        let t = Templates::new();
-        for l in 0..LEVELS {
-            for nl in l..LEVELS {
-                let g = BlockGpu {
-                    level: l as u32,
-                    side_level: [nl as u32; 4],
-                    ..Default::default()
-                };
-                let mut idx = Vec::new();
-                t.append(&[g], &mut idx);
-                let area: f64 = idx
-                    .chunks_exact(3)
-                    .map(|tri| {
-                        let p: Vec<(f64, f64)> = tri
-                            .iter()
-                            .map(|&v| ((v as usize % SIDE) as f64, (v as usize / SIDE) as f64))
-                            .collect();
-                        let a = 0.5
-                            * ((p[1].0 - p[0].0) * (p[2].1 - p[0].1)
-                                - (p[2].0 - p[0].0) * (p[1].1 - p[0].1));
-                        assert!(
-                            a > 0.0,
-                            "level {l}/{nl}: triangle {tri:?} not counter-clockwise"
-                        );
-                        a
-                    })
-                    .sum();
-                assert!(
-                    (area - 1024.0).abs() < 1e-9,
-                    "level {l} beside {nl}: area {area}"
-                );
+    fn templates_cover_each_block_exactly_once_for_every_size_and_neighbour_level() {
+        for c in [16, 32, 64, 128] {
+            let grid = Grid {
+                n: c + 1,
+                cells: c,
+                spacing: 1.0,
+                origin: DVec2::ZERO,
+                heights: vec![0.0; (c + 1) * (c + 1)],
+            };
+            let t = Templates::new(&grid);
+            let levels = grid.levels();
+            for l in 0..levels {
+                for nl in l..levels {
+                    let g = BlockGpu {
+                        level: l as u32,
+                        side_level: [nl as u32; 4],
+                        ..Default::default()
+                    };
+                    let mut idx = Vec::new();
+                    t.append(&[g], &mut idx);
+                    let area: f64 = idx
+                        .chunks_exact(3)
+                        .map(|tri| {
+                            let p: Vec<(f64, f64)> = tri
+                                .iter()
+                                .map(|&v| {
+                                    ((v as usize % (c + 1)) as f64, (v as usize / (c + 1)) as f64)
+                                })
+                                .collect();
+                            let a = 0.5
+                                * ((p[1].0 - p[0].0) * (p[2].1 - p[0].1)
+                                    - (p[2].0 - p[0].0) * (p[1].1 - p[0].1));
+                            assert!(
+                                a > 0.0,
+                                "{c} cells, level {l}/{nl}: triangle {tri:?} not counter-clockwise"
+                            );
+                            a
+                        })
+                        .sum();
+                    assert!(
+                        (area - (c * c) as f64).abs() < 1e-9,
+                        "{c} cells, level {l} beside {nl}: area {area}"
+                    );
+                }
             }
+            assert!(((c + 1) * (c + 1)) as u32 <= 1 << grid.slot_shift());
         }
     }
 }

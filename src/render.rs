@@ -97,6 +97,7 @@ impl WarpedRenderer {
             mesh: self.mesh,
             view: self.view,
             importance_max,
+            block: [0; 4],
         })
     }
 
@@ -155,6 +156,7 @@ impl BaselineSceneRenderer {
             bump: scene.detail.bump,
             view,
             k,
+            cells: scene.geomipmap.block as usize - 1,
             kind,
         };
         let renderer = BaselineRenderer::new(&ctx, &atlas, &detail, &options)?;
@@ -185,6 +187,10 @@ impl BaselineSceneRenderer {
             mesh: self.renderer.bake.grid.n as u32,
             view: self.view,
             importance_max: 0.0,
+            block: {
+                let g = &self.renderer.bake.grid;
+                [g.cells as u32, g.slot_shift(), g.levels() as u32, 0]
+            },
         })
     }
 

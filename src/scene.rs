@@ -165,6 +165,8 @@ pub struct GeoMipMapSection {
     pub exact: bool,
     /// Geomorphing (trilinear GeoMipMapping).
     pub morph: bool,
+    /// Vertices per block side: 17, 33, 65 or 129.
+    pub block: u32,
 }
 impl Default for GeoMipMapSection {
     fn default() -> Self {
@@ -173,6 +175,7 @@ impl Default for GeoMipMapSection {
             k: None,
             exact: false,
             morph: true,
+            block: 33,
         }
     }
 }
@@ -328,6 +331,12 @@ impl Scene {
         within("warp.max_log2_step", w.max_log2_step, 0.0, 64.0)?;
         let g = &self.geomipmap;
         open_range("geomipmap.tau", g.tau, 0.0, 1e6)?;
+        if ![17, 33, 65, 129].contains(&g.block) {
+            return Err(format!(
+                "geomipmap.block = {}: one of 17, 33, 65, 129",
+                g.block
+            ));
+        }
         if let Some(k) = g.k {
             within("geomipmap.k", k as f64, 0.0, 6.0)?;
         }

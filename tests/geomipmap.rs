@@ -6,9 +6,12 @@ use proptest::prelude::*;
 use terrain::atlas::{Atlas, LoadOptions};
 use terrain::camera::Camera;
 use terrain::geomipmap::{
-    BLOCK, Blocks, Grid, LodParams, Selection, Templates, choose_level, morphed_height,
+    Blocks, Grid, LodParams, Selection, Templates, choose_level, morphed_height,
 };
 use terrain::gpu::uniforms::view_proj;
+
+/// Cells per block side in these tests (the default).
+const BLOCK: usize = terrain::geomipmap::DEFAULT_CELLS;
 
 /// A `blocks`² grid over a synthetic sketch at spacing `spacing`, with noise octaves down to the
 /// grid's spacing as a baked grid has them (without them every other vertex would lie on its
@@ -34,6 +37,7 @@ fn grid(name: &str, blocks: usize, spacing: f64) -> Grid {
         .collect();
     Grid {
         n,
+        cells: BLOCK,
         spacing,
         origin: DVec2::ZERO,
         heights,
@@ -127,7 +131,7 @@ fn edge_vertices(
     t.append(std::slice::from_ref(g), &mut idx);
     let mut v: Vec<(usize, usize)> = idx
         .iter()
-        .map(|&v| ((v as usize) % 33, (v as usize) / 33))
+        .map(|&v| ((v as usize) % (BLOCK + 1), (v as usize) / (BLOCK + 1)))
         .filter(|&(i, j)| match side {
             0 => j == 0,
             1 => i == BLOCK,
@@ -145,7 +149,7 @@ fn edge_vertices(
 fn shared_edges_use_the_same_vertices_at_the_same_heights() {
     let g = grid("ridges", 8, 15.0);
     let blocks = Blocks::new(&g);
-    let t = Templates::new();
+    let t = Templates::new(&g);
     let mut sel = Selection::default();
     let cam = camera([1920.0, -200.0, 500.0], [1920.0, 3000.0, 150.0]);
     let lod = LodParams {

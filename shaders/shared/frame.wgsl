@@ -31,4 +31,6 @@ struct Frame {
     turbulence: array<Octave, 2>,
     // The atlas pyramid's levels in the atlas buffer: (width, height, first texel, 0).
     level: array<vec4<u32>, 16>,
+    // GeoMipMap blocks: cells per side, bits of the block-local vertex in an index, levels, 0.
+    block: vec4<u32>,
 }

@@ -16,7 +16,7 @@ use super::warp_zoom::WarpZoomPass;
 use crate::atlas::Atlas;
 use crate::detail::Detail;
 use crate::error::{Error, Result};
-use crate::geomipmap::{BLOCK, BlockGpu, Blocks, Grid, LodParams, Selection, Templates};
+use crate::geomipmap::{BlockGpu, Blocks, Grid, LodParams, Selection, Templates};
 use std::time::Instant;
 
 /// The largest baked grid the default K allows (2^22 vertices: 64 MiB of vertices and normals).
@@ -39,19 +39,21 @@ pub struct Bake {
     pub bytes: u64,
 }
 
-/// Bakes the terrain function over the square enclosing the atlas at spacing d_atlas / 2^k.
+/// Bakes the terrain function over the square enclosing the atlas at spacing d_atlas / 2^k, in
+/// blocks of `cells` cells a side.
 pub fn bake(
     ctx: &GpuContext,
     atlas: &Atlas,
     atlas_buffer: &wgpu::Buffer,
     detail: &Detail,
     k: u32,
+    cells: usize,
 ) -> Result<Bake> {
     let start = Instant::now();
     let spacing = atlas.d_atlas() / (1u32 << k) as f64;
     let side = (atlas.max_corner() - atlas.origin).max_element();
-    let blocks = ((side / (BLOCK as f64 * spacing)).ceil() as usize).max(1);
-    let n = BLOCK * blocks + 1;
+    let blocks = ((side / (cells as f64 * spacing)).ceil() as usize).max(1);
+    let n = cells * blocks + 1;
     let bytes = (n * n) as u64 * 16;
     if bytes > ctx.limits.max_storage_buffer_binding_size {
         return Err(Error::Gpu(format!(
@@ -92,6 +94,7 @@ pub fn bake(
     let heights = read_vec4(ctx, &detailed)?.iter().map(|v| v[2]).collect();
     let grid = Grid {
         n,
+        cells,
         spacing,
         origin: atlas.origin,
         heights,
@@ -117,6 +120,8 @@ pub struct BaselineOptions {
     pub bump: bool,
     pub view: View,
     pub k: u32,
+    /// Cells per block side.
+    pub cells: usize,
     pub kind: Baseline,
 }
 
@@ -148,10 +153,11 @@ impl BaselineRenderer {
         let start = Instant::now();
         let device = &ctx.device;
         let (atlas_buffer, atlas_bytes) = upload_atlas(ctx, atlas);
-        let bake = bake(ctx, atlas, &atlas_buffer, detail, o.k)?;
+        let bake = bake(ctx, atlas, &atlas_buffer, detail, o.k, o.cells)?;
         let blocks = Blocks::new(&bake.grid);
+        let templates = Templates::new(&bake.grid);
         let per_side = blocks.per_side;
-        let capacity = (per_side * per_side * BLOCK * BLOCK * 6) as u64;
+        let capacity = (per_side * per_side * o.cells * o.cells * 6) as u64;
         let block_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("blocks"),
             size: (per_side * per_side * std::mem::size_of::<BlockGpu>()) as u64,
@@ -195,7 +201,7 @@ impl BaselineRenderer {
             precompute_ms: start.elapsed().as_secs_f64() * 1e3,
             bake,
             blocks,
-            templates: Templates::new(),
+            templates,
             selection,
             indices: Vec::new(),
             block_buffer,

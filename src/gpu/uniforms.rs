@@ -61,6 +61,8 @@ pub struct FrameUniforms {
     pub turbulence: [OctaveGpu; 2],
     /// The atlas pyramid's levels in the atlas buffer: width, height, first texel, 0.
     pub level: [[u32; 4]; MAX_LEVELS],
+    /// GeoMipMap blocks: cells per side, index bits of the block-local vertex, levels, 0.
+    pub block: [u32; 4],
 }
 
 /// The debug views of `render --view`.
@@ -125,6 +127,8 @@ pub struct FrameInputs<'a> {
     pub mesh: u32,
     pub view: View,
     pub importance_max: f32,
+    /// GeoMipMap's block shape (cells, index bits, levels, 0); zeros for the warped mode.
+    pub block: [u32; 4],
 }
 
 impl FrameUniforms {
@@ -173,6 +177,7 @@ impl FrameUniforms {
             octave,
             turbulence,
             level: level_table(f.atlas),
+            block: f.block,
         }
     }
 }
@@ -226,6 +231,7 @@ impl FrameUniforms {
             octave,
             turbulence: [OctaveGpu::default(); 2],
             level: level_table(atlas),
+            block: [0; 4],
         }
     }
 }

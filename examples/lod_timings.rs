@@ -1,0 +1,88 @@
+//! Frame times of every mode on one adapter in one run: warped, GeoMipMap at τ = 1, 2, 4, 8 px
+//! (de Boer's distance and the exact bound), brute force. Median of `FRAMES` frames after a warm-up.
+//!
+//! `cargo run --release --example lod_timings [SCENE]` (default: the bundled jacksboro scene).
+
+use std::path::PathBuf;
+use terrain::gpu::baseline::Baseline;
+use terrain::gpu::uniforms::View;
+use terrain::render::{BaselineSceneRenderer, Frame, WarpedRenderer};
+use terrain::scene::Scene;
+
+const FRAMES: usize = 10;
+
+fn median(frames: &[Frame], f: impl Fn(&Frame) -> f64) -> f64 {
+    let mut v: Vec<f64> = frames.iter().map(f).collect();
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn row(label: &str, frames: &[Frame]) {
+    let last = frames.last().expect("frames");
+    println!(
+        "| {label} | {:.0} | {:.1} | {:.1} | {} | {} |",
+        median(frames, |f| f.cpu_us),
+        median(frames, |f| f.gpu.gpu_ms),
+        median(frames, |f| f.gpu.gpu_ms + f.cpu_us * 1e-3),
+        last.gpu.triangles,
+        last.blocks.map_or("—".to_string(), |b| b.to_string()),
+    );
+}
+
+fn main() -> anyhow::Result<()> {
+    let path = std::env::args()
+        .nth(1)
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("sketches/jacksboro.toml")
+        });
+    let scene = Scene::load(&path)?;
+    println!(
+        "| mode | CPU µs (stage or block selection) | GPU ms | frame ms | triangles | blocks |"
+    );
+    println!("|---|---|---|---|---|---|");
+    let mut warped = WarpedRenderer::new(&scene, View::Shaded)?;
+    let camera = terrain::cpu_stage::camera_of(&scene, &warped.atlas)?;
+    warped.render(&camera)?;
+    let frames: Vec<Frame> = (0..FRAMES)
+        .map(|_| warped.render(&camera))
+        .collect::<Result<_, _>>()?;
+    row("warped", &frames);
+    let adapter = warped.ctx.adapter_name();
+    drop(warped);
+    for kind in [Baseline::GeoMipMap, Baseline::BruteForce] {
+        let mut r = BaselineSceneRenderer::new(&scene, View::Shaded, kind)?;
+        eprintln!(
+            "{kind:?}: baked {}² grid in {:.0} ms, {:.0} MiB",
+            r.renderer.bake.grid.n,
+            r.renderer.precompute_ms,
+            r.renderer.bake.bytes as f64 / 1048576.0
+        );
+        let settings: Vec<(String, f64, bool)> = match kind {
+            Baseline::GeoMipMap => [1.0, 2.0, 4.0, 8.0]
+                .iter()
+                .flat_map(|&tau| {
+                    [
+                        (format!("geomipmap τ={tau} (de Boer)"), tau, false),
+                        (format!("geomipmap τ={tau} (exact)"), tau, true),
+                    ]
+                })
+                .collect(),
+            Baseline::BruteForce => vec![("bruteforce".to_string(), 1.0, false)],
+        };
+        for (label, tau, exact) in settings {
+            r.lod.tau = tau;
+            r.lod.exact = exact;
+            r.render(&camera)?;
+            let frames: Vec<Frame> = (0..FRAMES)
+                .map(|_| r.render(&camera))
+                .collect::<Result<_, _>>()?;
+            row(&label, &frames);
+        }
+    }
+    println!(
+        "\n{} on {adapter}, {FRAMES} frames each after a warm-up.",
+        path.display()
+    );
+    Ok(())
+}
