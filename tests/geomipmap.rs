@@ -74,39 +74,47 @@ proptest! {
     }
 }
 
+/// The largest projected error of the chosen levels: each vertex against the level's surface
+/// under it, both projected exactly.
+fn worst_projected_error(g: &Grid, blocks: &Blocks, sel: &Selection, cam: &Camera) -> f64 {
+    let mut worst = 0.0f64;
+    for &k in &sel.visible {
+        let l = sel.level[k] as usize;
+        let (bx, by) = ((k % blocks.per_side) * BLOCK, (k / blocks.per_side) * BLOCK);
+        for j in by..=by + BLOCK {
+            for i in bx..=bx + BLOCK {
+                let fine = g.world(i, j);
+                let coarse = fine.truncate().extend(g.level_height(i, j, l) as f64);
+                if let (Some(a), Some(b)) = (project(cam, fine), project(cam, coarse)) {
+                    worst = worst.max((a - b).length());
+                }
+            }
+        }
+    }
+    worst
+}
+
 #[test]
 fn tau_is_honoured_with_exact_projection() {
     let g = grid("ridges", 8, 15.0);
     let blocks = Blocks::new(&g);
     let mut sel = Selection::default();
-    for (eye, at) in [
+    let views = [
         ([1920.0, -300.0, 700.0], [1920.0, 3000.0, 200.0]),
         ([1000.0, 1000.0, 2500.0], [1900.0, 1900.0, 0.0]),
-    ] {
+    ];
+    for (eye, at) in views {
         let cam = camera(eye, at);
         for tau in [0.5, 2.0, 8.0] {
-            let lod = LodParams {
+            let exact = LodParams {
                 tau,
                 exact: true,
                 morph: false,
                 reach_m: 0.0,
             };
-            sel.select(&g, &blocks, &cam, &lod);
+            sel.select(&g, &blocks, &cam, &exact);
             assert!(!sel.visible.is_empty());
-            let mut worst = 0.0f64;
-            for &k in &sel.visible {
-                let l = sel.level[k] as usize;
-                let (bx, by) = ((k % blocks.per_side) * BLOCK, (k / blocks.per_side) * BLOCK);
-                for j in by..=by + BLOCK {
-                    for i in bx..=bx + BLOCK {
-                        let fine = g.world(i, j);
-                        let coarse = fine.truncate().extend(g.level_height(i, j, l) as f64);
-                        if let (Some(a), Some(b)) = (project(&cam, fine), project(&cam, coarse)) {
-                            worst = worst.max((a - b).length());
-                        }
-                    }
-                }
-            }
+            let worst = worst_projected_error(&g, &blocks, &sel, &cam);
             assert!(
                 worst <= tau * (1.0 + 1e-6),
                 "τ {tau}: a chosen level shows {worst:.2} px of error"
@@ -117,6 +125,16 @@ fn tau_is_honoured_with_exact_projection() {
                     "τ {tau}: every block at level 0"
                 );
             }
+            // De Boer's distance-based choice is a simplification: report what it allows.
+            let de_boer = LodParams {
+                exact: false,
+                ..exact
+            };
+            sel.select(&g, &blocks, &cam, &de_boer);
+            let approx = worst_projected_error(&g, &blocks, &sel, &cam);
+            eprintln!(
+                "view {eye:?}, τ {tau}: largest error {worst:.2} px exact, {approx:.2} px de Boer"
+            );
         }
     }
 }
