@@ -79,9 +79,10 @@ fn grid_index(g: vec2<u32>) -> u32 {
     return g.y * frame.mesh + g.x;
 }
 
-// Index = block slot << bits | (j·(cells+1) + i), with cells and bits from frame.block. Vertices that the next level drops move toward the
-// midpoint of their two neighbours on it (Wagner's geomorph); edge vertices follow the level and
-// morph range of the coarser block of their edge, so neighbours agree on them.
+// Index = block slot << bits | (j·(cells+1) + i), cells and bits from frame.block. Vertices that
+// the next level drops move toward the midpoint of their two neighbours on it (Wagner's
+// geomorph); edge vertices follow the level and morph range of the coarser block of their edge,
+// so neighbours agree on them.
 @vertex
 fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     let cells = frame.block.x;

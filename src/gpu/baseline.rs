@@ -56,8 +56,13 @@ pub fn bake(
     let n = cells * blocks + 1;
     let bytes = (n * n) as u64 * 16;
     if bytes > ctx.limits.max_storage_buffer_binding_size {
+        let advice = if k > 0 {
+            "lower geomipmap.k"
+        } else {
+            "the sketch is too large to bake at its own spacing; crop it or use the warped mode"
+        };
         return Err(Error::Gpu(format!(
-            "a {n}² baked grid needs {} MiB buffers, the adapter allows {} MiB; lower geomipmap.k",
+            "a {n}² baked grid needs {} MiB buffers, the adapter allows {} MiB; {advice}",
             bytes >> 20,
             ctx.limits.max_storage_buffer_binding_size >> 20
         )));
