@@ -65,7 +65,7 @@ enum Command {
         #[arg(long, default_value = "shaded", value_parser = ["shaded", "wireframe", "split-octave", "importance", "normals", "coverage"])]
         view: String,
         /// GeoMipMap's τ: the largest projected vertex error, pixels (overrides geomipmap.tau).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         tau: Option<f64>,
         /// Overrides a scene key, e.g. `--set detail.octaves=0` (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -79,7 +79,26 @@ enum Command {
 }
 
 fn main() {
-    let cli = Cli::parse();
+    // Usage errors as one line too, like every other bad input; help and version print in full.
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if !e.use_stderr() => e.exit(),
+        Err(e) => {
+            // The cause is everything before clap's usage block, on one line.
+            let text = e.to_string();
+            let cause: Vec<&str> = text
+                .lines()
+                .take_while(|l| !l.starts_with("Usage:"))
+                .map(str::trim)
+                .filter(|l| !l.is_empty() && !l.starts_with("tip:") && !l.starts_with("For more"))
+                .collect();
+            eprintln!(
+                "{} (terrain --help lists the commands and options)",
+                cause.join(" ")
+            );
+            std::process::exit(2);
+        }
+    };
     let result = match cli.command {
         Command::Info {
             file,

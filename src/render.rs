@@ -47,13 +47,8 @@ impl WarpedRenderer {
         let detail = cpu_stage::detail_of(scene, &atlas);
         let stage = CpuStage::new(scene, &detail)?;
         let mesh = scene.warp.mesh;
-        let atlas_bytes = atlas
-            .levels
-            .iter()
-            .map(|l| l.data.len() as u64 * 4)
-            .sum::<u64>();
         let ctx = GpuContext::new(&Needs {
-            storage_bytes: atlas_bytes.max((mesh * mesh) as u64 * 16),
+            storage_bytes: atlas.bytes().max((mesh * mesh) as u64 * 16),
         })?;
         let renderer = Renderer::new(
             &ctx,
@@ -142,13 +137,8 @@ impl BaselineSceneRenderer {
         let atlas = cpu_stage::load_atlas(scene)?;
         let detail = cpu_stage::detail_of(scene, &atlas);
         let k = scene.geomipmap.k.unwrap_or_else(|| default_k(&atlas));
-        let atlas_bytes = atlas
-            .levels
-            .iter()
-            .map(|l| l.data.len() as u64 * 4)
-            .sum::<u64>();
         let ctx = GpuContext::new(&Needs {
-            storage_bytes: atlas_bytes,
+            storage_bytes: atlas.bytes(),
         })?;
         let options = BaselineOptions {
             width: scene.camera.width,

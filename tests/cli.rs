@@ -55,6 +55,28 @@ fn scene_for(dir: &Path, sketch: &Path) -> PathBuf {
 }
 
 #[test]
+fn usage_errors_are_one_line_too() {
+    fails_with(&["rendr"], "unrecognized subcommand");
+    fails_with(&["render"], "--output");
+    fails_with(
+        &["render", "x.toml", "-o", "x.png", "--mode", "fast"],
+        "fast",
+    );
+    let scene = manifest_dir().join("sketches/hills.toml");
+    fails_with(
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            "x.png",
+            "--tau",
+            "-1",
+        ],
+        "--tau -1",
+    );
+}
+
+#[test]
 fn info_reads_the_bundled_sketch() {
     let path = manifest_dir().join("sketches/jacksboro_fault_dem.asc");
     let (code, out, _) = terrain(&["info", path.to_str().unwrap(), "--json"]);

@@ -173,6 +173,11 @@ impl Atlas {
     pub fn height(&self) -> usize {
         self.levels[0].height
     }
+    /// Bytes of heights in the whole pyramid (what the GPU holds of the atlas).
+    pub fn bytes(&self) -> u64 {
+        self.levels.iter().map(|l| l.data.len() as u64 * 4).sum()
+    }
+
     /// `d_atlas`: the smaller grid spacing, the scale of octave 1.
     pub fn d_atlas(&self) -> f64 {
         self.dx.min(self.dy)
