@@ -9,10 +9,11 @@
 
 use crate::error::{Error, Result};
 
-const SHARED: [(&str, &str); 3] = [
+const SHARED: [(&str, &str); 4] = [
     ("frame", include_str!("../../shaders/shared/frame.wgsl")),
     ("noise", include_str!("../../shaders/shared/noise.wgsl")),
     ("atlas", include_str!("../../shaders/shared/atlas.wgsl")),
+    ("shading", include_str!("../../shaders/shared/shading.wgsl")),
 ];
 
 /// The passes' WGSL files, by name.

@@ -1,0 +1,66 @@
+// Surface shading shared by the mesh renderers and the reference ray marcher: sky, surface
+// types, sun and sky light, aerial perspective. Needs `frame`; turbulence needs the noise.
+#ifdef NOISE
+#import noise
+#endif
+
+const SEA_LEVEL: f32 = 0.0;
+const FOG_DENSITY: f32 = 0.000035;
+
+fn sky_colour(dir: vec3<f32>) -> vec3<f32> {
+    let up = clamp(dir.z, -0.2, 1.0);
+    let horizon = vec3<f32>(0.72, 0.80, 0.90);
+    let zenith = vec3<f32>(0.22, 0.42, 0.78);
+    var c = mix(horizon, zenith, pow(max(up, 0.0), 0.6));
+    let sun = max(dot(dir, frame.sun.xyz), 0.0);
+    c += vec3<f32>(1.0, 0.85, 0.6) * (pow(sun, 400.0) * 4.0 + pow(sun, 12.0) * 0.25);
+    return c;
+}
+
+// Low-frequency turbulence that moves the boundaries between surface types.
+fn turbulence(local: vec2<f32>) -> f32 {
+#ifdef NOISE
+    return octave_local(frame.turbulence[0], local).x + 0.5 * octave_local(frame.turbulence[1], local).x;
+#else
+    return 0.0;
+#endif
+}
+
+fn albedo(local: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let t = turbulence(local.xy);
+    let h = local.z + 40.0 * t;
+    let slope = 1.0 - n.z;
+    let grass = mix(vec3<f32>(0.20, 0.33, 0.10), vec3<f32>(0.33, 0.40, 0.16), 0.5 + 0.5 * t);
+    let soil = vec3<f32>(0.42, 0.34, 0.24);
+    let sand = vec3<f32>(0.70, 0.63, 0.46);
+    let rock = mix(vec3<f32>(0.36, 0.33, 0.30), vec3<f32>(0.50, 0.47, 0.43), 0.5 + 0.5 * t);
+    let snow = vec3<f32>(0.92, 0.93, 0.96);
+    var c = grass;
+    c = mix(c, soil, smoothstep(0.18, 0.30, slope + 0.08 * t));
+    c = mix(c, rock, smoothstep(0.32, 0.45, slope + 0.1 * t));
+    c = mix(c, sand, 1.0 - smoothstep(SEA_LEVEL + 2.0, SEA_LEVEL + 8.0, h));
+    // Snow settles above the snow line, lower on north-facing slopes, and slides off cliffs.
+    let snow_line = 1800.0 - 250.0 * n.y;
+    let snowy = smoothstep(snow_line, snow_line + 150.0, h) * (1.0 - smoothstep(0.45, 0.6, slope));
+    return mix(c, snow, snowy);
+}
+
+// The lit colour of ground at `local` with normal `n`, seen from `to_eye` (distance `dist`).
+fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32> {
+    if (local.z < SEA_LEVEL) {
+        let fresnel = pow(1.0 - clamp(to_eye.z / dist, 0.0, 1.0), 4.0);
+        let reflected = sky_colour(reflect(-to_eye / dist, vec3<f32>(0.0, 0.0, 1.0)));
+        return mix(vec3<f32>(0.04, 0.12, 0.20), reflected, fresnel);
+    }
+    let sun = max(dot(n, frame.sun.xyz), 0.0);
+    let sky = 0.35 * (0.6 + 0.4 * n.z);
+    let light = vec3<f32>(1.0, 0.95, 0.85) * sun * 1.1 + vec3<f32>(0.55, 0.65, 0.85) * sky;
+    return albedo(local, n) * light;
+}
+
+// Aerial perspective: the air between the eye and the ground scatters toward the horizon sky.
+fn aerial(colour: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32> {
+    let fog = 1.0 - exp(-dist * FOG_DENSITY);
+    let horizon = normalize(-to_eye) * vec3<f32>(1.0, 1.0, 0.0) + vec3<f32>(0.0, 0.0, 0.02);
+    return mix(colour, sky_colour(horizon), fog);
+}
