@@ -37,7 +37,7 @@ fn sky_fs(in: SkyOut) -> @location(0) vec4<f32> {
     if (frame.view == 5u) {
         return vec4<f32>(0.0, 0.0, 0.0, 1.0);
     }
-    let far = frame.inv_view_proj * vec4<f32>(in.ndc, 0.5, 1.0);
+    let far = frame.inv_view_proj * vec4<f32>(in.ndc, 1e-4, 1.0);
     let dir = normalize(far.xyz / far.w - frame.eye.xyz);
     return vec4<f32>(sky_colour(dir), 1.0);
 }

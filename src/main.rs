@@ -276,7 +276,8 @@ fn render(
         Some("warped") => Mode::Warped,
         Some("geomipmap") => Mode::Geomipmap,
         Some("bruteforce") => Mode::Bruteforce,
-        Some(m) => anyhow::bail!("mode {m} is not part of this build yet"),
+        Some("reference") => Mode::Reference,
+        Some(m) => anyhow::bail!("unknown mode {m}"),
         None => scene.render.mode,
     };
     if let Some(tau) = opts.tau {

@@ -5,10 +5,12 @@ use crate::atlas::Atlas;
 use crate::camera::Camera;
 use crate::cpu_stage::{self, CpuStage, StageTimes};
 use crate::detail::Detail;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::geomipmap::LodParams;
 use crate::gpu::baseline::{Baseline, BaselineOptions, BaselineRenderer, default_k};
 use crate::gpu::context::{GpuContext, Needs};
+use crate::gpu::frame_io::{PassTimes, Timer, uniform_buffer, upload_atlas};
+use crate::gpu::reference::ReferencePass;
 use crate::gpu::renderer::{FrameStats, Options, Renderer};
 use crate::gpu::uniforms::{FrameInputs, FrameUniforms, View};
 use crate::scene::{Mode, Scene};
@@ -93,6 +95,7 @@ impl WarpedRenderer {
             view: self.view,
             importance_max,
             block: [0; 4],
+            step_factor: 0.0,
         })
     }
 
@@ -181,6 +184,7 @@ impl BaselineSceneRenderer {
                 let g = &self.renderer.bake.grid;
                 [g.cells as u32, g.slot_shift(), g.levels() as u32, 0]
             },
+            step_factor: 0.0,
         })
     }
 
@@ -206,10 +210,89 @@ impl BaselineSceneRenderer {
     }
 }
 
+/// The reference: the terrain function ray-marched per pixel, colour and positions.
+pub struct ReferenceRenderer {
+    pub ctx: GpuContext,
+    pub pass: ReferencePass,
+    pub atlas: Atlas,
+    pub detail: Detail,
+    frame: wgpu::Buffer,
+    _atlas_buffer: wgpu::Buffer,
+    timer: Option<Timer>,
+    pub step: f32,
+}
+
+impl ReferenceRenderer {
+    pub fn new(scene: &Scene) -> Result<ReferenceRenderer> {
+        let atlas = cpu_stage::load_atlas(scene)?;
+        let detail = cpu_stage::detail_of(scene, &atlas);
+        let ctx = GpuContext::new(&Needs {
+            storage_bytes: atlas.bytes(),
+        })?;
+        let frame = uniform_buffer(&ctx.device);
+        let (atlas_buffer, _) = upload_atlas(&ctx, &atlas);
+        let (w, h) = (scene.camera.width, scene.camera.height);
+        let pass =
+            ReferencePass::new(&ctx.device, &frame, &atlas_buffer, w, h, detail.octaves > 0)?;
+        Ok(ReferenceRenderer {
+            timer: Timer::new(&ctx),
+            ctx,
+            pass,
+            atlas,
+            detail,
+            frame,
+            _atlas_buffer: atlas_buffer,
+            step: scene.reference.step as f32,
+        })
+    }
+
+    pub fn render(&mut self, camera: &Camera) -> Result<Frame> {
+        let uniforms = FrameUniforms::new(&FrameInputs {
+            camera,
+            map: None,
+            mesh_origin: None,
+            atlas: &self.atlas,
+            detail: &self.detail,
+            mesh: 0,
+            view: View::Shaded,
+            importance_max: 0.0,
+            block: [0; 4],
+            step_factor: self.step,
+        });
+        self.ctx
+            .queue
+            .write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniforms));
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        let t = self.timer.as_ref();
+        self.pass.record(&mut encoder, t.map(|t| t.compute(2)));
+        if let Some(t) = t {
+            t.resolve(&mut encoder, 2);
+        }
+        let start = std::time::Instant::now();
+        self.ctx.queue.submit([encoder.finish()]);
+        let rgba = self.pass.read_image(&self.ctx)?;
+        let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        let passes = match t {
+            Some(t) => t.read(&self.ctx, 2)?,
+            None => PassTimes::default(),
+        };
+        Ok(Frame {
+            rgba,
+            width: camera.width,
+            height: camera.height,
+            cpu: StageTimes::default(),
+            cpu_us: 0.0,
+            gpu: FrameStats::new(passes, t.is_some(), wall_ms, 0),
+            blocks: None,
+        })
+    }
+}
+
 /// Any mode's renderer for a scene.
 pub enum SceneRenderer {
     Warped(Box<WarpedRenderer>),
     Baseline(Box<BaselineSceneRenderer>),
+    Reference(Box<ReferenceRenderer>),
 }
 
 impl SceneRenderer {
@@ -226,11 +309,7 @@ impl SceneRenderer {
                 view,
                 Baseline::BruteForce,
             )?)),
-            Mode::Reference => {
-                return Err(Error::Invalid(
-                    "render.mode = reference is not part of this build yet (the comparison issue adds it)".into(),
-                ));
-            }
+            Mode::Reference => SceneRenderer::Reference(Box::new(ReferenceRenderer::new(scene)?)),
         })
     }
 
@@ -238,6 +317,7 @@ impl SceneRenderer {
         match self {
             SceneRenderer::Warped(r) => &r.atlas,
             SceneRenderer::Baseline(r) => &r.atlas,
+            SceneRenderer::Reference(r) => &r.atlas,
         }
     }
 
@@ -245,6 +325,7 @@ impl SceneRenderer {
         match self {
             SceneRenderer::Warped(r) => &r.ctx,
             SceneRenderer::Baseline(r) => &r.ctx,
+            SceneRenderer::Reference(r) => &r.ctx,
         }
     }
 
@@ -252,6 +333,7 @@ impl SceneRenderer {
         match self {
             SceneRenderer::Warped(r) => r.render(camera),
             SceneRenderer::Baseline(r) => r.render(camera),
+            SceneRenderer::Reference(r) => r.render(camera),
         }
     }
 
@@ -259,13 +341,14 @@ impl SceneRenderer {
         match self {
             SceneRenderer::Warped(r) => r.renderer.gpu_bytes,
             SceneRenderer::Baseline(r) => r.renderer.gpu_bytes,
+            SceneRenderer::Reference(r) => r.atlas.bytes() + 2 * r.pass.colour.size(),
         }
     }
 
     /// The baselines' precomputation: milliseconds and bytes of the baked grid.
     pub fn precompute(&self) -> Option<(f64, u64)> {
         match self {
-            SceneRenderer::Warped(_) => None,
+            SceneRenderer::Warped(_) | SceneRenderer::Reference(_) => None,
             SceneRenderer::Baseline(r) => Some((r.renderer.precompute_ms, r.renderer.bake.bytes)),
         }
     }
@@ -275,6 +358,7 @@ impl SceneRenderer {
         match self {
             SceneRenderer::Warped(r) => r.stage.sketch_map.visible,
             SceneRenderer::Baseline(r) => !r.renderer.selection.visible.is_empty(),
+            SceneRenderer::Reference(_) => true,
         }
     }
 }

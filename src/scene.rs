@@ -23,6 +23,8 @@ pub struct Scene {
     pub render: RenderSection,
     #[serde(default)]
     pub geomipmap: GeoMipMapSection,
+    #[serde(default)]
+    pub reference: ReferenceSection,
     pub path: Option<PathSection>,
     /// The folder relative paths resolve against; not a key.
     #[serde(skip)]
@@ -177,6 +179,19 @@ impl Default for GeoMipMapSection {
             morph: true,
             block: 33,
         }
+    }
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ReferenceSection {
+    /// March step as a fraction of the height above the ground (and at least of the pixel's
+    /// footprint); halving it must not change the image (the convergence test).
+    pub step: f64,
+}
+impl Default for ReferenceSection {
+    fn default() -> Self {
+        ReferenceSection { step: 0.25 }
     }
 }
 
@@ -340,6 +355,12 @@ impl Scene {
         if let Some(k) = g.k {
             within("geomipmap.k", k as f64, 0.0, 6.0)?;
         }
+        open_range(
+            "reference.step",
+            self.reference.step,
+            0.0,
+            1.0 + f64::EPSILON,
+        )?;
         let i = &self.importance;
         positive("importance.max_per_m", i.max_per_m)?;
         open_range("importance.floor", i.floor, 0.0, 1.0 + f64::EPSILON)?;

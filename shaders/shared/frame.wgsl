@@ -33,4 +33,8 @@ struct Frame {
     level: array<vec4<u32>, 16>,
     // GeoMipMap blocks: cells per side, bits of the block-local vertex in an index, levels, 0.
     block: vec4<u32>,
+    // Reference ray march: lowest and highest ground (with the detail's reach), step factor, 0.
+    march: vec4<f32>,
+    // Image width and height in pixels, 0, 0.
+    image: vec4<u32>,
 }

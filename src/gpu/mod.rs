@@ -6,6 +6,7 @@ pub mod baseline;
 pub mod context;
 pub mod frame_io;
 pub mod normals;
+pub mod reference;
 pub mod renderer;
 pub mod shaders;
 pub mod terrain;

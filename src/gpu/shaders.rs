@@ -17,10 +17,11 @@ const SHARED: [(&str, &str); 4] = [
 ];
 
 /// The passes' WGSL files, by name.
-pub const PASSES: [(&str, &str); 3] = [
+pub const PASSES: [(&str, &str); 4] = [
     ("warp_zoom", include_str!("../../shaders/warp_zoom.wgsl")),
     ("normals", include_str!("../../shaders/normals.wgsl")),
     ("terrain", include_str!("../../shaders/terrain.wgsl")),
+    ("reference", include_str!("../../shaders/reference.wgsl")),
 ];
 
 /// Every flag any pass tests, for validating all variants.

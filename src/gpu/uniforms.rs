@@ -63,6 +63,10 @@ pub struct FrameUniforms {
     pub level: [[u32; 4]; MAX_LEVELS],
     /// GeoMipMap blocks: cells per side, index bits of the block-local vertex, levels, 0.
     pub block: [u32; 4],
+    /// Reference ray march: lowest and highest ground (with the detail's reach), step factor, 0.
+    pub march: [f32; 4],
+    /// Image width and height in pixels, 0, 0.
+    pub image: [u32; 4],
 }
 
 /// The debug views of `render --view`.
@@ -129,6 +133,8 @@ pub struct FrameInputs<'a> {
     pub importance_max: f32,
     /// GeoMipMap's block shape (cells, index bits, levels, 0); zeros for the warped mode.
     pub block: [u32; 4],
+    /// The reference's step: a fraction of the height above ground and of the pixel footprint.
+    pub step_factor: f32,
 }
 
 impl FrameUniforms {
@@ -178,6 +184,13 @@ impl FrameUniforms {
             turbulence,
             level: level_table(f.atlas),
             block: f.block,
+            march: [
+                (f.atlas.min_m as f64 - f.detail.reach_m()) as f32,
+                (f.atlas.max_m as f64 + f.detail.reach_m()) as f32,
+                f.step_factor,
+                0.0,
+            ],
+            image: [f.camera.width, f.camera.height, 0, 0],
         }
     }
 }
@@ -232,6 +245,8 @@ impl FrameUniforms {
             turbulence: [OctaveGpu::default(); 2],
             level: level_table(atlas),
             block: [0; 4],
+            march: [0.0; 4],
+            image: [0; 4],
         }
     }
 }

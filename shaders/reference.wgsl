@@ -1,0 +1,134 @@
+// The reference: per pixel, a ray marched to the terrain function (the sketch, bicubic at the
+// pixel's footprint, plus every octave k with b_k = clamp(o_px − k + 1, 0, 1) as geometry),
+// shaded as the meshes are, with the normal of that same function. Writes linear colour and the
+// hit position (metres from the frame origin; w = 1 on terrain, 0 on sky) per pixel.
+//
+// March: steps of `step factor` × the height above the ground, at least that fraction of the
+// pixel's footprint, then a bisection of the last step. Halving the factor is the convergence
+// check (tests/reference.rs).
+
+#import frame
+@group(0) @binding(0) var<uniform> frame: Frame;
+#import atlas
+#ifdef NOISE
+#import noise
+#endif
+#import shading
+
+@group(0) @binding(2) var<storage, read_write> colour_out: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read_write> position_out: array<vec4<f32>>;
+
+const MAX_STEPS: u32 = 4096u;
+
+// The terrain function at `p` for a footprint of `footprint` metres.
+fn height(p: vec2<f32>, footprint: f32) -> f32 {
+    var h = atlas_height(p, footprint);
+#ifdef NOISE
+    let o_px = log2(frame.d_atlas / max(footprint, 1e-6));
+    let last = min(frame.octaves, u32(max(ceil(o_px), 0.0)));
+    for (var k = 1u; k <= last; k++) {
+        let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
+        h += frame.octave[k - 1u].weight * b * octave_local(frame.octave[k - 1u], p).x;
+    }
+#endif
+    return h;
+}
+
+// Its gradient: the octaves' analytically, the sketch's by central differences of the bicubic.
+fn gradient(p: vec2<f32>, footprint: f32) -> vec2<f32> {
+    let e = max(footprint, 0.05 * frame.d_atlas);
+    let sx = atlas_height(p + vec2<f32>(e, 0.0), footprint) - atlas_height(p - vec2<f32>(e, 0.0), footprint);
+    let sy = atlas_height(p + vec2<f32>(0.0, e), footprint) - atlas_height(p - vec2<f32>(0.0, e), footprint);
+    var g = vec2<f32>(sx, sy) / (2.0 * e);
+#ifdef NOISE
+    let o_px = log2(frame.d_atlas / max(footprint, 1e-6));
+    let last = min(frame.octaves, u32(max(ceil(o_px), 0.0)));
+    for (var k = 1u; k <= last; k++) {
+        let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
+        g += frame.octave[k - 1u].weight * b * octave_local(frame.octave[k - 1u], p).yz;
+    }
+#endif
+    return g;
+}
+
+// The part of the ray inside the box of the sketch's rectangle and its heights, or t0 > t1.
+fn span(eye: vec3<f32>, dir: vec3<f32>) -> vec2<f32> {
+    let lo_xy = -frame.atlas_offset;
+    let hi_xy = lo_xy + vec2<f32>(frame.level[0].xy - 1u) / frame.atlas_inv_spacing;
+    let lo = vec3<f32>(lo_xy, frame.march.x);
+    let hi = vec3<f32>(hi_xy, frame.march.y);
+    var t0 = 0.0;
+    var t1 = 3.0e38;
+    for (var a = 0; a < 3; a++) {
+        if (abs(dir[a]) < 1e-12) {
+            if (eye[a] < lo[a] || eye[a] > hi[a]) {
+                return vec2<f32>(1.0, 0.0);
+            }
+        } else {
+            let ta = (lo[a] - eye[a]) / dir[a];
+            let tb = (hi[a] - eye[a]) / dir[a];
+            t0 = max(t0, min(ta, tb));
+            t1 = min(t1, max(ta, tb));
+        }
+    }
+    return vec2<f32>(t0, t1);
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = frame.image.xy;
+    if (id.x >= size.x || id.y >= size.y) {
+        return;
+    }
+    let ndc = vec2<f32>(
+        (f32(id.x) + 0.5) / f32(size.x) * 2.0 - 1.0,
+        1.0 - (f32(id.y) + 0.5) / f32(size.y) * 2.0,
+    );
+    // Reversed-Z: depth 1e-4 is ~500 m out, far enough that f32 rounding of the point does not
+    // bend the direction (at 0.5 it lay 0.1 m from the eye, and rays missed by 0.1 px).
+    let far = frame.inv_view_proj * vec4<f32>(ndc, 1e-4, 1.0);
+    let eye = frame.eye.xyz;
+    let dir = normalize(far.xyz / far.w - eye);
+    let k = id.y * size.x + id.x;
+    let range = span(eye, dir);
+    var t = range.x;
+    var t_prev = range.x;
+    var hit = false;
+    for (var step = 0u; step < MAX_STEPS && t <= range.y; step++) {
+        let p = eye + dir * t;
+        let footprint = t * frame.eye.w;
+        let above = p.z - height(p.xy, footprint);
+        if (above <= 0.0) {
+            hit = true;
+            break;
+        }
+        t_prev = t;
+        t += max(above, footprint) * frame.march.z;
+    }
+    if (!hit) {
+        colour_out[k] = vec4<f32>(sky_colour(dir), 1.0);
+        position_out[k] = vec4<f32>(0.0);
+        return;
+    }
+    // Bisect the last step to the crossing.
+    var lo = t_prev;
+    var hi = t;
+    for (var i = 0u; i < 16u; i++) {
+        let mid = 0.5 * (lo + hi);
+        let p = eye + dir * mid;
+        if (p.z - height(p.xy, mid * frame.eye.w) > 0.0) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let t_hit = 0.5 * (lo + hi);
+    let footprint = t_hit * frame.eye.w;
+    let p = eye + dir * t_hit;
+    let g = gradient(p.xy, footprint);
+    let n = normalize(vec3<f32>(-g, 1.0));
+    let to_eye = eye - p;
+    let dist = max(length(to_eye), 1e-3);
+    colour_out[k] = vec4<f32>(aerial(lit(p, n, to_eye, dist), to_eye, dist), 1.0);
+    position_out[k] = vec4<f32>(p, 1.0);
+}

@@ -1,0 +1,106 @@
+//! The reference pass (`shaders/reference.wgsl`): the terrain function ray-marched per pixel with
+//! every octave down to the pixel's footprint; linear colour and hit positions per pixel.
+
+use super::context::GpuContext;
+use super::frame_io::read_vec4;
+use super::{bind, compute_pipeline, entry, storage, uniform};
+use crate::error::Result;
+use wgpu::ShaderStages as S;
+
+pub struct ReferencePass {
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    /// Linear RGB and 1 per pixel, rows top first.
+    pub colour: wgpu::Buffer,
+    /// Hit position (metres from the frame origin) and 1, or 0 for sky, per pixel.
+    pub position: wgpu::Buffer,
+    width: u32,
+    height: u32,
+}
+
+impl ReferencePass {
+    pub fn new(
+        device: &wgpu::Device,
+        frame: &wgpu::Buffer,
+        atlas: &wgpu::Buffer,
+        width: u32,
+        height: u32,
+        noise: bool,
+    ) -> Result<ReferencePass> {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("reference"),
+            entries: &[
+                entry(0, S::COMPUTE, uniform()),
+                entry(1, S::COMPUTE, storage(true)),
+                entry(2, S::COMPUTE, storage(false)),
+                entry(3, S::COMPUTE, storage(false)),
+            ],
+        });
+        let flags: &[&str] = if noise { &["NOISE"] } else { &[] };
+        let pipeline = compute_pipeline(device, "reference", flags, &layout)?;
+        let buffer = |label| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: (width * height) as u64 * 16,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        let (colour, position) = (buffer("reference colour"), buffer("reference position"));
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("reference"),
+            layout: &layout,
+            entries: &[
+                bind(0, frame),
+                bind(1, atlas),
+                bind(2, &colour),
+                bind(3, &position),
+            ],
+        });
+        Ok(ReferencePass {
+            pipeline,
+            bind_group,
+            colour,
+            position,
+            width,
+            height,
+        })
+    }
+
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timestamps: Option<wgpu::ComputePassTimestampWrites>,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("reference"),
+            timestamp_writes: timestamps,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+    }
+
+    /// The image as RGBA8 sRGB, rows top first.
+    pub fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
+        Ok(read_vec4(ctx, &self.colour)?
+            .iter()
+            .flat_map(|c| [srgb(c[0]), srgb(c[1]), srgb(c[2]), 255])
+            .collect())
+    }
+
+    pub fn read_positions(&self, ctx: &GpuContext) -> Result<Vec<[f32; 4]>> {
+        read_vec4(ctx, &self.position)
+    }
+}
+
+/// Linear to 8-bit sRGB, as the render targets' sRGB format encodes.
+fn srgb(v: f32) -> u8 {
+    let v = v.clamp(0.0, 1.0);
+    let e = if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    };
+    (e * 255.0 + 0.5) as u8
+}

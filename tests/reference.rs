@@ -1,0 +1,86 @@
+//! The reference renderer: converged (halving its step changes the image less than the smallest
+//! difference it measures), in agreement with the meshes, and its positions where its pixels are.
+
+mod common;
+use common::*;
+use glam::{DVec2, DVec4};
+use terrain::gpu::baseline::Baseline;
+use terrain::gpu::uniforms::{View, view_proj};
+use terrain::render::{BaselineSceneRenderer, ReferenceRenderer, WarpedRenderer};
+use terrain::scene::Scene;
+
+fn bundled(name: &str, extra: &[&str]) -> Scene {
+    let path = manifest_dir().join("sketches").join(format!("{name}.toml"));
+    let mut o: Vec<String> = vec![
+        "camera.width=128".into(),
+        "camera.height=128".into(),
+        "geomipmap.k=1".into(),
+    ];
+    o.extend(extra.iter().map(|s| s.to_string()));
+    Scene::load_with(&path, &o).unwrap()
+}
+
+#[test]
+fn reference_converges_below_the_differences_it_measures() {
+    for name in ["gaussian", "hills"] {
+        let scene = bundled(name, &[]);
+        let mut r = ReferenceRenderer::new(&scene).unwrap();
+        let camera = terrain::cpu_stage::camera_of(&scene, &r.atlas).unwrap();
+        let reference = r.render(&camera).unwrap();
+        r.step *= 0.5;
+        let finer = r.render(&camera).unwrap();
+        let converged = psnr(&reference.rgba, &finer.rgba);
+        let warped = WarpedRenderer::new(&scene, View::Shaded)
+            .unwrap()
+            .render(&camera)
+            .unwrap();
+        let gmm_scene = bundled(name, &["geomipmap.tau=0.5"]);
+        let gmm = BaselineSceneRenderer::new(&gmm_scene, View::Shaded, Baseline::GeoMipMap)
+            .unwrap()
+            .render(&camera)
+            .unwrap();
+        let (w, g) = (
+            psnr(&warped.rgba, &reference.rgba),
+            psnr(&gmm.rgba, &reference.rgba),
+        );
+        eprintln!(
+            "{name}: halving the step {converged:.1} dB; warped {w:.1} dB, GeoMipMap τ=0.5 {g:.1} dB against it"
+        );
+        assert!(
+            converged > w.max(g) + 3.0,
+            "{name}: the reference moves {converged:.1} dB, modes differ by {w:.1}/{g:.1}"
+        );
+        assert!(
+            w > 20.0 && g > 20.0,
+            "{name}: the meshes do not show the reference's terrain ({w:.1}, {g:.1} dB)"
+        );
+    }
+}
+
+#[test]
+fn reference_positions_project_to_their_pixels_and_sky_has_none() {
+    let scene = bundled("jacksboro", &[]);
+    let mut r = ReferenceRenderer::new(&scene).unwrap();
+    let camera = terrain::cpu_stage::camera_of(&scene, &r.atlas).unwrap();
+    r.render(&camera).unwrap();
+    let positions = r.pass.read_positions(&r.ctx).unwrap();
+    let vp = view_proj(&camera, camera.eye.truncate());
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let (mut hits, mut sky, mut worst) = (0, 0, 0.0f64);
+    for (k, p) in positions.iter().enumerate() {
+        if p[3] == 0.0 {
+            sky += 1;
+            continue;
+        }
+        hits += 1;
+        let c = vp * DVec4::new(p[0] as f64, p[1] as f64, p[2] as f64, 1.0);
+        let px = DVec2::new(
+            (c.x / c.w + 1.0) * 0.5 * w as f64,
+            (1.0 - c.y / c.w) * 0.5 * h as f64,
+        );
+        let centre = DVec2::new((k % w) as f64 + 0.5, (k / w) as f64 + 0.5);
+        worst = worst.max((px - centre).length());
+    }
+    assert!(hits > w * h / 3 && sky > w * 10, "{hits} hits, {sky} sky");
+    assert!(worst < 0.01, "a hit lies {worst} px from its pixel");
+}
