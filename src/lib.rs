@@ -14,6 +14,7 @@ pub mod figures;
 pub mod geomipmap;
 pub mod gpu;
 pub mod importance;
+pub mod metrics;
 pub mod output;
 pub mod quality;
 pub mod render;

@@ -122,24 +122,8 @@ pub fn assert_sound(r: &Run, what: &str) {
     }
 }
 
-/// PSNR in dB between two RGBA8 images of one size, over RGB; infinity when identical.
-pub fn psnr(a: &[u8], b: &[u8]) -> f64 {
-    assert_eq!(a.len(), b.len());
-    let (mut sum, mut count) = (0.0f64, 0usize);
-    for (pa, pb) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
-        for c in 0..3 {
-            let d = pa[c] as f64 - pb[c] as f64;
-            sum += d * d;
-            count += 1;
-        }
-    }
-    let mse = sum / count as f64;
-    if mse == 0.0 {
-        f64::INFINITY
-    } else {
-        10.0 * (255.0f64 * 255.0 / mse).log10()
-    }
-}
+#[allow(unused_imports)] // not every test file compares images
+pub use terrain::metrics::psnr;
 
 /// An image of |a − b| × 4, for looking at where two renders differ.
 pub fn difference(a: &[u8], b: &[u8]) -> Vec<u8> {

@@ -1,0 +1,172 @@
+//! Image error of a mode against the reference: PSNR over RGB, and the screen-space geometric
+//! error from position buffers (DESIGN.md: the distance in pixels between where the mode's surface
+//! and the reference's surface appear).
+//!
+//! Screen-space error, per pixel x where either image shows ground: if both do, the distance from
+//! x to the reference pixel whose ground position is nearest (horizontally) to the mode's at x,
+//! searched within `window` pixels, is where the reference shows that same piece of ground; if only
+//! one does (a silhouette), the distance to the nearest pixel where the other shows ground. A
+//! pixel with no match in the window counts as `window` pixels.
+//!
+//! Rejected alternative: projecting the mode's point onto the reference surface vertically. It
+//! needs the terrain function on the CPU per pixel and says nothing at silhouettes.
+
+use serde::Serialize;
+
+/// PSNR in dB between two RGBA8 images of one size, over RGB; infinity when identical.
+pub fn psnr(a: &[u8], b: &[u8]) -> f64 {
+    assert_eq!(a.len(), b.len(), "images of different sizes");
+    let (mut sum, mut count) = (0.0f64, 0usize);
+    for (pa, pb) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
+        for c in 0..3 {
+            let d = pa[c] as f64 - pb[c] as f64;
+            sum += d * d;
+            count += 1;
+        }
+    }
+    if sum == 0.0 {
+        return f64::INFINITY;
+    }
+    10.0 * (255.0f64 * 255.0 / (sum / count as f64)).log10()
+}
+
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct ScreenError {
+    pub mean_px: f64,
+    pub p95_px: f64,
+    pub max_px: f64,
+    /// Pixels where either image shows ground.
+    pub pixels: usize,
+}
+
+/// Screen-space error of `mode` against `reference`: position buffers of `width` columns, each
+/// pixel (x, y, z, w) with w = 1 on ground and 0 on sky.
+pub fn screen_space_error(
+    mode: &[[f32; 4]],
+    reference: &[[f32; 4]],
+    width: usize,
+    window: usize,
+) -> ScreenError {
+    assert_eq!(
+        mode.len(),
+        reference.len(),
+        "position buffers of different sizes"
+    );
+    let height = mode.len() / width;
+    let ground = |b: &[[f32; 4]], x: usize, y: usize| b[y * width + x][3] > 0.5;
+    let mut errors = Vec::new();
+    for y in 0..height {
+        for x in 0..width {
+            let (m, r) = (ground(mode, x, y), ground(reference, x, y));
+            if !m && !r {
+                continue;
+            }
+            let (x0, x1) = (x.saturating_sub(window), (x + window).min(width - 1));
+            let (y0, y1) = (y.saturating_sub(window), (y + window).min(height - 1));
+            let mut best = window as f64;
+            if m && r {
+                let p = mode[y * width + x];
+                let mut nearest = f64::INFINITY;
+                for v in y0..=y1 {
+                    for u in x0..=x1 {
+                        let q = reference[v * width + u];
+                        if q[3] > 0.5 {
+                            let d = ((q[0] - p[0]) as f64).hypot((q[1] - p[1]) as f64);
+                            if d < nearest {
+                                nearest = d;
+                                best = (u as f64 - x as f64).hypot(v as f64 - y as f64);
+                            }
+                        }
+                    }
+                }
+            } else {
+                // A silhouette: the nearest pixel where the other image shows ground.
+                let other = if m { reference } else { mode };
+                for v in y0..=y1 {
+                    for u in x0..=x1 {
+                        if ground(other, u, v) {
+                            best = best.min((u as f64 - x as f64).hypot(v as f64 - y as f64));
+                        }
+                    }
+                }
+            }
+            errors.push(best);
+        }
+    }
+    summarise(errors)
+}
+
+fn summarise(mut errors: Vec<f64>) -> ScreenError {
+    if errors.is_empty() {
+        return ScreenError::default();
+    }
+    errors.sort_by(f64::total_cmp);
+    let n = errors.len();
+    ScreenError {
+        mean_px: errors.iter().sum::<f64>() / n as f64,
+        p95_px: errors[((n as f64 * 0.95) as usize).min(n - 1)],
+        max_px: errors[n - 1],
+        pixels: n,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A ground plane seen so that pixel (x, y) shows ground point (x·10, y·7), sky above row 4.
+    fn plane(w: usize, h: usize, shift: (i64, i64)) -> Vec<[f32; 4]> {
+        (0..w * h)
+            .map(|k| {
+                let (x, y) = ((k % w) as i64 - shift.0, (k / w) as i64 - shift.1);
+                if y < 4 {
+                    [0.0; 4]
+                } else {
+                    [x as f32 * 10.0, y as f32 * 7.0, 0.0, 1.0]
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn identical_images_score_infinite_psnr_and_zero_error() {
+        let img: Vec<u8> = (0..64 * 4).map(|k| (k * 37 % 251) as u8).collect();
+        assert_eq!(psnr(&img, &img), f64::INFINITY);
+        let p = plane(32, 24, (0, 0));
+        let e = screen_space_error(&p, &p, 32, 8);
+        assert_eq!((e.mean_px, e.max_px), (0.0, 0.0));
+        assert_eq!(e.pixels, 32 * 20);
+    }
+
+    #[test]
+    fn a_known_shift_gives_the_known_error() {
+        let (w, h) = (48, 40);
+        let reference = plane(w, h, (0, 0));
+        for shift in [(3i64, 0i64), (0, 2), (3, 4)] {
+            let mode = plane(w, h, shift);
+            let e = screen_space_error(&mode, &reference, w, 8);
+            let want = ((shift.0 * shift.0 + shift.1 * shift.1) as f64).sqrt();
+            // The median pixel sees the shift exactly; the image border and the shifted horizon
+            // (a silhouette) are the only other values.
+            assert!(
+                (e.p95_px - want).abs() < 1e-9,
+                "shift {shift:?}: p95 {} want {want}",
+                e.p95_px
+            );
+            assert!(
+                e.mean_px > 0.8 * want && e.mean_px <= want + 1e-9,
+                "shift {shift:?}: mean {}",
+                e.mean_px
+            );
+        }
+    }
+
+    #[test]
+    fn psnr_falls_with_noise() {
+        let a = vec![100u8; 400];
+        let mut b = a.clone();
+        b[0] = 110;
+        let db = psnr(&a, &b);
+        assert!(db.is_finite() && db > 40.0, "{db}");
+    }
+}
