@@ -18,6 +18,28 @@
 #endif
 #import shading
 
+// The colour, and with POSITIONS each pixel's depth (for recovering its ground position on the
+// CPU; 0 on sky, as the reversed-Z clear). The depth's 32 bits go out as the four bytes of an
+// 8-bit RGBA target, which every adapter renders and stores exactly; float targets are not
+// renderable everywhere (llvmpipe's GL path), nor are depth textures copyable.
+struct FragOut {
+    @location(0) colour: vec4<f32>,
+#ifdef POSITIONS
+    @location(1) depth_bytes: vec4<f32>,
+#endif
+}
+
+fn frag_out(colour: vec3<f32>, depth: f32) -> FragOut {
+    var out: FragOut;
+    out.colour = vec4<f32>(colour, 1.0);
+#ifdef POSITIONS
+    let bits = bitcast<u32>(depth);
+    let bytes = vec4<u32>(bits & 255u, (bits >> 8u) & 255u, (bits >> 16u) & 255u, bits >> 24u);
+    out.depth_bytes = vec4<f32>(bytes) / 255.0;
+#endif
+    return out;
+}
+
 struct SkyOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) ndc: vec2<f32>,
@@ -33,13 +55,13 @@ fn sky_vs(@builtin(vertex_index) vi: u32) -> SkyOut {
 }
 
 @fragment
-fn sky_fs(in: SkyOut) -> @location(0) vec4<f32> {
+fn sky_fs(in: SkyOut) -> FragOut {
     if (frame.view == 5u) {
-        return vec4<f32>(0.0, 0.0, 0.0, 1.0);
+        return frag_out(vec3<f32>(0.0), 0.0);
     }
     let far = frame.inv_view_proj * vec4<f32>(in.ndc, 1e-4, 1.0);
     let dir = normalize(far.xyz / far.w - frame.eye.xyz);
-    return vec4<f32>(sky_colour(dir), 1.0);
+    return frag_out(sky_colour(dir), 0.0);
 }
 
 struct VsOut {
@@ -134,7 +156,7 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
 #endif
 
 @fragment
-fn terrain_fs(in: VsOut) -> @location(0) vec4<f32> {
+fn terrain_fs(in: VsOut) -> FragOut {
     let to_eye = frame.eye.xyz - in.local;
     let dist = max(length(to_eye), 1e-3);
     var n = normalize(in.normal);
@@ -165,7 +187,7 @@ fn terrain_fs(in: VsOut) -> @location(0) vec4<f32> {
     } else if (frame.view == 4u) {
         colour = n * 0.5 + 0.5;
     } else if (frame.view == 5u) {
-        return vec4<f32>(1.0, 1.0, 1.0, 1.0);
+        return frag_out(vec3<f32>(1.0), in.clip.z);
     }
 #ifdef IMPORTANCE_VIEW
     let texel = (in.local.xy - frame.phi_offset) / frame.sun.w;
@@ -174,5 +196,5 @@ fn terrain_fs(in: VsOut) -> @location(0) vec4<f32> {
     let t = clamp(log2(v / frame.importance_max) / 12.0 + 1.0, 0.0, 1.0);
     colour = mix(vec3<f32>(0.27, 0.0, 0.33), vec3<f32>(0.99, 0.9, 0.14), t);
 #endif
-    return vec4<f32>(aerial(colour, to_eye, dist), 1.0);
+    return frag_out(aerial(colour, to_eye, dist), in.clip.z);
 }

@@ -42,10 +42,16 @@ pub struct Frame {
 impl WarpedRenderer {
     pub fn new(scene: &Scene, view: View) -> Result<WarpedRenderer> {
         let atlas = cpu_stage::load_atlas(scene)?;
-        WarpedRenderer::with_atlas(scene, atlas, view)
+        WarpedRenderer::with_atlas(scene, atlas, view, false)
     }
 
-    pub fn with_atlas(scene: &Scene, atlas: Atlas, view: View) -> Result<WarpedRenderer> {
+    /// `positions`: also write each pixel's ground position (see [`Renderer::read_positions`]).
+    pub fn with_atlas(
+        scene: &Scene,
+        atlas: Atlas,
+        view: View,
+        positions: bool,
+    ) -> Result<WarpedRenderer> {
         let detail = cpu_stage::detail_of(scene, &atlas);
         let stage = CpuStage::new(scene, &detail)?;
         let mesh = scene.warp.mesh;
@@ -63,6 +69,7 @@ impl WarpedRenderer {
                 octaves: detail.octaves,
                 bump: scene.detail.bump,
                 view,
+                positions,
             },
         )?;
         Ok(WarpedRenderer {
@@ -137,6 +144,16 @@ pub struct BaselineSceneRenderer {
 
 impl BaselineSceneRenderer {
     pub fn new(scene: &Scene, view: View, kind: Baseline) -> Result<BaselineSceneRenderer> {
+        BaselineSceneRenderer::with_positions(scene, view, kind, false)
+    }
+
+    /// `positions`: also write each pixel's ground position.
+    pub fn with_positions(
+        scene: &Scene,
+        view: View,
+        kind: Baseline,
+        positions: bool,
+    ) -> Result<BaselineSceneRenderer> {
         let atlas = cpu_stage::load_atlas(scene)?;
         let detail = cpu_stage::detail_of(scene, &atlas);
         let k = scene.geomipmap.k.unwrap_or_else(|| default_k(&atlas));
@@ -151,6 +168,7 @@ impl BaselineSceneRenderer {
             k,
             cells: scene.geomipmap.block as usize - 1,
             kind,
+            positions,
         };
         let renderer = BaselineRenderer::new(&ctx, &atlas, &detail, &options)?;
         let g = &scene.geomipmap;

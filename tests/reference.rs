@@ -84,3 +84,40 @@ fn reference_positions_project_to_their_pixels_and_sky_has_none() {
     assert!(hits > w * h / 3 && sky > w * 10, "{hits} hits, {sky} sky");
     assert!(worst < 0.01, "a hit lies {worst} px from its pixel");
 }
+
+#[test]
+fn meshes_stay_within_pixels_of_the_reference() {
+    use terrain::metrics::screen_space_error;
+    for name in ["gaussian", "hills"] {
+        let scene = bundled(name, &["geomipmap.tau=0.5"]);
+        let mut reference = ReferenceRenderer::new(&scene).unwrap();
+        let camera = terrain::cpu_stage::camera_of(&scene, &reference.atlas).unwrap();
+        reference.render(&camera).unwrap();
+        let truth = reference.pass.read_positions(&reference.ctx).unwrap();
+        let atlas = terrain::cpu_stage::load_atlas(&scene).unwrap();
+        let mut warped = WarpedRenderer::with_atlas(&scene, atlas, View::Shaded, true).unwrap();
+        warped.render(&camera).unwrap();
+        let vp = view_proj(&camera, camera.eye.truncate());
+        let w = warped.renderer.read_positions(&warped.ctx, vp).unwrap();
+        let mut gmm =
+            BaselineSceneRenderer::with_positions(&scene, View::Shaded, Baseline::GeoMipMap, true)
+                .unwrap();
+        gmm.render(&camera).unwrap();
+        let g = gmm.renderer.read_positions(&gmm.ctx, vp).unwrap();
+        let width = camera.width as usize;
+        let self_error = screen_space_error(&w, &w, width, 16);
+        assert_eq!(self_error.max_px, 0.0);
+        let (ew, eg) = (
+            screen_space_error(&w, &truth, width, 16),
+            screen_space_error(&g, &truth, width, 16),
+        );
+        eprintln!(
+            "{name}: screen-space error, warped mean {:.2} p95 {:.2} max {:.1} px; GeoMipMap τ=0.5 mean {:.2} p95 {:.2} max {:.1} px",
+            ew.mean_px, ew.p95_px, ew.max_px, eg.mean_px, eg.p95_px, eg.max_px
+        );
+        assert!(
+            ew.mean_px < 1.0 && eg.mean_px < 1.0,
+            "{name}: {ew:?} {eg:?}"
+        );
+    }
+}

@@ -128,6 +128,8 @@ pub struct BaselineOptions {
     /// Cells per block side.
     pub cells: usize,
     pub kind: Baseline,
+    /// Also write each pixel's ground position (for screen-space error).
+    pub positions: bool,
 }
 
 pub struct BaselineRenderer {
@@ -176,6 +178,7 @@ impl BaselineRenderer {
             bump: noise && o.bump,
             importance: None,
             geomipmap: Some((block_buffer.clone(), capacity)),
+            positions: o.positions,
         };
         let n = bake.grid.n as u32;
         let terrain = TerrainPass::new(
@@ -226,6 +229,20 @@ impl BaselineRenderer {
                 .select(&self.bake.grid, &self.blocks, camera, lod);
         }
         start.elapsed().as_secs_f64() * 1e6
+    }
+
+    /// Ground positions of the last frame's pixels; needs `positions` at construction.
+    pub fn read_positions(
+        &self,
+        ctx: &GpuContext,
+        view_proj: glam::DMat4,
+    ) -> Result<Vec<[f32; 4]>> {
+        let depth = self.terrain.depth_copy.as_ref().ok_or_else(|| {
+            crate::error::Error::Invalid(
+                "positions were not asked for when the renderer was built".into(),
+            )
+        })?;
+        super::frame_io::positions_from_depth(ctx, depth, view_proj)
     }
 
     /// Draws the current selection and reads the image back.

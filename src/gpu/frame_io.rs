@@ -201,6 +201,70 @@ impl ColourReadback {
     }
 }
 
+/// Each pixel's ground position from its reversed-Z depth (its f32 bits in an Rgba8Unorm copy,
+/// low byte first): the pixel centre
+/// unprojected in f64 with `view_proj` (metres from its origin), w = 1; sky (depth 0) is all 0.
+pub fn positions_from_depth(
+    ctx: &GpuContext,
+    depth: &wgpu::Texture,
+    view_proj: glam::DMat4,
+) -> Result<Vec<[f32; 4]>> {
+    let (width, height) = (depth.width(), depth.height());
+    let padded = padded_row(width);
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("depth readback"),
+        size: padded as u64 * height as u64,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    encoder.copy_texture_to_buffer(
+        depth.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &staging,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: None,
+            },
+        },
+        wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+    );
+    ctx.queue.submit([encoder.finish()]);
+    let inverse = view_proj.inverse();
+    read_buffer(ctx, &staging, |bytes| {
+        let mut out = Vec::with_capacity((width * height) as usize);
+        for y in 0..height as usize {
+            let row = &bytes[y * padded as usize..][..width as usize * 4];
+            for (x, b) in row.chunks_exact(4).enumerate() {
+                let d = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+                if d <= 0.0 {
+                    out.push([0.0; 4]);
+                    continue;
+                }
+                let ndc = glam::DVec4::new(
+                    (x as f64 + 0.5) / width as f64 * 2.0 - 1.0,
+                    1.0 - (y as f64 + 0.5) / height as f64 * 2.0,
+                    d as f64,
+                    1.0,
+                );
+                let p = inverse * ndc;
+                out.push([
+                    (p.x / p.w) as f32,
+                    (p.y / p.w) as f32,
+                    (p.z / p.w) as f32,
+                    1.0,
+                ]);
+            }
+        }
+        out
+    })
+}
+
 fn padded_row(width: u32) -> u32 {
     (width * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT
 }

@@ -22,6 +22,8 @@ pub struct Options {
     pub octaves: u32,
     pub bump: bool,
     pub view: View,
+    /// Also write each pixel's ground position (for screen-space error).
+    pub positions: bool,
 }
 
 pub struct Renderer {
@@ -58,6 +60,7 @@ impl Renderer {
             bump: detail && o.bump,
             importance: importance.clone(),
             geomipmap: None,
+            positions: o.positions,
         };
         let (detailed, normal_buffer) = (&warp_zoom.detailed, &normals.normals);
         let terrain = TerrainPass::new(
@@ -141,6 +144,21 @@ impl Renderer {
     /// The detailed geometry image of the last frame, read back (for tests).
     pub fn read_detailed(&self, ctx: &GpuContext) -> Result<Vec<[f32; 4]>> {
         read_vec4(ctx, &self.warp_zoom.detailed)
+    }
+
+    /// Ground positions of the last frame's pixels (metres from the frame origin, w = 1 on
+    /// ground); needs `positions` at construction (else the depth was not kept).
+    pub fn read_positions(
+        &self,
+        ctx: &GpuContext,
+        view_proj: glam::DMat4,
+    ) -> Result<Vec<[f32; 4]>> {
+        let depth = self.terrain.depth_copy.as_ref().ok_or_else(|| {
+            crate::error::Error::Invalid(
+                "positions were not asked for when the renderer was built".into(),
+            )
+        })?;
+        super::frame_io::positions_from_depth(ctx, depth, view_proj)
     }
 
     /// The normals of the last frame, read back (for tests).

@@ -25,7 +25,14 @@ pub const PASSES: [(&str, &str); 4] = [
 ];
 
 /// Every flag any pass tests, for validating all variants.
-pub const FLAGS: [&str; 5] = ["DETAIL", "BUMP", "NOISE", "IMPORTANCE_VIEW", "GEOMIPMAP"];
+pub const FLAGS: [&str; 6] = [
+    "DETAIL",
+    "BUMP",
+    "NOISE",
+    "IMPORTANCE_VIEW",
+    "GEOMIPMAP",
+    "POSITIONS",
+];
 
 /// The combined source of pass `name` with `flags` set.
 pub fn compose(name: &str, flags: &[&str]) -> Result<String> {

@@ -7,6 +7,9 @@ use crate::error::Result;
 use wgpu::ShaderStages as S;
 
 pub const COLOUR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// Each pixel's depth as four bytes, kept for recovering ground positions (depth textures cannot
+/// be copied, nor float targets rendered, on every adapter).
+pub const DEPTH_COPY: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 pub struct TerrainPass {
@@ -17,6 +20,9 @@ pub struct TerrainPass {
     index_count: u32,
     pub colour: wgpu::Texture,
     colour_view: wgpu::TextureView,
+    /// Each pixel's depth as a colour target, when the variant asks for positions.
+    pub depth_copy: Option<wgpu::Texture>,
+    depth_copy_view: Option<wgpu::TextureView>,
     depth_view: wgpu::TextureView,
     target_bytes: u64,
 }
@@ -30,6 +36,9 @@ pub struct Variant {
     /// GeoMipMap: the per-frame block records and the most indices a frame can draw. The index
     /// buffer is then rewritten every frame instead of holding the warped mesh's quads.
     pub geomipmap: Option<(wgpu::Buffer, u64)>,
+    /// Also write each pixel's depth, from which its ground position is recovered (for
+    /// screen-space error).
+    pub positions: bool,
 }
 
 impl TerrainPass {
@@ -64,6 +73,12 @@ impl TerrainPass {
             entries.push(entry(6, S::VERTEX, storage(true)));
             flags.push("GEOMIPMAP");
         }
+        let mut targets = vec![Some(wgpu::ColorTargetState::from(COLOUR))];
+        if variant.positions {
+            flags.push("POSITIONS");
+            targets.push(Some(DEPTH_COPY.into()));
+        }
+
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("terrain"),
             entries: &entries,
@@ -100,7 +115,7 @@ impl TerrainPass {
                     module: &module,
                     entry_point: Some(fs),
                     compilation_options: Default::default(),
-                    targets: &[Some(COLOUR.into())],
+                    targets: &targets,
                 }),
                 multiview_mask: None,
                 cache: None,
@@ -171,6 +186,10 @@ impl TerrainPass {
             "colour",
         );
         let depth = target(DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT, "depth");
+        let depth_copy = variant.positions.then(|| {
+            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+            target(DEPTH_COPY, usage, "depth copy")
+        });
         Ok(TerrainPass {
             sky,
             terrain,
@@ -179,7 +198,11 @@ impl TerrainPass {
             index,
             colour_view: colour.create_view(&Default::default()),
             depth_view: depth.create_view(&Default::default()),
-            target_bytes: 2 * width as u64 * height as u64 * 4,
+            depth_copy_view: depth_copy
+                .as_ref()
+                .map(|t| t.create_view(&Default::default())),
+            depth_copy,
+            target_bytes: (2 + variant.positions as u64) * width as u64 * height as u64 * 4,
             colour,
         })
     }
@@ -206,17 +229,24 @@ impl TerrainPass {
         draw_terrain: bool,
         timestamps: Option<wgpu::RenderPassTimestampWrites>,
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("terrain"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &self.colour_view,
+        let attach = |view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
                     store: wgpu::StoreOp::Store,
                 },
-            })],
+            })
+        };
+        let mut attachments = vec![attach(&self.colour_view)];
+        if let Some(view) = &self.depth_copy_view {
+            attachments.push(attach(view));
+        }
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("terrain"),
+            color_attachments: &attachments,
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &self.depth_view,
                 depth_ops: Some(wgpu::Operations {
