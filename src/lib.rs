@@ -3,7 +3,10 @@
 //!
 //! The CPU stage of a frame, in the order data flows through it:
 //! [`atlas`] (the sketch atlas) → [`sketch_map`] → [`importance`] → [`warp`] → Φ, measured by
-//! [`quality`]; [`detail`] is the procedural model the GPU adds on top.
+//! [`quality`]; [`detail`] is the procedural model the GPU adds on top. [`gpu`] holds the passes
+//! (warp & zoom, normals, terrain, reference), [`geomipmap`] the baseline's levels and stitching,
+//! [`render`] puts a mode's CPU and GPU halves together, [`metrics`] measures images against the
+//! reference.
 
 pub mod atlas;
 pub mod camera;

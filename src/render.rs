@@ -1,5 +1,7 @@
-//! Warped-mode snapshots: the CPU stage and the GPU passes for a scene, one device and one set of
-//! pipelines reused across frames (and cameras).
+//! Snapshots in every mode, one device and one set of pipelines reused across frames (and
+//! cameras): [`WarpedRenderer`] (the CPU stage, then the GPU passes), [`BaselineSceneRenderer`]
+//! (GeoMipMap and brute force over a grid baked once), [`ReferenceRenderer`] (the terrain function
+//! ray-marched per pixel), and [`SceneRenderer`] over all of them.
 
 use crate::atlas::Atlas;
 use crate::camera::Camera;
