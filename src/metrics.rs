@@ -1,5 +1,7 @@
-//! Image error of a mode against the reference: PSNR over RGB, and the screen-space geometric
-//! error from position buffers (DESIGN.md: the distance in pixels between where the mode's surface
+//! Image error of a mode against the reference: PSNR over RGB, SSIM (image-compare's mean SSIM
+//! over 8×8 windows per channel), FLIP mean (flip-rs, NVIDIA's LDR-FLIP at 67 pixels per degree:
+//! a 0.7 m wide 4K display seen from 0.7 m), and the screen-space geometric error from position
+//! buffers (DESIGN.md: the distance in pixels between where the mode's surface
 //! and the reference's surface appear).
 //!
 //! Screen-space error, per pixel x where either image shows ground: if both do, the distance from
@@ -28,6 +30,34 @@ pub fn psnr(a: &[u8], b: &[u8]) -> f64 {
         return f64::INFINITY;
     }
     10.0 * (255.0f64 * 255.0 / (sum / count as f64)).log10()
+}
+
+fn rgb(rgba: &[u8]) -> Vec<u8> {
+    rgba.chunks_exact(4)
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .collect()
+}
+
+/// SSIM of `test` against `reference` (RGBA8, `width` columns): 1 for identical images.
+pub fn ssim(reference: &[u8], test: &[u8], width: u32) -> Option<f64> {
+    let height = (reference.len() / 4) as u32 / width.max(1);
+    let a = image::RgbImage::from_raw(width, height, rgb(reference))?;
+    let b = image::RgbImage::from_raw(width, height, rgb(test))?;
+    image_compare::rgb_similarity_structure(&image_compare::Algorithm::MSSIMSimple, &a, &b)
+        .ok()
+        .map(|s| s.score)
+}
+
+/// Mean LDR-FLIP error of `test` against `reference` (RGBA8 sRGB): 0 for identical images.
+pub fn flip_mean(reference: &[u8], test: &[u8], width: u32) -> Option<f64> {
+    let w = width as usize;
+    let h = reference.len() / 4 / w.max(1);
+    let a = flip_rs::RgbImage::new(w, h, rgb(reference)).ok()?;
+    let b = flip_rs::RgbImage::new(w, h, rgb(test)).ok()?;
+    let ppd = flip_rs::pixels_per_degree(0.7, 3840.0, 0.7).ok()?;
+    let map = flip_rs::ldr_flip(&a, &b, ppd).ok()?;
+    let stats = map.statistics();
+    stats.finite.then_some(stats.mean as f64)
 }
 
 #[derive(Clone, Copy, Debug, Default, Serialize)]
@@ -159,6 +189,27 @@ mod tests {
                 e.mean_px
             );
         }
+    }
+
+    #[test]
+    fn ssim_and_flip_are_perfect_for_identical_images_and_worse_for_others() {
+        let (w, h) = (48u32, 32u32);
+        let img: Vec<u8> = (0..w * h)
+            .flat_map(|k| {
+                let (x, y) = (k % w, k / w);
+                [(x * 5) as u8, (y * 7) as u8, ((x * y) % 251) as u8, 255]
+            })
+            .collect();
+        let shifted: Vec<u8> = (0..w * h)
+            .flat_map(|k| {
+                let (x, y) = ((k % w + 3) % w, k / w);
+                [(x * 5) as u8, (y * 7) as u8, ((x * y) % 251) as u8, 255]
+            })
+            .collect();
+        assert!((ssim(&img, &img, w).unwrap() - 1.0).abs() < 1e-9);
+        assert_eq!(flip_mean(&img, &img, w).unwrap(), 0.0);
+        assert!(ssim(&img, &shifted, w).unwrap() < 0.9);
+        assert!(flip_mean(&img, &shifted, w).unwrap() > 0.05);
     }
 
     #[test]

@@ -92,18 +92,33 @@ fn meshes_stay_within_pixels_of_the_reference() {
         let scene = bundled(name, &["geomipmap.tau=0.5"]);
         let mut reference = ReferenceRenderer::new(&scene).unwrap();
         let camera = terrain::cpu_stage::camera_of(&scene, &reference.atlas).unwrap();
-        reference.render(&camera).unwrap();
+        let truth_image = reference.render(&camera).unwrap().rgba;
         let truth = reference.pass.read_positions(&reference.ctx).unwrap();
         let atlas = terrain::cpu_stage::load_atlas(&scene).unwrap();
         let mut warped = WarpedRenderer::with_atlas(&scene, atlas, View::Shaded, true).unwrap();
-        warped.render(&camera).unwrap();
+        let warped_image = warped.render(&camera).unwrap().rgba;
         let vp = view_proj(&camera, camera.eye.truncate());
         let w = warped.renderer.read_positions(&warped.ctx, vp).unwrap();
         let mut gmm =
             BaselineSceneRenderer::with_positions(&scene, View::Shaded, Baseline::GeoMipMap, true)
                 .unwrap();
-        gmm.render(&camera).unwrap();
+        let gmm_image = gmm.render(&camera).unwrap().rgba;
         let g = gmm.renderer.read_positions(&gmm.ctx, vp).unwrap();
+        let width32 = camera.width;
+        for (mode, image) in [("warped", &warped_image), ("GeoMipMap τ=0.5", &gmm_image)] {
+            let (ssim, flip) = (
+                terrain::metrics::ssim(&truth_image, image, width32).unwrap(),
+                terrain::metrics::flip_mean(&truth_image, image, width32).unwrap(),
+            );
+            eprintln!(
+                "{name}: {mode}: PSNR {:.1} dB, SSIM {ssim:.3}, FLIP {flip:.3}",
+                psnr(&truth_image, image)
+            );
+            assert!(
+                ssim > 0.3 && ssim < 1.0 && flip > 0.0 && flip < 0.5,
+                "{name} {mode}: {ssim} {flip}"
+            );
+        }
         let width = camera.width as usize;
         let self_error = screen_space_error(&w, &w, width, 16);
         assert_eq!(self_error.max_px, 0.0);
