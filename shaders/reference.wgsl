@@ -20,18 +20,24 @@
 
 const MAX_STEPS: u32 = 4096u;
 
-// The terrain function at `p` for a footprint of `footprint` metres.
-fn height(p: vec2<f32>, footprint: f32) -> f32 {
-    var h = atlas_height(p, footprint);
+// The octaves down to a footprint of `footprint` metres, each weighted by b_k: value (x) and
+// gradient (yz).
+fn octaves(p: vec2<f32>, footprint: f32) -> vec3<f32> {
+    var sum = vec3<f32>(0.0);
 #ifdef NOISE
     let o_px = log2(frame.d_atlas / max(footprint, 1e-6));
     let last = min(frame.octaves, u32(max(ceil(o_px), 0.0)));
     for (var k = 1u; k <= last; k++) {
         let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
-        h += frame.octave[k - 1u].weight * b * octave_local(frame.octave[k - 1u], p).x;
+        sum += frame.octave[k - 1u].weight * b * octave_local(frame.octave[k - 1u], p);
     }
 #endif
-    return h;
+    return sum;
+}
+
+// The terrain function at `p` for a footprint of `footprint` metres.
+fn height(p: vec2<f32>, footprint: f32) -> f32 {
+    return atlas_height(p, footprint) + octaves(p, footprint).x;
 }
 
 // Its gradient: the octaves' analytically, the sketch's by central differences of the bicubic.
@@ -39,16 +45,7 @@ fn gradient(p: vec2<f32>, footprint: f32) -> vec2<f32> {
     let e = max(footprint, 0.05 * frame.d_atlas);
     let sx = atlas_height(p + vec2<f32>(e, 0.0), footprint) - atlas_height(p - vec2<f32>(e, 0.0), footprint);
     let sy = atlas_height(p + vec2<f32>(0.0, e), footprint) - atlas_height(p - vec2<f32>(0.0, e), footprint);
-    var g = vec2<f32>(sx, sy) / (2.0 * e);
-#ifdef NOISE
-    let o_px = log2(frame.d_atlas / max(footprint, 1e-6));
-    let last = min(frame.octaves, u32(max(ceil(o_px), 0.0)));
-    for (var k = 1u; k <= last; k++) {
-        let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
-        g += frame.octave[k - 1u].weight * b * octave_local(frame.octave[k - 1u], p).yz;
-    }
-#endif
-    return g;
+    return vec2<f32>(sx, sy) / (2.0 * e) + octaves(p, footprint).yz;
 }
 
 // The part of the ray inside the box of the sketch's rectangle and its heights, or t0 > t1.

@@ -237,12 +237,7 @@ impl BaselineRenderer {
         ctx: &GpuContext,
         view_proj: glam::DMat4,
     ) -> Result<Vec<[f32; 4]>> {
-        let depth = self.terrain.depth_copy.as_ref().ok_or_else(|| {
-            crate::error::Error::Invalid(
-                "positions were not asked for when the renderer was built".into(),
-            )
-        })?;
-        super::frame_io::positions_from_depth(ctx, depth, view_proj)
+        self.terrain.read_positions(ctx, view_proj)
     }
 
     /// Draws the current selection and reads the image back.

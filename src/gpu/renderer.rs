@@ -153,12 +153,7 @@ impl Renderer {
         ctx: &GpuContext,
         view_proj: glam::DMat4,
     ) -> Result<Vec<[f32; 4]>> {
-        let depth = self.terrain.depth_copy.as_ref().ok_or_else(|| {
-            crate::error::Error::Invalid(
-                "positions were not asked for when the renderer was built".into(),
-            )
-        })?;
-        super::frame_io::positions_from_depth(ctx, depth, view_proj)
+        self.terrain.read_positions(ctx, view_proj)
     }
 
     /// The normals of the last frame, read back (for tests).

@@ -211,6 +211,21 @@ impl TerrainPass {
         self.index_count as u64 / 3
     }
 
+    /// Ground positions of the last frame's pixels (metres from the frame origin, w = 1 on
+    /// ground), recovered from the depth copy; needs `positions` in the variant.
+    pub fn read_positions(
+        &self,
+        ctx: &super::context::GpuContext,
+        view_proj: glam::DMat4,
+    ) -> Result<Vec<[f32; 4]>> {
+        let depth = self.depth_copy.as_ref().ok_or_else(|| {
+            crate::error::Error::Invalid(
+                "positions were not asked for when the renderer was built".into(),
+            )
+        })?;
+        super::frame_io::positions_from_depth(ctx, depth, view_proj)
+    }
+
     /// Bytes of the colour and depth targets.
     pub fn target_bytes(&self) -> u64 {
         self.target_bytes
