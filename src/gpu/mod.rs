@@ -90,13 +90,14 @@ pub(crate) fn bind(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<
     }
 }
 
-/// Records a compute pass running `pipeline` once per vertex of a `mesh`² grid (8×8 workgroups).
-pub(crate) fn dispatch_mesh(
+/// Records a compute pass running `pipeline` once per cell of a `size[0]` × `size[1]` grid
+/// (mesh vertices or pixels; 8×8 workgroups).
+pub(crate) fn dispatch_grid(
     encoder: &mut wgpu::CommandEncoder,
     label: &str,
     pipeline: &wgpu::ComputePipeline,
     bind_group: &wgpu::BindGroup,
-    mesh: u32,
+    size: [u32; 2],
     timestamps: Option<wgpu::ComputePassTimestampWrites>,
 ) {
     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -105,5 +106,5 @@ pub(crate) fn dispatch_mesh(
     });
     pass.set_pipeline(pipeline);
     pass.set_bind_group(0, bind_group, &[]);
-    pass.dispatch_workgroups(mesh.div_ceil(8), mesh.div_ceil(8), 1);
+    pass.dispatch_workgroups(size[0].div_ceil(8), size[1].div_ceil(8), 1);
 }

@@ -1,6 +1,6 @@
 //! Normals of the detailed geometry image (`shaders/normals.wgsl`).
 
-use super::{bind, compute_pipeline, dispatch_mesh, entry, storage, uniform};
+use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
 
@@ -53,7 +53,7 @@ impl NormalsPass {
         timestamps: Option<wgpu::ComputePassTimestampWrites>,
     ) {
         let (p, b) = (&self.pipeline, &self.bind_group);
-        dispatch_mesh(encoder, "normals", p, b, self.mesh, timestamps);
+        dispatch_grid(encoder, "normals", p, b, [self.mesh; 2], timestamps);
     }
 }
 

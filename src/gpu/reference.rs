@@ -3,7 +3,7 @@
 
 use super::context::GpuContext;
 use super::frame_io::read_vec4;
-use super::{bind, compute_pipeline, entry, storage, uniform};
+use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
 
@@ -72,13 +72,15 @@ impl ReferencePass {
         encoder: &mut wgpu::CommandEncoder,
         timestamps: Option<wgpu::ComputePassTimestampWrites>,
     ) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("reference"),
-            timestamp_writes: timestamps,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.bind_group, &[]);
-        pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+        let (p, b) = (&self.pipeline, &self.bind_group);
+        dispatch_grid(
+            encoder,
+            "reference",
+            p,
+            b,
+            [self.width, self.height],
+            timestamps,
+        );
     }
 
     /// The image as RGBA8 sRGB, rows top first.

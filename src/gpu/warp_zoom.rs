@@ -3,7 +3,7 @@
 //! hold the GPU to the CPU stage's definitions.
 
 use super::uniforms::FrameUniforms;
-use super::{bind, compute_pipeline, dispatch_mesh, entry, storage, uniform};
+use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
 use crate::atlas::Atlas;
 use crate::detail::{OctaveFrame, gradient_noise};
 use crate::error::Result;
@@ -77,7 +77,7 @@ impl WarpZoomPass {
         timestamps: Option<wgpu::ComputePassTimestampWrites>,
     ) {
         let (p, b) = (&self.pipeline, &self.bind_group);
-        dispatch_mesh(encoder, "warp_zoom", p, b, self.mesh, timestamps);
+        dispatch_grid(encoder, "warp_zoom", p, b, [self.mesh; 2], timestamps);
     }
 }
 
