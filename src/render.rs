@@ -54,12 +54,24 @@ impl WarpedRenderer {
         view: View,
         positions: bool,
     ) -> Result<WarpedRenderer> {
+        let mesh = scene.warp.mesh as u64;
+        let ctx = GpuContext::new(&Needs {
+            storage_bytes: atlas.bytes().max(mesh * mesh * 16),
+        })?;
+        WarpedRenderer::with_context(ctx, scene, atlas, view, positions)
+    }
+
+    /// On a device shared with other renderers.
+    pub fn with_context(
+        ctx: GpuContext,
+        scene: &Scene,
+        atlas: Atlas,
+        view: View,
+        positions: bool,
+    ) -> Result<WarpedRenderer> {
         let detail = cpu_stage::detail_of(scene, &atlas);
         let stage = CpuStage::new(scene, &detail)?;
         let mesh = scene.warp.mesh;
-        let ctx = GpuContext::new(&Needs {
-            storage_bytes: atlas.bytes().max((mesh * mesh) as u64 * 16),
-        })?;
         let renderer = Renderer::new(
             &ctx,
             &atlas,
@@ -157,11 +169,23 @@ impl BaselineSceneRenderer {
         positions: bool,
     ) -> Result<BaselineSceneRenderer> {
         let atlas = cpu_stage::load_atlas(scene)?;
-        let detail = cpu_stage::detail_of(scene, &atlas);
-        let k = scene.geomipmap.k.unwrap_or_else(|| default_k(&atlas));
         let ctx = GpuContext::new(&Needs {
             storage_bytes: atlas.bytes(),
         })?;
+        BaselineSceneRenderer::with_context(ctx, scene, atlas, view, kind, positions)
+    }
+
+    /// On a device shared with other renderers.
+    pub fn with_context(
+        ctx: GpuContext,
+        scene: &Scene,
+        atlas: Atlas,
+        view: View,
+        kind: Baseline,
+        positions: bool,
+    ) -> Result<BaselineSceneRenderer> {
+        let detail = cpu_stage::detail_of(scene, &atlas);
+        let k = scene.geomipmap.k.unwrap_or_else(|| default_k(&atlas));
         let options = BaselineOptions {
             width: scene.camera.width,
             height: scene.camera.height,
@@ -245,10 +269,15 @@ pub struct ReferenceRenderer {
 impl ReferenceRenderer {
     pub fn new(scene: &Scene) -> Result<ReferenceRenderer> {
         let atlas = cpu_stage::load_atlas(scene)?;
-        let detail = cpu_stage::detail_of(scene, &atlas);
         let ctx = GpuContext::new(&Needs {
             storage_bytes: atlas.bytes(),
         })?;
+        ReferenceRenderer::with_context(ctx, scene, atlas)
+    }
+
+    /// On a device shared with other renderers.
+    pub fn with_context(ctx: GpuContext, scene: &Scene, atlas: Atlas) -> Result<ReferenceRenderer> {
+        let detail = cpu_stage::detail_of(scene, &atlas);
         let frame = uniform_buffer(&ctx.device);
         let (atlas_buffer, _) = upload_atlas(&ctx, &atlas);
         let (w, h) = (scene.camera.width, scene.camera.height);

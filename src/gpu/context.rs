@@ -3,6 +3,9 @@
 
 use crate::error::{Error, Result};
 
+/// Cheap to clone (wgpu's handles are reference counted): renderers of several modes and settings
+/// share one device, as `compare` and `batch` do.
+#[derive(Clone)]
 pub struct GpuContext {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,

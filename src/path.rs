@@ -1,0 +1,276 @@
+//! Camera paths (the scene's `[path]`, DESIGN.md): a smooth curve through the key positions,
+//! travelled at constant speed, looking at each key's `look_at` or ahead along the curve.
+//!
+//! Rules: the curve is a centripetal Catmull-Rom spline through every key (the end keys
+//! mirrored), so it passes through each key without overshooting loops where keys bunch up.
+//! Arc length is tabulated (512 samples a segment) and inverted by bisection, so equal steps in
+//! time are equal steps in distance. The view direction at a point between keys i and i+1 blends,
+//! with a smoothstep in the segment's parameter, key i's and key i+1's directions, where a key's
+//! direction is towards its `look_at`, or else the curve's direction `LOOK_AHEAD_S` seconds ahead.
+//! A camera the curve takes under the sketch's surface is lifted to `CLEARANCE_M` above it.
+//!
+//! Rejected alternative: uniform Catmull-Rom by key index, traversed in its own parameter. Its
+//! speed changes with the spacing of the keys (a camera that lurches), and its uniform
+//! parameterisation loops past closely spaced keys.
+
+use crate::atlas::Atlas;
+use crate::camera::Camera;
+use crate::cpu_stage::ground_under;
+use crate::error::{Error, Result};
+use crate::scene::{PathKey, PathSection, Scene};
+use glam::{DVec2, DVec3};
+
+/// Arc-length samples per segment.
+const SAMPLES: usize = 512;
+/// How far ahead (in seconds of travel) a key without `look_at` looks.
+pub const LOOK_AHEAD_S: f64 = 2.0;
+/// The least height above the sketch's surface a path's camera keeps.
+pub const CLEARANCE_M: f64 = 2.0;
+
+pub struct CameraPath {
+    keys: Vec<PathKey>,
+    pub speed_mps: f64,
+    /// Cumulative arc length at each (segment, sample), `SAMPLES + 1` per segment.
+    lengths: Vec<f64>,
+}
+
+impl CameraPath {
+    pub fn new(section: &PathSection) -> Result<CameraPath> {
+        if section.keys.len() < 2 {
+            return Err(Error::Invalid("a camera path needs at least 2 keys".into()));
+        }
+        let mut path = CameraPath {
+            keys: section.keys.clone(),
+            speed_mps: section.speed_mps,
+            lengths: Vec::new(),
+        };
+        let mut total = 0.0;
+        for seg in 0..path.segments() {
+            let mut prev = path.curve(seg, 0.0);
+            path.lengths.push(total);
+            for k in 1..=SAMPLES {
+                let p = path.curve(seg, k as f64 / SAMPLES as f64);
+                total += (p - prev).length();
+                path.lengths.push(total);
+                prev = p;
+            }
+        }
+        if !(total.is_finite() && total > 1e-6) {
+            return Err(Error::Invalid(
+                "the camera path has no length (its keys coincide)".into(),
+            ));
+        }
+        Ok(path)
+    }
+
+    /// The scene's path, or without one a default pass: the scene's camera flown straight ahead
+    /// (its horizontal view direction) for 10 s at the default speed, keeping its view direction.
+    pub fn of_scene(scene: &Scene) -> Result<CameraPath> {
+        if let Some(p) = &scene.path {
+            return CameraPath::new(p);
+        }
+        let eye = DVec3::from(scene.camera.position);
+        let look = DVec3::from(scene.camera.look_at);
+        let speed = 150.0;
+        let heading = (look - eye).truncate().try_normalize().unwrap_or(DVec2::Y);
+        let step = (heading * speed * 10.0).extend(0.0);
+        CameraPath::new(&PathSection {
+            speed_mps: speed,
+            keys: vec![
+                PathKey {
+                    position: eye.to_array(),
+                    look_at: Some(look.to_array()),
+                },
+                PathKey {
+                    position: (eye + step).to_array(),
+                    look_at: Some((look + step).to_array()),
+                },
+            ],
+        })
+    }
+
+    fn segments(&self) -> usize {
+        self.keys.len() - 1
+    }
+
+    pub fn length_m(&self) -> f64 {
+        *self.lengths.last().unwrap_or(&0.0)
+    }
+
+    pub fn duration_s(&self) -> f64 {
+        self.length_m() / self.speed_mps
+    }
+
+    fn key(&self, i: isize) -> DVec3 {
+        let n = self.keys.len() as isize;
+        let at = |k: isize| DVec3::from(self.keys[k as usize].position);
+        match i {
+            i if i < 0 => 2.0 * at(0) - at(1),
+            i if i >= n => 2.0 * at(n - 1) - at(n - 2),
+            i => at(i),
+        }
+    }
+
+    /// Centripetal Catmull-Rom (Barry–Goldman) on segment `seg` at parameter `u` ∈ [0, 1].
+    fn curve(&self, seg: usize, u: f64) -> DVec3 {
+        let i = seg as isize;
+        let p = [
+            self.key(i - 1),
+            self.key(i),
+            self.key(i + 1),
+            self.key(i + 2),
+        ];
+        let knot = |a: DVec3, b: DVec3| (b - a).length().sqrt().max(1e-9);
+        let t0 = 0.0;
+        let t1 = t0 + knot(p[0], p[1]);
+        let t2 = t1 + knot(p[1], p[2]);
+        let t3 = t2 + knot(p[2], p[3]);
+        let t = t1 + u * (t2 - t1);
+        let lerp = |a: DVec3, b: DVec3, ta: f64, tb: f64| a + (b - a) * ((t - ta) / (tb - ta));
+        let a1 = lerp(p[0], p[1], t0, t1);
+        let a2 = lerp(p[1], p[2], t1, t2);
+        let a3 = lerp(p[2], p[3], t2, t3);
+        let b1 = lerp(a1, a2, t0, t2);
+        let b2 = lerp(a2, a3, t1, t3);
+        lerp(b1, b2, t1, t2)
+    }
+
+    /// The segment and its parameter at arc length `s` (clamped to the path).
+    fn locate(&self, s: f64) -> (usize, f64) {
+        let s = s.clamp(0.0, self.length_m());
+        let k = self
+            .lengths
+            .partition_point(|&l| l <= s)
+            .clamp(1, self.lengths.len() - 1);
+        let (lo, hi) = (self.lengths[k - 1], self.lengths[k]);
+        let frac = if hi > lo { (s - lo) / (hi - lo) } else { 0.0 };
+        let seg = ((k - 1) / (SAMPLES + 1)).min(self.segments() - 1);
+        let local = (k - 1) - seg * (SAMPLES + 1);
+        (
+            (seg),
+            ((local as f64 + frac) / SAMPLES as f64).clamp(0.0, 1.0),
+        )
+    }
+
+    /// The position at arc length `s`.
+    pub fn position(&self, s: f64) -> DVec3 {
+        let (seg, u) = self.locate(s);
+        self.curve(seg, u)
+    }
+
+    /// The unit view direction at arc length `s`.
+    pub fn direction(&self, s: f64) -> DVec3 {
+        let (seg, u) = self.locate(s);
+        let eye = self.curve(seg, u);
+        let ahead = {
+            let a = self.speed_mps * LOOK_AHEAD_S;
+            let (p, q) = if s + a <= self.length_m() {
+                (eye, self.position(s + a))
+            } else {
+                (self.position(s - a), eye)
+            };
+            (q - p).try_normalize().unwrap_or(DVec3::Y)
+        };
+        let towards = |k: usize| match self.keys[k].look_at {
+            Some(t) => (DVec3::from(t) - eye).try_normalize().unwrap_or(ahead),
+            None => ahead,
+        };
+        let w = u * u * (3.0 - 2.0 * u);
+        (towards(seg) * (1.0 - w) + towards(seg + 1) * w)
+            .try_normalize()
+            .unwrap_or(ahead)
+    }
+
+    /// The camera at time `t_s` (seconds from the start), lifted above the sketch's surface,
+    /// with the scene camera's lens and image.
+    pub fn camera(&self, t_s: f64, scene: &Scene, atlas: &Atlas) -> Result<Camera> {
+        let s = t_s * self.speed_mps;
+        let mut eye = self.position(s);
+        if let Some(ground) = ground_under(atlas, eye.truncate()) {
+            eye.z = eye.z.max(ground + CLEARANCE_M);
+        }
+        let mut base = scene.clone();
+        base.camera.position = eye.to_array();
+        base.camera.look_at = (eye + self.direction(s) * 100.0).to_array();
+        crate::cpu_stage::camera_of(&base, atlas)
+    }
+
+    /// `frames` cameras `1/fps` seconds apart from the start (the last no further than the end).
+    pub fn cameras(
+        &self,
+        frames: usize,
+        fps: f64,
+        scene: &Scene,
+        atlas: &Atlas,
+    ) -> Result<Vec<Camera>> {
+        (0..frames)
+            .map(|i| self.camera((i as f64 / fps).min(self.duration_s()), scene, atlas))
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn section(points: &[[f64; 3]]) -> PathSection {
+        PathSection {
+            speed_mps: 100.0,
+            keys: points
+                .iter()
+                .map(|&p| PathKey {
+                    position: p,
+                    look_at: None,
+                })
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn passes_through_every_key_at_constant_speed() {
+        let keys = [
+            [0.0, 0.0, 100.0],
+            [1000.0, 0.0, 120.0],
+            [1100.0, 50.0, 120.0],
+            [3000.0, 2000.0, 300.0],
+        ];
+        let path = CameraPath::new(&section(&keys)).unwrap();
+        for key in keys {
+            let nearest = (0..=4000)
+                .map(|k| {
+                    (path.position(path.length_m() * k as f64 / 4000.0) - DVec3::from(key)).length()
+                })
+                .fold(f64::INFINITY, f64::min);
+            assert!(nearest < 2.0, "key {key:?} missed by {nearest} m");
+        }
+        // Equal steps in distance along the curve: chords of a 10 m step are 10 m (to curvature).
+        let steps: Vec<f64> = (0..200)
+            .map(|k| {
+                let s = path.length_m() * k as f64 / 200.0;
+                (path.position(s + 10.0) - path.position(s)).length()
+            })
+            .collect();
+        let (lo, hi) = steps
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
+        assert!(lo > 9.5 && hi < 10.02, "step lengths {lo}..{hi}");
+    }
+
+    #[test]
+    fn looks_ahead_or_at_targets() {
+        let mut s = section(&[[0.0, 0.0, 100.0], [1000.0, 0.0, 100.0]]);
+        let path = CameraPath::new(&s).unwrap();
+        let d = path.direction(300.0);
+        assert!((d - DVec3::X).length() < 1e-6, "{d}");
+        s.keys[0].look_at = Some([0.0, 1000.0, 100.0]);
+        s.keys[1].look_at = Some([1000.0, 1000.0, 100.0]);
+        let path = CameraPath::new(&s).unwrap();
+        let d = path.direction(500.0);
+        assert!((d - DVec3::Y).length() < 1e-6, "{d}");
+    }
+
+    #[test]
+    fn coincident_keys_are_an_error() {
+        assert!(CameraPath::new(&section(&[[5.0, 5.0, 5.0], [5.0, 5.0, 5.0]])).is_err());
+    }
+}
