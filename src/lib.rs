@@ -10,6 +10,7 @@
 
 pub mod atlas;
 pub mod camera;
+pub mod compare;
 pub mod cpu_stage;
 pub mod detail;
 pub mod error;

@@ -76,6 +76,33 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Every mode over a sweep of its quality setting against the reference image; writes
+    /// report.csv, report.json, summary.md and figures (error_vs_time.svg/.png, ...) to --out-dir.
+    Compare {
+        scene: PathBuf,
+        #[arg(long)]
+        out_dir: PathBuf,
+        /// Image width and height, pixels.
+        #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=4096))]
+        size: u32,
+        /// Modes to compare, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "warped,geomipmap,bruteforce", value_parser = ["warped", "geomipmap", "bruteforce"])]
+        modes: Vec<String>,
+        /// Timed frames per setting after one warm-up; medians are reported.
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+        repeat: u32,
+        /// Frames along the camera path (the scene's [path], else straight ahead); 0: none.
+        #[arg(long, default_value_t = 24, value_parser = clap::value_parser!(u32).range(0..=100000))]
+        path_frames: u32,
+        /// Frames per second along the path.
+        #[arg(long, default_value_t = 15.0)]
+        path_fps: f64,
+        /// Overrides a scene key (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 fn main() {
@@ -140,6 +167,34 @@ fn main() {
                 view,
                 tau,
                 repeat,
+            },
+            json,
+        ),
+        Command::Compare {
+            scene,
+            out_dir,
+            size,
+            modes,
+            repeat,
+            path_frames,
+            path_fps,
+            set,
+            json,
+        } => compare(
+            &scene,
+            &set,
+            &out_dir,
+            terrain::compare::Options {
+                size,
+                modes: modes
+                    .iter()
+                    .map(|m| parse_mode(m))
+                    .collect::<Result<_>>()
+                    .unwrap_or_default(),
+                repeat,
+                path_frames: path_frames as usize,
+                path_fps,
+                ..Default::default()
             },
             json,
         ),
@@ -264,6 +319,59 @@ fn warp(
     Ok(())
 }
 
+fn parse_mode(m: &str) -> Result<Mode> {
+    Ok(match m {
+        "warped" => Mode::Warped,
+        "geomipmap" => Mode::Geomipmap,
+        "bruteforce" => Mode::Bruteforce,
+        "reference" => Mode::Reference,
+        m => anyhow::bail!("unknown mode {m}"),
+    })
+}
+
+fn compare(
+    scene_path: &Path,
+    set: &[String],
+    out_dir: &Path,
+    mut opts: terrain::compare::Options,
+    json: bool,
+) -> Result<()> {
+    anyhow::ensure!(
+        opts.path_fps.is_finite() && opts.path_fps > 0.0,
+        "--path-fps {}: must be a positive number",
+        opts.path_fps
+    );
+    opts.modes.dedup();
+    anyhow::ensure!(!opts.modes.is_empty(), "--modes: give at least one mode");
+    let scene = Scene::load_with(scene_path, set)?;
+    let name = scene_path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let outcome = terrain::compare::run(&scene, &name, &opts, out_dir)?;
+    if json {
+        println!("{}", outcome.report);
+    } else {
+        print!(
+            "{}",
+            terrain::compare::report::summary_markdown(&name, &outcome.summary)
+        );
+        let skipped = outcome.report["skipped"].as_array().map_or(0, |a| a.len());
+        println!(
+            "\n{} settings measured{} in {:.0} s; report.csv, report.json and figures in {}",
+            outcome.rows.len(),
+            if skipped > 0 {
+                format!(", {skipped} skipped (see report.json)")
+            } else {
+                String::new()
+            },
+            outcome.report["elapsed_s"].as_f64().unwrap_or(0.0),
+            out_dir.display()
+        );
+    }
+    Ok(())
+}
+
 fn render(
     scene_path: &Path,
     set: &[String],
@@ -273,11 +381,7 @@ fn render(
 ) -> Result<()> {
     let mut scene = Scene::load_with(scene_path, set)?;
     let mode = match opts.mode.as_deref() {
-        Some("warped") => Mode::Warped,
-        Some("geomipmap") => Mode::Geomipmap,
-        Some("bruteforce") => Mode::Bruteforce,
-        Some("reference") => Mode::Reference,
-        Some(m) => anyhow::bail!("unknown mode {m}"),
+        Some(m) => parse_mode(m)?,
         None => scene.render.mode,
     };
     if let Some(tau) = opts.tau {

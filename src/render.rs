@@ -123,6 +123,12 @@ impl WarpedRenderer {
     /// The CPU stage, then the GPU passes, for `camera`.
     pub fn render(&mut self, camera: &Camera) -> Result<Frame> {
         let cpu = self.stage.run(&self.atlas, camera);
+        self.draw(camera, cpu)
+    }
+
+    /// The GPU passes for `camera` over the last CPU stage's sketch map and Φ (the stage
+    /// frozen: the mesh stays where it was, seen from elsewhere).
+    pub fn draw(&mut self, camera: &Camera, cpu: StageTimes) -> Result<Frame> {
         let uniforms = self.uniforms(camera);
         let importance =
             (self.view == View::Importance).then_some(self.stage.importance.importance.as_slice());
@@ -399,6 +405,27 @@ impl SceneRenderer {
         match self {
             SceneRenderer::Warped(_) | SceneRenderer::Reference(_) => None,
             SceneRenderer::Baseline(r) => Some((r.renderer.precompute_ms, r.renderer.bake.bytes)),
+        }
+    }
+
+    /// `camera` drawn with the level of detail of the last frame (the warped mode's CPU stage
+    /// frozen, GeoMipMap's selection kept): what a frame would show without the LOD update.
+    pub fn render_held(&mut self, camera: &Camera) -> Result<Frame> {
+        match self {
+            SceneRenderer::Warped(r) => r.draw(camera, StageTimes::default()),
+            SceneRenderer::Baseline(r) => r.draw(camera, 0.0),
+            SceneRenderer::Reference(r) => r.render(camera),
+        }
+    }
+
+    /// Ground positions of the last frame's pixels, relative to `camera`'s ground point (w = 1
+    /// on ground, 0 on sky); the renderer must have been built with positions on.
+    pub fn read_positions(&self, camera: &Camera) -> Result<Vec<[f32; 4]>> {
+        let vp = crate::gpu::uniforms::view_proj(camera, camera.eye.truncate());
+        match self {
+            SceneRenderer::Warped(r) => r.renderer.read_positions(&r.ctx, vp),
+            SceneRenderer::Baseline(r) => r.renderer.read_positions(&r.ctx, vp),
+            SceneRenderer::Reference(r) => r.pass.read_positions(&r.ctx),
         }
     }
 

@@ -142,6 +142,18 @@ fn range(axis: &Axis, values: impl Iterator<Item = f64>, bars_from_zero: bool) -
     )
 }
 
+/// Tick values of an axis and their labels (a linear axis's with the step's decimals).
+fn labelled_ticks(lo: f64, hi: f64, scale: Scale) -> Vec<(f64, String)> {
+    let t = ticks(lo, hi, scale);
+    match (scale, t.as_slice()) {
+        (Scale::Linear, [a, b, ..]) => {
+            let decimals = (-(b - a).log10()).ceil().max(0.0) as usize;
+            t.iter().map(|v| (*v, format!("{v:.decimals$}"))).collect()
+        }
+        _ => t.iter().map(|v| (*v, number(*v))).collect(),
+    }
+}
+
 /// Tick values of an axis.
 fn ticks(lo: f64, hi: f64, scale: Scale) -> Vec<f64> {
     match scale {
@@ -294,13 +306,13 @@ fn draw_panel(c: &mut dyn Canvas, p: &Panel, left: f32, width: f32, height: f32)
         a: y0,
         b: y1,
     };
-    for t in ticks(xlo, xhi, p.x.scale) {
+    for (t, label) in labelled_ticks(xlo, xhi, p.x.scale) {
         if let Some(x) = xm.px(t) {
             c.polyline(&[(x, y0), (x, y1)], Rgb::LIGHT, 1.0, false);
             c.text(
                 x,
                 y0 + 16.0,
-                &number(t),
+                &label,
                 11.0,
                 Anchor::Middle,
                 false,
@@ -308,13 +320,13 @@ fn draw_panel(c: &mut dyn Canvas, p: &Panel, left: f32, width: f32, height: f32)
             );
         }
     }
-    for t in ticks(ylo, yhi, p.y.scale) {
+    for (t, label) in labelled_ticks(ylo, yhi, p.y.scale) {
         if let Some(y) = ym.px(t) {
             c.polyline(&[(x0, y), (x1, y)], Rgb::LIGHT, 1.0, false);
             c.text(
                 x0 - 6.0,
                 y + 4.0,
-                &number(t),
+                &label,
                 11.0,
                 Anchor::End,
                 false,
@@ -411,6 +423,16 @@ mod tests {
         );
         assert_eq!(ticks(0.01, 1000.0, Scale::Log10).len(), 6);
         assert_eq!(number(0.05), "0.05");
+        let l: Vec<String> = labelled_ticks(0.0, 0.3, Scale::Linear)
+            .into_iter()
+            .map(|t| t.1)
+            .collect();
+        assert_eq!(
+            l,
+            [
+                "0.00", "0.05", "0.10", "0.15", "0.20", "0.25", "0.30", "0.35"
+            ]
+        );
         assert_eq!(number(2.5), "2.5");
         assert_eq!(number(200.0), "200");
     }

@@ -1,0 +1,249 @@
+//! `compare`'s figures: error against frame time (with the Pareto fronts), the warped mode's
+//! density-ratio histogram, the error along the camera path, and the image strip.
+
+use super::report::{PSNR_CAP_DB, Row, TARGET_PSNR_DB, TARGET_SSE_PX};
+use crate::error::{Error, Result};
+use crate::output::write_png_rgba;
+use crate::plot::chart::{Axis, Figure, Panel, Scale, Series, Style};
+use crate::plot::raster::RasterCanvas;
+use crate::plot::{Anchor, Canvas, Rgb};
+use crate::quality::Bin;
+use std::path::Path;
+
+pub fn colour(mode: &str) -> Rgb {
+    match mode {
+        "warped" => Rgb(230, 120, 20),
+        "geomipmap" => Rgb(40, 100, 200),
+        "bruteforce" => Rgb(40, 160, 70),
+        _ => Rgb(120, 120, 120),
+    }
+}
+
+pub fn display(mode: &str) -> &str {
+    match mode {
+        "warped" => "warped",
+        "geomipmap" => "GeoMipMap",
+        "bruteforce" => "brute force",
+        m => m,
+    }
+}
+
+fn modes(rows: &[Row]) -> Vec<&str> {
+    let mut out: Vec<&str> = Vec::new();
+    for r in rows {
+        if !out.contains(&r.mode.as_str()) {
+            out.push(&r.mode);
+        }
+    }
+    out
+}
+
+/// `error_vs_time`: PSNR and mean screen-space error against frame time, a line per mode
+/// through its settings in order of frame time, each front as rings on a dashed line.
+pub fn error_vs_time(rows: &[Row], title: &str) -> Figure {
+    let panel = |name: &str,
+                 y: Axis,
+                 value: &dyn Fn(&Row) -> f64,
+                 on_front: &dyn Fn(&Row) -> bool,
+                 guide: (f64, String)| {
+        let mut series: Vec<Series> = modes(rows)
+            .into_iter()
+            .map(|m| {
+                let mut pts: Vec<(f64, f64)> = rows
+                    .iter()
+                    .filter(|r| r.mode == m)
+                    .map(|r| (r.frame_ms, value(r)))
+                    .collect();
+                pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                Series {
+                    name: display(m).to_string(),
+                    colour: colour(m),
+                    style: Style::LineMarkers,
+                    points: pts,
+                }
+            })
+            .collect();
+        let mut front: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| on_front(r))
+            .map(|r| (r.frame_ms, value(r)))
+            .collect();
+        front.sort_by(|a, b| a.0.total_cmp(&b.0));
+        series.push(Series {
+            name: "Pareto front".into(),
+            colour: Rgb::BLACK,
+            style: Style::Front,
+            points: front,
+        });
+        Panel {
+            title: name.to_string(),
+            x: Axis::new("frame time (ms, CPU stage + GPU passes)", Scale::Log10),
+            y,
+            series,
+            guides: vec![guide],
+        }
+    };
+    Figure {
+        title: title.to_string(),
+        width: 1100,
+        height: 520,
+        panels: vec![
+            panel(
+                "Image error against the reference",
+                Axis::new("PSNR (dB, higher is better)", Scale::Linear),
+                &|r| r.psnr_db.min(PSNR_CAP_DB),
+                &|r| r.pareto_psnr,
+                (TARGET_PSNR_DB, format!("{TARGET_PSNR_DB} dB")),
+            ),
+            panel(
+                "Screen-space geometric error",
+                Axis::new(
+                    "mean screen-space error (px, lower is better)",
+                    Scale::Log10,
+                ),
+                &|r| r.sse_mean_px.max(1e-3),
+                &|r| r.pareto_sse,
+                (TARGET_SSE_PX, format!("{TARGET_SSE_PX} px")),
+            ),
+        ],
+    }
+}
+
+/// The density-ratio histogram of the warped mode's geometry image (the paper's Fig. 6 as bars):
+/// share of visible cells per half-octave bin of obtained / demanded density.
+pub fn ratio_histogram(bins: &[Bin], visible: usize, title: &str) -> Figure {
+    let total = visible.max(1) as f64;
+    let points: Vec<(f64, f64)> = bins
+        .iter()
+        .map(|b| {
+            let centre = match (b.lo > 0.0, b.hi.is_finite()) {
+                (true, true) => 0.5 * (b.lo.log2() + b.hi.log2()),
+                (false, _) => b.hi.log2() - 0.25,
+                (_, false) => b.lo.log2() + 0.25,
+            };
+            (centre, 100.0 * b.cells as f64 / total)
+        })
+        .collect();
+    Figure {
+        title: title.to_string(),
+        width: 700,
+        height: 440,
+        panels: vec![Panel {
+            title: "obtained / demanded density (end bars: beyond 1/8 and 8)".into(),
+            x: Axis::new("log2 of the density ratio", Scale::Linear),
+            y: Axis::new("visible cells (%)", Scale::Linear),
+            series: vec![Series {
+                name: "warped geometry image".into(),
+                colour: colour("warped"),
+                style: Style::Bars(0.5),
+                points,
+            }],
+            guides: vec![],
+        }],
+    }
+}
+
+/// Per-frame PSNR and the change from the level-of-detail update along the path, a line per mode.
+pub fn path_error(series: &[(String, Vec<(f64, f64, Option<f64>)>)], title: &str) -> Figure {
+    let line = |f: &dyn Fn(&(f64, f64, Option<f64>)) -> Option<f64>| -> Vec<Series> {
+        series
+            .iter()
+            .map(|(m, pts)| Series {
+                name: display(m).to_string(),
+                colour: colour(m),
+                style: Style::LineMarkers,
+                points: pts.iter().filter_map(|p| Some((p.0, f(p)?))).collect(),
+            })
+            .collect()
+    };
+    Figure {
+        title: title.to_string(),
+        width: 1100,
+        height: 460,
+        panels: vec![
+            Panel {
+                title: "Image error per frame".into(),
+                x: Axis::new("time along the path (s)", Scale::Linear),
+                y: Axis::new("PSNR (dB)", Scale::Linear),
+                series: line(&|p| Some(p.1)),
+                guides: vec![],
+            },
+            Panel {
+                title: "Change from the LOD update alone (popping, swimming)".into(),
+                x: Axis::new("time along the path (s)", Scale::Linear),
+                y: Axis::new("mean change per pixel (8-bit levels)", Scale::Linear),
+                series: line(&|p| p.2),
+                guides: vec![],
+            },
+        ],
+    }
+}
+
+/// The image strip: the reference and each mode (name, setting, pixels) on top, each mode's
+/// difference from the reference (×4; white is equal) below, labelled.
+pub fn strip(
+    path: &Path,
+    width: u32,
+    height: u32,
+    reference: &[u8],
+    modes: &[(String, String, Vec<u8>)],
+) -> Result<()> {
+    let label_h = 36;
+    let columns = 1 + modes.len() as u32;
+    let (w, h) = (columns * width, 2 * (height + label_h));
+    let mut c =
+        RasterCanvas::new(w, h).ok_or_else(|| Error::Invalid(format!("strip of {w}×{h}")))?;
+    let blit = |c: &mut RasterCanvas, x0: u32, y0: u32, rgba: &[u8]| {
+        let data = c.pixmap.data_mut();
+        let row = (width * 4) as usize;
+        for y in 0..height {
+            let src = (y * width * 4) as usize;
+            let dst = (((y0 + y) * w + x0) * 4) as usize;
+            data[dst..dst + row].copy_from_slice(&rgba[src..src + row]);
+        }
+    };
+    let label = |c: &mut RasterCanvas, column: u32, y: u32, lines: [&str; 2]| {
+        let x = (column * width) as f32 + width as f32 / 2.0;
+        c.text(
+            x,
+            y as f32 + 15.0,
+            lines[0],
+            13.0,
+            Anchor::Middle,
+            false,
+            Rgb::BLACK,
+        );
+        c.text(
+            x,
+            y as f32 + 30.0,
+            lines[1],
+            11.0,
+            Anchor::Middle,
+            false,
+            Rgb::GREY,
+        );
+    };
+    blit(&mut c, 0, label_h, reference);
+    label(&mut c, 0, 0, ["reference", "ray march"]);
+    label(
+        &mut c,
+        0,
+        height + label_h,
+        ["below: difference", "|mode − ref| × 4"],
+    );
+    for (k, (name, setting, rgba)) in modes.iter().enumerate() {
+        let column = k as u32 + 1;
+        blit(&mut c, column * width, label_h, rgba);
+        let diff: Vec<u8> = rgba
+            .chunks_exact(4)
+            .zip(reference.chunks_exact(4))
+            .flat_map(|(a, b)| {
+                let d = |i: usize| (4 * (a[i] as i32 - b[i] as i32).abs()).min(255) as u8;
+                [255 - d(0), 255 - d(1), 255 - d(2), 255]
+            })
+            .collect();
+        blit(&mut c, column * width, height + 2 * label_h, &diff);
+        label(&mut c, column, 0, [name, setting]);
+    }
+    write_png_rgba(path, w, h, c.pixmap.data())
+}

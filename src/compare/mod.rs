@@ -1,0 +1,496 @@
+//! `terrain compare`: every mode over a sweep of its quality setting, each measured against the
+//! reference image for the scene's camera, then each mode's scene setting along a camera path.
+//!
+//! Rules: one device for the whole run; the reference is ray-marched once per camera and its
+//! convergence shown (the image at half the step, as PSNR). Per setting: a warm-up frame, then
+//! `repeat` timed frames whose medians are reported (DESIGN.md's frame time: CPU stage plus GPU
+//! passes); the last frame's image and positions are measured. Every renderer is built with its
+//! position attachment on, so all modes carry the same one extra RGBA8 write per pixel. GeoMipMap
+//! settings of one block size share one baked grid. A setting that fails (a grid too large for the
+//! device, say) is recorded in `report.json`'s `skipped` and the rest carry on.
+//!
+//! Outputs in the out dir, each written atomically: `report.csv`, `report.json`, `summary.md`,
+//! `error_vs_time.svg`/`.png`, `ratio_histogram.svg`/`.png`, `path.csv`, `path_error.svg`/`.png`,
+//! `strip.png`, `reference.png`.
+
+pub mod figures;
+pub mod report;
+pub mod sweep;
+pub mod temporal;
+
+use crate::atlas::Atlas;
+use crate::camera::Camera;
+use crate::cpu_stage::{self, CpuStage};
+use crate::error::{Error, Result};
+use crate::gpu::baseline::Baseline;
+use crate::gpu::context::{GpuContext, Needs};
+use crate::gpu::uniforms::View;
+use crate::metrics::{self, ScreenError};
+use crate::output::{write_atomic, write_png_rgba};
+use crate::path::CameraPath;
+use crate::progress::Progress;
+use crate::render::{
+    BaselineSceneRenderer, Frame, ReferenceRenderer, SceneRenderer, WarpedRenderer,
+};
+use crate::scene::{Mode, Scene};
+use report::Row;
+use serde_json::{Value, json};
+use std::path::Path;
+use sweep::Setting;
+use temporal::LodChange;
+
+pub struct Options {
+    /// Image width and height in pixels.
+    pub size: u32,
+    pub modes: Vec<Mode>,
+    /// Timed frames per setting, after one warm-up.
+    pub repeat: u32,
+    /// Frames along the camera path (0: no path).
+    pub path_frames: usize,
+    pub path_fps: f64,
+    /// Search window of the screen-space error, pixels.
+    pub window: usize,
+    /// The settings to run; `None`: the default sweep.
+    pub settings: Option<Vec<Setting>>,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options {
+            size: 256,
+            modes: vec![Mode::Warped, Mode::Geomipmap, Mode::Bruteforce],
+            repeat: 5,
+            path_frames: 24,
+            path_fps: 15.0,
+            window: 16,
+            settings: None,
+        }
+    }
+}
+
+pub struct Outcome {
+    pub rows: Vec<Row>,
+    pub summary: report::Summary,
+    pub report: Value,
+}
+
+/// The reference for one camera: its image and positions.
+struct Truth {
+    rgba: Vec<u8>,
+    positions: Vec<[f32; 4]>,
+}
+
+fn truth(r: &mut ReferenceRenderer, camera: &Camera) -> Result<(Truth, Frame)> {
+    let frame = r.render(camera)?;
+    let positions = r.pass.read_positions(&r.ctx)?;
+    Ok((
+        Truth {
+            rgba: frame.rgba.clone(),
+            positions,
+        },
+        frame,
+    ))
+}
+
+fn renderer(ctx: &GpuContext, scene: &Scene, atlas: &Atlas, s: &Setting) -> Result<SceneRenderer> {
+    let scene = s.apply(scene);
+    let (ctx, atlas) = (ctx.clone(), atlas.clone());
+    Ok(match s {
+        Setting::Warped { .. } => SceneRenderer::Warped(Box::new(WarpedRenderer::with_context(
+            ctx,
+            &scene,
+            atlas,
+            View::Shaded,
+            true,
+        )?)),
+        Setting::GeoMipMap { .. } | Setting::BruteForce { .. } => {
+            let kind = if s.mode() == Mode::Geomipmap {
+                Baseline::GeoMipMap
+            } else {
+                Baseline::BruteForce
+            };
+            SceneRenderer::Baseline(Box::new(BaselineSceneRenderer::with_context(
+                ctx,
+                &scene,
+                atlas,
+                View::Shaded,
+                kind,
+                true,
+            )?))
+        }
+    })
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Times `repeat` frames after a warm-up and measures the last against `truth`.
+fn measure(
+    r: &mut SceneRenderer,
+    s: &Setting,
+    camera: &Camera,
+    truth: &Truth,
+    o: &Options,
+) -> Result<(Row, Vec<u8>)> {
+    r.render(camera)?;
+    let mut frames = Vec::with_capacity(o.repeat as usize);
+    for _ in 0..o.repeat.max(1) {
+        frames.push(r.render(camera)?);
+    }
+    let last = frames
+        .last()
+        .ok_or_else(|| Error::Invalid("no frame".into()))?;
+    let positions = r.read_positions(camera)?;
+    let width = camera.width;
+    let sse = metrics::screen_space_error(&positions, &truth.positions, width as usize, o.window);
+    let cpu_us = median(frames.iter().map(|f| f.cpu_us).collect());
+    let gpu_ms = median(frames.iter().map(|f| f.gpu.gpu_ms).collect());
+    let timed = r.ctx().timestamps;
+    let pass = |get: fn(&Frame) -> Option<f64>| {
+        timed.then(|| median(frames.iter().map(|f| get(f).unwrap_or(0.0)).collect()))
+    };
+    let (pre_ms, pre_bytes) = r.precompute().unwrap_or((0.0, 0));
+    let row = Row {
+        mode: s.mode_name().to_string(),
+        setting: s.label(),
+        triangles: last.gpu.triangles,
+        cpu_stage_us: cpu_us,
+        gpu_ms,
+        frame_ms: gpu_ms + cpu_us * 1e-3,
+        psnr_db: metrics::psnr(&last.rgba, &truth.rgba),
+        ssim: metrics::ssim(&truth.rgba, &last.rgba, width).unwrap_or(0.0),
+        flip_mean: metrics::flip_mean(&truth.rgba, &last.rgba, width).unwrap_or(1.0),
+        sse_mean_px: sse.mean_px,
+        sse_p95_px: sse.p95_px,
+        sse_max_px: sse.max_px,
+        precompute_ms: pre_ms,
+        precompute_bytes: pre_bytes,
+        gpu_memory_bytes: r.gpu_bytes(),
+        frames: o.repeat.max(1),
+        pareto_psnr: false,
+        pareto_sse: false,
+        passes_ms: Some([
+            pass(|f| f.gpu.passes.warp_zoom_ms),
+            pass(|f| f.gpu.passes.normals_ms),
+            pass(|f| f.gpu.passes.terrain_ms),
+        ]),
+    };
+    Ok((row, last.rgba.clone()))
+}
+
+/// Runs the comparison of `scene` (named `name` in titles) and writes its outputs to `out_dir`.
+pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Outcome> {
+    let mut scene = scene.clone();
+    scene.camera.width = o.size;
+    scene.camera.height = o.size;
+    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    let atlas = cpu_stage::load_atlas(&scene)?;
+    let camera = cpu_stage::camera_of(&scene, &atlas)?;
+    let settings = o
+        .settings
+        .clone()
+        .unwrap_or_else(|| sweep::default_sweep(&o.modes, &atlas));
+    let mesh = settings
+        .iter()
+        .filter_map(|s| match s {
+            Setting::Warped { mesh, .. } => Some(*mesh as u64),
+            _ => None,
+        })
+        .max()
+        .unwrap_or(0);
+    let ctx = GpuContext::new(&Needs {
+        storage_bytes: atlas.bytes().max(mesh * mesh * 16),
+    })?;
+    let path_frames = o.path_frames * o.modes.len().min(1);
+    let mut progress = Progress::new(
+        &format!("compare {name}"),
+        (2 + settings.len() + path_frames + 1) as f64,
+    );
+
+    let mut reference = ReferenceRenderer::with_context(ctx.clone(), &scene, atlas.clone())?;
+    let (truth0, ref_frame) = truth(&mut reference, &camera)?;
+    progress.advance(1.0, "reference");
+    let step = reference.step;
+    reference.step = 0.5 * step;
+    let finer = reference.render(&camera)?;
+    reference.step = step;
+    let halving_db = metrics::psnr(&truth0.rgba, &finer.rgba);
+    progress.advance(1.0, "reference at half the step");
+
+    let mut rows = Vec::new();
+    let mut skipped = Vec::new();
+    let mut images: Vec<(Setting, Vec<u8>)> = Vec::new();
+    let mut gmm: Option<(u32, SceneRenderer)> = None;
+    for s in &settings {
+        let result = (|| -> Result<(Row, Vec<u8>)> {
+            if let Setting::GeoMipMap { tau, block } = *s {
+                if gmm.as_ref().is_none_or(|(b, _)| *b != block) {
+                    gmm = None; // one baked grid at a time
+                    gmm = Some((block, renderer(&ctx, &scene, &atlas, s)?));
+                }
+                let (_, r) = gmm.as_mut().expect("just built");
+                if let SceneRenderer::Baseline(b) = r {
+                    b.lod.tau = tau;
+                }
+                return measure(r, s, &camera, &truth0, o);
+            }
+            gmm = None;
+            let mut r = renderer(&ctx, &scene, &atlas, s)?;
+            measure(&mut r, s, &camera, &truth0, o)
+        })();
+        match result {
+            Ok((row, rgba)) => {
+                rows.push(row);
+                images.push((*s, rgba));
+            }
+            Err(e) => skipped.push(
+                json!({ "mode": s.mode_name(), "setting": s.label(), "error": e.to_string() }),
+            ),
+        }
+        progress.advance(1.0, &format!("{} {}", s.mode_name(), s.label()));
+    }
+    drop(gmm);
+    report::mark_fronts(&mut rows);
+    let summary = report::summarise(&rows);
+
+    let title = format!("{name}: {0}×{0} px on {1}", o.size, ctx.adapter_name());
+    let path = if path_frames > 0 {
+        let io = (out_dir, title.as_str());
+        Some(path_series(
+            &ctx,
+            &scene,
+            &atlas,
+            &mut reference,
+            o,
+            &mut progress,
+            io.0,
+            io.1,
+        )?)
+    } else {
+        None
+    };
+    write_outputs(out_dir, &rows, &summary, &title)?;
+    write_png_rgba(&out_dir.join("reference.png"), o.size, o.size, &truth0.rgba)?;
+    let strip_modes: Vec<(String, String, Vec<u8>)> = o
+        .modes
+        .iter()
+        .filter_map(|&m| {
+            let want = Setting::of_scene(m, &scene, &atlas)?;
+            let (s, img) = images
+                .iter()
+                .find(|(s, _)| *s == want)
+                .or_else(|| images.iter().find(|(s, _)| s.mode() == m))?;
+            Some((
+                figures::display(s.mode_name()).to_string(),
+                s.label(),
+                img.clone(),
+            ))
+        })
+        .collect();
+    figures::strip(
+        &out_dir.join("strip.png"),
+        o.size,
+        o.size,
+        &truth0.rgba,
+        &strip_modes,
+    )?;
+    let histogram = if o.modes.contains(&Mode::Warped) {
+        Some(ratio_histogram(&scene, &atlas, &camera, out_dir, name)?)
+    } else {
+        None
+    };
+    progress.advance(1.0, "figures");
+    progress.finish();
+
+    let report = json!({
+        "scene": name,
+        "adapter": ctx.adapter_name(),
+        "size": o.size,
+        "gpu_timing": if ctx.timestamps { "timestamp queries" } else { "wall time around submit" },
+        "timed_frames": o.repeat.max(1),
+        "reference": {
+            "step": step,
+            "ms": ref_frame.gpu.gpu_ms,
+            "psnr_halving_step_db": halving_db.min(report::PSNR_CAP_DB),
+        },
+        "rows": rows,
+        "summary": summary,
+        "path": path,
+        "density_ratio": histogram,
+        "skipped": skipped,
+        "elapsed_s": progress.elapsed().as_secs_f64(),
+    });
+    write_atomic(
+        &out_dir.join("report.json"),
+        serde_json::to_string_pretty(&report)
+            .map_err(|e| Error::Invalid(e.to_string()))?
+            .as_bytes(),
+    )?;
+    Ok(Outcome {
+        rows,
+        summary,
+        report,
+    })
+}
+
+fn write_outputs(
+    out_dir: &Path,
+    rows: &[Row],
+    summary: &report::Summary,
+    title: &str,
+) -> Result<()> {
+    write_atomic(&out_dir.join("report.csv"), report::csv(rows).as_bytes())?;
+    write_atomic(
+        &out_dir.join("summary.md"),
+        report::summary_markdown(title, summary).as_bytes(),
+    )?;
+    figures::error_vs_time(rows, &format!("Error against frame time: {title}"))
+        .write(&out_dir.join("error_vs_time"))
+}
+
+/// The warped mode's density-ratio histogram at the scene's camera.
+fn ratio_histogram(
+    scene: &Scene,
+    atlas: &Atlas,
+    camera: &Camera,
+    out_dir: &Path,
+    title: &str,
+) -> Result<Value> {
+    let detail = cpu_stage::detail_of(scene, atlas);
+    let mut stage = CpuStage::new(scene, &detail)?;
+    stage.run(atlas, camera);
+    let mut ratios = Vec::new();
+    let q = crate::quality::measure(
+        &stage.warp.phi,
+        stage.sketch_map.n,
+        stage.sketch_map.spacing,
+        &stage.importance,
+        &mut ratios,
+    );
+    figures::ratio_histogram(
+        &q.histogram,
+        q.cells_visible,
+        &format!(
+            "Warped density ratio, {title}: {:.1} % of {} visible cells in [1/2, 2]",
+            100.0 * q.ratio_within_0_5_2,
+            q.cells_visible
+        ),
+    )
+    .write(&out_dir.join("ratio_histogram"))?;
+    Ok(json!({
+        "cells_visible": q.cells_visible,
+        "ratio_within_0_5_2": q.ratio_within_0_5_2,
+        "ratio_within_0_5_1": q.ratio_within_0_5_1,
+        "histogram": q.histogram,
+    }))
+}
+
+/// Per frame along the path: each mode (at the scene's setting) against the reference, and the
+/// error change the motion does not explain. Writes `path.csv` and `path_error.svg`/`.png`.
+fn path_series(
+    ctx: &GpuContext,
+    scene: &Scene,
+    atlas: &Atlas,
+    reference: &mut ReferenceRenderer,
+    o: &Options,
+    progress: &mut Progress,
+    out_dir: &Path,
+    title: &str,
+) -> Result<Value> {
+    let path = CameraPath::of_scene(scene)?;
+    let cameras = path.cameras(o.path_frames, o.path_fps, scene, atlas)?;
+    let mut modes: Vec<(Setting, SceneRenderer)> = Vec::new();
+    for &m in &o.modes {
+        if let Some(s) = Setting::of_scene(m, scene, atlas) {
+            modes.push((s, renderer(ctx, scene, atlas, &s)?));
+        }
+    }
+    // Per mode: (time, PSNR, LOD change at this frame), and the screen-space errors.
+    let mut series: Vec<(String, Vec<(f64, f64, Option<f64>)>)> = modes
+        .iter()
+        .map(|(s, _)| (s.mode_name().to_string(), Vec::new()))
+        .collect();
+    let mut sse: Vec<Vec<ScreenError>> = vec![Vec::new(); modes.len()];
+    let mut changes: Vec<Vec<LodChange>> = vec![Vec::new(); modes.len()];
+    let mut csv = String::from(
+        "frame,time_s,mode,setting,psnr_db,sse_mean_px,sse_p95_px,lod_change_levels,lod_changed_share\n",
+    );
+    for (f, camera) in cameras.iter().enumerate() {
+        let t = f as f64 / o.path_fps;
+        let (truth, _) = truth(reference, camera)?;
+        for (k, (s, r)) in modes.iter_mut().enumerate() {
+            let held = if f > 0 {
+                Some(r.render_held(camera)?)
+            } else {
+                None
+            };
+            let frame = r.render(camera)?;
+            let change = held.map(|h| temporal::lod_change(&h.rgba, &frame.rgba));
+            let positions = r.read_positions(camera)?;
+            let e = metrics::screen_space_error(
+                &positions,
+                &truth.positions,
+                camera.width as usize,
+                o.window,
+            );
+            let db = metrics::psnr(&frame.rgba, &truth.rgba).min(report::PSNR_CAP_DB);
+            // The first frame has no previous level of detail: its change cells stay empty.
+            csv += &format!(
+                "{f},{t:.4},{},{},{db:.3},{:.3},{:.3},{},{}\n",
+                s.mode_name(),
+                s.label(),
+                e.mean_px,
+                e.p95_px,
+                change
+                    .map(|c| format!("{:.4}", c.mean_levels))
+                    .unwrap_or_default(),
+                change
+                    .map(|c| format!("{:.5}", c.changed_share))
+                    .unwrap_or_default(),
+            );
+            series[k].1.push((t, db, change.map(|c| c.mean_levels)));
+            sse[k].push(e);
+            changes[k].extend(change);
+        }
+        progress.advance(1.0, &format!("path frame {}/{}", f + 1, cameras.len()));
+    }
+    write_atomic(&out_dir.join("path.csv"), csv.as_bytes())?;
+    figures::path_error(&series, &format!("Along the camera path: {title}"))
+        .write(&out_dir.join("path_error"))?;
+    let stats = |v: Vec<f64>| -> Value {
+        if v.is_empty() {
+            return Value::Null;
+        }
+        let mut s = v.clone();
+        s.sort_by(f64::total_cmp);
+        json!({
+            "mean": s.iter().sum::<f64>() / s.len() as f64,
+            "p95": s[((s.len() as f64 * 0.95) as usize).min(s.len() - 1)],
+            "max": s[s.len() - 1],
+        })
+    };
+    let per_mode: Vec<Value> = modes
+        .iter()
+        .enumerate()
+        .map(|(k, (s, _))| {
+            let pts = &series[k].1;
+            json!({
+                "mode": s.mode_name(),
+                "setting": s.label(),
+                "psnr_db": stats(pts.iter().map(|p| p.1).collect()),
+                "sse_mean_px": stats(sse[k].iter().map(|e| e.mean_px).collect()),
+                "lod_change_levels": stats(changes[k].iter().map(|c| c.mean_levels).collect()),
+                "lod_changed_share": stats(changes[k].iter().map(|c| c.changed_share).collect()),
+            })
+        })
+        .collect();
+    Ok(json!({
+        "frames": cameras.len(),
+        "fps": o.path_fps,
+        "length_m": path.length_m().min(path.speed_mps * (cameras.len().saturating_sub(1)) as f64 / o.path_fps),
+        "source": if scene.path.is_some() { "scene [path]" } else { "default: straight ahead at 150 m/s" },
+        "modes": per_mode,
+    }))
+}

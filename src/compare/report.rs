@@ -1,0 +1,311 @@
+//! The report: one row per mode and setting (`report.csv`, `report.json`), the Pareto fronts of
+//! error against frame time, and the acceptance summary (`summary.md`).
+//!
+//! Rules: every CSV cell is filled; a PSNR of identical images (infinite) is written as
+//! [`PSNR_CAP_DB`]. A row is on a front when no other row is both faster and better in that error.
+//! "Frame time to reach" a target is the least frame time among a mode's rows that reach it;
+//! "error at equal frame time" is each mode's best error among its rows no slower than the
+//! common budget, the slowest of the modes' fastest rows (so every mode has a row within it).
+
+use serde::Serialize;
+use std::fmt::Write;
+
+/// PSNR written for identical images.
+pub const PSNR_CAP_DB: f64 = 100.0;
+pub const TARGET_PSNR_DB: f64 = 30.0;
+pub const TARGET_SSE_PX: f64 = 1.0;
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub mode: String,
+    pub setting: String,
+    pub triangles: u64,
+    pub cpu_stage_us: f64,
+    pub gpu_ms: f64,
+    pub frame_ms: f64,
+    pub psnr_db: f64,
+    pub ssim: f64,
+    pub flip_mean: f64,
+    pub sse_mean_px: f64,
+    pub sse_p95_px: f64,
+    pub sse_max_px: f64,
+    pub precompute_ms: f64,
+    pub precompute_bytes: u64,
+    pub gpu_memory_bytes: u64,
+    pub frames: u32,
+    pub pareto_psnr: bool,
+    pub pareto_sse: bool,
+    /// Per-pass GPU times (JSON only; null where the adapter has no timestamp queries).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub passes_ms: Option<[Option<f64>; 3]>,
+}
+
+pub const CSV_COLUMNS: [&str; 18] = [
+    "mode",
+    "setting",
+    "triangles",
+    "cpu_stage_us",
+    "gpu_ms",
+    "frame_ms",
+    "psnr_db",
+    "ssim",
+    "flip_mean",
+    "sse_mean_px",
+    "sse_p95_px",
+    "sse_max_px",
+    "precompute_ms",
+    "precompute_bytes",
+    "gpu_memory_bytes",
+    "frames",
+    "pareto_psnr",
+    "pareto_sse",
+];
+
+impl Row {
+    fn cells(&self) -> [String; 18] {
+        let f = |v: f64, d: usize| format!("{v:.d$}");
+        [
+            self.mode.clone(),
+            self.setting.clone(),
+            self.triangles.to_string(),
+            f(self.cpu_stage_us, 1),
+            f(self.gpu_ms, 3),
+            f(self.frame_ms, 3),
+            f(self.psnr_db.min(PSNR_CAP_DB), 3),
+            f(self.ssim, 4),
+            f(self.flip_mean, 4),
+            f(self.sse_mean_px, 3),
+            f(self.sse_p95_px, 3),
+            f(self.sse_max_px, 3),
+            f(self.precompute_ms, 1),
+            self.precompute_bytes.to_string(),
+            self.gpu_memory_bytes.to_string(),
+            self.frames.to_string(),
+            self.pareto_psnr.to_string(),
+            self.pareto_sse.to_string(),
+        ]
+    }
+}
+
+pub fn csv(rows: &[Row]) -> String {
+    let mut out = CSV_COLUMNS.join(",") + "\n";
+    for r in rows {
+        let cells: Vec<String> = r
+            .cells()
+            .into_iter()
+            .map(|c| {
+                if c.contains(',') {
+                    format!("\"{c}\"")
+                } else {
+                    c
+                }
+            })
+            .collect();
+        out += &(cells.join(",") + "\n");
+    }
+    out
+}
+
+/// Whether each row is on the front: no other row is at least as fast and at least as good in
+/// `error`, and strictly better in one of them.
+fn front(rows: &[Row], error: impl Fn(&Row) -> f64, lower_is_better: bool) -> Vec<bool> {
+    let better = |a: f64, b: f64| if lower_is_better { a < b } else { a > b };
+    rows.iter()
+        .map(|r| {
+            !rows.iter().any(|o| {
+                let (eo, er) = (error(o), error(r));
+                o.frame_ms <= r.frame_ms
+                    && !better(er, eo)
+                    && (o.frame_ms < r.frame_ms || better(eo, er))
+            })
+        })
+        .collect()
+}
+
+pub fn mark_fronts(rows: &mut [Row]) {
+    let p = front(rows, |r| r.psnr_db.min(PSNR_CAP_DB), false);
+    let s = front(rows, |r| r.sse_mean_px, true);
+    for (k, r) in rows.iter_mut().enumerate() {
+        r.pareto_psnr = p[k];
+        r.pareto_sse = s[k];
+    }
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ModeSummary {
+    pub mode: String,
+    /// Least frame time reaching 30 dB PSNR; `None`: no setting reaches it.
+    pub ms_to_30db: Option<f64>,
+    pub setting_30db: Option<String>,
+    /// Least frame time reaching a mean screen-space error of 1 px.
+    pub ms_to_1px: Option<f64>,
+    pub setting_1px: Option<String>,
+    /// Best errors among the mode's rows within the common budget.
+    pub psnr_at_budget_db: Option<f64>,
+    pub sse_at_budget_px: Option<f64>,
+    pub fastest_ms: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    pub budget_ms: f64,
+    pub modes: Vec<ModeSummary>,
+}
+
+fn rows_of<'a>(rows: &'a [Row], m: &'a str) -> impl Iterator<Item = &'a Row> + 'a {
+    rows.iter().filter(move |r| r.mode == m)
+}
+
+pub fn summarise(rows: &[Row]) -> Summary {
+    let mut names: Vec<&str> = Vec::new();
+    for r in rows {
+        if !names.contains(&r.mode.as_str()) {
+            names.push(&r.mode);
+        }
+    }
+    let fastest = |m: &str| {
+        rows_of(rows, m)
+            .map(|r| r.frame_ms)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let budget = names.iter().map(|m| fastest(m)).fold(0.0, f64::max);
+    let first = |m: &str, ok: &dyn Fn(&Row) -> bool| {
+        rows_of(rows, m)
+            .filter(|r| ok(r))
+            .min_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms))
+            .map(|r| (r.frame_ms, r.setting.clone()))
+    };
+    let modes = names
+        .iter()
+        .map(|&m| {
+            let db = first(m, &|r| r.psnr_db >= TARGET_PSNR_DB);
+            let px = first(m, &|r| r.sse_mean_px <= TARGET_SSE_PX);
+            let within = || rows_of(rows, m).filter(|r| r.frame_ms <= budget);
+            ModeSummary {
+                mode: m.to_string(),
+                ms_to_30db: db.as_ref().map(|d| d.0),
+                setting_30db: db.map(|d| d.1),
+                ms_to_1px: px.as_ref().map(|d| d.0),
+                setting_1px: px.map(|d| d.1),
+                psnr_at_budget_db: within()
+                    .map(|r| r.psnr_db.min(PSNR_CAP_DB))
+                    .reduce(f64::max),
+                sse_at_budget_px: within().map(|r| r.sse_mean_px).reduce(f64::min),
+                fastest_ms: fastest(m),
+            }
+        })
+        .collect();
+    Summary {
+        budget_ms: budget,
+        modes,
+    }
+}
+
+/// The summary as a Markdown table (for `summary.md` and the README).
+pub fn summary_markdown(title: &str, s: &Summary) -> String {
+    let opt = |v: Option<f64>, d: usize, unit: &str| match v {
+        Some(v) => format!("{v:.d$} {unit}"),
+        None => "not reached".into(),
+    };
+    let mut out = format!(
+        "### {title}\n\n| mode | frame time to 30 dB | frame time to 1 px mean error | PSNR at {b:.1} ms | mean error at {b:.1} ms |\n|---|---|---|---|---|\n",
+        b = s.budget_ms
+    );
+    for m in &s.modes {
+        let with = |v: Option<f64>, set: &Option<String>| match (v, set) {
+            (Some(v), Some(set)) => format!("{v:.1} ms ({set})"),
+            _ => "not reached".into(),
+        };
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {} | {} |",
+            m.mode,
+            with(m.ms_to_30db, &m.setting_30db),
+            with(m.ms_to_1px, &m.setting_1px),
+            opt(m.psnr_at_budget_db, 1, "dB"),
+            opt(m.sse_at_budget_px, 2, "px"),
+        );
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(mode: &str, ms: f64, db: f64, px: f64) -> Row {
+        Row {
+            mode: mode.into(),
+            setting: format!("{ms}"),
+            triangles: 1,
+            cpu_stage_us: 0.0,
+            gpu_ms: ms,
+            frame_ms: ms,
+            psnr_db: db,
+            ssim: 0.5,
+            flip_mean: 0.1,
+            sse_mean_px: px,
+            sse_p95_px: px,
+            sse_max_px: px,
+            precompute_ms: 0.0,
+            precompute_bytes: 0,
+            gpu_memory_bytes: 1,
+            frames: 1,
+            pareto_psnr: false,
+            pareto_sse: false,
+            passes_ms: None,
+        }
+    }
+
+    #[test]
+    fn fronts_keep_only_undominated_rows() {
+        let mut rows = vec![
+            row("a", 10.0, 25.0, 2.0),
+            row("a", 20.0, 31.0, 0.5),
+            row("b", 15.0, 24.0, 3.0), // slower and worse than the first
+            row("b", 40.0, 31.0, 0.4), // slower, same PSNR: off the PSNR front; better px: on it
+        ];
+        mark_fronts(&mut rows);
+        let p: Vec<bool> = rows.iter().map(|r| r.pareto_psnr).collect();
+        let s: Vec<bool> = rows.iter().map(|r| r.pareto_sse).collect();
+        assert_eq!(p, [true, true, false, false]);
+        assert_eq!(s, [true, true, false, true]);
+    }
+
+    #[test]
+    fn summary_finds_times_to_targets_and_errors_at_the_common_budget() {
+        let rows = vec![
+            row("a", 10.0, 25.0, 2.0),
+            row("a", 20.0, 31.0, 0.5),
+            row("b", 15.0, 24.0, 3.0),
+            row("b", 40.0, 29.0, 0.9),
+        ];
+        let s = summarise(&rows);
+        assert_eq!(s.budget_ms, 15.0);
+        let (a, b) = (&s.modes[0], &s.modes[1]);
+        assert_eq!((a.ms_to_30db, a.ms_to_1px), (Some(20.0), Some(20.0)));
+        assert_eq!((b.ms_to_30db, b.ms_to_1px), (None, Some(40.0)));
+        assert_eq!(
+            (a.psnr_at_budget_db, b.psnr_at_budget_db),
+            (Some(25.0), Some(24.0))
+        );
+        let md = summary_markdown("t", &s);
+        assert!(
+            md.contains("not reached") && md.contains("| a | 20.0 ms (20)"),
+            "{md}"
+        );
+    }
+
+    #[test]
+    fn csv_has_every_column_in_every_row() {
+        let text = csv(&[row("a", 1.0, f64::INFINITY, 0.0), row("b", 2.0, 20.0, 1.0)]);
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 3);
+        for l in &lines {
+            let cells: Vec<&str> = l.split(',').collect();
+            assert_eq!(cells.len(), CSV_COLUMNS.len());
+            assert!(cells.iter().all(|c| !c.is_empty()));
+        }
+        assert!(lines[1].contains(",100.000,"));
+    }
+}
