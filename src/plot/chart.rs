@@ -173,8 +173,8 @@ fn ticks(lo: f64, hi: f64, scale: Scale) -> Vec<f64> {
                 .map(|m| m * mag)
                 .find(|s| *s >= raw)
                 .unwrap_or(10.0 * mag);
-            let first = (lo / step).ceil() as i64;
-            let last = (hi / step).floor() as i64;
+            let first = (lo / step - 1e-9).ceil() as i64;
+            let last = (hi / step + 1e-9).floor() as i64;
             (first..=last).map(|k| k as f64 * step).collect()
         }
     }
@@ -427,12 +427,7 @@ mod tests {
             .into_iter()
             .map(|t| t.1)
             .collect();
-        assert_eq!(
-            l,
-            [
-                "0.00", "0.05", "0.10", "0.15", "0.20", "0.25", "0.30", "0.35"
-            ]
-        );
+        assert_eq!(l, ["0.00", "0.05", "0.10", "0.15", "0.20", "0.25", "0.30"]);
         assert_eq!(number(2.5), "2.5");
         assert_eq!(number(200.0), "200");
     }
