@@ -1,0 +1,215 @@
+//! `terrain compare` end to end on a small image: one CSV row per mode and setting with every
+//! column filled, the JSON report agreeing with it, the figures written, the path's series with
+//! brute force (no level of detail) as the zero control, and bad options failing in one line.
+
+mod common;
+use common::*;
+use std::process::Command;
+use terrain::compare::report::CSV_COLUMNS;
+use terrain::compare::sweep::{Setting, default_sweep};
+use terrain::scene::Mode;
+
+fn terrain(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_terrain"))
+        .args(args)
+        .env("TERRAIN_QUIET", "1")
+        .output()
+        .expect("run terrain");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn sketch(name: &str) -> String {
+    manifest_dir()
+        .join("sketches")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+fn png_size(path: &std::path::Path) -> (u32, u32) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
+    ));
+    let info = decoder.read_info().expect("a PNG").info().clone();
+    (info.width, info.height)
+}
+
+#[test]
+fn compare_reports_every_setting_with_every_column_filled() {
+    let dir = scratch("compare-gaussian");
+    let out = dir.display().to_string();
+    let (code, stdout, err) = terrain(&[
+        "compare",
+        &sketch("gaussian.toml"),
+        "--out-dir",
+        &out,
+        "--size",
+        "64",
+        "--modes",
+        "warped,geomipmap,bruteforce",
+        "--repeat",
+        "1",
+        "--path-frames",
+        "3",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("frame time to 30 dB"), "{stdout}");
+
+    let scene =
+        terrain::scene::Scene::load(&manifest_dir().join("sketches/gaussian.toml")).unwrap();
+    let atlas = terrain::cpu_stage::load_atlas(&scene).unwrap();
+    let modes = [Mode::Warped, Mode::Geomipmap, Mode::Bruteforce];
+    let settings = default_sweep(&modes, &atlas);
+    let csv = std::fs::read_to_string(dir.join("report.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines[0], CSV_COLUMNS.join(","));
+    assert_eq!(
+        lines.len() - 1,
+        settings.len(),
+        "one row per setting:\n{csv}"
+    );
+    for (line, s) in lines[1..].iter().zip(&settings) {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells.len(), CSV_COLUMNS.len(), "{line}");
+        assert!(cells.iter().all(|c| !c.is_empty()), "empty cell: {line}");
+        assert_eq!((cells[0], cells[1]), (s.mode_name(), s.label().as_str()));
+        let num = |k: usize| cells[k].parse::<f64>().unwrap_or_else(|_| panic!("{line}"));
+        assert!(num(2) > 0.0, "no triangles: {line}");
+        assert!(num(5) > 0.0 && num(5) >= num(4), "frame time: {line}");
+        assert!(num(6) > 10.0 && num(6) < 100.0, "PSNR: {line}");
+        assert!(num(9) >= 0.0 && num(9) <= num(11), "screen error: {line}");
+    }
+    // Some row of every mode is on a front; the fastest row always is.
+    for m in ["warped", "geomipmap", "bruteforce"] {
+        assert!(lines.iter().any(|l| l.starts_with(m)), "{m} missing");
+    }
+
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["rows"].as_array().unwrap().len(), settings.len());
+    assert_eq!(report["skipped"].as_array().unwrap().len(), 0);
+    // The reference is converged below the differences it measures.
+    let best = report["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["psnr_db"].as_f64().unwrap())
+        .fold(0.0, f64::max);
+    let halving = report["reference"]["psnr_halving_step_db"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        halving > best + 3.0,
+        "reference moves {halving} dB, best mode {best} dB"
+    );
+    assert_eq!(report["summary"]["modes"].as_array().unwrap().len(), 3);
+
+    for f in ["error_vs_time", "ratio_histogram", "path_error"] {
+        let svg = std::fs::read_to_string(dir.join(format!("{f}.svg"))).unwrap();
+        assert!(svg.starts_with("<svg") && svg.contains("</svg>"), "{f}.svg");
+        let (w, h) = png_size(&dir.join(format!("{f}.png")));
+        assert!(w >= 600 && h >= 400, "{f}.png is {w}×{h}");
+    }
+    let svg = std::fs::read_to_string(dir.join("error_vs_time.svg")).unwrap();
+    for label in [
+        "frame time (ms",
+        "PSNR (dB",
+        "screen-space error (px",
+        "Pareto front",
+        "GeoMipMap",
+    ] {
+        assert!(svg.contains(label), "error_vs_time.svg lacks {label:?}");
+    }
+    assert_eq!(png_size(&dir.join("strip.png")), (4 * 64, 2 * (64 + 36)));
+
+    // The path: 3 frames × 3 modes; the first frame has no LOD change, brute force never has one.
+    let path = std::fs::read_to_string(dir.join("path.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = path
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 9, "{path}");
+    for r in &rows {
+        let change = r[7];
+        match (r[0], r[2]) {
+            ("0", _) => assert_eq!(change, "", "{r:?}"),
+            (_, "bruteforce") => assert_eq!(change.parse::<f64>().unwrap(), 0.0, "{r:?}"),
+            _ => assert!(change.parse::<f64>().unwrap() >= 0.0, "{r:?}"),
+        }
+    }
+    // The warped mesh slides as the camera moves: swimming is measured, not zero.
+    let warped_swims = rows
+        .iter()
+        .any(|r| r[2] == "warped" && r[0] != "0" && r[7].parse::<f64>().unwrap() > 0.0);
+    assert!(warped_swims, "{path}");
+}
+
+#[test]
+fn modes_and_size_narrow_the_sweep() {
+    let dir = scratch("compare-narrow");
+    let out = dir.display().to_string();
+    let (code, _, err) = terrain(&[
+        "compare",
+        &sketch("hills-high.toml"),
+        "--out-dir",
+        &out,
+        "--size",
+        "48",
+        "--modes",
+        "bruteforce",
+        "--repeat",
+        "1",
+        "--path-frames",
+        "0",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let csv = std::fs::read_to_string(dir.join("report.csv")).unwrap();
+    assert!(
+        csv.lines().skip(1).all(|l| l.starts_with("bruteforce,K=")),
+        "{csv}"
+    );
+    assert_eq!(png_size(&dir.join("reference.png")), (48, 48));
+    assert!(!dir.join("path.csv").exists() && !dir.join("ratio_histogram.svg").exists());
+}
+
+#[test]
+fn bad_compare_options_fail_in_one_line() {
+    let dir = scratch("compare-bad").display().to_string();
+    let g = sketch("gaussian.toml");
+    for (args, cause) in [
+        (vec!["--modes", "warped,lod"], "lod"),
+        (vec!["--size", "0"], "size"),
+        (vec!["--path-fps", "0"], "path-fps"),
+        (vec!["--set", "warp.quad_px=-1"], "warp.quad_px"),
+    ] {
+        let mut all = vec!["compare", g.as_str(), "--out-dir", dir.as_str()];
+        all.extend(args.iter().copied());
+        let (code, _, err) = terrain(&all);
+        assert_ne!(code, 0, "{all:?} succeeded");
+        assert!(!err.contains("panicked"), "{all:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{all:?}: {err}");
+        assert!(err.contains(cause), "{all:?}: {err}");
+    }
+}
+
+#[test]
+fn scene_settings_are_in_the_default_sweep() {
+    // The strip and the path show each mode at the scene's setting; with the bundled scenes'
+    // defaults those are rows of the sweep, so the strip's images are the report's.
+    for name in ["jacksboro", "gaussian", "hills-high"] {
+        let scene =
+            terrain::scene::Scene::load(&manifest_dir().join(format!("sketches/{name}.toml")))
+                .unwrap();
+        let atlas = terrain::cpu_stage::load_atlas(&scene).unwrap();
+        let sweep = default_sweep(&[Mode::Warped, Mode::Geomipmap, Mode::Bruteforce], &atlas);
+        for m in [Mode::Warped, Mode::Geomipmap, Mode::Bruteforce] {
+            let s: Setting = Setting::of_scene(m, &scene, &atlas).unwrap();
+            assert!(sweep.contains(&s), "{name}: {s:?} not swept");
+        }
+    }
+}
