@@ -8,13 +8,16 @@
 //! [`render`] puts a mode's CPU and GPU halves together, [`metrics`] measures images against the
 //! reference.
 
+pub mod animation;
 pub mod atlas;
+pub mod batch;
 pub mod camera;
 pub mod compare;
 pub mod cpu_stage;
 pub mod detail;
 pub mod error;
 pub mod figures;
+pub mod fly;
 pub mod geomipmap;
 pub mod gpu;
 pub mod importance;

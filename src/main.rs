@@ -103,9 +103,64 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Renders the scene's camera path (its [path], else straight ahead) to numbered PNG
+    /// frames, an animation (APNG; MP4 when ffmpeg is installed) and frames.csv in --out-dir.
+    Fly {
+        scene: PathBuf,
+        #[arg(long)]
+        out_dir: PathBuf,
+        #[arg(long, value_parser = ["warped", "geomipmap", "bruteforce", "reference"])]
+        mode: Option<String>,
+        #[arg(long, default_value = "shaded", value_parser = ["shaded", "wireframe", "split-octave", "importance", "normals", "coverage"])]
+        view: String,
+        /// Frames spread evenly over the whole path (default: --fps frames per second of travel).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+        frames: Option<u32>,
+        /// Frames per second of the animation (and of travel without --frames).
+        #[arg(long, default_value_t = 30.0)]
+        fps: f64,
+        /// Image size: N (square) or WxH; default the scene's.
+        #[arg(long)]
+        size: Option<String>,
+        /// Skips the MP4 even when ffmpeg is installed.
+        #[arg(long)]
+        no_mp4: bool,
+        /// Overrides a scene key (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Many snapshots from a jobs file on one device; manifest.jsonl lists each with its status.
+    Batch {
+        jobs: PathBuf,
+        #[arg(long)]
+        out_dir: PathBuf,
+        /// Renders share i of n (items k with k mod n = i), e.g. --shard 0/4.
+        #[arg(long, value_name = "I/N")]
+        shard: Option<String>,
+        /// Skips items the manifest lists as done; retries failed ones.
+        #[arg(long)]
+        resume: bool,
+        /// Merges the shard manifests in --out-dir into manifest.jsonl instead of rendering.
+        #[arg(long, conflicts_with_all = ["shard", "resume"])]
+        merge: bool,
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 fn main() {
+    // Mesa's EGL probes for a Wayland display whenever an adapter is requested; where
+    // XDG_RUNTIME_DIR is unset (a container, a CI job, ssh) libwayland then prints an error line
+    // about a display nobody asked for, breaking the one-line-error rule. Pointing it at the
+    // temporary folder makes the probe fail quietly instead; a real Wayland session always sets it.
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none()
+        && std::env::var_os("WAYLAND_DISPLAY").is_none()
+    {
+        // SAFETY: the first statement of main, before any thread exists.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+    }
     // Usage errors as one line too, like every other bad input; help and version print in full.
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
@@ -198,6 +253,39 @@ fn main() {
             },
             json,
         ),
+        Command::Fly {
+            scene,
+            out_dir,
+            mode,
+            view,
+            frames,
+            fps,
+            size,
+            no_mp4,
+            set,
+            json,
+        } => fly(
+            &scene,
+            &set,
+            &out_dir,
+            &FlyArgs {
+                mode,
+                view,
+                frames,
+                fps,
+                size,
+                mp4: !no_mp4,
+            },
+            json,
+        ),
+        Command::Batch {
+            jobs,
+            out_dir,
+            shard,
+            resume,
+            merge,
+            json,
+        } => batch(&jobs, &out_dir, shard.as_deref(), resume, merge, json),
     };
     if let Err(e) = result {
         eprintln!("error: {}", format!("{e:#}").replace('\n', " "));
@@ -327,6 +415,162 @@ fn parse_mode(m: &str) -> Result<Mode> {
         "reference" => Mode::Reference,
         m => anyhow::bail!("unknown mode {m}"),
     })
+}
+
+struct FlyArgs {
+    mode: Option<String>,
+    view: String,
+    frames: Option<u32>,
+    fps: f64,
+    size: Option<String>,
+    mp4: bool,
+}
+
+/// `N` or `WxH`.
+fn parse_size(s: &str) -> Result<(u32, u32)> {
+    let parse =
+        |v: &str| -> Option<u32> { v.trim().parse().ok().filter(|&n| (1..=16384).contains(&n)) };
+    let size = match s.split_once(['x', 'X', '×']) {
+        Some((w, h)) => parse(w).zip(parse(h)),
+        None => parse(s).map(|n| (n, n)),
+    };
+    size.with_context(|| format!("--size {s}: expected N or WxH, 1 to 16384 pixels"))
+}
+
+fn fly(scene_path: &Path, set: &[String], out_dir: &Path, a: &FlyArgs, json: bool) -> Result<()> {
+    anyhow::ensure!(
+        a.fps.is_finite() && a.fps > 0.0 && a.fps <= 1000.0,
+        "--fps {}: must be a number of frames per second in (0, 1000]",
+        a.fps
+    );
+    let mut scene = Scene::load_with(scene_path, set)?;
+    if let Some(s) = &a.size {
+        (scene.camera.width, scene.camera.height) = parse_size(s)?;
+    }
+    let mode = match a.mode.as_deref() {
+        Some(m) => parse_mode(m)?,
+        None => scene.render.mode,
+    };
+    let opts = terrain::fly::Options {
+        mode,
+        view: View::parse(&a.view).context("unknown view")?,
+        frames: a.frames.map(|n| n as usize),
+        fps: a.fps,
+        mp4: a.mp4,
+    };
+    let o = terrain::fly::run(&scene, &opts, out_dir)?;
+    if let Some(note) = &o.mp4_note {
+        eprintln!("{note}");
+    }
+    if json {
+        let out = json!({
+            "adapter": o.adapter,
+            "frames": o.frames.len(),
+            "frame_ms_median": o.frame_ms_median,
+            "frame_ms_p95": o.frame_ms_p95,
+            "spread_p95_over_median": o.spread,
+            "animation": o.animation.display().to_string(),
+            "mp4": o.mp4.as_ref().map(|p| p.display().to_string()),
+            "elapsed_s": o.elapsed_s,
+        });
+        println!("{out}");
+    } else {
+        println!(
+            "{} frames on {} in {:.1} s: frame time median {:.1} ms, p95 {:.1} ms (p95/median {:.2}); {}{}, frames.csv in {}",
+            o.frames.len(),
+            o.adapter,
+            o.elapsed_s,
+            o.frame_ms_median,
+            o.frame_ms_p95,
+            o.spread,
+            o.animation.display(),
+            o.mp4
+                .as_ref()
+                .map(|p| format!(", {}", p.display()))
+                .unwrap_or_default(),
+            out_dir.display()
+        );
+    }
+    Ok(())
+}
+
+fn parse_shard(s: &str) -> Result<(usize, usize)> {
+    let parsed = s
+        .split_once('/')
+        .and_then(|(i, n)| {
+            Some((
+                i.trim().parse::<usize>().ok()?,
+                n.trim().parse::<usize>().ok()?,
+            ))
+        })
+        .filter(|&(i, n)| n > 0 && i < n);
+    parsed.with_context(|| format!("--shard {s}: expected I/N with 0 ≤ I < N"))
+}
+
+fn batch(
+    jobs: &Path,
+    out_dir: &Path,
+    shard: Option<&str>,
+    resume: bool,
+    merge: bool,
+    json: bool,
+) -> Result<()> {
+    if merge {
+        let (lines, missing, failed) = terrain::batch::merge_manifests(jobs, out_dir)?;
+        if json {
+            println!(
+                "{}",
+                json!({ "lines": lines, "missing": missing, "failed": failed })
+            );
+        } else {
+            println!(
+                "{}: {lines} items, {} missing, {failed} failed",
+                out_dir.join("manifest.jsonl").display(),
+                missing.len()
+            );
+        }
+        anyhow::ensure!(
+            missing.is_empty() && failed == 0,
+            "{} items missing{}, {failed} failed: run the shards again with --resume",
+            missing.len(),
+            missing
+                .first()
+                .map(|m| format!(" (first {m})"))
+                .unwrap_or_default()
+        );
+        return Ok(());
+    }
+    let shard = shard.map(parse_shard).transpose()?.unwrap_or((0, 1));
+    let s = terrain::batch::run(jobs, out_dir, &terrain::batch::Options { shard, resume })?;
+    let rate = s.rendered as f64 / s.seconds.max(1e-9);
+    if json {
+        println!(
+            "{}",
+            json!({
+                "items": s.total, "rendered": s.rendered, "skipped": s.skipped, "failed": s.failed,
+                "seconds": s.seconds, "snapshots_per_s": rate,
+                "manifest": s.manifest.display().to_string(),
+            })
+        );
+    } else {
+        println!(
+            "{} of {} items rendered in {:.1} s ({rate:.2} snapshots/s), {} already done, {} failed; {}",
+            s.rendered,
+            s.total,
+            s.seconds,
+            s.skipped,
+            s.failed,
+            s.manifest.display()
+        );
+    }
+    anyhow::ensure!(
+        s.failed == 0,
+        "{} of {} snapshots failed; their causes are in {}",
+        s.failed,
+        s.total,
+        s.manifest.display()
+    );
+    Ok(())
 }
 
 fn compare(

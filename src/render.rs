@@ -69,9 +69,12 @@ impl WarpedRenderer {
         view: View,
         positions: bool,
     ) -> Result<WarpedRenderer> {
+        let mesh = scene.warp.mesh;
+        ctx.check(&Needs {
+            storage_bytes: atlas.bytes().max((mesh as u64).pow(2) * 16),
+        })?;
         let detail = cpu_stage::detail_of(scene, &atlas);
         let stage = CpuStage::new(scene, &detail)?;
-        let mesh = scene.warp.mesh;
         let renderer = Renderer::new(
             &ctx,
             &atlas,
@@ -190,6 +193,9 @@ impl BaselineSceneRenderer {
         kind: Baseline,
         positions: bool,
     ) -> Result<BaselineSceneRenderer> {
+        ctx.check(&Needs {
+            storage_bytes: atlas.bytes(),
+        })?;
         let detail = cpu_stage::detail_of(scene, &atlas);
         let k = scene.geomipmap.k.unwrap_or_else(|| default_k(&atlas));
         let options = BaselineOptions {
@@ -283,6 +289,9 @@ impl ReferenceRenderer {
 
     /// On a device shared with other renderers.
     pub fn with_context(ctx: GpuContext, scene: &Scene, atlas: Atlas) -> Result<ReferenceRenderer> {
+        ctx.check(&Needs {
+            storage_bytes: atlas.bytes(),
+        })?;
         let detail = cpu_stage::detail_of(scene, &atlas);
         let frame = uniform_buffer(&ctx.device);
         let (atlas_buffer, _) = upload_atlas(&ctx, &atlas);
@@ -365,6 +374,46 @@ impl SceneRenderer {
                 Baseline::BruteForce,
             )?)),
             Mode::Reference => SceneRenderer::Reference(Box::new(ReferenceRenderer::new(scene)?)),
+        })
+    }
+
+    /// On a device shared with other renderers; `positions`: also write each pixel's ground
+    /// position (the reference always does).
+    pub fn with_context(
+        ctx: GpuContext,
+        scene: &Scene,
+        atlas: Atlas,
+        mode: Mode,
+        view: View,
+        positions: bool,
+    ) -> Result<SceneRenderer> {
+        let baseline = |kind| -> Result<SceneRenderer> {
+            Ok(SceneRenderer::Baseline(Box::new(
+                BaselineSceneRenderer::with_context(
+                    ctx.clone(),
+                    scene,
+                    atlas.clone(),
+                    view,
+                    kind,
+                    positions,
+                )?,
+            )))
+        };
+        Ok(match mode {
+            Mode::Warped => SceneRenderer::Warped(Box::new(WarpedRenderer::with_context(
+                ctx.clone(),
+                scene,
+                atlas.clone(),
+                view,
+                positions,
+            )?)),
+            Mode::Geomipmap => baseline(Baseline::GeoMipMap)?,
+            Mode::Bruteforce => baseline(Baseline::BruteForce)?,
+            Mode::Reference => SceneRenderer::Reference(Box::new(ReferenceRenderer::with_context(
+                ctx.clone(),
+                scene,
+                atlas.clone(),
+            )?)),
         })
     }
 

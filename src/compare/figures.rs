@@ -143,16 +143,28 @@ pub fn ratio_histogram(bins: &[Bin], visible: usize, title: &str) -> Figure {
     }
 }
 
+/// One frame of a mode along the path.
+#[derive(Clone, Copy, Debug)]
+pub struct PathPoint {
+    pub t_s: f64,
+    pub psnr_db: f64,
+    /// The LOD update's change (none at the first frame).
+    pub change: Option<f64>,
+}
+
+/// A mode's name and its frames along the path.
+pub type ModeSeries = (String, Vec<PathPoint>);
+
 /// Per-frame PSNR and the change from the level-of-detail update along the path, a line per mode.
-pub fn path_error(series: &[(String, Vec<(f64, f64, Option<f64>)>)], title: &str) -> Figure {
-    let line = |f: &dyn Fn(&(f64, f64, Option<f64>)) -> Option<f64>| -> Vec<Series> {
+pub fn path_error(series: &[ModeSeries], title: &str) -> Figure {
+    let line = |f: &dyn Fn(&PathPoint) -> Option<f64>| -> Vec<Series> {
         series
             .iter()
             .map(|(m, pts)| Series {
                 name: display(m).to_string(),
                 colour: colour(m),
                 style: Style::LineMarkers,
-                points: pts.iter().filter_map(|p| Some((p.0, f(p)?))).collect(),
+                points: pts.iter().filter_map(|p| Some((p.t_s, f(p)?))).collect(),
             })
             .collect()
     };
@@ -165,14 +177,14 @@ pub fn path_error(series: &[(String, Vec<(f64, f64, Option<f64>)>)], title: &str
                 title: "Image error per frame".into(),
                 x: Axis::new("time along the path (s)", Scale::Linear),
                 y: Axis::new("PSNR (dB)", Scale::Linear),
-                series: line(&|p| Some(p.1)),
+                series: line(&|p| Some(p.psnr_db)),
                 guides: vec![],
             },
             Panel {
                 title: "Change from the LOD update alone (popping, swimming)".into(),
                 x: Axis::new("time along the path (s)", Scale::Linear),
                 y: Axis::new("mean change per pixel (8-bit levels)", Scale::Linear),
-                series: line(&|p| p.2),
+                series: line(&|p| p.change),
                 guides: vec![],
             },
         ],

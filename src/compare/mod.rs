@@ -22,16 +22,13 @@ use crate::atlas::Atlas;
 use crate::camera::Camera;
 use crate::cpu_stage::{self, CpuStage};
 use crate::error::{Error, Result};
-use crate::gpu::baseline::Baseline;
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::uniforms::View;
 use crate::metrics::{self, ScreenError};
 use crate::output::{write_atomic, write_png_rgba};
 use crate::path::CameraPath;
 use crate::progress::Progress;
-use crate::render::{
-    BaselineSceneRenderer, Frame, ReferenceRenderer, SceneRenderer, WarpedRenderer,
-};
+use crate::render::{Frame, ReferenceRenderer, SceneRenderer};
 use crate::scene::{Mode, Scene};
 use report::Row;
 use serde_json::{Value, json};
@@ -94,31 +91,14 @@ fn truth(r: &mut ReferenceRenderer, camera: &Camera) -> Result<(Truth, Frame)> {
 
 fn renderer(ctx: &GpuContext, scene: &Scene, atlas: &Atlas, s: &Setting) -> Result<SceneRenderer> {
     let scene = s.apply(scene);
-    let (ctx, atlas) = (ctx.clone(), atlas.clone());
-    Ok(match s {
-        Setting::Warped { .. } => SceneRenderer::Warped(Box::new(WarpedRenderer::with_context(
-            ctx,
-            &scene,
-            atlas,
-            View::Shaded,
-            true,
-        )?)),
-        Setting::GeoMipMap { .. } | Setting::BruteForce { .. } => {
-            let kind = if s.mode() == Mode::Geomipmap {
-                Baseline::GeoMipMap
-            } else {
-                Baseline::BruteForce
-            };
-            SceneRenderer::Baseline(Box::new(BaselineSceneRenderer::with_context(
-                ctx,
-                &scene,
-                atlas,
-                View::Shaded,
-                kind,
-                true,
-            )?))
-        }
-    })
+    SceneRenderer::with_context(
+        ctx.clone(),
+        &scene,
+        atlas.clone(),
+        s.mode(),
+        View::Shaded,
+        true,
+    )
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -257,7 +237,10 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
 
     let title = format!("{name}: {0}×{0} px on {1}", o.size, ctx.adapter_name());
     let path = if path_frames > 0 {
-        let io = (out_dir, title.as_str());
+        let out = Out {
+            dir: out_dir,
+            title: &title,
+        };
         Some(path_series(
             &ctx,
             &scene,
@@ -265,8 +248,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
             &mut reference,
             o,
             &mut progress,
-            io.0,
-            io.1,
+            &out,
         )?)
     } else {
         None
@@ -389,6 +371,12 @@ fn ratio_histogram(
 
 /// Per frame along the path: each mode (at the scene's setting) against the reference, and the
 /// error change the motion does not explain. Writes `path.csv` and `path_error.svg`/`.png`.
+/// Where a stage's outputs go, and the title of its figures.
+struct Out<'a> {
+    dir: &'a Path,
+    title: &'a str,
+}
+
 fn path_series(
     ctx: &GpuContext,
     scene: &Scene,
@@ -396,9 +384,9 @@ fn path_series(
     reference: &mut ReferenceRenderer,
     o: &Options,
     progress: &mut Progress,
-    out_dir: &Path,
-    title: &str,
+    out: &Out,
 ) -> Result<Value> {
+    let (out_dir, title) = (out.dir, out.title);
     let path = CameraPath::of_scene(scene)?;
     let cameras = path.cameras(o.path_frames, o.path_fps, scene, atlas)?;
     let mut modes: Vec<(Setting, SceneRenderer)> = Vec::new();
@@ -408,7 +396,7 @@ fn path_series(
         }
     }
     // Per mode: (time, PSNR, LOD change at this frame), and the screen-space errors.
-    let mut series: Vec<(String, Vec<(f64, f64, Option<f64>)>)> = modes
+    let mut series: Vec<figures::ModeSeries> = modes
         .iter()
         .map(|(s, _)| (s.mode_name().to_string(), Vec::new()))
         .collect();
@@ -450,7 +438,11 @@ fn path_series(
                     .map(|c| format!("{:.5}", c.changed_share))
                     .unwrap_or_default(),
             );
-            series[k].1.push((t, db, change.map(|c| c.mean_levels)));
+            series[k].1.push(figures::PathPoint {
+                t_s: t,
+                psnr_db: db,
+                change: change.map(|c| c.mean_levels),
+            });
             sse[k].push(e);
             changes[k].extend(change);
         }
@@ -479,7 +471,7 @@ fn path_series(
             json!({
                 "mode": s.mode_name(),
                 "setting": s.label(),
-                "psnr_db": stats(pts.iter().map(|p| p.1).collect()),
+                "psnr_db": stats(pts.iter().map(|p| p.psnr_db).collect()),
                 "sse_mean_px": stats(sse[k].iter().map(|e| e.mean_px).collect()),
                 "lod_change_levels": stats(changes[k].iter().map(|c| c.mean_levels).collect()),
                 "lod_changed_share": stats(changes[k].iter().map(|c| c.changed_share).collect()),

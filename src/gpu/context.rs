@@ -38,20 +38,8 @@ impl GpuContext {
         })?;
         let info = adapter.get_info();
         let limits = adapter.limits();
+        check(&info.name, &limits, needs)?;
         let name = &info.name;
-        if limits.max_storage_buffer_binding_size < needs.storage_bytes {
-            return Err(Error::Gpu(format!(
-                "{name}: the sketch's pyramid or the mesh needs a {} MiB storage buffer, the adapter allows {} MiB",
-                needs.storage_bytes >> 20,
-                limits.max_storage_buffer_binding_size >> 20
-            )));
-        }
-        if limits.max_storage_buffers_per_shader_stage < 3 {
-            return Err(Error::Gpu(format!(
-                "{name}: needs 3 storage buffers per shader stage (vertex included), has {}",
-                limits.max_storage_buffers_per_shader_stage
-            )));
-        }
         let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         let required_features = if timestamps {
             wgpu::Features::TIMESTAMP_QUERY
@@ -76,6 +64,12 @@ impl GpuContext {
         })
     }
 
+    /// Whether this device can hold what `needs` asks for (before anything is created: a buffer
+    /// over a limit would otherwise be a validation error, which wgpu reports by panicking).
+    pub fn check(&self, needs: &Needs) -> Result<()> {
+        check(&self.adapter.name, &self.limits, needs)
+    }
+
     /// "name (backend)", for reports.
     pub fn adapter_name(&self) -> String {
         format!("{} ({:?})", self.adapter.name, self.adapter.backend)
@@ -88,4 +82,21 @@ impl GpuContext {
             .map(|_| ())
             .map_err(|e| Error::Gpu(format!("device lost while waiting: {e}")))
     }
+}
+
+fn check(name: &str, limits: &wgpu::Limits, needs: &Needs) -> Result<()> {
+    if limits.max_storage_buffer_binding_size < needs.storage_bytes {
+        return Err(Error::Gpu(format!(
+            "{name}: the sketch's pyramid or the mesh needs a {} MiB storage buffer, the adapter allows {} MiB",
+            needs.storage_bytes >> 20,
+            limits.max_storage_buffer_binding_size >> 20
+        )));
+    }
+    if limits.max_storage_buffers_per_shader_stage < 3 {
+        return Err(Error::Gpu(format!(
+            "{name}: needs 3 storage buffers per shader stage (vertex included), has {}",
+            limits.max_storage_buffers_per_shader_stage
+        )));
+    }
+    Ok(())
 }

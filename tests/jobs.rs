@@ -1,0 +1,374 @@
+//! The jobs users run unattended: `fly` along a path (frames, animation, CSV) and `batch`
+//! (shards that together are the whole batch, byte for byte; a killed batch resumed with nothing
+//! lost or listed twice; bad jobs failing alone with their cause).
+
+mod common;
+use common::*;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn terrain(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_terrain"))
+        .args(args)
+        .env("TERRAIN_QUIET", "1")
+        .output()
+        .expect("run terrain");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A small, quick base scene over the synthetic hills.
+fn base_scene(dir: &Path, size: u32) -> PathBuf {
+    let path = dir.join("base.toml");
+    std::fs::write(
+        &path,
+        format!(
+            "[sketch]\nsynthetic = \"hills\"\n\n[camera]\nposition = [500.0, 300.0, 900.0]\nlook_at = [3800.0, 4000.0, 200.0]\nwidth = {size}\nheight = {size}\n\n[detail]\namplitude_m = 8.0\ngain = 0.45\n\n[warp]\nmesh = 128\n"
+        ),
+    )
+    .unwrap();
+    path
+}
+
+fn jobs_file(dir: &Path, body: &str) -> PathBuf {
+    let path = dir.join("jobs.toml");
+    std::fs::write(&path, format!("scene = \"base.toml\"\n{body}")).unwrap();
+    path
+}
+
+/// name → PNG bytes of every snapshot in `dir`.
+fn pngs(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".png"))
+        .map(|e| {
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                std::fs::read(e.path()).unwrap(),
+            )
+        })
+        .collect()
+}
+
+fn manifest(path: &Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect()
+}
+
+#[test]
+fn fly_writes_frames_animation_and_csv_along_the_path() {
+    let dir = scratch("fly");
+    let scene = dir.join("path.toml");
+    std::fs::write(
+        &scene,
+        "[sketch]\nsynthetic = \"hills\"\n[camera]\nposition = [500.0, 300.0, 900.0]\nlook_at = [3800.0, 4000.0, 200.0]\nwidth = 40\nheight = 32\n[warp]\nmesh = 128\n[path]\nspeed_mps = 200.0\nkeys = [\n  { position = [1000.0, 1000.0, 700.0], look_at = [4000.0, 4000.0, 100.0] },\n  { position = [2000.0, 1500.0, 650.0] },\n  { position = [3000.0, 1200.0, 700.0] },\n]\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let (code, stdout, err) = terrain(&[
+        "fly",
+        scene.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+        "--frames",
+        "7",
+        "--fps",
+        "10",
+        "--no-mp4",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        stdout.contains("7 frames") && stdout.contains("p95/median"),
+        "{stdout}"
+    );
+    for k in 0..7 {
+        assert!(out.join(format!("frame-{k:05}.png")).is_file(), "frame {k}");
+    }
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(out.join("animation.png")).unwrap(),
+    ));
+    let reader = decoder.read_info().unwrap();
+    assert_eq!(
+        reader.info().animation_control().map(|a| a.num_frames),
+        Some(7)
+    );
+    assert_eq!((reader.info().width, reader.info().height), (40, 32));
+
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').take(9).map(|c| c.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 7);
+    // The path starts and ends at its keys, and frames are equal distances apart.
+    let eye = |r: &Vec<f64>| glam::DVec3::new(r[2], r[3], r[4]);
+    assert!((eye(&rows[0]) - glam::DVec3::new(1000.0, 1000.0, 700.0)).length() < 0.5);
+    assert!((eye(&rows[6]) - glam::DVec3::new(3000.0, 1200.0, 700.0)).length() < 0.5);
+    let steps: Vec<f64> = rows
+        .windows(2)
+        .map(|w| (eye(&w[1]) - eye(&w[0])).length())
+        .collect();
+    let (lo, hi) = steps
+        .iter()
+        .fold((f64::MAX, 0.0f64), |(a, b), &s| (a.min(s), b.max(s)));
+    assert!(hi / lo < 1.05, "frame steps {steps:?}");
+    for r in &rows {
+        assert!(r[7] > 0.0 && r[8] > 0.0, "frame time and triangles: {r:?}");
+    }
+}
+
+#[test]
+fn shards_together_are_the_whole_batch_byte_for_byte() {
+    let dir = scratch("batch-shards");
+    base_scene(&dir, 32);
+    let jobs = jobs_file(
+        &dir,
+        "[random]\ncount = 10\nseed = 3\n\n[[job]]\nname = \"given\"\ncamera = { position = [2000.0, 500.0, 800.0], look_at = [2000.0, 3000.0, 100.0] }\n",
+    );
+    let whole = dir.join("whole");
+    let (code, _, err) = terrain(&[
+        "batch",
+        jobs.to_str().unwrap(),
+        "--out-dir",
+        whole.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let sharded = dir.join("sharded");
+    for i in 0..4 {
+        let shard = format!("{i}/4");
+        let (code, _, err) = terrain(&[
+            "batch",
+            jobs.to_str().unwrap(),
+            "--out-dir",
+            sharded.to_str().unwrap(),
+            "--shard",
+            &shard,
+        ]);
+        assert_eq!(code, 0, "shard {shard}: {err}");
+        let lines = manifest(&sharded.join(format!("manifest-{i}-of-4.jsonl")));
+        assert!(
+            lines.iter().all(|l| l["index"].as_u64().unwrap() % 4 == i),
+            "shard {i}"
+        );
+    }
+    let (code, stdout, err) = terrain(&[
+        "batch",
+        jobs.to_str().unwrap(),
+        "--out-dir",
+        sharded.to_str().unwrap(),
+        "--merge",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("11 items, 0 missing, 0 failed"), "{stdout}");
+    let (a, b) = (pngs(&whole), pngs(&sharded));
+    assert_eq!(a.len(), 11);
+    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+    for (name, bytes) in &a {
+        assert!(
+            bytes == &b[name],
+            "{name} differs between the sharded and the whole batch"
+        );
+    }
+    let merged = manifest(&sharded.join("manifest.jsonl"));
+    let indices: Vec<u64> = merged
+        .iter()
+        .map(|l| l["index"].as_u64().unwrap())
+        .collect();
+    assert_eq!(indices, (0..11).collect::<Vec<u64>>());
+    // Random cameras stand above the ground and see terrain.
+    for name in a.keys().filter(|n| n.starts_with("random-")) {
+        let (_, _, img) = read_png(&whole.join(name)).unwrap();
+        let sky = img
+            .chunks(4)
+            .filter(|p| p[2] > p[0] + 40 && p[2] > 150)
+            .count();
+        assert!(sky < img.len() / 4 * 9 / 10, "{name} shows almost only sky");
+    }
+}
+
+#[test]
+fn a_killed_batch_resumes_with_nothing_lost_or_listed_twice() {
+    let dir = scratch("batch-resume");
+    base_scene(&dir, 48);
+    let jobs = jobs_file(&dir, "[random]\ncount = 14\nseed = 9\n");
+    let out = dir.join("out");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_terrain"))
+        .args([
+            "batch",
+            jobs.to_str().unwrap(),
+            "--out-dir",
+            out.to_str().unwrap(),
+        ])
+        .env("TERRAIN_QUIET", "1")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    let lines = |p: &Path| {
+        std::fs::read_to_string(p)
+            .map(|t| t.lines().count())
+            .unwrap_or(0)
+    };
+    while lines(&out.join("manifest.jsonl")) < 3 {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "batch made no progress"
+        );
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "batch ended before it was killed"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let before = lines(&out.join("manifest.jsonl"));
+    assert!(
+        before < 14,
+        "the batch finished before it was killed ({before} lines)"
+    );
+
+    let (code, stdout, err) = terrain(&[
+        "batch",
+        jobs.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+        "--resume",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("already done"), "{stdout}");
+    let m = manifest(&out.join("manifest.jsonl"));
+    let mut names: Vec<&str> = m.iter().map(|l| l["name"].as_str().unwrap()).collect();
+    names.sort();
+    names.dedup();
+    assert_eq!(
+        (m.len(), names.len()),
+        (14, 14),
+        "lines {} names {}",
+        m.len(),
+        names.len()
+    );
+    assert!(m.iter().all(|l| l["status"] == "ok"));
+    let images = pngs(&out);
+    assert_eq!(images.len(), 14);
+    // Resumed images are the ones an uninterrupted run makes.
+    let fresh = dir.join("fresh");
+    let (code, _, err) = terrain(&[
+        "batch",
+        jobs.to_str().unwrap(),
+        "--out-dir",
+        fresh.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(images, pngs(&fresh));
+    // No temporary file is left behind.
+    let stray: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(stray.is_empty(), "{stray:?}");
+}
+
+#[test]
+fn bad_jobs_fail_alone_with_their_cause() {
+    let dir = scratch("batch-bad");
+    // A base scene over a sketch file, so a job can point it at one that is not there.
+    let heights: Vec<String> = (0..33 * 33)
+        .map(|k| format!("{}", 100 + (k % 33) * 3 + (k / 33) * 2))
+        .collect();
+    std::fs::write(
+        dir.join("small.asc"),
+        format!(
+            "ncols 33\nnrows 33\nxllcorner 0\nyllcorner 0\ncellsize 30\nNODATA_value -9999\n{}\n",
+            heights.join(" ")
+        ),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("base.toml"),
+        "[sketch]\npath = \"small.asc\"\n[camera]\nposition = [100.0, 50.0, 400.0]\nlook_at = [500.0, 900.0, 100.0]\nwidth = 32\nheight = 32\n[warp]\nmesh = 128\n",
+    )
+    .unwrap();
+    let jobs = jobs_file(
+        &dir,
+        "[random]\ncount = 2\nseed = 1\n\n\
+         [[job]]\nname = \"ok\"\n\n\
+         [[job]]\nname = \"missing-sketch\"\nsketch = { path = \"nowhere.asc\" }\n\n\
+         [[job]]\nname = \"underground\"\ncamera = { position = [500.0, 500.0, -50.0] }\n\n\
+         [[job]]\nname = \"malformed\"\ncamera = { position = \"up\" }\n\n\
+         [[job]]\nname = \"../escape\"\n\n\
+         [[job]]\nname = \"ok\"\n",
+    );
+    let out = dir.join("out");
+    let (code, _, err) = terrain(&[
+        "batch",
+        jobs.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("5 of 8 snapshots failed"), "{err}");
+    let m = manifest(&out.join("manifest.jsonl"));
+    let by_name = |n: &str| m.iter().filter(|l| l["name"] == n).collect::<Vec<_>>();
+    assert_eq!(by_name("ok")[0]["status"], "ok");
+    assert_eq!(by_name("random-0")[0]["status"], "ok");
+    assert_eq!(by_name("random-1")[0]["status"], "ok");
+    let cause = |n: &str, i: usize| by_name(n)[i]["error"].as_str().unwrap_or("").to_string();
+    assert!(
+        cause("missing-sketch", 0).contains("nowhere.asc: No such file"),
+        "{}",
+        cause("missing-sketch", 0)
+    );
+    assert!(
+        cause("underground", 0).contains("below the ground"),
+        "{}",
+        cause("underground", 0)
+    );
+    assert!(
+        cause("malformed", 0).contains("camera.position"),
+        "{}",
+        cause("malformed", 0)
+    );
+    assert!(
+        cause("../escape", 0).contains("name"),
+        "{}",
+        cause("../escape", 0)
+    );
+    assert!(cause("ok", 1).contains("earlier job"), "{}", cause("ok", 1));
+    assert!(!out.join("escape.png").exists() && !dir.join("escape.png").exists());
+
+    // A jobs file that is not TOML, an unknown key and a bad shard fail whole, in one line.
+    for (body, cause) in [
+        ("[[job]\n", "jobs.toml"),
+        ("colour = 3\n", "colour"),
+        ("", "--shard"),
+    ] {
+        let jobs = jobs_file(&dir, body);
+        let mut args = vec![
+            "batch",
+            jobs.to_str().unwrap(),
+            "--out-dir",
+            out.to_str().unwrap(),
+        ];
+        if body.is_empty() {
+            args.extend(["--shard", "4/4"]);
+        }
+        let (code, _, err) = terrain(&args);
+        assert_ne!(code, 0);
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(err.contains(cause), "{err}");
+    }
+}
