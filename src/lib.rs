@@ -18,6 +18,7 @@ pub mod detail;
 pub mod error;
 pub mod figures;
 pub mod fly;
+pub mod flycam;
 pub mod geomipmap;
 pub mod gpu;
 pub mod importance;
@@ -30,6 +31,8 @@ pub mod quality;
 pub mod render;
 pub mod scene;
 pub mod sketch_map;
+#[cfg(feature = "view")]
+pub mod view;
 pub mod warp;
 
 pub use error::{Error, Result};

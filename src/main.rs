@@ -148,6 +148,25 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// An interactive window flying through the terrain (mouse look, WASD/QE, 1/2/3 modes,
+    /// V views, F freeze, R record the path, P screenshot, Esc quit).
+    View {
+        scene: PathBuf,
+        #[arg(long, value_parser = ["warped", "geomipmap", "bruteforce"])]
+        mode: Option<String>,
+        /// Window size: N (square) or WxH.
+        #[arg(long, default_value = "800x450")]
+        size: String,
+        /// Quits after this many frames (with --screenshot: writes it first).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+        frames: Option<u64>,
+        /// Where screenshots are written (P, and on quitting after --frames).
+        #[arg(long)]
+        screenshot: Option<PathBuf>,
+        /// Overrides a scene key (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
 }
 
 fn main() {
@@ -286,6 +305,14 @@ fn main() {
             merge,
             json,
         } => batch(&jobs, &out_dir, shard.as_deref(), resume, merge, json),
+        Command::View {
+            scene,
+            mode,
+            size,
+            frames,
+            screenshot,
+            set,
+        } => view(&scene, &set, mode.as_deref(), &size, frames, screenshot),
     };
     if let Err(e) = result {
         eprintln!("error: {}", format!("{e:#}").replace('\n', " "));
@@ -492,6 +519,45 @@ fn fly(scene_path: &Path, set: &[String], out_dir: &Path, a: &FlyArgs, json: boo
         );
     }
     Ok(())
+}
+
+#[cfg(feature = "view")]
+fn view(
+    scene_path: &Path,
+    set: &[String],
+    mode: Option<&str>,
+    size: &str,
+    frames: Option<u64>,
+    screenshot: Option<PathBuf>,
+) -> Result<()> {
+    let scene = Scene::load_with(scene_path, set)?;
+    let mode = match mode {
+        Some(m) => parse_mode(m)?,
+        None if scene.render.mode == Mode::Reference => Mode::Warped,
+        None => scene.render.mode,
+    };
+    let opts = terrain::view::Options {
+        scene_path: scene_path.to_path_buf(),
+        mode,
+        size: parse_size(size)?,
+        frames,
+        screenshot,
+    };
+    Ok(terrain::view::run(scene, opts)?)
+}
+
+#[cfg(not(feature = "view"))]
+fn view(
+    _: &Path,
+    _: &[String],
+    _: Option<&str>,
+    _: &str,
+    _: Option<u64>,
+    _: Option<PathBuf>,
+) -> Result<()> {
+    anyhow::bail!(
+        "this terrain was built without the `view` feature (cargo build --release builds it)"
+    )
 }
 
 fn parse_shard(s: &str) -> Result<(usize, usize)> {

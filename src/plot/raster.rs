@@ -27,6 +27,13 @@ impl RasterCanvas {
         Some(RasterCanvas { pixmap, font })
     }
 
+    /// A canvas over opaque RGBA8 pixels (a rendered frame, to write on).
+    pub fn from_rgba(width: u32, height: u32, rgba: Vec<u8>) -> Option<RasterCanvas> {
+        let pixmap = Pixmap::from_vec(rgba, tiny_skia::IntSize::from_wh(width, height)?)?;
+        let font = FontRef::try_from_slice(DEJAVU_SANS).ok()?;
+        Some(RasterCanvas { pixmap, font })
+    }
+
     /// The advance width of `text` at `size` pixels.
     pub fn text_width(&self, text: &str, size: f32) -> f32 {
         let f = self.font.as_scaled(PxScale::from(size));

@@ -1,0 +1,519 @@
+//! `terrain view`: an interactive window flying through the terrain.
+//!
+//! Controls: drag with the left mouse button to look; W/A/S/D to move, Q/E down and up (Shift:
+//! ×4), at a speed scaled to the height above the ground; 1/2/3 warped, GeoMipMap, brute force;
+//! V cycles the views (shaded, wireframe, split octave, importance, normals, coverage); F freezes
+//! the level of detail (the warped mode's CPU stage, GeoMipMap's levels) to look at the mesh from
+//! outside; R starts and stops recording the path flown (written as `<scene>-flown.toml`, the
+//! scene with that `[path]`); P writes a screenshot; Esc quits. The figures on screen: mode, view,
+//! frame time per stage, triangles, height above the ground.
+//!
+//! Rules: the frame is rendered headless by the same renderers as every other command (one
+//! device, renderers rebuilt only when the mode, the view or the window's size changes), then
+//! presented through softbuffer with the figures drawn on it; a screenshot is exactly the pixels
+//! presented. `--frames N` quits after N frames, writing `--screenshot` first (how the test
+//! drives it under Xvfb).
+//!
+//! Rejected alternative: a wgpu surface and a blit pass. The renderers read their frame back for
+//! every other command already; a second presentation path needs a surface format per platform
+//! and a GL context on the X display, which llvmpipe under Xvfb provides unreliably. The cost of
+//! the CPU path is one readback per frame (a few ms at 1080p on a discrete GPU).
+
+use crate::atlas::Atlas;
+use crate::cpu_stage::{self, ground_under};
+use crate::error::{Error, Result};
+use crate::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder, scene_with_path};
+use crate::gpu::context::{GpuContext, Needs};
+use crate::gpu::uniforms::View;
+use crate::output::{write_atomic, write_png_rgba};
+use crate::plot::raster::RasterCanvas;
+use crate::plot::{Anchor, Canvas, Rgb};
+use crate::render::{Frame, SceneRenderer};
+use crate::scene::{Mode, Scene};
+use std::collections::HashSet;
+use std::num::NonZeroU32;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, MouseButton, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+pub struct Options {
+    pub scene_path: PathBuf,
+    pub mode: Mode,
+    pub size: (u32, u32),
+    /// Quit after this many frames.
+    pub frames: Option<u64>,
+    /// Where screenshots go (P, and on quitting after `frames`).
+    pub screenshot: Option<PathBuf>,
+}
+
+const VIEWS: [View; 6] = [
+    View::Shaded,
+    View::Wireframe,
+    View::SplitOctave,
+    View::Importance,
+    View::Normals,
+    View::Coverage,
+];
+
+type Surface = softbuffer::Surface<Arc<Window>, Arc<Window>>;
+
+struct App {
+    o: Options,
+    scene: Scene,
+    atlas: Atlas,
+    reach_m: f64,
+    /// The scene camera's far distance (default: the sketch's farthest corner), kept in flight.
+    far: f64,
+    ctx: GpuContext,
+    renderer: Option<SceneRenderer>,
+    mode: Mode,
+    view: View,
+    size: (u32, u32),
+    frozen: bool,
+    cam: FlyCamera,
+    held: HashSet<KeyCode>,
+    drag: Option<(f64, f64)>,
+    last: Instant,
+    frames: u64,
+    shots: u32,
+    presented: Vec<u8>,
+    recorder: Option<PathRecorder>,
+    window: Option<Arc<Window>>,
+    surface: Option<Surface>,
+    error: Option<Error>,
+    message: String,
+}
+
+fn mode_label(m: Mode) -> &'static str {
+    match m {
+        Mode::Warped => "warped",
+        Mode::Geomipmap => "GeoMipMap",
+        Mode::Bruteforce => "brute force",
+        Mode::Reference => "reference",
+    }
+}
+
+fn view_label(v: View) -> &'static str {
+    match v {
+        View::Shaded => "shaded",
+        View::Wireframe => "wireframe",
+        View::SplitOctave => "split octave",
+        View::Importance => "importance",
+        View::Normals => "normals",
+        View::Coverage => "coverage",
+    }
+}
+
+impl App {
+    /// The least height of the eye at its position: the ground plus everything the detail can
+    /// add plus the clearance.
+    fn floor(&self) -> Option<f64> {
+        ground_under(&self.atlas, self.cam.eye.truncate()).map(|g| g + self.reach_m + CLEARANCE_M)
+    }
+
+    fn motion(&self) -> Motion {
+        let axis = |plus: KeyCode, minus: KeyCode| {
+            (self.held.contains(&plus) as i32 - self.held.contains(&minus) as i32) as f64
+        };
+        Motion {
+            forward: axis(KeyCode::KeyW, KeyCode::KeyS),
+            right: axis(KeyCode::KeyD, KeyCode::KeyA),
+            up: axis(KeyCode::KeyE, KeyCode::KeyQ),
+            fast: self.held.contains(&KeyCode::ShiftLeft)
+                || self.held.contains(&KeyCode::ShiftRight),
+        }
+    }
+
+    fn renderer(&mut self) -> Result<&mut SceneRenderer> {
+        if self.renderer.is_none() {
+            let mut scene = self.scene.clone();
+            (scene.camera.width, scene.camera.height) = self.size;
+            // The importance view is drawn only by the warped mode.
+            let view = if self.mode != Mode::Warped && self.view == View::Importance {
+                View::Shaded
+            } else {
+                self.view
+            };
+            self.renderer = Some(SceneRenderer::with_context(
+                self.ctx.clone(),
+                &scene,
+                self.atlas.clone(),
+                self.mode,
+                view,
+                false,
+            )?);
+            self.frozen = false;
+        }
+        Ok(self.renderer.as_mut().expect("just built"))
+    }
+
+    fn frame(&mut self) -> Result<Vec<u8>> {
+        let now = Instant::now();
+        let dt = (now - self.last).as_secs_f64();
+        self.last = now;
+        let motion = self.motion();
+        let floor = self.floor();
+        self.cam.step(dt, &motion, floor);
+        if let Some(r) = &mut self.recorder {
+            r.record(&self.cam, dt);
+        }
+        let camera = self.cam.camera(
+            self.scene.camera.fov_y_deg,
+            self.size.0,
+            self.size.1,
+            self.far,
+        )?;
+        let frozen = self.frozen;
+        let r = self.renderer()?;
+        let frame = if frozen {
+            r.render_held(&camera)?
+        } else {
+            r.render(&camera)?
+        };
+        Ok(self.hud(&frame, dt))
+    }
+
+    /// The frame with the figures written on it.
+    fn hud(&self, frame: &Frame, dt: f64) -> Vec<u8> {
+        let (w, h) = (frame.width, frame.height);
+        let Some(mut c) = RasterCanvas::from_rgba(w, h, frame.rgba.clone()) else {
+            return frame.rgba.clone();
+        };
+        let g = &frame.gpu;
+        let p = &g.passes;
+        let ms = |v: Option<f64>| v.map_or("–".into(), |v| format!("{v:.1}"));
+        let ground = ground_under(&self.atlas, self.cam.eye.truncate());
+        let above = self.cam.eye.z - ground.unwrap_or(self.atlas.min_m as f64);
+        let mut flags = Vec::new();
+        if self.frozen {
+            flags.push("LOD frozen".to_string());
+        }
+        if let Some(r) = &self.recorder {
+            flags.push(format!("recording ({} keys)", r.keys.len()));
+        }
+        if !self.message.is_empty() {
+            flags.push(self.message.clone());
+        }
+        let lines = [
+            format!(
+                "{} · {} · {}×{} · {:.1} fps {}",
+                mode_label(self.mode),
+                view_label(self.view),
+                w,
+                h,
+                1.0 / dt.max(1e-6),
+                flags.join(" · ")
+            ),
+            format!(
+                "CPU {:.2} ms (sketch map {:.2}, importance {:.2}, warp {:.2}) · GPU {:.1} ms (warp & zoom {}, normals {}, terrain {})",
+                frame.cpu_us * 1e-3,
+                frame.cpu.sketch_map_us * 1e-3,
+                frame.cpu.importance_us * 1e-3,
+                frame.cpu.warp_us * 1e-3,
+                g.gpu_ms,
+                ms(p.warp_zoom_ms),
+                ms(p.normals_ms),
+                ms(p.terrain_ms)
+            ),
+            format!(
+                "{} triangles · {:.0} m above the ground · {:.0} m/s",
+                g.triangles,
+                above,
+                FlyCamera::speed(above, false)
+            ),
+        ];
+        let size = 12.0;
+        for (k, line) in lines.iter().enumerate() {
+            let y = 16.0 + k as f32 * 16.0;
+            c.text(7.0, y + 1.0, line, size, Anchor::Start, false, Rgb::BLACK);
+            c.text(6.0, y, line, size, Anchor::Start, false, Rgb::WHITE);
+        }
+        let help = "drag: look · WASD QE: move (Shift ×4) · 1 2 3: mode · V: view · F: freeze · R: record · P: screenshot · Esc";
+        c.text(
+            7.0,
+            h as f32 - 7.0,
+            help,
+            11.0,
+            Anchor::Start,
+            false,
+            Rgb::BLACK,
+        );
+        c.text(
+            6.0,
+            h as f32 - 8.0,
+            help,
+            11.0,
+            Anchor::Start,
+            false,
+            Rgb::WHITE,
+        );
+        c.pixmap.data().to_vec()
+    }
+
+    fn present(&mut self, rgba: &[u8]) -> Result<()> {
+        let (Some(surface), Some(w), Some(h)) = (
+            self.surface.as_mut(),
+            NonZeroU32::new(self.size.0),
+            NonZeroU32::new(self.size.1),
+        ) else {
+            return Ok(());
+        };
+        let gpu = |e: softbuffer::SoftBufferError| Error::Gpu(format!("window: {e}"));
+        surface.resize(w, h).map_err(gpu)?;
+        let mut buffer = surface.buffer_mut().map_err(gpu)?;
+        if buffer.len() * 4 != rgba.len() {
+            return Ok(()); // resized meanwhile: the next frame matches
+        }
+        for (dst, p) in buffer.iter_mut().zip(rgba.chunks_exact(4)) {
+            *dst = (p[0] as u32) << 16 | (p[1] as u32) << 8 | p[2] as u32;
+        }
+        buffer.present().map_err(gpu)
+    }
+
+    fn screenshot(&mut self) -> Result<PathBuf> {
+        let path = match &self.o.screenshot {
+            Some(p) if self.shots == 0 => p.clone(),
+            Some(p) => p.with_file_name(format!(
+                "{}-{}.png",
+                p.file_stem()
+                    .map(|s| s.to_string_lossy())
+                    .unwrap_or_default(),
+                self.shots
+            )),
+            None => PathBuf::from(format!("{}-view-{}.png", self.stem(), self.shots)),
+        };
+        self.shots += 1;
+        write_png_rgba(&path, self.size.0, self.size.1, &self.presented)?;
+        Ok(path)
+    }
+
+    fn stem(&self) -> String {
+        self.o
+            .scene_path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "scene".into())
+    }
+
+    fn toggle_recording(&mut self) -> Result<()> {
+        let Some(r) = self.recorder.take() else {
+            self.recorder = Some(PathRecorder::default());
+            self.message = "recording".into();
+            return Ok(());
+        };
+        let Some(path) = r.finish(&self.cam) else {
+            self.message = "nothing recorded: fly, then stop".into();
+            return Ok(());
+        };
+        let text = std::fs::read_to_string(&self.o.scene_path)
+            .map_err(|e| Error::io(&self.o.scene_path, e))?;
+        let out = scene_with_path(&text, &path).map_err(Error::Invalid)?;
+        let dir = self.o.scene_path.parent().unwrap_or(Path::new(""));
+        let file = dir.join(format!("{}-flown.toml", self.stem()));
+        write_atomic(&file, out.as_bytes())?;
+        self.message = format!("{} keys written to {}", path.keys.len(), file.display());
+        Ok(())
+    }
+
+    fn key(&mut self, code: KeyCode, el: &ActiveEventLoop) -> Result<()> {
+        let mode = |m| Some(m);
+        let new_mode = match code {
+            KeyCode::Digit1 => mode(Mode::Warped),
+            KeyCode::Digit2 => mode(Mode::Geomipmap),
+            KeyCode::Digit3 => mode(Mode::Bruteforce),
+            _ => None,
+        };
+        if let Some(m) = new_mode.filter(|m| *m != self.mode) {
+            self.mode = m;
+            self.renderer = None;
+        }
+        match code {
+            KeyCode::KeyV => {
+                let k = VIEWS.iter().position(|v| *v == self.view).unwrap_or(0);
+                self.view = VIEWS[(k + 1) % VIEWS.len()];
+                self.renderer = None;
+            }
+            KeyCode::KeyF => self.frozen = !self.frozen,
+            KeyCode::KeyR => self.toggle_recording()?,
+            KeyCode::KeyP => {
+                let p = self.screenshot()?;
+                self.message = format!("screenshot {}", p.display());
+            }
+            KeyCode::Escape => el.exit(),
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn fail(&mut self, el: &ActiveEventLoop, e: Error) {
+        self.error = Some(e);
+        el.exit();
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, el: &ActiveEventLoop) {
+        if self.window.is_some() {
+            return;
+        }
+        let attrs = Window::default_attributes()
+            .with_title(format!("terrain view: {}", self.o.scene_path.display()))
+            .with_inner_size(PhysicalSize::new(self.size.0, self.size.1));
+        let window = match el.create_window(attrs) {
+            Ok(w) => Arc::new(w),
+            Err(e) => return self.fail(el, Error::Gpu(format!("cannot open a window: {e}"))),
+        };
+        let surface = softbuffer::Context::new(window.clone())
+            .and_then(|c| softbuffer::Surface::new(&c, window.clone()));
+        match surface {
+            Ok(s) => self.surface = Some(s),
+            Err(e) => {
+                return self.fail(el, Error::Gpu(format!("cannot draw into the window: {e}")));
+            }
+        }
+        let size = window.inner_size();
+        if size.width > 0 && size.height > 0 {
+            self.size = (size.width, size.height);
+        }
+        self.window = Some(window);
+        self.last = Instant::now();
+    }
+
+    fn window_event(&mut self, el: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let result = match event {
+            WindowEvent::CloseRequested => {
+                el.exit();
+                Ok(())
+            }
+            WindowEvent::Resized(s) if s.width > 0 && s.height > 0 => {
+                if (s.width, s.height) != self.size {
+                    self.size = (s.width, s.height);
+                    self.renderer = None;
+                }
+                Ok(())
+            }
+            WindowEvent::KeyboardInput { event, .. } => match event.physical_key {
+                PhysicalKey::Code(code) if event.state == ElementState::Pressed => {
+                    self.held.insert(code);
+                    if event.repeat {
+                        Ok(())
+                    } else {
+                        self.key(code, el)
+                    }
+                }
+                PhysicalKey::Code(code) => {
+                    self.held.remove(&code);
+                    Ok(())
+                }
+                _ => Ok(()),
+            },
+            WindowEvent::MouseInput {
+                state,
+                button: MouseButton::Left,
+                ..
+            } => {
+                if state == ElementState::Released {
+                    self.drag = None;
+                } else {
+                    self.drag = Some((f64::NAN, f64::NAN));
+                }
+                Ok(())
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                if let Some((x, y)) = self.drag {
+                    if x.is_finite() {
+                        self.cam.look(position.x - x, position.y - y);
+                    }
+                    self.drag = Some((position.x, position.y));
+                }
+                Ok(())
+            }
+            WindowEvent::RedrawRequested => self.redraw(el),
+            _ => Ok(()),
+        };
+        if let Err(e) = result {
+            self.fail(el, e);
+        }
+    }
+
+    fn about_to_wait(&mut self, _: &ActiveEventLoop) {
+        if let Some(w) = &self.window {
+            w.request_redraw();
+        }
+    }
+}
+
+impl App {
+    fn redraw(&mut self, el: &ActiveEventLoop) -> Result<()> {
+        let rgba = self.frame()?;
+        self.present(&rgba)?;
+        self.presented = rgba;
+        self.frames += 1;
+        if self.o.frames.is_some_and(|n| self.frames >= n) {
+            if self.o.screenshot.is_some() {
+                self.screenshot()?;
+            }
+            el.exit();
+        }
+        Ok(())
+    }
+}
+
+/// Opens the window and flies until it is closed (or `frames` are drawn).
+pub fn run(scene: Scene, o: Options) -> Result<()> {
+    let atlas = cpu_stage::load_atlas(&scene)?;
+    let camera = cpu_stage::camera_of(&scene, &atlas)?;
+    let reach_m = cpu_stage::detail_of(&scene, &atlas).reach_m();
+    let ctx = GpuContext::new(&Needs {
+        storage_bytes: atlas.bytes(),
+    })?;
+    let event_loop = EventLoop::new().map_err(|e| {
+        Error::Gpu(format!(
+            "cannot reach a display ({e}); `terrain view` needs X11 or Wayland (headless: xvfb-run terrain view …)"
+        ))
+    })?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    let mut app = App {
+        size: o.size,
+        mode: o.mode,
+        o,
+        cam: FlyCamera::from_camera(&camera),
+        scene,
+        atlas,
+        reach_m,
+        far: camera.far,
+        ctx,
+        renderer: None,
+        view: View::Shaded,
+        frozen: false,
+        held: HashSet::new(),
+        drag: None,
+        last: Instant::now(),
+        frames: 0,
+        shots: 0,
+        presented: Vec::new(),
+        recorder: None,
+        window: None,
+        surface: None,
+        error: None,
+        message: String::new(),
+    };
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| Error::Gpu(format!("window event loop: {e}")))?;
+    if let Some(e) = app.error {
+        return Err(e);
+    }
+    if app.recorder.is_some() {
+        // Closed while recording: the path flown is kept, not lost.
+        app.toggle_recording()?;
+        eprintln!("{}", app.message);
+    }
+    Ok(())
+}
