@@ -157,6 +157,13 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
 
 @fragment
 fn terrain_fs(in: VsOut) -> FragOut {
+    // The sketch ends at its edge, as the reference's does: the warped region (a square on a
+    // quantised lattice) and the baked grid (the square enclosing the sketch) may reach past it.
+    let atlas_texel = (in.local.xy + frame.atlas_offset) * frame.atlas_inv_spacing;
+    let edge = vec2<f32>(frame.level[0].xy - 1u);
+    if (any(atlas_texel < vec2<f32>(-1e-3)) || any(atlas_texel > edge + 1e-3)) {
+        discard;
+    }
     let to_eye = frame.eye.xyz - in.local;
     let dist = max(length(to_eye), 1e-3);
     var n = normalize(in.normal);

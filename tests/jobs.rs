@@ -372,3 +372,23 @@ fn bad_jobs_fail_alone_with_their_cause() {
         assert!(err.contains(cause), "{err}");
     }
 }
+
+#[test]
+fn the_bundled_jobs_file_and_flight_load() {
+    let jobs =
+        terrain::batch::Jobs::load(&manifest_dir().join("sketches/random-snapshots.toml")).unwrap();
+    let items = jobs.items();
+    assert_eq!(items.len(), 202);
+    assert_eq!(
+        (items[0].name.as_str(), items[201].name.as_str()),
+        ("valley-north", "random-199")
+    );
+    let scene = terrain::scene::Scene::load(&manifest_dir().join("sketches/jacksboro-flight.toml"))
+        .unwrap();
+    let path = terrain::path::CameraPath::of_scene(&scene).unwrap();
+    assert!(
+        (9000.0..10000.0).contains(&path.length_m()),
+        "{}",
+        path.length_m()
+    );
+}
