@@ -4,23 +4,9 @@
 
 mod common;
 use common::*;
-use std::process::Command;
 use terrain::compare::report::CSV_COLUMNS;
 use terrain::compare::sweep::{Setting, default_sweep};
 use terrain::scene::Mode;
-
-fn terrain(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_terrain"))
-        .args(args)
-        .env("TERRAIN_QUIET", "1")
-        .output()
-        .expect("run terrain");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
 
 fn sketch(name: &str) -> String {
     manifest_dir()

@@ -9,19 +9,6 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn terrain(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_terrain"))
-        .args(args)
-        .env("TERRAIN_QUIET", "1")
-        .output()
-        .expect("run terrain");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
 /// A small, quick base scene over the synthetic hills.
 fn base_scene(dir: &Path, size: u32) -> PathBuf {
     let path = dir.join("base.toml");

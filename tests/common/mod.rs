@@ -146,3 +146,17 @@ pub fn read_png(path: &std::path::Path) -> Option<(u32, u32, Vec<u8>)> {
     (info.color_type == png::ColorType::Rgba)
         .then(|| (info.width, info.height, buf[..info.buffer_size()].to_vec()))
 }
+
+/// Runs the `terrain` binary (progress lines off); (exit code, stdout, stderr).
+pub fn terrain(args: &[&str]) -> (i32, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_terrain"))
+        .args(args)
+        .env("TERRAIN_QUIET", "1")
+        .output()
+        .expect("run terrain");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
