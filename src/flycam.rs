@@ -114,6 +114,8 @@ impl PathRecorder {
 
     pub fn record(&mut self, cam: &FlyCamera, dt: f64) {
         let moved = self.last.map_or(0.0, |l| (cam.eye - l).length());
+        // Time counts from the first recorded position, as distance does.
+        let dt = if self.last.is_some() { dt } else { 0.0 };
         self.distance_m += moved;
         self.since_key_m += moved;
         self.seconds += dt;

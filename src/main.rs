@@ -97,6 +97,9 @@ enum Command {
         /// Frames per second along the path.
         #[arg(long, default_value_t = 15.0)]
         path_fps: f64,
+        /// Only redraws error_vs_time and summary.md from --out-dir's report.json.
+        #[arg(long)]
+        replot: bool,
         /// Overrides a scene key (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
@@ -245,6 +248,13 @@ fn main() {
             json,
         ),
         Command::Compare {
+            out_dir,
+            replot: true,
+            ..
+        } => terrain::compare::replot(&out_dir)
+            .map(|n| println!("{n} rows redrawn in {}", out_dir.display()))
+            .map_err(Into::into),
+        Command::Compare {
             scene,
             out_dir,
             size,
@@ -254,6 +264,7 @@ fn main() {
             path_fps,
             set,
             json,
+            ..
         } => compare(
             &scene,
             &set,

@@ -128,6 +128,22 @@ fn compare_reports_every_setting_with_every_column_filled() {
             _ => assert!(change.parse::<f64>().unwrap() >= 0.0, "{r:?}"),
         }
     }
+    // --replot redraws the figure and the summary from report.json alone, the same summary.
+    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap();
+    std::fs::remove_file(dir.join("error_vs_time.svg")).unwrap();
+    let g = sketch("gaussian.toml");
+    let (code, stdout, err) = terrain(&["compare", &g, "--out-dir", &out, "--replot"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        stdout.contains(&format!("{} rows redrawn", settings.len())),
+        "{stdout}"
+    );
+    assert!(dir.join("error_vs_time.svg").is_file());
+    assert_eq!(
+        std::fs::read_to_string(dir.join("summary.md")).unwrap(),
+        summary
+    );
+
     // The warped mesh slides as the camera moves: swimming is measured, not zero.
     let warped_swims = rows
         .iter()

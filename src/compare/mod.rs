@@ -338,6 +338,26 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     })
 }
 
+/// Redraws `error_vs_time` and `summary.md` in `out_dir` from its `report.json` (after a change
+/// to the figures, without measuring again). Returns the rows' count.
+pub fn replot(out_dir: &Path) -> Result<usize> {
+    let path = out_dir.join("report.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+    let bad = |why: String| Error::Invalid(format!("{}: {why}", path.display()));
+    let report: Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+    let mut rows: Vec<Row> =
+        serde_json::from_value(report["rows"].clone()).map_err(|e| bad(format!("rows: {e}")))?;
+    report::mark_fronts(&mut rows);
+    let title = format!(
+        "{}: {1}×{1} px on {2}",
+        report["scene"].as_str().unwrap_or("scene"),
+        report["size"].as_u64().unwrap_or(0),
+        report["adapter"].as_str().unwrap_or("?")
+    );
+    write_outputs(out_dir, &rows, &report::summarise(&rows), &title)?;
+    Ok(rows.len())
+}
+
 fn write_outputs(
     out_dir: &Path,
     rows: &[Row],

@@ -7,7 +7,7 @@
 //! "error at equal frame time" is each mode's best error among its rows no slower than the
 //! common budget, the slowest of the modes' fastest rows (so every mode has a row within it).
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 
 /// PSNR written for identical images.
@@ -15,7 +15,7 @@ pub const PSNR_CAP_DB: f64 = 100.0;
 pub const TARGET_PSNR_DB: f64 = 30.0;
 pub const TARGET_SSE_PX: f64 = 1.0;
 
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Row {
     pub mode: String,
     pub setting: String,
@@ -36,7 +36,7 @@ pub struct Row {
     pub pareto_psnr: bool,
     pub pareto_sse: bool,
     /// Per-pass GPU times (JSON only; null where the adapter has no timestamp queries).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none", default)]
     pub passes_ms: Option<[Option<f64>; 3]>,
 }
 

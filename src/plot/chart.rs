@@ -40,7 +40,7 @@ impl Axis {
 pub enum Style {
     /// A line through the points with a filled marker on each.
     LineMarkers,
-    /// A dashed line with a ring on each point (a Pareto front).
+    /// A dashed staircase with a ring on each point (a Pareto front, in order of x).
     Front,
     Line,
     /// Bars from the axis's bottom, `width` in x units, centred on each point's x.
@@ -397,7 +397,8 @@ fn draw_panel(c: &mut dyn Canvas, p: &Panel, left: f32, width: f32, height: f32)
             Style::LineMarkers | Style::Front => {
                 let front = s.style == Style::Front;
                 if pts.len() > 1 {
-                    c.polyline(&pts, s.colour, if front { 1.5 } else { 2.0 }, front);
+                    let line = if front { staircase(&pts) } else { pts.clone() };
+                    c.polyline(&line, s.colour, if front { 1.5 } else { 2.0 }, front);
                 }
                 for &(x, y) in &pts {
                     c.marker(x, y, if front { 6.5 } else { 3.5 }, s.colour, !front);
@@ -405,6 +406,19 @@ fn draw_panel(c: &mut dyn Canvas, p: &Panel, left: f32, width: f32, height: f32)
             }
         }
     }
+}
+
+/// A front through points in order of x as a staircase: each point's value holds until the
+/// next point (what is attainable at a given cost), then steps.
+fn staircase(pts: &[(f32, f32)]) -> Vec<(f32, f32)> {
+    let mut out = Vec::with_capacity(2 * pts.len());
+    for (k, &p) in pts.iter().enumerate() {
+        if k > 0 {
+            out.push((p.0, pts[k - 1].1));
+        }
+        out.push(p);
+    }
+    out
 }
 
 #[cfg(test)]
@@ -430,6 +444,15 @@ mod tests {
         assert_eq!(l, ["0.00", "0.05", "0.10", "0.15", "0.20", "0.25", "0.30"]);
         assert_eq!(number(2.5), "2.5");
         assert_eq!(number(200.0), "200");
+    }
+
+    #[test]
+    fn a_front_steps_at_each_point() {
+        let s = staircase(&[(0.0, 5.0), (2.0, 3.0), (4.0, 1.0)]);
+        assert_eq!(
+            s,
+            vec![(0.0, 5.0), (2.0, 5.0), (2.0, 3.0), (4.0, 3.0), (4.0, 1.0)]
+        );
     }
 
     #[test]
