@@ -36,6 +36,9 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+/// The most random cameras one jobs file asks for.
+pub const MAX_RANDOM: usize = 10_000_000;
+
 /// Random cameras stand this far above the sketch's ground, plus the detail's reach (metres).
 pub const RANDOM_HEIGHT_M: (f64, f64) = (30.0, 3000.0);
 
@@ -106,6 +109,12 @@ impl Jobs {
                     }
                 };
                 let count = int(&mut r, "count", None)? as usize;
+                if count > MAX_RANDOM {
+                    return Err(bad(
+                        path,
+                        format!("random.count = {count}: at most {MAX_RANDOM}"),
+                    ));
+                }
                 let seed = int(&mut r, "seed", Some(0))? as u64;
                 if let Some(k) = r.keys().next() {
                     return Err(bad(path, format!("random.{k}: unknown key (count, seed)")));

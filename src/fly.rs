@@ -61,7 +61,10 @@ fn percentile(v: &[f64], q: f64) -> f64 {
     s[((s.len() as f64 * q) as usize).min(s.len() - 1)]
 }
 
-/// The times along `path` of the frames to render.
+/// The most frames one flight renders.
+pub const MAX_FRAMES: usize = 1_000_000;
+
+/// The times along `path` of the frames to render (one more than [`MAX_FRAMES`] at most).
 pub fn frame_times(path: &CameraPath, o: &Options) -> Vec<f64> {
     let duration = path.duration_s();
     match o.frames {
@@ -70,7 +73,7 @@ pub fn frame_times(path: &CameraPath, o: &Options) -> Vec<f64> {
             .collect(),
         Some(_) => vec![0.0],
         None => {
-            let n = (duration * o.fps).floor() as usize + 1;
+            let n = (duration * o.fps).floor().min(MAX_FRAMES as f64) as usize + 1;
             (0..n).map(|k| k as f64 / o.fps).collect()
         }
     }
@@ -82,6 +85,13 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
     let atlas = r.atlas().clone();
     let path = CameraPath::of_scene(scene)?;
     let times = frame_times(&path, o);
+    if times.len() > MAX_FRAMES {
+        return Err(Error::Invalid(format!(
+            "the path takes {:.0} s: more than {MAX_FRAMES} frames at {} fps; give --frames",
+            path.duration_s(),
+            o.fps
+        )));
+    }
     let cameras = times
         .iter()
         .map(|&t| path.camera(t, scene, &atlas))

@@ -341,6 +341,7 @@ fn bad_jobs_fail_alone_with_their_cause() {
     for (body, cause) in [
         ("[[job]\n", "jobs.toml"),
         ("colour = 3\n", "colour"),
+        ("[random]\ncount = 100000000000\n", "random.count"),
         ("", "--shard"),
     ] {
         let jobs = jobs_file(&dir, body);
@@ -378,4 +379,25 @@ fn the_bundled_jobs_file_and_flight_load() {
         "{}",
         path.length_m()
     );
+}
+
+#[test]
+fn a_path_too_long_to_fly_frame_by_frame_fails_in_one_line() {
+    let dir = scratch("fly-slow");
+    let scene = dir.join("slow.toml");
+    std::fs::write(
+        &scene,
+        "[sketch]\nsynthetic = \"hills\"\n[camera]\nposition = [500.0, 300.0, 900.0]\nlook_at = [3800.0, 4000.0, 200.0]\n[path]\nspeed_mps = 1e-9\nkeys = [{ position = [0.0, 0.0, 900.0] }, { position = [1000.0, 0.0, 900.0] }]\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let (code, _, err) = terrain(&[
+        "fly",
+        scene.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("give --frames"), "{err}");
 }
