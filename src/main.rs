@@ -73,6 +73,10 @@ enum Command {
         /// Frames rendered after one warm-up frame; medians are reported, the last is written.
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
         repeat: u32,
+        /// Also writes each pixel's world position (x, y, z metres, then 1 on ground, 0 on sky)
+        /// as a NumPy .npy of f64, shape (height, width, 4).
+        #[arg(long, value_name = "FILE.npy")]
+        positions: Option<PathBuf>,
         #[arg(long)]
         json: bool,
     },
@@ -234,6 +238,7 @@ fn main() {
             tau,
             set,
             repeat,
+            positions,
             json,
         } => render(
             &scene,
@@ -244,6 +249,7 @@ fn main() {
                 view,
                 tau,
                 repeat,
+                positions,
             },
             json,
         ),
@@ -713,7 +719,7 @@ fn render(
         scene.geomipmap.tau = tau;
     }
     let view = View::parse(&opts.view).context("unknown view")?;
-    let mut r = SceneRenderer::new(&scene, mode, view)?;
+    let mut r = SceneRenderer::with_positions(&scene, mode, view, opts.positions.is_some())?;
     let camera = cpu_stage::camera_of(&scene, r.atlas())?;
     r.render(&camera)?; // warm-up: shader compilation and first-use allocation
     let mut frames = Vec::with_capacity(opts.repeat as usize);
@@ -734,6 +740,26 @@ fn render(
     };
     let last = frames.last().context("no frame rendered")?;
     output::write_png_rgba(out, last.width, last.height, &last.rgba)?;
+    if let Some(p) = &opts.positions {
+        // World metres in f64: the passes' positions are f32 from the camera's ground point.
+        let origin = camera.eye.truncate();
+        let world: Vec<f64> = r
+            .read_positions(&camera)?
+            .iter()
+            .flat_map(|q| {
+                let ground = q[3] > 0.5;
+                let at = |v: f32, o: f64| if ground { v as f64 + o } else { 0.0 };
+                [
+                    at(q[0], origin.x),
+                    at(q[1], origin.y),
+                    at(q[2], 0.0),
+                    q[3] as f64,
+                ]
+            })
+            .collect();
+        let shape = [last.height as usize, last.width as usize, 4];
+        output::write_npy_f64(p, &shape, &world)?;
+    }
     let mode_name = format!("{mode:?}").to_lowercase();
     let mut report = json!({
         "adapter": r.ctx().adapter_name(),
@@ -786,6 +812,7 @@ struct RenderOpts {
     view: String,
     tau: Option<f64>,
     repeat: u32,
+    positions: Option<PathBuf>,
 }
 
 fn view_name(v: View) -> &'static str {

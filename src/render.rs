@@ -361,18 +361,30 @@ pub enum SceneRenderer {
 
 impl SceneRenderer {
     pub fn new(scene: &Scene, mode: Mode, view: View) -> Result<SceneRenderer> {
+        SceneRenderer::with_positions(scene, mode, view, false)
+    }
+
+    /// `positions`: also write each pixel's ground position (the reference always does).
+    pub fn with_positions(
+        scene: &Scene,
+        mode: Mode,
+        view: View,
+        positions: bool,
+    ) -> Result<SceneRenderer> {
+        let baseline = |kind| -> Result<SceneRenderer> {
+            Ok(SceneRenderer::Baseline(Box::new(
+                BaselineSceneRenderer::with_positions(scene, view, kind, positions)?,
+            )))
+        };
         Ok(match mode {
-            Mode::Warped => SceneRenderer::Warped(Box::new(WarpedRenderer::new(scene, view)?)),
-            Mode::Geomipmap => SceneRenderer::Baseline(Box::new(BaselineSceneRenderer::new(
+            Mode::Warped => SceneRenderer::Warped(Box::new(WarpedRenderer::with_atlas(
                 scene,
+                cpu_stage::load_atlas(scene)?,
                 view,
-                Baseline::GeoMipMap,
+                positions,
             )?)),
-            Mode::Bruteforce => SceneRenderer::Baseline(Box::new(BaselineSceneRenderer::new(
-                scene,
-                view,
-                Baseline::BruteForce,
-            )?)),
+            Mode::Geomipmap => baseline(Baseline::GeoMipMap)?,
+            Mode::Bruteforce => baseline(Baseline::BruteForce)?,
             Mode::Reference => SceneRenderer::Reference(Box::new(ReferenceRenderer::new(scene)?)),
         })
     }
