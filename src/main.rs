@@ -741,22 +741,7 @@ fn render(
     let last = frames.last().context("no frame rendered")?;
     output::write_png_rgba(out, last.width, last.height, &last.rgba)?;
     if let Some(p) = &opts.positions {
-        // World metres in f64: the passes' positions are f32 from the camera's ground point.
-        let origin = camera.eye.truncate();
-        let world: Vec<f64> = r
-            .read_positions(&camera)?
-            .iter()
-            .flat_map(|q| {
-                let ground = q[3] > 0.5;
-                let at = |v: f32, o: f64| if ground { v as f64 + o } else { 0.0 };
-                [
-                    at(q[0], origin.x),
-                    at(q[1], origin.y),
-                    at(q[2], 0.0),
-                    q[3] as f64,
-                ]
-            })
-            .collect();
+        let world = terrain::render::world_positions(&r.read_positions(&camera)?, &camera);
         let shape = [last.height as usize, last.width as usize, 4];
         output::write_npy_f64(p, &shape, &world)?;
     }

@@ -499,3 +499,22 @@ impl SceneRenderer {
         }
     }
 }
+
+/// Positions as the passes write them (f32, relative to `camera`'s ground point, w = 1 on ground)
+/// to world metres in f64, four values a pixel: x, y, z (0 on sky), then 1 on ground and 0 on sky.
+pub fn world_positions(relative: &[[f32; 4]], camera: &Camera) -> Vec<f64> {
+    let origin = camera.eye.truncate();
+    relative
+        .iter()
+        .flat_map(|q| {
+            let ground = q[3] > 0.5;
+            let at = |v: f32, o: f64| if ground { v as f64 + o } else { 0.0 };
+            [
+                at(q[0], origin.x),
+                at(q[1], origin.y),
+                at(q[2], 0.0),
+                q[3] as f64,
+            ]
+        })
+        .collect()
+}

@@ -111,6 +111,8 @@ fn compare_reports_every_setting_with_every_column_filled() {
         assert!(svg.contains(label), "error_vs_time.svg lacks {label:?}");
     }
     assert_eq!(png_size(&dir.join("strip.png")), (4 * 64, 2 * (64 + 36)));
+    let npy = std::fs::read(dir.join("reference_positions.npy")).unwrap();
+    assert!(npy.starts_with(b"\x93NUMPY") && npy.len() > 64 * 64 * 4 * 8);
 
     // The path: 3 frames × 3 modes; the first frame has no LOD change, brute force never has one.
     let path = std::fs::read_to_string(dir.join("path.csv")).unwrap();

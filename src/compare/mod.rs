@@ -12,7 +12,8 @@
 //!
 //! Outputs in the out dir, each written atomically: `report.csv`, `report.json`, `summary.md`,
 //! `error_vs_time.svg`/`.png`, `ratio_histogram.svg`/`.png`, `path.csv`, `path_error.svg`/`.png`,
-//! `strip.png`, `reference.png`.
+//! `strip.png`, `reference.png`, `reference_positions.npy` (world x, y, z and ground flag per
+//! pixel, f64).
 //!
 //! Rejected alternative: timing each setting with a separate renderer built without positions
 //! and measuring it with another. It would bake every baseline grid twice (over a second each on
@@ -275,6 +276,12 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     };
     write_outputs(out_dir, &rows, &summary, &title)?;
     write_png_rgba(&out_dir.join("reference.png"), o.size, o.size, &truth0.rgba)?;
+    let size = o.size as usize;
+    crate::output::write_npy_f64(
+        &out_dir.join("reference_positions.npy"),
+        &[size, size, 4],
+        &crate::render::world_positions(&truth0.positions, &camera),
+    )?;
     let strip_modes: Vec<(String, String, Vec<u8>)> = o
         .modes
         .iter()
