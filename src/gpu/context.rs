@@ -45,8 +45,7 @@ impl GpuContext {
         // machine, whose wall time both agree with. Its frames are timed by wall time instead.
         let lavapipe =
             info.backend == wgpu::Backend::Vulkan && info.device_type == wgpu::DeviceType::Cpu;
-        let timestamps =
-            adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY) && !lavapipe;
+        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY) && !lavapipe;
         let required_features = if timestamps {
             wgpu::Features::TIMESTAMP_QUERY
         } else {
