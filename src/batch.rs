@@ -434,7 +434,7 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
     write_png_rgba(&output, frame.width, frame.height, &frame.rgba)?;
     Ok(json!({
         "output": output.file_name().map(|n| n.to_string_lossy().into_owned()),
-        "mode": crate::compare::sweep::mode_name(scene.render.mode),
+        "mode": scene.render.mode.name(),
         "camera": {
             "position": camera.eye.to_array(),
             "look_at": (camera.eye + camera.forward * 100.0).to_array(),

@@ -452,13 +452,7 @@ fn warp(
 }
 
 fn parse_mode(m: &str) -> Result<Mode> {
-    Ok(match m {
-        "warped" => Mode::Warped,
-        "geomipmap" => Mode::Geomipmap,
-        "bruteforce" => Mode::Bruteforce,
-        "reference" => Mode::Reference,
-        m => anyhow::bail!("unknown mode {m}"),
-    })
+    Mode::parse(m).with_context(|| format!("unknown mode {m}"))
 }
 
 struct FlyArgs {
@@ -745,7 +739,7 @@ fn render(
         let shape = [last.height as usize, last.width as usize, 4];
         output::write_npy_f64(p, &shape, &world)?;
     }
-    let mode_name = format!("{mode:?}").to_lowercase();
+    let mode_name = mode.name();
     let mut report = json!({
         "adapter": r.ctx().adapter_name(),
         "mode": mode_name,

@@ -371,22 +371,16 @@ impl SceneRenderer {
         view: View,
         positions: bool,
     ) -> Result<SceneRenderer> {
-        let baseline = |kind| -> Result<SceneRenderer> {
-            Ok(SceneRenderer::Baseline(Box::new(
-                BaselineSceneRenderer::with_positions(scene, view, kind, positions)?,
-            )))
+        let atlas = cpu_stage::load_atlas(scene)?;
+        let mesh = if mode == Mode::Warped {
+            scene.warp.mesh as u64
+        } else {
+            0
         };
-        Ok(match mode {
-            Mode::Warped => SceneRenderer::Warped(Box::new(WarpedRenderer::with_atlas(
-                scene,
-                cpu_stage::load_atlas(scene)?,
-                view,
-                positions,
-            )?)),
-            Mode::Geomipmap => baseline(Baseline::GeoMipMap)?,
-            Mode::Bruteforce => baseline(Baseline::BruteForce)?,
-            Mode::Reference => SceneRenderer::Reference(Box::new(ReferenceRenderer::new(scene)?)),
-        })
+        let ctx = GpuContext::new(&Needs {
+            storage_bytes: atlas.bytes().max(mesh * mesh * 16),
+        })?;
+        SceneRenderer::with_context(ctx, scene, atlas, mode, view, positions)
     }
 
     /// On a device shared with other renderers; `positions`: also write each pixel's ground
@@ -399,32 +393,22 @@ impl SceneRenderer {
         view: View,
         positions: bool,
     ) -> Result<SceneRenderer> {
-        let baseline = |kind| -> Result<SceneRenderer> {
-            Ok(SceneRenderer::Baseline(Box::new(
-                BaselineSceneRenderer::with_context(
-                    ctx.clone(),
-                    scene,
-                    atlas.clone(),
-                    view,
-                    kind,
-                    positions,
-                )?,
-            )))
-        };
         Ok(match mode {
             Mode::Warped => SceneRenderer::Warped(Box::new(WarpedRenderer::with_context(
-                ctx.clone(),
-                scene,
-                atlas.clone(),
-                view,
-                positions,
+                ctx, scene, atlas, view, positions,
             )?)),
-            Mode::Geomipmap => baseline(Baseline::GeoMipMap)?,
-            Mode::Bruteforce => baseline(Baseline::BruteForce)?,
+            Mode::Geomipmap | Mode::Bruteforce => {
+                let kind = if mode == Mode::Geomipmap {
+                    Baseline::GeoMipMap
+                } else {
+                    Baseline::BruteForce
+                };
+                SceneRenderer::Baseline(Box::new(BaselineSceneRenderer::with_context(
+                    ctx, scene, atlas, view, kind, positions,
+                )?))
+            }
             Mode::Reference => SceneRenderer::Reference(Box::new(ReferenceRenderer::with_context(
-                ctx.clone(),
-                scene,
-                atlas.clone(),
+                ctx, scene, atlas,
             )?)),
         })
     }

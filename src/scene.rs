@@ -204,6 +204,29 @@ pub enum Mode {
     Reference,
 }
 
+impl Mode {
+    pub const ALL: [Mode; 4] = [
+        Mode::Warped,
+        Mode::Geomipmap,
+        Mode::Bruteforce,
+        Mode::Reference,
+    ];
+
+    /// The name in scene files, on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Warped => "warped",
+            Mode::Geomipmap => "geomipmap",
+            Mode::Bruteforce => "bruteforce",
+            Mode::Reference => "reference",
+        }
+    }
+
+    pub fn parse(name: &str) -> Option<Mode> {
+        Mode::ALL.into_iter().find(|m| m.name() == name)
+    }
+}
+
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RenderSection {

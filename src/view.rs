@@ -90,15 +90,6 @@ struct App {
     message: String,
 }
 
-fn mode_label(m: Mode) -> &'static str {
-    match m {
-        Mode::Warped => "warped",
-        Mode::Geomipmap => "GeoMipMap",
-        Mode::Bruteforce => "brute force",
-        Mode::Reference => "reference",
-    }
-}
-
 fn view_label(v: View) -> &'static str {
     match v {
         View::Shaded => "shaded",
@@ -203,7 +194,7 @@ impl App {
         let lines = [
             format!(
                 "{} · {} · {}×{} · {:.1} fps {}",
-                mode_label(self.mode),
+                crate::compare::figures::display(self.mode.name()),
                 view_label(self.view),
                 w,
                 h,

@@ -50,19 +50,7 @@ fn view_opens_draws_and_screenshots_itself_under_xvfb() {
     let (w, h, view) = read_png(&shot).expect("screenshot written");
     assert_eq!((w, h), (160, 120));
 
-    let rendered = dir.join("render.png");
-    let out = Command::new(env!("CARGO_BIN_EXE_terrain"))
-        .args(["render", scene.to_str().unwrap(), "-o"])
-        .arg(&rendered)
-        .args(["--set", "camera.width=160", "--set", "camera.height=120"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let (_, _, render) = read_png(&rendered).unwrap();
+    let render = rendered(&dir, "warped");
     // Between the figures at the top (three lines) and the key help at the bottom, the window
     // shows exactly the terrain `render` draws.
     let band = |img: &[u8], y0: usize, y1: usize| img[y0 * 160 * 4..y1 * 160 * 4].to_vec();

@@ -32,7 +32,7 @@ impl Setting {
 
     /// The mode's name in reports: `warped`, `geomipmap`, `bruteforce`.
     pub fn mode_name(&self) -> &'static str {
-        mode_name(self.mode())
+        self.mode().name()
     }
 
     pub fn label(&self) -> String {
@@ -76,15 +76,6 @@ impl Setting {
             },
             Mode::Reference => return None,
         })
-    }
-}
-
-pub fn mode_name(mode: Mode) -> &'static str {
-    match mode {
-        Mode::Warped => "warped",
-        Mode::Geomipmap => "geomipmap",
-        Mode::Bruteforce => "bruteforce",
-        Mode::Reference => "reference",
     }
 }
 
