@@ -10,7 +10,7 @@
 //! Rejected alternative: an animated GIF. Its 256-colour palette bands the sky's gradient and
 //! dithers the terrain's texture, which is the detail a flythrough is made to show.
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Role};
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
@@ -24,7 +24,7 @@ pub struct Apng {
 }
 
 fn io(path: &Path, e: impl std::fmt::Display) -> Error {
-    Error::io(path, std::io::Error::other(e.to_string()))
+    Error::io(Role::Output, path, std::io::Error::other(e.to_string()))
 }
 
 impl Apng {
@@ -32,7 +32,7 @@ impl Apng {
     pub fn create(path: &Path, width: u32, height: u32, frames: u32, fps: f64) -> Result<Apng> {
         let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
         let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-        let file = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
+        let file = File::create(&tmp).map_err(|e| Error::io(Role::Output, &tmp, e))?;
         let mut enc = png::Encoder::new(BufWriter::new(file), width, height);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
@@ -79,7 +79,7 @@ impl Apng {
             .take()
             .ok_or_else(|| io(&self.path, "finished"))?;
         w.finish().map_err(|e| io(&self.path, e))?;
-        std::fs::rename(&self.tmp, &self.path).map_err(|e| Error::io(&self.path, e))
+        std::fs::rename(&self.tmp, &self.path).map_err(|e| Error::io(Role::Output, &self.path, e))
     }
 }
 
@@ -93,6 +93,24 @@ impl Drop for Apng {
 }
 
 /// Whether `ffmpeg` runs.
+/// An APNG made from PNG frames already on disk (when ffmpeg failed on them).
+pub fn apng_from_frames(path: &Path, frames: &[PathBuf], w: u32, h: u32, fps: f64) -> Result<()> {
+    let mut apng = Apng::create(path, w, h, frames.len() as u32, fps)?;
+    for f in frames {
+        let file = File::open(f).map_err(|e| Error::io(Role::Output, f, e))?;
+        let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+            .read_info()
+            .map_err(|e| io(f, e))?;
+        let mut buf = vec![0; reader.output_buffer_size().unwrap_or(0)];
+        let info = reader.next_frame(&mut buf).map_err(|e| io(f, e))?;
+        if (info.width, info.height, info.color_type) != (w, h, png::ColorType::Rgba) {
+            return Err(Error::file(Role::Output, f, "not a frame of this flight"));
+        }
+        apng.add(&buf[..info.buffer_size()])?;
+    }
+    apng.finish()
+}
+
 pub fn ffmpeg_available() -> bool {
     Command::new("ffmpeg")
         .arg("-version")
@@ -118,14 +136,14 @@ pub fn mp4(dir: &Path, pattern: &str, fps: f64, out: &Path) -> Result<()> {
         ])
         .arg(&tmp)
         .output()
-        .map_err(|e| Error::io(out, e))?;
+        .map_err(|e| Error::io(Role::Output, out, e))?;
     if !result.status.success() {
         let _ = std::fs::remove_file(&tmp);
         let why = String::from_utf8_lossy(&result.stderr);
         let line = why.lines().last().unwrap_or("failed");
         return Err(io(out, format!("ffmpeg: {line}")));
     }
-    std::fs::rename(&tmp, out).map_err(|e| Error::io(out, e))
+    std::fs::rename(&tmp, out).map_err(|e| Error::io(Role::Output, out, e))
 }
 
 #[cfg(test)]

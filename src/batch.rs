@@ -22,14 +22,15 @@
 use crate::atlas::Atlas;
 use crate::camera::Camera;
 use crate::cpu_stage::{self, ground_under};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Role};
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::uniforms::View;
-use crate::output::{write_atomic, write_png_rgba};
+use crate::output::{write_atomic, write_image};
 use crate::progress::Progress;
 use crate::render::SceneRenderer;
 use crate::scene::Scene;
 use glam::{DVec2, DVec3};
+use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 use std::collections::HashSet;
 use std::io::Write;
@@ -73,75 +74,68 @@ pub enum ItemKind {
 }
 
 fn bad(path: &Path, reason: impl Into<String>) -> Error {
-    Error::Scene {
-        path: path.to_path_buf(),
-        reason: reason.into(),
-    }
+    Error::file(Role::JobsFile, path, reason)
+}
+
+/// The jobs file as written (docs/scene.md, "Jobs file"); unknown keys are refused by name.
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct JobsFile {
+    /// The base scene every job starts from, relative to the jobs file.
+    pub scene: PathBuf,
+    pub random: Option<RandomSection>,
+    /// Explicit jobs: `name`, and any scene keys, which override the base scene's.
+    #[serde(default)]
+    pub job: Vec<toml::Table>,
+}
+
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RandomSection {
+    /// How many random cameras.
+    pub count: u64,
+    /// The seed of the cameras (each a function of the seed and its index alone).
+    #[serde(default)]
+    pub seed: u64,
 }
 
 impl Jobs {
     pub fn load(path: &Path) -> Result<Jobs> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let mut table: toml::Table = text
-            .parse()
-            .map_err(|e: toml::de::Error| bad(path, e.message().to_string()))?;
-        let scene = match table.remove("scene") {
-            Some(toml::Value::String(s)) => s,
-            Some(_) => return Err(bad(path, "scene: expected a file name")),
-            None => {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(Role::JobsFile, path, e))?;
+        let de = toml::Deserializer::parse(&text).map_err(|e| bad(path, e.message()))?;
+        let file: JobsFile = serde_path_to_error::deserialize(de).map_err(|e| {
+            let key = e.path().to_string();
+            let message = e.into_inner().message().replace('\n', " ");
+            if key.is_empty() || key == "." || message.contains(&key) {
+                bad(path, message)
+            } else {
+                bad(path, format!("{key}: {message}"))
+            }
+        })?;
+        let random = match file.random {
+            Some(r) if r.count > MAX_RANDOM as u64 => {
                 return Err(bad(
                     path,
-                    "scene: missing (the base scene every job starts from)",
+                    format!("random.count = {}: at most {MAX_RANDOM}", r.count),
                 ));
             }
-        };
-        let random = match table.remove("random") {
+            Some(r) => Some(Random {
+                count: r.count as usize,
+                seed: r.seed,
+            }),
             None => None,
-            Some(toml::Value::Table(mut r)) => {
-                let int = |r: &mut toml::Table, key: &str, default: Option<i64>| -> Result<i64> {
-                    match (r.remove(key), default) {
-                        (Some(toml::Value::Integer(v)), _) if v >= 0 => Ok(v),
-                        (None, Some(d)) => Ok(d),
-                        _ => Err(bad(
-                            path,
-                            format!("random.{key}: expected a non-negative integer"),
-                        )),
-                    }
-                };
-                let count = int(&mut r, "count", None)? as usize;
-                if count > MAX_RANDOM {
-                    return Err(bad(
-                        path,
-                        format!("random.count = {count}: at most {MAX_RANDOM}"),
-                    ));
-                }
-                let seed = int(&mut r, "seed", Some(0))? as u64;
-                if let Some(k) = r.keys().next() {
-                    return Err(bad(path, format!("random.{k}: unknown key (count, seed)")));
-                }
-                Some(Random { count, seed })
-            }
-            Some(_) => return Err(bad(path, "random: expected a table")),
         };
-        let explicit = match table.remove("job") {
-            None => Vec::new(),
-            Some(toml::Value::Array(a)) => a,
-            Some(_) => return Err(bad(path, "job: expected [[job]] tables")),
-        };
-        if let Some(k) = table.keys().next() {
-            return Err(bad(path, format!("{k}: unknown key (scene, random, job)")));
-        }
         let base_dir = path.parent().unwrap_or(Path::new(""));
-        let scene_path = base_dir.join(scene);
-        let base_text =
-            std::fs::read_to_string(&scene_path).map_err(|e| Error::io(&scene_path, e))?;
+        let scene_path = base_dir.join(&file.scene);
+        let base_text = std::fs::read_to_string(&scene_path)
+            .map_err(|e| Error::io(Role::Scene, &scene_path, e))?;
         let base: toml::Table = base_text
             .parse()
-            .map_err(|e: toml::de::Error| bad(&scene_path, e.message().to_string()))?;
+            .map_err(|e: toml::de::Error| Error::scene(&scene_path, e.message()))?;
         Ok(Jobs {
             scene_path,
             base,
-            explicit,
+            explicit: file.job.into_iter().map(toml::Value::Table).collect(),
             random,
         })
     }
@@ -204,7 +198,7 @@ impl Jobs {
             .parent()
             .unwrap_or(Path::new(""))
             .to_path_buf();
-        Scene::parse(&text, dir).map_err(|reason| bad(&self.scene_path, reason))
+        Scene::parse(&text, dir).map_err(|reason| Error::scene(&self.scene_path, reason))
     }
 }
 
@@ -431,7 +425,7 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
     let r = cache.renderer(&scene)?;
     let frame = r.render(&camera)?;
     let output = out_dir.join(format!("{}.png", item.name));
-    write_png_rgba(&output, frame.width, frame.height, &frame.rgba)?;
+    write_image(&output, frame.width, frame.height, &frame.rgba)?;
     Ok(json!({
         "output": output.file_name().map(|n| n.to_string_lossy().into_owned()),
         "mode": scene.render.mode.name(),
@@ -451,7 +445,7 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
 
 pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
     let jobs = Jobs::load(jobs_path)?;
-    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
     let manifest = out_dir.join(manifest_name(o.shard));
     let done = if o.resume {
         resume_from(&manifest, out_dir)?
@@ -467,7 +461,7 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
     let mut file = std::fs::OpenOptions::new()
         .append(true)
         .open(&manifest)
-        .map_err(|e| Error::io(&manifest, e))?;
+        .map_err(|e| Error::io(Role::Manifest, &manifest, e))?;
     let mut names = HashSet::new();
     let mut cache = Cache {
         ctx: None,
@@ -515,7 +509,7 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
         }
         writeln!(file, "{line}")
             .and_then(|_| file.flush())
-            .map_err(|e| Error::io(&manifest, e))?;
+            .map_err(|e| Error::io(Role::Manifest, &manifest, e))?;
         progress.advance(1.0, &item.name);
     }
     progress.finish();
@@ -535,13 +529,15 @@ pub fn merge_manifests(jobs_path: &Path, out_dir: &Path) -> Result<(usize, Vec<S
     let jobs = Jobs::load(jobs_path)?;
     let items = jobs.items();
     let mut lines: Vec<Option<Value>> = vec![None; items.len()];
-    let entries = std::fs::read_dir(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    let entries =
+        std::fs::read_dir(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
     for entry in entries.flatten() {
         let name = entry.file_name().to_string_lossy().into_owned();
         if !(name.starts_with("manifest-") && name.ends_with(".jsonl")) {
             continue;
         }
-        let text = std::fs::read_to_string(entry.path()).map_err(|e| Error::io(entry.path(), e))?;
+        let text = std::fs::read_to_string(entry.path())
+            .map_err(|e| Error::io(Role::Manifest, entry.path(), e))?;
         for v in text
             .lines()
             .filter_map(|l| serde_json::from_str::<Value>(l).ok())

@@ -157,12 +157,22 @@ pub fn ground_under(atlas: &Atlas, p: DVec2) -> Option<f64> {
     Some(atlas.sample_texel(u, v, 0.0) as f64)
 }
 
-/// The scene's detail parameters over `atlas`.
+/// The scene's detail parameters over `atlas`; unset octaves and amplitude follow the sketch
+/// (`detail::default_octaves`, `detail::default_amplitude_m`; docs/scene.md states the rule).
 pub fn detail_of(scene: &Scene, atlas: &Atlas) -> Detail {
     let d = &scene.detail;
+    let d_atlas = atlas.d_atlas();
     Detail {
-        octaves: d.octaves,
-        amplitude_m: d.amplitude_m,
+        octaves: d.octaves.unwrap_or_else(|| {
+            crate::detail::default_octaves(
+                d_atlas,
+                crate::scene::FINEST_WAVELENGTH_M,
+                crate::scene::MAX_OCTAVES,
+            )
+        }),
+        amplitude_m: d.amplitude_m.unwrap_or_else(|| {
+            crate::detail::default_amplitude_m(atlas.finest_relief()[0], d.gain, d_atlas)
+        }),
         gain: d.gain,
         seed: d.seed,
         bias: d.bias,

@@ -22,6 +22,33 @@ pub const LATTICE_PER_CYCLE: f64 = 1.6;
 /// Gradient noise with unit gradients spans about ±1/√2; this scales it to about ±1.
 const VALUE_SCALE: f32 = std::f32::consts::SQRT_2;
 
+/// RMS of one octave's noise n_k over the plane (measured: see `noise_rms_is_measured`).
+pub const NOISE_RMS: f64 = 0.31;
+
+/// The default octave count for a sketch of cell size `d_atlas`: every octave whose wavelength
+/// `d_atlas / 2^(k−1)` is at least `finest_m` (at least one, at most `max`).
+pub fn default_octaves(d_atlas: f64, finest_m: f64, max: u32) -> u32 {
+    let k = (d_atlas / finest_m).log2().floor() + 1.0;
+    if k.is_finite() {
+        k.clamp(1.0, max as f64) as u32
+    } else {
+        1
+    }
+}
+
+/// The default amplitude of octave 1, metres: the sketch's finest relief (`finest_relief()[0]`,
+/// RMS of wavelengths 2–4 cells) carried on by one `gain` step and turned from an RMS into the
+/// noise's amplitude, so the detail continues the sketch's own spectrum instead of replacing it.
+/// At least 1 % of a cell, so a flat sketch still has a surface.
+pub fn default_amplitude_m(finest_relief_m: f64, gain: f64, d_atlas: f64) -> f64 {
+    let a = gain * finest_relief_m / NOISE_RMS;
+    if a.is_finite() {
+        a.max(0.01 * d_atlas)
+    } else {
+        0.01 * d_atlas
+    }
+}
+
 /// Scene parameters of the detail, plus the atlas spacing that fixes octave 1.
 #[derive(Clone, Debug)]
 pub struct Detail {
@@ -286,5 +313,35 @@ mod tests {
         assert_eq!(octave_share(4, 3.5, 5.0), 1.0);
         assert_eq!(d.last_octave(3.2), 4);
         assert_eq!(d.last_octave(-1.0), 0);
+    }
+
+    #[test]
+    fn noise_rms_is_measured() {
+        let d = detail();
+        let n = 200;
+        let mut sum = 0.0f64;
+        for j in 0..n {
+            for i in 0..n {
+                let p = DVec2::new(i as f64 * 7.31, j as f64 * 5.77);
+                sum += (d.octave_world(3, p).0 as f64).powi(2);
+            }
+        }
+        let rms = (sum / (n * n) as f64).sqrt();
+        assert!((rms / NOISE_RMS - 1.0).abs() < 0.05, "measured {rms:.3}");
+    }
+
+    #[test]
+    fn defaults_follow_the_cell_size_and_relief() {
+        // 74 m cells: octaves down to wavelengths of a decimetre (74/2^9 = 0.15 m).
+        assert_eq!(default_octaves(74.4, 0.1, 24), 10);
+        assert_eq!(default_octaves(1.0, 0.1, 24), 4);
+        assert_eq!(default_octaves(1e9, 0.1, 24), 24);
+        assert_eq!(default_octaves(0.01, 0.1, 24), 1);
+        // More relief in the sketch, more amplitude in the detail; never zero, never NaN.
+        let rough = default_amplitude_m(20.0, 0.5, 30.0);
+        let smooth = default_amplitude_m(2.0, 0.5, 30.0);
+        assert!((rough / smooth - 10.0).abs() < 1e-9);
+        assert_eq!(default_amplitude_m(0.0, 0.5, 30.0), 0.3);
+        assert_eq!(default_amplitude_m(f64::NAN, 0.5, 30.0), 0.3);
     }
 }

@@ -1,28 +1,74 @@
-//! The library's error type: one variant per kind of cause, each printing as one line that names it.
+//! The library's error type: one variant per kind of cause, each printing as one line that names
+//! the cause and, for a file, the role the file plays (scene, sketch, jobs file, output, …), so
+//! "No such file or directory" always says which file the user got wrong.
 //!
 //! The binary prints `Display` and exits non-zero; nothing a user gives the program may panic instead.
 
+use std::fmt;
 use std::path::PathBuf;
+
+/// What a file is to the command that reads or writes it; the first words of its messages.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    Scene,
+    Sketch,
+    /// `importance.max_map`: a sketch-format map of I_s.
+    ImportanceMap,
+    JobsFile,
+    /// A file the command writes (image, figure, report, animation).
+    Output,
+    /// The folder a command writes into.
+    OutputFolder,
+    /// `batch`'s manifest, read by `--resume` and `--merge` and appended to.
+    Manifest,
+    /// `compare --replot`'s report.json.
+    Report,
+}
+
+impl fmt::Display for Role {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Role::Scene => "scene",
+            Role::Sketch => "sketch",
+            Role::ImportanceMap => "importance map",
+            Role::JobsFile => "jobs file",
+            Role::Output => "output",
+            Role::OutputFolder => "output folder",
+            Role::Manifest => "manifest",
+            Role::Report => "report",
+        })
+    }
+}
 
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    #[error("{path}: {source}")]
+    /// The operating system refused a file: missing, unreadable, a full disk.
+    #[error("{role} {path}: {source}")]
     Io {
+        role: Role,
         path: PathBuf,
         source: std::io::Error,
     },
-    /// A sketch (height map) file that is truncated, corrupt or inconsistent.
-    #[error("{path}: {reason}")]
-    Sketch { path: PathBuf, reason: String },
-    /// A scene or jobs file: a TOML syntax error, an unknown key, a value out of range.
-    #[error("scene {path}: {reason}")]
-    Scene { path: PathBuf, reason: String },
+    /// A file that is truncated, corrupt, inconsistent or, for a scene or jobs file, has a bad
+    /// key; `reason` names the key.
+    #[error("{role} {path}: {reason}")]
+    File {
+        role: Role,
+        path: PathBuf,
+        reason: String,
+    },
+    /// A `--set key=value` override that is not a key, or whose value is out of range.
+    #[error("--set {arg}: {reason}")]
+    Override { arg: String, reason: String },
     /// A camera that cannot be built (NaN, eye at its own target, zero-size image).
     #[error("camera: {0}")]
     Camera(String),
     /// No adapter, a limit the adapter lacks, a lost device.
     #[error("GPU: {0}")]
     Gpu(String),
+    /// No window can be opened (no display, a window system error).
+    #[error("window: {0}")]
+    Window(String),
     /// A value that cannot be used (synthetic name, empty grid).
     #[error("{0}")]
     Invalid(String),
@@ -31,16 +77,59 @@ pub enum Error {
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
-    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+    pub fn io(role: Role, path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {
+            role,
             path: path.into(),
             source,
         }
     }
-    pub fn sketch(path: impl Into<PathBuf>, reason: impl Into<String>) -> Self {
-        Error::Sketch {
+    pub fn file(role: Role, path: impl Into<PathBuf>, reason: impl Into<String>) -> Self {
+        Error::File {
+            role,
             path: path.into(),
             reason: reason.into(),
         }
+    }
+    pub fn sketch(path: impl Into<PathBuf>, reason: impl Into<String>) -> Self {
+        Error::file(Role::Sketch, path, reason)
+    }
+    pub fn scene(path: impl Into<PathBuf>, reason: impl Into<String>) -> Self {
+        Error::file(Role::Scene, path, reason)
+    }
+
+    /// The same error with its file in another role (a sketch reader's error about the file that
+    /// is, to this command, the importance map).
+    pub fn in_role(self, new: Role) -> Self {
+        match self {
+            Error::Io { path, source, .. } => Error::Io {
+                role: new,
+                path,
+                source,
+            },
+            Error::File { path, reason, .. } => Error::File {
+                role: new,
+                path,
+                reason,
+            },
+            e => e,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_file_error_names_its_role_and_cause_once() {
+        let e = Error::io(
+            Role::Output,
+            "out/x.png",
+            std::io::Error::from(std::io::ErrorKind::NotFound),
+        );
+        assert_eq!(e.to_string(), "output out/x.png: entity not found");
+        let e = Error::sketch("a.asc", "truncated").in_role(Role::ImportanceMap);
+        assert_eq!(e.to_string(), "importance map a.asc: truncated");
     }
 }

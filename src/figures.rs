@@ -8,7 +8,7 @@
 use crate::atlas::Atlas;
 use crate::cpu_stage::CpuStage;
 use crate::error::Result;
-use crate::output::write_png_rgba;
+use crate::output::write_image;
 use glam::DVec2;
 use std::path::Path;
 use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Stroke, Transform};
@@ -28,7 +28,7 @@ pub fn write_all(dir: &Path, atlas: &Atlas, stage: &CpuStage, ratios: &[f32]) ->
 }
 
 fn save(path: &Path, p: &Pixmap) -> Result<()> {
-    write_png_rgba(path, p.width(), p.height(), p.data())
+    write_image(path, p.width(), p.height(), p.data())
 }
 
 /// World metres to pixels over the region.
@@ -66,7 +66,7 @@ fn write_importance(path: &Path, stage: &CpuStage) -> Result<()> {
             rgba[(py * side + px) * 4..][..3].copy_from_slice(&c);
         }
     }
-    write_png_rgba(path, side as u32, side as u32, &rgba)
+    write_image(path, side as u32, side as u32, &rgba)
 }
 
 /// Height-tinted hillshade of the atlas over the region (light from the north-west).

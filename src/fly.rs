@@ -1,15 +1,20 @@
-//! `terrain fly`: the scene's camera path rendered to numbered PNG frames, an animation
-//! (APNG, and MP4 through ffmpeg when it is installed) and `frames.csv` with each frame's timings.
+//! `terrain fly`: the scene's camera path rendered to numbered PNG frames, an animation (MP4
+//! through ffmpeg when it is installed, else APNG) and `frames.csv` with each frame's timings.
 //!
 //! Rules: one device and one set of pipelines for the whole path; one warm-up frame (shader
 //! compilation, first-use allocation) before the first timed one. Frames are `1/fps` seconds
 //! apart along the path at its constant speed, or `frames` of them spread evenly from its start to
-//! its end. Every file is written atomically; the animation is streamed as frames come.
+//! its end. Without `frames`, a path longer than [`DEFAULT_MAX_FRAMES`] at `fps` is spread over
+//! that many frames instead (and the command says so): the bundled flight at 30 fps would be
+//! 1149 frames and 651 MB, more than anyone asking for "a flythrough" expects. What will be
+//! written is said before the first frame. Every file is written atomically; an APNG is streamed
+//! as frames come. MP4 is preferred because the APNG of a long flight (363 MB for the bundled
+//! one) is more than browsers play smoothly; where ffmpeg fails, the APNG is made from the frames.
 
 use crate::animation::{self, Apng};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Role};
 use crate::gpu::uniforms::View;
-use crate::output::{write_atomic, write_png_rgba};
+use crate::output::{write_atomic, write_image};
 use crate::path::CameraPath;
 use crate::progress::Progress;
 use crate::render::SceneRenderer;
@@ -23,7 +28,7 @@ pub struct Options {
     /// Frames spread over the whole path; `None`: `fps` frames a second of travel.
     pub frames: Option<usize>,
     pub fps: f64,
-    /// Also encode `animation.mp4` when ffmpeg is on the PATH.
+    /// Encode `animation.mp4` (instead of the APNG) when ffmpeg is on the PATH.
     pub mp4: bool,
 }
 
@@ -48,10 +53,13 @@ pub struct Outcome {
     pub frame_ms_p95: f64,
     /// p95 / median of the frame time: how even the flight is.
     pub spread: f64,
+    /// The animation written: `animation.mp4`, or `animation.png` (APNG).
     pub animation: PathBuf,
     pub mp4: Option<PathBuf>,
-    /// Why there is no MP4, when there is none.
+    /// Why there is no MP4, when there is none and one was wanted.
     pub mp4_note: Option<String>,
+    /// Why the frame count differs from `fps` frames a second of travel, when it does.
+    pub frames_note: Option<String>,
     pub elapsed_s: f64,
 }
 
@@ -63,43 +71,76 @@ fn percentile(v: &[f64], q: f64) -> f64 {
 
 /// The most frames one flight renders.
 pub const MAX_FRAMES: usize = 1_000_000;
+/// The most frames a flight renders unless `--frames` asks for more: 10 s at 30 fps.
+pub const DEFAULT_MAX_FRAMES: usize = 300;
 
-/// The times along `path` of the frames to render (one more than [`MAX_FRAMES`] at most).
-pub fn frame_times(path: &CameraPath, o: &Options) -> Vec<f64> {
+/// `n` frame times spread evenly from the start of a path of `duration` seconds to its end.
+fn spread(duration: f64, n: usize) -> Vec<f64> {
+    if n <= 1 {
+        return vec![0.0];
+    }
+    (0..n)
+        .map(|k| duration * k as f64 / (n - 1) as f64)
+        .collect()
+}
+
+/// The times along `path` of the frames to render, and why they are not `fps` frames a second
+/// of travel when they are not.
+pub fn frame_times(path: &CameraPath, o: &Options) -> (Vec<f64>, Option<String>) {
     let duration = path.duration_s();
     match o.frames {
-        Some(n) if n > 1 => (0..n)
-            .map(|k| duration * k as f64 / (n - 1) as f64)
-            .collect(),
-        Some(_) => vec![0.0],
+        Some(n) => (spread(duration, n.min(MAX_FRAMES)), None),
         None => {
-            let n = (duration * o.fps).floor().min(MAX_FRAMES as f64) as usize + 1;
-            (0..n).map(|k| k as f64 / o.fps).collect()
+            let real_time = (duration * o.fps).floor();
+            if real_time < DEFAULT_MAX_FRAMES as f64 {
+                let n = real_time as usize + 1;
+                ((0..n).map(|k| k as f64 / o.fps).collect(), None)
+            } else {
+                let note = format!(
+                    "the path takes {duration:.0} s: {DEFAULT_MAX_FRAMES} frames spread over it \
+                     (at {} fps it would be {:.0}; --frames N chooses)",
+                    o.fps,
+                    real_time + 1.0
+                );
+                (spread(duration, DEFAULT_MAX_FRAMES), Some(note))
+            }
         }
     }
 }
 
 pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
-    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
     let mut r = SceneRenderer::new(scene, o.mode, o.view)?;
     let atlas = r.atlas().clone();
     let path = CameraPath::of_scene(scene)?;
-    let times = frame_times(&path, o);
-    if times.len() > MAX_FRAMES {
-        return Err(Error::Invalid(format!(
-            "the path takes {:.0} s: more than {MAX_FRAMES} frames at {} fps; give --frames",
-            path.duration_s(),
-            o.fps
-        )));
-    }
+    let (times, frames_note) = frame_times(&path, o);
     let cameras = times
         .iter()
         .map(|&t| path.camera(t, scene, &atlas))
         .collect::<Result<Vec<_>>>()?;
     let (w, h) = (scene.camera.width, scene.camera.height);
+    let mp4 = o.mp4 && animation::ffmpeg_available();
+    let apng_path = out_dir.join("animation.png");
+    let mp4_path = out_dir.join("animation.mp4");
+    if let Some(note) = &frames_note {
+        eprintln!("fly: {note}");
+    }
+    eprintln!(
+        "fly: writing {} frames of {w}×{h} (frame-00000.png …), {} and frames.csv to {}",
+        cameras.len(),
+        if mp4 {
+            "animation.mp4"
+        } else {
+            "animation.png (APNG)"
+        },
+        out_dir.display()
+    );
     let mut progress = Progress::new("fly", cameras.len() as f64);
-    let anim_path = out_dir.join("animation.png");
-    let mut apng = Apng::create(&anim_path, w, h, cameras.len() as u32, o.fps)?;
+    let mut apng = if mp4 {
+        None
+    } else {
+        Some(Apng::create(&apng_path, w, h, cameras.len() as u32, o.fps)?)
+    };
     r.render(&cameras[0])?; // warm-up
     let mut records = Vec::with_capacity(cameras.len());
     let mut csv = String::from(
@@ -108,8 +149,10 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
     for (k, (camera, &t)) in cameras.iter().zip(&times).enumerate() {
         let frame = r.render(camera)?;
         let file = format!("frame-{k:05}.png");
-        write_png_rgba(&out_dir.join(&file), w, h, &frame.rgba)?;
-        apng.add(&frame.rgba)?;
+        write_image(&out_dir.join(&file), w, h, &frame.rgba)?;
+        if let Some(a) = &mut apng {
+            a.add(&frame.rgba)?;
+        }
         let p = &frame.gpu.passes;
         let record = FrameRecord {
             frame: k,
@@ -143,21 +186,28 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
         progress.advance(1.0, &format!("frame {}/{}", k + 1, cameras.len()));
     }
     progress.finish();
-    apng.finish()?;
     write_atomic(&out_dir.join("frames.csv"), csv.as_bytes())?;
-    let (mp4, mp4_note) = if !o.mp4 {
-        (None, Some("--no-mp4".to_string()))
-    } else if !animation::ffmpeg_available() {
-        (
-            None,
-            Some("ffmpeg not found on the PATH: no animation.mp4 (animation.png is an APNG that browsers play)".into()),
-        )
-    } else {
-        let out = out_dir.join("animation.mp4");
-        match animation::mp4(out_dir, "frame-%05d.png", o.fps, &out) {
-            Ok(()) => (Some(out), None),
-            Err(e) => (None, Some(e.to_string())),
+    let (mp4, mp4_note) = match apng {
+        Some(a) => {
+            a.finish()?;
+            let note = o.mp4.then(|| {
+                "ffmpeg not found on the PATH: animation.png is an APNG (browsers play it); \
+                 install ffmpeg for a smaller animation.mp4"
+                    .to_string()
+            });
+            (None, note)
         }
+        None => match animation::mp4(out_dir, "frame-%05d.png", o.fps, &mp4_path) {
+            Ok(()) => (Some(mp4_path), None),
+            Err(e) => {
+                let files: Vec<PathBuf> = records.iter().map(|r| out_dir.join(&r.file)).collect();
+                animation::apng_from_frames(&apng_path, &files, w, h, o.fps)?;
+                (
+                    None,
+                    Some(format!("{e}; wrote animation.png (APNG) instead")),
+                )
+            }
+        },
     };
     let ms: Vec<f64> = records.iter().map(|r| r.frame_ms).collect();
     let (median, p95) = (percentile(&ms, 0.5), percentile(&ms, 0.95));
@@ -167,9 +217,10 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
         frame_ms_median: median,
         frame_ms_p95: p95,
         spread: p95 / median.max(f64::MIN_POSITIVE),
-        animation: anim_path,
+        animation: mp4.clone().unwrap_or(apng_path),
         mp4,
         mp4_note,
+        frames_note,
         elapsed_s: progress.elapsed().as_secs_f64(),
     })
 }

@@ -7,7 +7,9 @@ use serde_json::json;
 use std::path::{Path, PathBuf};
 use terrain::atlas::{Atlas, LoadOptions};
 use terrain::cpu_stage::{self, CpuStage, StageTimes};
+use terrain::error::{Error, Role};
 use terrain::gpu::uniforms::View;
+use terrain::progress::Spinner;
 use terrain::render::SceneRenderer;
 use terrain::scene::{Mode, Scene, WarpMethod};
 use terrain::{figures, output, quality};
@@ -57,15 +59,19 @@ enum Command {
     /// Renders a snapshot of the scene from its camera (headless, on whatever adapter there is).
     Render {
         scene: PathBuf,
+        /// The image: .png or .jpg (its folder is created).
         #[arg(short = 'o', long = "output")]
         output: PathBuf,
+        /// Image size: N (square) or WxH; default the scene's camera.width × camera.height.
+        #[arg(long, value_name = "N|WxH", value_parser = size_arg)]
+        size: Option<(u32, u32)>,
         /// Overrides the scene's render.mode.
         #[arg(long, value_parser = ["warped", "geomipmap", "bruteforce", "reference"])]
         mode: Option<String>,
         #[arg(long, default_value = "shaded", value_parser = ["shaded", "wireframe", "split-octave", "importance", "normals", "coverage"])]
         view: String,
         /// GeoMipMap's τ: the largest projected vertex error, pixels (overrides geomipmap.tau).
-        #[arg(long, allow_negative_numbers = true)]
+        #[arg(long, allow_negative_numbers = true, value_parser = positive_arg)]
         tau: Option<f64>,
         /// Overrides a scene key, e.g. `--set detail.octaves=0` (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -86,9 +92,9 @@ enum Command {
         scene: PathBuf,
         #[arg(long)]
         out_dir: PathBuf,
-        /// Image width and height, pixels.
-        #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=4096))]
-        size: u32,
+        /// Image size: N (square) or WxH.
+        #[arg(long, value_name = "N|WxH", default_value = "256", value_parser = size_arg)]
+        size: (u32, u32),
         /// Modes to compare, comma-separated.
         #[arg(long, value_delimiter = ',', default_value = "warped,geomipmap,bruteforce", value_parser = ["warped", "geomipmap", "bruteforce"])]
         modes: Vec<String>,
@@ -99,7 +105,7 @@ enum Command {
         #[arg(long, default_value_t = 24, value_parser = clap::value_parser!(u32).range(0..=100000))]
         path_frames: u32,
         /// Frames per second along the path.
-        #[arg(long, default_value_t = 15.0)]
+        #[arg(long, default_value_t = 15.0, value_parser = fps_arg)]
         path_fps: f64,
         /// Only redraws error_vs_time and summary.md from --out-dir's report.json.
         #[arg(long)]
@@ -111,7 +117,7 @@ enum Command {
         json: bool,
     },
     /// Renders the scene's camera path (its [path], else straight ahead) to numbered PNG
-    /// frames, an animation (APNG; MP4 when ffmpeg is installed) and frames.csv in --out-dir.
+    /// frames, an animation (MP4 when ffmpeg is installed, else APNG) and frames.csv in --out-dir.
     Fly {
         scene: PathBuf,
         #[arg(long)]
@@ -120,16 +126,17 @@ enum Command {
         mode: Option<String>,
         #[arg(long, default_value = "shaded", value_parser = ["shaded", "wireframe", "split-octave", "importance", "normals", "coverage"])]
         view: String,
-        /// Frames spread evenly over the whole path (default: --fps frames per second of travel).
+        /// Frames spread evenly over the whole path (default: --fps frames per second of travel,
+        /// at most 300; a longer path is spread over 300 frames).
         #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
         frames: Option<u32>,
         /// Frames per second of the animation (and of travel without --frames).
-        #[arg(long, default_value_t = 30.0)]
+        #[arg(long, default_value_t = 30.0, value_parser = fps_arg)]
         fps: f64,
         /// Image size: N (square) or WxH; default the scene's.
-        #[arg(long)]
-        size: Option<String>,
-        /// Skips the MP4 even when ffmpeg is installed.
+        #[arg(long, value_name = "N|WxH", value_parser = size_arg)]
+        size: Option<(u32, u32)>,
+        /// Writes the animation as APNG even when ffmpeg could make an MP4.
         #[arg(long)]
         no_mp4: bool,
         /// Overrides a scene key (repeatable).
@@ -144,8 +151,8 @@ enum Command {
         #[arg(long)]
         out_dir: PathBuf,
         /// Renders share i of n (items k with k mod n = i), e.g. --shard 0/4.
-        #[arg(long, value_name = "I/N")]
-        shard: Option<String>,
+        #[arg(long, value_name = "I/N", value_parser = shard_arg)]
+        shard: Option<(usize, usize)>,
         /// Skips items the manifest lists as done; retries failed ones.
         #[arg(long)]
         resume: bool,
@@ -162,12 +169,17 @@ enum Command {
         #[arg(long, value_parser = ["warped", "geomipmap", "bruteforce"])]
         mode: Option<String>,
         /// Window size: N (square) or WxH.
-        #[arg(long, default_value = "800x450")]
-        size: String,
+        #[arg(long, value_name = "N|WxH", default_value = "800x450", value_parser = size_arg)]
+        size: (u32, u32),
         /// Quits after this many frames (with --screenshot: writes it first).
         #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
         frames: Option<u64>,
-        /// Where screenshots are written (P, and on quitting after --frames).
+        /// The folder screenshots (P) and recorded paths (R) go to, under names that never
+        /// overwrite: <scene>-view-<n>.png, <scene>-flown[-<n>].toml.
+        #[arg(long, default_value = ".")]
+        out_dir: PathBuf,
+        /// The first screenshot's file (P, or on quitting after --frames); later ones go to
+        /// --out-dir.
         #[arg(long)]
         screenshot: Option<PathBuf>,
         /// Overrides a scene key (repeatable).
@@ -175,6 +187,10 @@ enum Command {
         set: Vec<String>,
     },
 }
+
+/// The exit code of every usage error: an unknown option, a bad option value, a bad `--set`.
+/// Bad input found while working (a file, a scene key, the device) exits with 1.
+const USAGE: i32 = 2;
 
 fn main() {
     // Mesa's EGL probes for a Wayland display whenever an adapter is requested; where
@@ -204,7 +220,7 @@ fn main() {
                 "{} (terrain --help lists the commands and options)",
                 cause.join(" ")
             );
-            std::process::exit(2);
+            std::process::exit(USAGE);
         }
     };
     let result = match cli.command {
@@ -233,6 +249,7 @@ fn main() {
         Command::Render {
             scene,
             output,
+            size,
             mode,
             view,
             tau,
@@ -245,6 +262,7 @@ fn main() {
             &set,
             &output,
             &RenderOpts {
+                size,
                 mode,
                 view,
                 tau,
@@ -321,20 +339,89 @@ fn main() {
             resume,
             merge,
             json,
-        } => batch(&jobs, &out_dir, shard.as_deref(), resume, merge, json),
+        } => batch(&jobs, &out_dir, shard, resume, merge, json),
         Command::View {
             scene,
             mode,
             size,
             frames,
+            out_dir,
             screenshot,
             set,
-        } => view(&scene, &set, mode.as_deref(), &size, frames, screenshot),
+        } => view(
+            &scene,
+            &set,
+            mode.as_deref(),
+            ViewArgs {
+                size,
+                frames,
+                out_dir,
+                screenshot,
+            },
+        ),
     };
     if let Err(e) = result {
-        eprintln!("error: {}", format!("{e:#}").replace('\n', " "));
-        std::process::exit(1);
+        eprintln!("error: {}", one_line(&e));
+        // A bad `--set` is a usage error like any bad option: the same exit code as clap's.
+        let usage = matches!(e.downcast_ref(), Some(Error::Override { .. }));
+        std::process::exit(if usage { USAGE } else { 1 });
     }
+}
+
+/// The error and its causes on one line, each cause once: a library error prints its source
+/// already (`output x.png: No such file…`), which anyhow's `{:#}` would print again.
+fn one_line(e: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string().replace('\n', " ");
+        if !line.contains(&text) {
+            if !line.is_empty() {
+                line += ": ";
+            }
+            line += &text;
+        }
+    }
+    line
+}
+
+/// The largest image side any command renders (camera.width's range).
+const MAX_SIDE: u32 = 16384;
+
+/// `--size`: `N` (square) or `WxH`, each 1 to [`MAX_SIDE`] pixels, the same for every command.
+fn size_arg(s: &str) -> Result<(u32, u32), String> {
+    let side =
+        |v: &str| -> Option<u32> { v.trim().parse().ok().filter(|n| (1..=MAX_SIDE).contains(n)) };
+    let size = match s.split_once(['x', 'X', '×']) {
+        Some((w, h)) => side(w).zip(side(h)),
+        None => side(s).map(|n| (n, n)),
+    };
+    size.ok_or_else(|| format!("expected N or WxH, each 1 to {MAX_SIDE} pixels"))
+}
+
+/// `--fps`, `--path-fps`: frames per second in (0, 1000].
+fn fps_arg(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|f| f.is_finite() && *f > 0.0 && *f <= 1000.0)
+        .ok_or_else(|| "expected frames per second in (0, 1000]".into())
+}
+
+/// `--tau`: a positive number of pixels.
+fn positive_arg(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|f| f.is_finite() && *f > 0.0)
+        .ok_or_else(|| "expected a positive number of pixels".into())
+}
+
+/// `--shard I/N` with 0 ≤ I < N.
+fn shard_arg(s: &str) -> Result<(usize, usize), String> {
+    s.split_once('/')
+        .and_then(|(i, n)| Some((i.trim().parse().ok()?, n.trim().parse().ok()?)))
+        .filter(|&(i, n): &(usize, usize)| n > 0 && i < n)
+        .ok_or_else(|| "expected I/N with 0 ≤ I < N".into())
 }
 
 fn info(file: &Path, spacing_m: Option<f64>, json: bool) -> Result<()> {
@@ -460,30 +547,14 @@ struct FlyArgs {
     view: String,
     frames: Option<u32>,
     fps: f64,
-    size: Option<String>,
+    size: Option<(u32, u32)>,
     mp4: bool,
 }
 
-/// `N` or `WxH`.
-fn parse_size(s: &str) -> Result<(u32, u32)> {
-    let parse =
-        |v: &str| -> Option<u32> { v.trim().parse().ok().filter(|&n| (1..=16384).contains(&n)) };
-    let size = match s.split_once(['x', 'X', '×']) {
-        Some((w, h)) => parse(w).zip(parse(h)),
-        None => parse(s).map(|n| (n, n)),
-    };
-    size.with_context(|| format!("--size {s}: expected N or WxH, 1 to 16384 pixels"))
-}
-
 fn fly(scene_path: &Path, set: &[String], out_dir: &Path, a: &FlyArgs, json: bool) -> Result<()> {
-    anyhow::ensure!(
-        a.fps.is_finite() && a.fps > 0.0 && a.fps <= 1000.0,
-        "--fps {}: must be a number of frames per second in (0, 1000]",
-        a.fps
-    );
     let mut scene = Scene::load_with(scene_path, set)?;
-    if let Some(s) = &a.size {
-        (scene.camera.width, scene.camera.height) = parse_size(s)?;
+    if let Some(size) = a.size {
+        (scene.camera.width, scene.camera.height) = size;
     }
     let mode = match a.mode.as_deref() {
         Some(m) => parse_mode(m)?,
@@ -532,15 +603,15 @@ fn fly(scene_path: &Path, set: &[String], out_dir: &Path, a: &FlyArgs, json: boo
     Ok(())
 }
 
-#[cfg(feature = "view")]
-fn view(
-    scene_path: &Path,
-    set: &[String],
-    mode: Option<&str>,
-    size: &str,
+struct ViewArgs {
+    size: (u32, u32),
     frames: Option<u64>,
+    out_dir: PathBuf,
     screenshot: Option<PathBuf>,
-) -> Result<()> {
+}
+
+#[cfg(feature = "view")]
+fn view(scene_path: &Path, set: &[String], mode: Option<&str>, a: ViewArgs) -> Result<()> {
     let scene = Scene::load_with(scene_path, set)?;
     let mode = match mode {
         Some(m) => parse_mode(m)?,
@@ -550,44 +621,25 @@ fn view(
     let opts = terrain::view::Options {
         scene_path: scene_path.to_path_buf(),
         mode,
-        size: parse_size(size)?,
-        frames,
-        screenshot,
+        size: a.size,
+        frames: a.frames,
+        out_dir: a.out_dir,
+        screenshot: a.screenshot,
     };
     Ok(terrain::view::run(scene, opts)?)
 }
 
 #[cfg(not(feature = "view"))]
-fn view(
-    _: &Path,
-    _: &[String],
-    _: Option<&str>,
-    _: &str,
-    _: Option<u64>,
-    _: Option<PathBuf>,
-) -> Result<()> {
+fn view(_: &Path, _: &[String], _: Option<&str>, _: ViewArgs) -> Result<()> {
     anyhow::bail!(
         "this terrain was built without the `view` feature (cargo build --release builds it)"
     )
 }
 
-fn parse_shard(s: &str) -> Result<(usize, usize)> {
-    let parsed = s
-        .split_once('/')
-        .and_then(|(i, n)| {
-            Some((
-                i.trim().parse::<usize>().ok()?,
-                n.trim().parse::<usize>().ok()?,
-            ))
-        })
-        .filter(|&(i, n)| n > 0 && i < n);
-    parsed.with_context(|| format!("--shard {s}: expected I/N with 0 ≤ I < N"))
-}
-
 fn batch(
     jobs: &Path,
     out_dir: &Path,
-    shard: Option<&str>,
+    shard: Option<(usize, usize)>,
     resume: bool,
     merge: bool,
     json: bool,
@@ -617,7 +669,7 @@ fn batch(
         );
         return Ok(());
     }
-    let shard = shard.map(parse_shard).transpose()?.unwrap_or((0, 1));
+    let shard = shard.unwrap_or((0, 1));
     let s = terrain::batch::run(jobs, out_dir, &terrain::batch::Options { shard, resume })?;
     let rate = s.rendered as f64 / s.seconds.max(1e-9);
     if json {
@@ -657,11 +709,6 @@ fn compare(
     mut opts: terrain::compare::Options,
     json: bool,
 ) -> Result<()> {
-    anyhow::ensure!(
-        opts.path_fps.is_finite() && opts.path_fps > 0.0,
-        "--path-fps {}: must be a positive number",
-        opts.path_fps
-    );
     opts.modes.dedup();
     anyhow::ensure!(!opts.modes.is_empty(), "--modes: give at least one mode");
     let scene = Scene::load_with(scene_path, set)?;
@@ -700,25 +747,49 @@ fn render(
     opts: &RenderOpts,
     json: bool,
 ) -> Result<()> {
+    // Refused before any work: an image format the extension does not name, positions that are
+    // not .npy.
+    output::ImageFormat::of(out)?;
+    if let Some(p) = &opts.positions
+        && p.extension().is_none_or(|e| !e.eq_ignore_ascii_case("npy"))
+    {
+        return Err(Error::file(
+            Role::Output,
+            p,
+            "--positions writes NumPy: give a .npy file name",
+        )
+        .into());
+    }
     let mut scene = Scene::load_with(scene_path, set)?;
     let mode = match opts.mode.as_deref() {
         Some(m) => parse_mode(m)?,
         None => scene.render.mode,
     };
     if let Some(tau) = opts.tau {
-        anyhow::ensure!(
-            tau.is_finite() && tau > 0.0,
-            "--tau {tau}: must be a positive number of pixels"
-        );
         scene.geomipmap.tau = tau;
+    }
+    if let Some(size) = opts.size {
+        (scene.camera.width, scene.camera.height) = size;
     }
     let view = View::parse(&opts.view).context("unknown view")?;
     let mut r = SceneRenderer::with_positions(&scene, mode, view, opts.positions.is_some())?;
     let camera = cpu_stage::camera_of(&scene, r.atlas())?;
+    let big = scene.camera.width as u64 * scene.camera.height as u64 > BIG_RENDER_PIXELS;
+    let spinner = big.then(|| {
+        Spinner::new(&format!(
+            "rendering {}×{} ({} frames)",
+            scene.camera.width,
+            scene.camera.height,
+            opts.repeat + 1
+        ))
+    });
     r.render(&camera)?; // warm-up: shader compilation and first-use allocation
     let mut frames = Vec::with_capacity(opts.repeat as usize);
     for _ in 0..opts.repeat {
         frames.push(r.render(&camera)?);
+    }
+    if let Some(s) = spinner {
+        s.finish();
     }
     let median = |f: &dyn Fn(&terrain::render::Frame) -> f64| {
         let mut v: Vec<f64> = frames.iter().map(f).collect();
@@ -733,12 +804,15 @@ fn render(
         timed.then(|| median(&|f| get(&f.gpu.passes).unwrap_or(0.0)))
     };
     let last = frames.last().context("no frame rendered")?;
-    output::write_png_rgba(out, last.width, last.height, &last.rgba)?;
+    // The image and the positions land together or not at all.
+    let mut staged = output::Staged::default();
+    staged.add_image(out, last.width, last.height, &last.rgba)?;
     if let Some(p) = &opts.positions {
         let world = terrain::render::world_positions(&r.read_positions(&camera)?, &camera);
         let shape = [last.height as usize, last.width as usize, 4];
-        output::write_npy_f64(p, &shape, &world)?;
+        staged.add(p, &output::npy_f64(&shape, &world))?;
     }
+    staged.commit()?;
     let mode_name = mode.name();
     let mut report = json!({
         "adapter": r.ctx().adapter_name(),
@@ -786,7 +860,11 @@ fn render(
     Ok(())
 }
 
+/// Renders above this many pixels show a spinner: at 16384² a frame takes minutes on llvmpipe.
+const BIG_RENDER_PIXELS: u64 = 8 << 20;
+
 struct RenderOpts {
+    size: Option<(u32, u32)>,
     mode: Option<String>,
     view: String,
     tau: Option<f64>,

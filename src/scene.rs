@@ -1,14 +1,19 @@
 //! The scene file (TOML): DESIGN.md's keys and this project's additions, read strictly.
 //!
-//! Rules: an unknown key is an error naming it (serde's `deny_unknown_fields`), every number is
-//! range-checked after parsing with the key's full dotted name in the message, and relative paths
-//! resolve against the scene file's folder. Defaults live in the `Default` impls, one place each.
+//! Rules: an unknown key is an error naming it (serde's `deny_unknown_fields`), a value of the
+//! wrong type names its full dotted key (`detail.octaves`, through `serde_path_to_error`), every
+//! number is range-checked after parsing with the key's full dotted name in the message, and
+//! relative paths resolve against the scene file's folder. An error caused by a `--set` override
+//! blames the override, not the file. Defaults live in the `Default` impls, one place each; keys
+//! whose default follows the sketch are `Option`s resolved in `cpu_stage::detail_of`.
+//! `docs/scene.md` documents every key; a test (`tests/scene_doc.rs`) checks it against these
+//! structs, their defaults included.
 
-use crate::error::{Error, Result};
-use serde::Deserialize;
+use crate::error::{Error, Result, Role};
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     pub sketch: SketchSection,
@@ -31,7 +36,7 @@ pub struct Scene {
     pub base_dir: PathBuf,
 }
 
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SketchSection {
     pub path: Option<PathBuf>,
@@ -44,7 +49,7 @@ pub struct SketchSection {
     pub height_range_m: Option<[f64; 2]>,
 }
 
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraSection {
     pub position: [f64; 3],
@@ -65,11 +70,19 @@ fn default_size() -> u32 {
     512
 }
 
-#[derive(Clone, Debug, Deserialize)]
+/// The most octaves a scene may ask for.
+pub const MAX_OCTAVES: u32 = 24;
+/// The finest noise wavelength the default octave count reaches, metres: below a decimetre
+/// no camera this renderer places (at least a metre above the ground) resolves a change.
+pub const FINEST_WAVELENGTH_M: f64 = 0.1;
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct DetailSection {
-    pub octaves: u32,
-    pub amplitude_m: f64,
+    /// Noise octaves; by default those whose wavelength is at least [`FINEST_WAVELENGTH_M`].
+    pub octaves: Option<u32>,
+    /// Octave 1's amplitude; by default the sketch's own finest relief carried one octave on.
+    pub amplitude_m: Option<f64>,
     pub gain: f64,
     pub seed: u32,
     /// Octaves subtracted from the split octave: the paper's "more conservative estimate".
@@ -80,8 +93,8 @@ pub struct DetailSection {
 impl Default for DetailSection {
     fn default() -> Self {
         DetailSection {
-            octaves: 12,
-            amplitude_m: 30.0,
+            octaves: None,
+            amplitude_m: None,
             gain: 0.5,
             seed: 7,
             bias: 0.5,
@@ -91,7 +104,7 @@ impl Default for DetailSection {
 }
 
 /// How the warp keeps cells from folding; see `warp.rs`.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum WarpMethod {
     /// The paper's single row pass then column pass, nothing more.
@@ -100,7 +113,7 @@ pub enum WarpMethod {
     Guarded,
 }
 
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct WarpSection {
     pub quad_px: f64,
@@ -123,7 +136,7 @@ impl Default for WarpSection {
     }
 }
 
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ImportanceSection {
     /// I_v: view distance. Off: uniform.
@@ -155,7 +168,7 @@ impl Default for ImportanceSection {
     }
 }
 
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct GeoMipMapSection {
     /// τ: the largest projected vertex error allowed, pixels.
@@ -182,7 +195,7 @@ impl Default for GeoMipMapSection {
     }
 }
 
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ReferenceSection {
     /// March step as a fraction of the height above the ground (and at least of the pixel's
@@ -195,7 +208,7 @@ impl Default for ReferenceSection {
     }
 }
 
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum Mode {
     Warped,
@@ -227,7 +240,7 @@ impl Mode {
     }
 }
 
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RenderSection {
     pub mode: Mode,
@@ -238,7 +251,7 @@ impl Default for RenderSection {
     }
 }
 
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PathSection {
     #[serde(default = "default_speed")]
@@ -249,70 +262,111 @@ fn default_speed() -> f64 {
     150.0
 }
 
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PathKey {
     pub position: [f64; 3],
     pub look_at: Option<[f64; 3]>,
 }
 
+/// Where a scene's fault lies: in its text, or in a `--set` override given with it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Fault {
+    /// In the scene's text; the reason names the key (and the line, where the parser knows it).
+    Text(String),
+    /// In the override `arg` (`key.path=value`).
+    Override { arg: String, reason: String },
+}
+
+impl std::fmt::Display for Fault {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Fault::Text(reason) => f.write_str(reason),
+            Fault::Override { arg, reason } => write!(f, "--set {arg}: {reason}"),
+        }
+    }
+}
+
+impl Fault {
+    /// The error of a scene read from `path`.
+    pub fn into_error(self, path: &Path) -> Error {
+        match self {
+            Fault::Text(reason) => Error::scene(path, reason),
+            Fault::Override { arg, reason } => Error::Override { arg, reason },
+        }
+    }
+}
+
 impl Scene {
     pub fn load(path: &Path) -> Result<Scene> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
-        Scene::parse(&text, base).map_err(|reason| Error::Scene {
-            path: path.to_path_buf(),
-            reason,
-        })
+        Scene::load_with(path, &[])
     }
 
     /// Parses and checks a scene; the error is one line naming the key.
     pub fn parse(text: &str, base_dir: PathBuf) -> std::result::Result<Scene, String> {
-        Scene::parse_with(text, base_dir, &[])
+        Scene::parse_with(text, base_dir, &[]).map_err(|f| f.to_string())
     }
 
     /// Like [`Scene::load`], with `key.path=value` overrides (TOML values; bare words are strings)
     /// applied before the scene is checked, as `--set` gives them.
     pub fn load_with(path: &Path, overrides: &[String]) -> Result<Scene> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(Role::Scene, path, e))?;
         let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
-        Scene::parse_with(&text, base, overrides).map_err(|reason| Error::Scene {
-            path: path.to_path_buf(),
-            reason,
-        })
+        Scene::parse_with(&text, base, overrides).map_err(|f| f.into_error(path))
     }
 
     pub fn parse_with(
         text: &str,
         base_dir: PathBuf,
         overrides: &[String],
-    ) -> std::result::Result<Scene, String> {
-        let one_line = |e: toml::de::Error, text: &str| {
-            let line = e
-                .span()
-                .filter(|_| !text.is_empty())
-                .map(|s| {
-                    format!(
-                        "line {}: ",
-                        text[..s.start.min(text.len())].matches('\n').count() + 1
-                    )
-                })
-                .unwrap_or_default();
-            format!("{line}{}", e.message().replace('\n', " "))
-        };
-        let mut scene: Scene = if overrides.is_empty() {
-            toml::from_str(text).map_err(|e| one_line(e, text))?
+    ) -> std::result::Result<Scene, Fault> {
+        let mut scene = if overrides.is_empty() {
+            deserialize_text(text).map_err(Fault::Text)?
         } else {
-            let mut table: toml::Table = toml::from_str(text).map_err(|e| one_line(e, text))?;
+            let mut table: toml::Table = toml::from_str(text)
+                .map_err(|e| Fault::Text(one_line(e.message(), e.span(), text)))?;
             for o in overrides {
-                apply_override(&mut table, o)?;
+                apply_override(&mut table, o).map_err(|reason| Fault::Override {
+                    arg: o.clone(),
+                    reason,
+                })?;
             }
-            toml::Value::Table(table)
-                .try_into()
-                .map_err(|e: toml::de::Error| one_line(e, ""))?
+            match serde_path_to_error::deserialize::<_, Scene>(toml::Value::Table(table)) {
+                Ok(scene) => scene,
+                Err(e) => {
+                    let key = e.path().to_string();
+                    let message = e.inner().message().replace('\n', " ");
+                    return Err(match overrides.iter().find(|o| blames(o, &key, &message)) {
+                        Some(o) => Fault::Override {
+                            arg: o.clone(),
+                            reason: message,
+                        },
+                        // The file's own fault, with its line where the file alone shows it.
+                        None => Fault::Text(
+                            deserialize_text(text)
+                                .err()
+                                .unwrap_or_else(|| keyed(&key, &message)),
+                        ),
+                    });
+                }
+            }
         };
         scene.base_dir = base_dir;
-        scene.check()?;
+        scene.check().map_err(|reason| {
+            match overrides
+                .iter()
+                .find(|o| reason.starts_with(override_key(o)))
+            {
+                Some(o) => Fault::Override {
+                    arg: o.clone(),
+                    // The argument names the key and value already.
+                    reason: reason
+                        .split_once(": ")
+                        .map_or(reason.clone(), |(_, r)| r.to_string()),
+                },
+                None => Fault::Text(reason),
+            }
+        })?;
         Ok(scene)
     }
 
@@ -358,8 +412,12 @@ impl Scene {
         within("camera.height", c.height as f64, 1.0, 16384.0)?;
         positive("camera.far_m", c.far_m)?;
         let d = &self.detail;
-        within("detail.octaves", d.octaves as f64, 0.0, 24.0)?;
-        within("detail.amplitude_m", d.amplitude_m, 0.0, 1e5)?;
+        if let Some(o) = d.octaves {
+            within("detail.octaves", o as f64, 0.0, MAX_OCTAVES as f64)?;
+        }
+        if let Some(a) = d.amplitude_m {
+            within("detail.amplitude_m", a, 0.0, 1e5)?;
+        }
         within("detail.gain", d.gain, 0.0, 1.0)?;
         within("detail.bias", d.bias, -4.0, 8.0)?;
         let w = &self.warp;
@@ -412,26 +470,72 @@ impl Scene {
     }
 }
 
+/// Deserialises a scene's text; the error names the line and the key's full dotted path.
+fn deserialize_text(text: &str) -> std::result::Result<Scene, String> {
+    let de = toml::Deserializer::parse(text).map_err(|e| one_line(e.message(), e.span(), text))?;
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let key = e.path().to_string();
+        let inner = e.into_inner();
+        one_line(&keyed(&key, inner.message()), inner.span(), text)
+    })
+}
+
+/// `key: message`, unless the key is the root or the message names it already.
+fn keyed(key: &str, message: &str) -> String {
+    if key.is_empty() || key == "." || message.contains(key) {
+        message.to_string()
+    } else {
+        format!("{key}: {message}")
+    }
+}
+
+/// The message on one line, after `line N: ` where the span says.
+fn one_line(message: &str, span: Option<std::ops::Range<usize>>, text: &str) -> String {
+    let line = span
+        .map(|s| {
+            format!(
+                "line {}: ",
+                text[..s.start.min(text.len())].matches('\n').count() + 1
+            )
+        })
+        .unwrap_or_default();
+    format!("{line}{}", message.replace('\n', " "))
+}
+
+fn override_key(o: &str) -> &str {
+    o.split_once('=').map_or(o, |(k, _)| k).trim()
+}
+
+/// Whether the override `o` caused serde's error at `path`: the path is its key, or the error is
+/// an unknown field of the table the override's key names.
+fn blames(o: &str, path: &str, message: &str) -> bool {
+    let key = override_key(o);
+    if key == path {
+        return true;
+    }
+    let (table, last) = key.rsplit_once('.').unwrap_or(("", key));
+    let path = if path == "." { "" } else { path };
+    table == path && message.contains(&format!("`{last}`"))
+}
+
 /// Sets `a.b.c=value` in a TOML table, creating the tables on the way.
 fn apply_override(table: &mut toml::Table, o: &str) -> std::result::Result<(), String> {
     let (key, value) = o
         .split_once('=')
-        .ok_or_else(|| format!("--set {o}: expected key.path=value"))?;
+        .ok_or_else(|| "expected key.path=value".to_string())?;
     let value = toml::from_str::<toml::Table>(&format!("v = {value}"))
         .ok()
         .and_then(|mut t| t.remove("v"))
         .unwrap_or_else(|| toml::Value::String(value.trim().to_string()));
     let parts: Vec<&str> = key.trim().split('.').collect();
-    let (last, path) = parts
-        .split_last()
-        .ok_or_else(|| format!("--set {o}: empty key"))?;
+    let (last, path) = parts.split_last().ok_or_else(|| "empty key".to_string())?;
     let mut here = table;
     for p in path {
         here = here
             .entry(p.to_string())
             .or_insert_with(|| toml::Value::Table(toml::Table::new()))
             .as_table_mut()
-            .ok_or_else(|| format!("--set {o}: `{p}` is not a table"))?;
+            .ok_or_else(|| format!("`{p}` is not a table"))?;
     }
     here.insert(last.to_string(), value);
     Ok(())
@@ -483,7 +587,7 @@ mod tests {
     fn defaults_follow_design() {
         let s = Scene::parse(MIN, PathBuf::new()).unwrap();
         assert_eq!((s.warp.quad_px, s.warp.mesh, s.warp.size), (2.0, 512, 128));
-        assert_eq!((s.detail.octaves, s.detail.gain), (12, 0.5));
+        assert_eq!((s.detail.octaves, s.detail.gain), (None, 0.5));
         assert_eq!(s.render.mode, Mode::Warped);
     }
 
@@ -518,12 +622,33 @@ mod tests {
             Scene::parse_with(MIN, PathBuf::new(), &o)
         };
         let s = set(&["detail.octaves=0", "warp.method=plain", "camera.width = 64"]).unwrap();
+        let blamed = |o: &[&str]| set(o).unwrap_err().to_string();
+        assert_eq!(
+            blamed(&["detail.octaves=many"]),
+            "--set detail.octaves=many: invalid type: string \"many\", expected u32"
+        );
+        assert_eq!(
+            blamed(&["warp.mesh=64", "detail.gain=3"]),
+            "--set detail.gain=3: must be in [0, 1]"
+        );
+        assert!(blamed(&["detail.octave=3"]).starts_with("--set detail.octave=3: unknown field"));
+        // A fault of the file itself is still the file's, with its line, beside an override.
+        let bad = format!("{MIN}[detail]\nseed = \"x\"\n");
+        let e = Scene::parse_with(&bad, PathBuf::new(), &["warp.mesh=64".into()]).unwrap_err();
+        assert!(
+            matches!(&e, Fault::Text(r) if r.starts_with("line 7: detail.seed")),
+            "{e}"
+        );
         assert_eq!(
             (s.detail.octaves, s.warp.method, s.camera.width),
-            (0, WarpMethod::Plain, 64)
+            (Some(0), WarpMethod::Plain, 64)
         );
-        assert!(set(&["detail.gain=3"]).unwrap_err().contains("detail.gain"));
-        assert!(set(&["detail.octave=3"]).unwrap_err().contains("octave"));
-        assert!(set(&["nonsense"]).unwrap_err().contains("key.path=value"));
+
+        assert!(
+            set(&["nonsense"])
+                .unwrap_err()
+                .to_string()
+                .contains("key.path=value")
+        );
     }
 }

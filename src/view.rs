@@ -4,8 +4,9 @@
 //! ×4), at a speed scaled to the height above the ground; 1/2/3 warped, GeoMipMap, brute force;
 //! V cycles the views (shaded, wireframe, split octave, importance, normals, coverage); F freezes
 //! the level of detail (the warped mode's CPU stage, GeoMipMap's levels) to look at the mesh from
-//! outside; R starts and stops recording the path flown (written as `<scene>-flown.toml`, the
-//! scene with that `[path]`); P writes a screenshot; Esc quits. The figures on screen: mode, view,
+//! outside; R starts and stops recording the path flown (written to `--out-dir` as
+//! `<scene>-flown.toml`, the scene with that `[path]`); P writes a screenshot to `--out-dir`
+//! (`<scene>-view-<n>.png`); neither ever overwrites a file, taking the next free number; Esc quits. The figures on screen: mode, view,
 //! frame time per stage, triangles, height above the ground.
 //!
 //! Rules: the frame is rendered headless by the same renderers as every other command (one
@@ -21,11 +22,11 @@
 
 use crate::atlas::Atlas;
 use crate::cpu_stage::{self, ground_under};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Role};
 use crate::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder, scene_with_path};
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::uniforms::View;
-use crate::output::{write_atomic, write_png_rgba};
+use crate::output::{write_atomic, write_image};
 use crate::plot::raster::RasterCanvas;
 use crate::plot::{Anchor, Canvas, Rgb};
 use crate::render::{Frame, SceneRenderer};
@@ -48,8 +49,18 @@ pub struct Options {
     pub size: (u32, u32),
     /// Quit after this many frames.
     pub frames: Option<u64>,
-    /// Where screenshots go (P, and on quitting after `frames`).
+    /// The folder screenshots and recorded paths go to.
+    pub out_dir: PathBuf,
+    /// The first screenshot's file (P, or on quitting after `frames`); later ones go to `out_dir`.
     pub screenshot: Option<PathBuf>,
+}
+
+/// `dir/<name(0)>`, or the first of `dir/<name(n)>`, n = 1, 2, … that does not exist yet.
+fn unused(dir: &Path, name: impl Fn(usize) -> String) -> PathBuf {
+    (0..)
+        .map(|n| dir.join(name(n)))
+        .find(|p| !p.exists())
+        .expect("some number is free")
 }
 
 const VIEWS: [View; 6] = [
@@ -255,7 +266,7 @@ impl App {
         ) else {
             return Ok(());
         };
-        let gpu = |e: softbuffer::SoftBufferError| Error::Gpu(format!("window: {e}"));
+        let gpu = |e: softbuffer::SoftBufferError| Error::Window(e.to_string());
         surface.resize(w, h).map_err(gpu)?;
         let mut buffer = surface.buffer_mut().map_err(gpu)?;
         if buffer.len() * 4 != rgba.len() {
@@ -270,17 +281,13 @@ impl App {
     fn screenshot(&mut self) -> Result<PathBuf> {
         let path = match &self.o.screenshot {
             Some(p) if self.shots == 0 => p.clone(),
-            Some(p) => p.with_file_name(format!(
-                "{}-{}.png",
-                p.file_stem()
-                    .map(|s| s.to_string_lossy())
-                    .unwrap_or_default(),
-                self.shots
-            )),
-            None => PathBuf::from(format!("{}-view-{}.png", self.stem(), self.shots)),
+            _ => {
+                let stem = self.stem();
+                unused(&self.o.out_dir, |n| format!("{stem}-view-{}.png", n + 1))
+            }
         };
         self.shots += 1;
-        write_png_rgba(&path, self.size.0, self.size.1, &self.presented)?;
+        write_image(&path, self.size.0, self.size.1, &self.presented)?;
         Ok(path)
     }
 
@@ -303,10 +310,13 @@ impl App {
             return Ok(());
         };
         let text = std::fs::read_to_string(&self.o.scene_path)
-            .map_err(|e| Error::io(&self.o.scene_path, e))?;
+            .map_err(|e| Error::io(Role::Scene, &self.o.scene_path, e))?;
         let out = scene_with_path(&text, &path).map_err(Error::Invalid)?;
-        let dir = self.o.scene_path.parent().unwrap_or(Path::new(""));
-        let file = dir.join(format!("{}-flown.toml", self.stem()));
+        let stem = self.stem();
+        let file = unused(&self.o.out_dir, |n| match n {
+            0 => format!("{stem}-flown.toml"),
+            n => format!("{stem}-flown-{}.toml", n + 1),
+        });
         write_atomic(&file, out.as_bytes())?;
         self.message = format!("{} keys written to {}", path.keys.len(), file.display());
         Ok(())
@@ -358,14 +368,14 @@ impl ApplicationHandler for App {
             .with_inner_size(PhysicalSize::new(self.size.0, self.size.1));
         let window = match el.create_window(attrs) {
             Ok(w) => Arc::new(w),
-            Err(e) => return self.fail(el, Error::Gpu(format!("cannot open a window: {e}"))),
+            Err(e) => return self.fail(el, Error::Window(format!("cannot open one: {e}"))),
         };
         let surface = softbuffer::Context::new(window.clone())
             .and_then(|c| softbuffer::Surface::new(&c, window.clone()));
         match surface {
             Ok(s) => self.surface = Some(s),
             Err(e) => {
-                return self.fail(el, Error::Gpu(format!("cannot draw into the window: {e}")));
+                return self.fail(el, Error::Window(format!("cannot draw into it: {e}")));
             }
         }
         let size = window.inner_size();
@@ -456,6 +466,22 @@ impl App {
     }
 }
 
+/// Why no window opens, in the user's terms: winit's message carries its own source path
+/// (`os error at …/winit-0.30/src/…/mod.rs:765: …`), which is dropped.
+fn no_display(winit: &str) -> String {
+    let unset = |v: &str| std::env::var_os(v).is_none_or(|s| s.is_empty());
+    let cause = if unset("DISPLAY") && unset("WAYLAND_DISPLAY") {
+        "no display: neither DISPLAY nor WAYLAND_DISPLAY is set".to_string()
+    } else {
+        let cause = match winit.find(".rs:") {
+            Some(i) => winit[i..].split_once(": ").map_or(winit, |(_, c)| c),
+            None => winit,
+        };
+        format!("cannot open the display: {}", cause.trim_end_matches('.'))
+    };
+    format!("{cause}; `terrain view` needs X11 or Wayland (headless: xvfb-run terrain view …)")
+}
+
 /// Opens the window and flies until it is closed (or `frames` are drawn).
 pub fn run(scene: Scene, o: Options) -> Result<()> {
     let atlas = cpu_stage::load_atlas(&scene)?;
@@ -464,11 +490,7 @@ pub fn run(scene: Scene, o: Options) -> Result<()> {
     let ctx = GpuContext::new(&Needs {
         storage_bytes: atlas.bytes(),
     })?;
-    let event_loop = EventLoop::new().map_err(|e| {
-        Error::Gpu(format!(
-            "cannot reach a display ({e}); `terrain view` needs X11 or Wayland (headless: xvfb-run terrain view …)"
-        ))
-    })?;
+    let event_loop = EventLoop::new().map_err(|e| Error::Window(no_display(&e.to_string())))?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App {
         size: o.size,
@@ -497,7 +519,7 @@ pub fn run(scene: Scene, o: Options) -> Result<()> {
     };
     event_loop
         .run_app(&mut app)
-        .map_err(|e| Error::Gpu(format!("window event loop: {e}")))?;
+        .map_err(|e| Error::Window(format!("event loop: {e}")))?;
     if let Some(e) = app.error {
         return Err(e);
     }

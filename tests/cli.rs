@@ -59,7 +59,7 @@ fn usage_errors_are_one_line_too() {
             "--tau",
             "-1",
         ],
-        "--tau -1",
+        "'-1' for '--tau",
     );
 }
 
@@ -383,4 +383,161 @@ fn render_writes_world_positions_that_agree_between_modes() {
         median < 20.0,
         "median gap {median} m between the warped and the reference positions"
     );
+}
+
+/// Runs and checks the one-line failure: its exit code, and that it names `cause`.
+fn fails_as(args: &[&str], code: i32, cause: &str) {
+    let (got, _, err) = terrain(args);
+    assert_eq!(got, code, "{args:?}: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    assert!(
+        err.contains(cause),
+        "{args:?}: {err:?} does not name {cause:?}"
+    );
+}
+
+#[test]
+fn messages_name_the_files_role_and_the_key() {
+    let dir = scratch("cli-roles");
+    let small = manifest_dir().join("sketches/jacksboro-small.toml");
+    let small = small.to_str().unwrap();
+    let at = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    // A bad override is a usage error (2) that blames the override and names its key.
+    fails_as(
+        &[
+            "render",
+            small,
+            "-o",
+            &at("x.png"),
+            "--set",
+            "detail.octaves=many",
+        ],
+        2,
+        "--set detail.octaves=many: invalid type",
+    );
+    fails_as(
+        &[
+            "render",
+            small,
+            "-o",
+            &at("x.png"),
+            "--set",
+            "detail.gain=3",
+        ],
+        2,
+        "--set detail.gain=3: must be in [0, 1]",
+    );
+    // Missing files say which file they were.
+    fails_as(
+        &["render", &at("none.toml"), "-o", &at("x.png")],
+        1,
+        "error: scene ",
+    );
+    let nosketch = write(
+        &dir,
+        "nosketch.toml",
+        format!("[sketch]\npath = \"gone.asc\"\n{CAMERA}"),
+    );
+    fails_as(
+        &["render", nosketch.to_str().unwrap(), "-o", &at("x.png")],
+        1,
+        "error: sketch ",
+    );
+    fails_as(
+        &["batch", &at("none-jobs.toml"), "--out-dir", &at("b")],
+        1,
+        "error: jobs file ",
+    );
+    fails_as(&["info", small], 1, "a scene file, not a height map");
+    for (args, cause) in [
+        (vec!["--frames", "1"], "no display"),
+        (vec!["--size", "0"], "--size"),
+    ] {
+        if cfg!(feature = "view") && std::env::var_os("DISPLAY").is_none() {
+            let mut a = vec!["view", small];
+            a.extend(args);
+            let (code, _, err) = terrain(&a);
+            let want = if cause == "--size" { 2 } else { 1 };
+            assert_eq!(code, want, "{err}");
+            assert!(err.contains(cause) && !err.contains(".rs:"), "{err}");
+        }
+    }
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        1,
+        "nothing written but the scene"
+    );
+}
+
+#[test]
+fn outputs_make_their_folders_take_their_format_from_the_name_and_land_together() {
+    let dir = scratch("cli-outputs");
+    let small = manifest_dir().join("sketches/jacksboro-small.toml");
+    let small = small.to_str().unwrap();
+    let at = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let (code, _, err) = terrain(&[
+        "render",
+        small,
+        "-o",
+        &at("new/deeper/x.jpg"),
+        "--size",
+        "48x32",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let jpg = std::fs::read(dir.join("new/deeper/x.jpg")).unwrap();
+    assert!(jpg.starts_with(&[0xFF, 0xD8, 0xFF]), "not a JPEG");
+    fails_as(&["render", small, "-o", &at("x.webp")], 1, "output ");
+    // The positions' folder cannot be made (a file is in the way): the image is not written
+    // either.
+    write(&dir, "blocker", "");
+    fails_as(
+        &[
+            "render",
+            small,
+            "-o",
+            &at("y.png"),
+            "--positions",
+            &at("blocker/p.npy"),
+        ],
+        1,
+        "blocker",
+    );
+    assert!(!dir.join("y.png").exists() && !dir.join("x.webp").exists());
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tmp"))
+        .collect();
+    assert!(left.is_empty(), "temporary files left: {left:?}");
+}
+
+#[test]
+fn size_has_one_syntax_one_range_and_one_exit_code_everywhere() {
+    let scene = manifest_dir().join("sketches/jacksboro-small.toml");
+    let scene = scene.to_str().unwrap();
+    let dir = scratch("cli-size");
+    let d = dir.to_str().unwrap();
+    for size in ["0", "16385", "12x", "axb"] {
+        for cmd in [
+            vec!["render", scene, "-o", "x.png"],
+            vec!["fly", scene, "--out-dir", d],
+            vec!["compare", scene, "--out-dir", d],
+            vec!["view", scene],
+        ] {
+            let mut args = cmd.clone();
+            args.extend(["--size", size]);
+            fails_as(&args, 2, "expected N or WxH, each 1 to 16384 pixels");
+        }
+    }
+    let (code, _, err) = terrain(&[
+        "render",
+        scene,
+        "-o",
+        &format!("{d}/s.png"),
+        "--size",
+        "24x16",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (w, h, _) = read_png(&dir.join("s.png")).unwrap();
+    assert_eq!((w, h), (24, 16));
 }

@@ -107,7 +107,7 @@ fn snapshots_match_their_references() {
         let reference = dir.join(format!("{name}.png"));
         if update {
             std::fs::create_dir_all(&dir).unwrap();
-            terrain::output::write_png_rgba(&reference, frame.width, frame.height, &frame.rgba)
+            terrain::output::write_image(&reference, frame.width, frame.height, &frame.rgba)
                 .unwrap();
             continue;
         }
@@ -122,8 +122,8 @@ fn snapshots_match_their_references() {
         eprintln!("{name}: {db:.1} dB");
         if db < 40.0 {
             let actual = out.join(format!("{name}.png"));
-            terrain::output::write_png_rgba(&actual, w, h, &frame.rgba).unwrap();
-            terrain::output::write_png_rgba(
+            terrain::output::write_image(&actual, w, h, &frame.rgba).unwrap();
+            terrain::output::write_image(
                 &out.join(format!("{name}-diff.png")),
                 w,
                 h,

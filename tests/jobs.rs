@@ -382,22 +382,33 @@ fn the_bundled_jobs_file_and_flight_load() {
 }
 
 #[test]
-fn a_path_too_long_to_fly_frame_by_frame_fails_in_one_line() {
+fn a_long_path_without_frames_is_spread_over_the_default_count_and_says_so() {
     let dir = scratch("fly-slow");
     let scene = dir.join("slow.toml");
     std::fs::write(
         &scene,
-        "[sketch]\nsynthetic = \"hills\"\n[camera]\nposition = [500.0, 300.0, 900.0]\nlook_at = [3800.0, 4000.0, 200.0]\n[path]\nspeed_mps = 1e-9\nkeys = [{ position = [0.0, 0.0, 900.0] }, { position = [1000.0, 0.0, 900.0] }]\n",
+        "[sketch]\nsynthetic = \"hills\"\n[camera]\nposition = [500.0, 300.0, 900.0]\nlook_at = [3800.0, 4000.0, 200.0]\n[warp]\nmesh = 16\n[detail]\noctaves = 0\n[path]\nspeed_mps = 1e-9\nkeys = [{ position = [0.0, 0.0, 900.0] }, { position = [1000.0, 0.0, 900.0] }]\n",
     )
     .unwrap();
     let out = dir.join("out");
-    let (code, _, err) = terrain(&[
+    let (code, stdout, err) = terrain(&[
         "fly",
         scene.to_str().unwrap(),
         "--out-dir",
         out.to_str().unwrap(),
+        "--size",
+        "8",
+        "--no-mp4",
     ]);
-    assert_eq!(code, 1, "{err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(err.contains("give --frames"), "{err}");
+    assert_eq!(code, 0, "{err}");
+    let n = terrain::fly::DEFAULT_MAX_FRAMES;
+    assert!(stdout.contains(&format!("{n} frames")), "{stdout}");
+    // Said before the first frame: how many frames, spread over the path, and what is written.
+    assert!(
+        err.contains(&format!("{n} frames spread over it")) && err.contains("--frames N"),
+        "{err}"
+    );
+    assert!(err.contains(&format!("writing {n} frames of 8×8")), "{err}");
+    assert!(out.join(format!("frame-{:05}.png", n - 1)).is_file());
+    assert!(!out.join(format!("frame-{n:05}.png")).exists());
 }

@@ -2,10 +2,76 @@
 //! a screenshot of what it presented and exits; the screenshot shows the terrain `render` draws
 //! for the same camera, with the on-screen figures over it. Driven by xdotool's keys, it switches
 //! mode, records the path flown and quits.
+//!
+//! This file has its own harness (libtest-mimic) so that a machine without Xvfb or xdotool
+//! reports these tests as ignored, with the reason, instead of passing them having checked
+//! nothing. Where `TERRAIN_REQUIRE_VIEW_TESTS` is set (`.ci/run` sets it) a missing tool fails
+//! them instead: CI always runs them.
 
 mod common;
 use common::*;
+use libtest_mimic::{Arguments, Failed, Trial};
 use std::process::Command;
+
+/// A test's name, its body, and the programs it needs.
+type ViewTest = (&'static str, fn(), &'static [&'static str]);
+
+fn main() {
+    let args = Arguments::from_args();
+    let tests: [ViewTest; 2] = [
+        (
+            "view_opens_draws_and_screenshots_itself_under_xvfb",
+            view_opens_draws_and_screenshots_itself_under_xvfb,
+            &["xvfb-run"],
+        ),
+        (
+            "view_keys_switch_mode_record_the_path_and_quit",
+            view_keys_switch_mode_record_the_path_and_quit,
+            &["xvfb-run", "xdotool"],
+        ),
+    ];
+    let required = std::env::var_os("TERRAIN_REQUIRE_VIEW_TESTS").is_some();
+    let trials = tests
+        .into_iter()
+        .map(|(name, test, tools)| {
+            let why = missing(tools);
+            let reason = why.clone();
+            let trial = Trial::test(name, move || match &reason {
+                Some(why) => Err(Failed::from(format!(
+                    "{why}, and TERRAIN_REQUIRE_VIEW_TESTS is set"
+                ))),
+                None => std::panic::catch_unwind(test).map_err(|p| {
+                    let text = p
+                        .downcast_ref::<String>()
+                        .cloned()
+                        .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()));
+                    Failed::from(text.unwrap_or_else(|| "panicked".into()))
+                }),
+            });
+            match why {
+                Some(why) if !required => trial
+                    .with_kind(format!("skipped: {why}"))
+                    .with_ignored_flag(true),
+                _ => trial,
+            }
+        })
+        .collect();
+    libtest_mimic::run(&args, trials).exit();
+}
+
+/// Why these tests cannot run here, if they cannot.
+fn missing(tools: &[&str]) -> Option<String> {
+    if !cfg!(feature = "view") {
+        return Some("built without the `view` feature".into());
+    }
+    let absent: Vec<&str> = tools.iter().copied().filter(|t| !has(t)).collect();
+    (!absent.is_empty()).then(|| {
+        format!(
+            "{} not installed (Debian: apt-get install xvfb xauth xdotool)",
+            absent.join(" and ")
+        )
+    })
+}
 
 fn has(program: &str) -> bool {
     Command::new("sh")
@@ -14,19 +80,7 @@ fn has(program: &str) -> bool {
         .is_ok_and(|o| o.status.success())
 }
 
-#[test]
 fn view_opens_draws_and_screenshots_itself_under_xvfb() {
-    if !cfg!(feature = "view") {
-        eprintln!("built without the `view` feature: nothing to test");
-        return;
-    }
-    if !has("xvfb-run") {
-        // .ci/run installs it; a machine without it cannot open a window headless.
-        eprintln!(
-            "xvfb-run is not installed (Debian: apt-get install xvfb xauth): `view` not tested"
-        );
-        return;
-    }
     let dir = scratch("view");
     let shot = dir.join("shot.png");
     let scene = manifest_dir().join("sketches/gaussian.toml");
@@ -85,35 +139,28 @@ fn rendered(dir: &std::path::Path, mode: &str) -> Vec<u8> {
     read_png(&png).unwrap().2
 }
 
-#[test]
 fn view_keys_switch_mode_record_the_path_and_quit() {
-    if !cfg!(feature = "view") {
-        eprintln!("built without the `view` feature: nothing to test");
-        return;
-    }
-    if !(has("xvfb-run") && has("xdotool")) {
-        eprintln!(
-            "xvfb-run or xdotool is not installed (Debian: apt-get install xvfb xauth xdotool): keys not tested"
-        );
-        return;
-    }
     let dir = scratch("view-keys");
     let scene = dir.join("gaussian.toml");
     std::fs::copy(manifest_dir().join("sketches/gaussian.toml"), &scene).unwrap();
     let shot = dir.join("shot.png");
     // 2: GeoMipMap; P: screenshot; R, W held for 2 s, R: a recorded flight north; Esc: quit.
     let script = format!(
-        "timeout 120 {bin} view {scene} --size 160x120 --screenshot {shot} & pid=$!\n\
+        "timeout 120 {bin} view {scene} --size 160x120 --screenshot {shot} --out-dir {dir} & pid=$!\n\
          wid=$(xdotool search --sync --name 'terrain view')\n\
          xdotool windowfocus --sync $wid\n\
-         sleep 1; xdotool key 2; sleep 3; xdotool key p; sleep 1\n\
+         sleep 1; xdotool key 2; sleep 3; xdotool key p; sleep 1; xdotool key p; sleep 1\n\
          xdotool key r; xdotool keydown w; sleep 2; xdotool keyup w; xdotool key r; sleep 1\n\
          xdotool key Escape\n\
          wait $pid\n",
         bin = env!("CARGO_BIN_EXE_terrain"),
         scene = scene.display(),
         shot = shot.display(),
+        dir = dir.join("views").display(),
     );
+    // A screenshot of an earlier session that the second P must not overwrite.
+    std::fs::create_dir_all(dir.join("views")).unwrap();
+    std::fs::write(dir.join("views/gaussian-view-1.png"), b"earlier").unwrap();
     let out = Command::new("xvfb-run")
         .args(["-a", "-s", "-screen 0 640x480x24", "sh", "-c", &script])
         .output()
@@ -134,8 +181,17 @@ fn view_keys_switch_mode_record_the_path_and_quit() {
         "GeoMipMap {gmm:.1} dB, warped {warped:.1} dB"
     );
 
-    // R … R wrote the scene with the path flown: north (W, the camera looks north), at speed.
-    let flown = dir.join("gaussian-flown.toml");
+    // The second P took the next free name in --out-dir.
+    assert_eq!(
+        std::fs::read(dir.join("views/gaussian-view-1.png")).unwrap(),
+        b"earlier"
+    );
+    let (w, h, _) = read_png(&dir.join("views/gaussian-view-2.png")).expect("second screenshot");
+    assert_eq!((w, h), (160, 120));
+
+    // R … R wrote the scene with the path flown into --out-dir: north (W, the camera looks
+    // north), at speed.
+    let flown = dir.join("views/gaussian-flown.toml");
     let recorded = terrain::scene::Scene::load(&flown).expect("the recorded scene loads");
     let path = recorded.path.expect("a [path]");
     let (first, last) = (

@@ -5,11 +5,11 @@
 //! geographic (degrees) and converted to metres at its mid latitude; projected grids are in metres.
 
 use super::{RawGrid, degrees_to_metres};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Role};
 use std::path::Path;
 
 pub fn read(path: &Path) -> Result<RawGrid> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = std::fs::read(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
     let text = std::str::from_utf8(&bytes)
         .map_err(|_| Error::sketch(path, "not an ASCII grid (binary content)"))?;
     parse(path, text)

@@ -3,14 +3,14 @@
 //! south-west corner, whose latitude converts the arc-second cells to metres.
 
 use super::{RawGrid, degrees_to_metres};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Role};
 use std::path::Path;
 
 const VOID: i16 = -32768;
 
 /// `spacing_given`: the scene sets the spacing, so a name without a latitude is no error.
 pub fn read(path: &Path, spacing_given: bool) -> Result<RawGrid> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = std::fs::read(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
     let (side, arcsec) = match bytes.len() {
         n if n == 1201 * 1201 * 2 => (1201, 3.0),
         n if n == 3601 * 3601 * 2 => (3601, 1.0),

@@ -3,7 +3,7 @@
 //! tie point and GDAL nodata tags honoured when present).
 
 use super::{LoadOptions, RawGrid, degrees_to_metres};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Role};
 use std::io::BufReader;
 use std::path::Path;
 use tiff::decoder::{Decoder, DecodingResult};
@@ -11,7 +11,7 @@ use tiff::tags::Tag;
 
 pub fn read_png(path: &Path, opts: &LoadOptions) -> Result<RawGrid> {
     let bad = |reason: String| Error::sketch(path, reason);
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = std::fs::File::open(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
     let mut decoder = png::Decoder::new(BufReader::new(file));
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder
@@ -63,7 +63,7 @@ pub fn read_png(path: &Path, opts: &LoadOptions) -> Result<RawGrid> {
 
 pub fn read_tiff(path: &Path) -> Result<RawGrid> {
     let bad = |reason: String| Error::sketch(path, reason);
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = std::fs::File::open(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
     let mut dec =
         Decoder::new(BufReader::new(file)).map_err(|e| bad(format!("not a readable TIFF: {e}")))?;
     let (w, h) = dec

@@ -98,9 +98,27 @@ pub fn degrees_to_metres(cell_x_deg: f64, cell_y_deg: f64, lat_deg: f64) -> (f64
     (east, cell_y_deg * m_per_deg)
 }
 
+/// Sketch files above this size show a spinner while they are read (about 2 s for an ASCII grid).
+const LARGE_FILE_BYTES: u64 = 64 << 20;
+
+/// The sketch formats by extension, for messages.
+const FORMATS: &str = ".asc/.grd (ESRI ASCII), .hgt (SRTM), .png, .tif/.tiff, .xyz/.csv/.txt";
+
 impl Atlas {
     /// Reads a sketch file, choosing the reader by its extension.
     pub fn load(path: &Path, opts: &LoadOptions) -> Result<Atlas> {
+        // A large sketch takes seconds to parse and fill: say so while it does.
+        let spinner = std::fs::metadata(path)
+            .is_ok_and(|m| m.len() > LARGE_FILE_BYTES)
+            .then(|| crate::progress::Spinner::new(&format!("reading sketch {}", path.display())));
+        let atlas = Atlas::load_quietly(path, opts);
+        if let Some(s) = spinner {
+            s.finish();
+        }
+        atlas
+    }
+
+    fn load_quietly(path: &Path, opts: &LoadOptions) -> Result<Atlas> {
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
@@ -112,10 +130,24 @@ impl Atlas {
             "png" => image::read_png(path, opts)?,
             "tif" | "tiff" => image::read_tiff(path)?,
             "xyz" | "csv" | "txt" => xyz::read(path)?,
-            _ => {
+            "toml" => {
                 return Err(Error::sketch(
                     path,
-                    "unknown sketch format (expected .asc, .hgt, .png, .tif, .xyz)",
+                    format!(
+                        "a scene file, not a height map: give it to `terrain render`; a sketch is {FORMATS}"
+                    ),
+                ));
+            }
+            "" => {
+                return Err(Error::sketch(
+                    path,
+                    format!("no extension to tell its format: a sketch is {FORMATS}"),
+                ));
+            }
+            other => {
+                return Err(Error::sketch(
+                    path,
+                    format!("unknown sketch format `.{other}`: a sketch is {FORMATS}"),
                 ));
             }
         };
@@ -169,6 +201,35 @@ impl Atlas {
 
     pub fn width(&self) -> usize {
         self.levels[0].width
+    }
+
+    /// The sketch's relief in its two finest bands, metres RMS: what level 0 adds to level 1 of
+    /// the pyramid (wavelengths of 2–4 cells), and what level 1 adds to level 2 (4–8 cells).
+    /// At most about 256² texels are visited, so a sketch of any size costs the same.
+    pub fn finest_relief(&self) -> [f64; 2] {
+        let band = |l: usize| -> f64 {
+            let Some(level) = self.levels.get(l) else {
+                return 0.0;
+            };
+            if l + 1 >= self.levels.len() {
+                return 0.0;
+            }
+            let stride = (level.width.max(level.height) / 256).max(1);
+            let (mut sum, mut n) = (0.0f64, 0usize);
+            for j in (0..level.height).step_by(stride) {
+                for i in (0..level.width).step_by(stride) {
+                    // Level l's texel (i, j) in level-0 texel units, where sample_texel works.
+                    let s = (1u64 << l) as f64;
+                    let (u, v) = ((i as f64 + 0.5) * s - 0.5, (j as f64 + 0.5) * s - 0.5);
+                    let fine = level.data[j * level.width + i] as f64;
+                    let coarse = self.sample_texel(u, v, (l + 1) as f64) as f64;
+                    sum += (fine - coarse).powi(2);
+                    n += 1;
+                }
+            }
+            (sum / n.max(1) as f64).sqrt()
+        };
+        [band(0), band(1)]
     }
     pub fn height(&self) -> usize {
         self.levels[0].height

@@ -3,11 +3,11 @@
 //! points the grid lacks are nodata.
 
 use super::RawGrid;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Role};
 use std::path::Path;
 
 pub fn read(path: &Path) -> Result<RawGrid> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = std::fs::read(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
     let text = std::str::from_utf8(&bytes)
         .map_err(|_| Error::sketch(path, "not an XYZ text file (binary content)"))?;
     parse(path, text)

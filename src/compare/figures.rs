@@ -3,7 +3,7 @@
 
 use super::report::{PSNR_CAP_DB, Row, TARGET_PSNR_DB, TARGET_SSE_PX};
 use crate::error::{Error, Result};
-use crate::output::write_png_rgba;
+use crate::output::write_image;
 use crate::plot::chart::{Axis, Figure, Panel, Scale, Series, Style};
 use crate::plot::raster::RasterCanvas;
 use crate::plot::{Anchor, Canvas, Rgb};
@@ -257,5 +257,5 @@ pub fn strip(
         blit(&mut c, column * width, height + 2 * label_h, &diff);
         label(&mut c, column, 0, [name, setting]);
     }
-    write_png_rgba(path, w, h, c.pixmap.data())
+    write_image(path, w, h, c.pixmap.data())
 }

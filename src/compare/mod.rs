@@ -27,11 +27,11 @@ pub mod temporal;
 use crate::atlas::Atlas;
 use crate::camera::Camera;
 use crate::cpu_stage::{self, CpuStage};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Role};
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::uniforms::View;
 use crate::metrics::{self, ScreenError};
-use crate::output::{write_atomic, write_png_rgba};
+use crate::output::{write_atomic, write_image};
 use crate::path::CameraPath;
 use crate::progress::Progress;
 use crate::render::{Frame, ReferenceRenderer, SceneRenderer};
@@ -50,7 +50,8 @@ const MAX_REFERENCE_HALVINGS: usize = 3;
 
 pub struct Options {
     /// Image width and height in pixels.
-    pub size: u32,
+    /// Image width and height, pixels.
+    pub size: (u32, u32),
     pub modes: Vec<Mode>,
     /// Timed frames per setting, after one warm-up.
     pub repeat: u32,
@@ -66,7 +67,7 @@ pub struct Options {
 impl Default for Options {
     fn default() -> Options {
         Options {
-            size: 256,
+            size: (256, 256),
             modes: vec![Mode::Warped, Mode::Geomipmap, Mode::Bruteforce],
             repeat: 5,
             path_frames: 24,
@@ -175,9 +176,8 @@ fn measure(
 /// Runs the comparison of `scene` (named `name` in titles) and writes its outputs to `out_dir`.
 pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Outcome> {
     let mut scene = scene.clone();
-    scene.camera.width = o.size;
-    scene.camera.height = o.size;
-    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    (scene.camera.width, scene.camera.height) = o.size;
+    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
     let atlas = cpu_stage::load_atlas(&scene)?;
     let camera = cpu_stage::camera_of(&scene, &atlas)?;
     let settings = o
@@ -256,7 +256,8 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     report::mark_fronts(&mut rows);
     let summary = report::summarise(&rows);
 
-    let title = format!("{name}: {0}×{0} px on {1}", o.size, ctx.adapter_name());
+    let (w, h) = o.size;
+    let title = format!("{name}: {w}×{h} px on {}", ctx.adapter_name());
     let path = if path_frames > 0 {
         let out = Out {
             dir: out_dir,
@@ -275,11 +276,10 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
         None
     };
     write_outputs(out_dir, &rows, &summary, &title)?;
-    write_png_rgba(&out_dir.join("reference.png"), o.size, o.size, &truth0.rgba)?;
-    let size = o.size as usize;
+    write_image(&out_dir.join("reference.png"), w, h, &truth0.rgba)?;
     crate::output::write_npy_f64(
         &out_dir.join("reference_positions.npy"),
-        &[size, size, 4],
+        &[h as usize, w as usize, 4],
         &crate::render::world_positions(&truth0.positions, &camera),
     )?;
     let strip_modes: Vec<(String, String, Vec<u8>)> = o
@@ -298,13 +298,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
             ))
         })
         .collect();
-    figures::strip(
-        &out_dir.join("strip.png"),
-        o.size,
-        o.size,
-        &truth0.rgba,
-        &strip_modes,
-    )?;
+    figures::strip(&out_dir.join("strip.png"), w, h, &truth0.rgba, &strip_modes)?;
     let histogram = if o.modes.contains(&Mode::Warped) {
         Some(ratio_histogram(&scene, &atlas, &camera, out_dir, name)?)
     } else {
@@ -316,7 +310,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     let report = json!({
         "scene": name,
         "adapter": ctx.adapter_name(),
-        "size": o.size,
+        "size": [w, h],
         "gpu_timing": if ctx.timestamps { "timestamp queries" } else { "wall time around submit" },
         "timed_frames": o.repeat.max(1),
         "reference": {
@@ -349,16 +343,18 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
 /// to the figures, without measuring again). Returns the rows' count.
 pub fn replot(out_dir: &Path) -> Result<usize> {
     let path = out_dir.join("report.json");
-    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
-    let bad = |why: String| Error::Invalid(format!("{}: {why}", path.display()));
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(Role::Report, &path, e))?;
+    let bad = |why: String| Error::file(Role::Report, &path, why);
     let report: Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
     let mut rows: Vec<Row> =
         serde_json::from_value(report["rows"].clone()).map_err(|e| bad(format!("rows: {e}")))?;
     report::mark_fronts(&mut rows);
+    let side = |k: usize| report["size"][k].as_u64().unwrap_or(0);
     let title = format!(
-        "{}: {1}×{1} px on {2}",
+        "{}: {}×{} px on {}",
         report["scene"].as_str().unwrap_or("scene"),
-        report["size"].as_u64().unwrap_or(0),
+        side(0),
+        side(1),
         report["adapter"].as_str().unwrap_or("?")
     );
     write_outputs(out_dir, &rows, &report::summarise(&rows), &title)?;

@@ -9,7 +9,7 @@ use super::raster::RasterCanvas;
 use super::svg::SvgCanvas;
 use super::{Anchor, Canvas, Rgb};
 use crate::error::{Error, Result};
-use crate::output::{write_atomic, write_png_rgba};
+use crate::output::{write_atomic, write_image};
 use std::path::Path;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -264,7 +264,7 @@ impl Figure {
     /// Writes `<stem>.svg` and `<stem>.png` atomically.
     pub fn write(&self, stem: &Path) -> Result<()> {
         write_atomic(&stem.with_extension("svg"), self.svg().as_bytes())?;
-        write_png_rgba(
+        write_image(
             &stem.with_extension("png"),
             self.width,
             self.height,
