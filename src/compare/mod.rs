@@ -180,6 +180,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
     let atlas = cpu_stage::load_atlas(&scene)?;
     let camera = cpu_stage::camera_of(&scene, &atlas)?;
+    let detail = cpu_stage::detail_of(&scene, &atlas);
     let settings = o
         .settings
         .clone()
@@ -309,6 +310,12 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
 
     let report = json!({
         "scene": name,
+        "detail": {
+            "octaves": detail.octaves,
+            "amplitude_m": detail.amplitude_m,
+            "gain": detail.gain,
+            "bias": detail.bias,
+        },
         "adapter": ctx.adapter_name(),
         "size": [w, h],
         "gpu_timing": if ctx.timestamps { "timestamp queries" } else { "wall time around submit" },
