@@ -242,6 +242,10 @@ fn name_the_key(text: &str, reason: &str) -> String {
             } else {
                 format!("{section}.{key}")
             };
+            // The scene reader names the key itself where serde knows it.
+            if rest.starts_with(&path) {
+                return rest.to_string();
+            }
             return format!("{path}: {rest}");
         }
     }

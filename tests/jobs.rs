@@ -325,7 +325,8 @@ fn bad_jobs_fail_alone_with_their_cause() {
         cause("underground", 0)
     );
     assert!(
-        cause("malformed", 0).contains("camera.position"),
+        cause("malformed", 0).contains("camera.position")
+            && cause("malformed", 0).matches("camera.position").count() == 1,
         "{}",
         cause("malformed", 0)
     );
