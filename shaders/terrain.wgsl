@@ -56,7 +56,7 @@ fn sky_vs(@builtin(vertex_index) vi: u32) -> SkyOut {
 
 @fragment
 fn sky_fs(in: SkyOut) -> FragOut {
-    if (frame.view == 5u) {
+    if (frame.view == VIEW_COVERAGE) {
         return frag_out(vec3<f32>(0.0), 0.0);
     }
     let far = frame.inv_view_proj * vec4<f32>(in.ndc, 1e-4, 1.0);
@@ -184,16 +184,16 @@ fn terrain_fs(in: VsOut) -> FragOut {
     n = normalize(vec3<f32>(n.xy / max(n.z, 0.05) - grad, 1.0));
 #endif
     var colour = lit(in.local, n, to_eye, dist);
-    if (frame.view == 1u) {
+    if (frame.view == VIEW_WIREFRAME) {
         // Wireframe: the quad mesh's grid lines over the shaded terrain.
         let d = abs(fract(in.grid + 0.5) - 0.5) / max(fwidth(in.grid), vec2<f32>(1e-6));
         colour = mix(vec3<f32>(0.05, 0.05, 0.08), colour, clamp(min(d.x, d.y), 0.0, 1.0));
-    } else if (frame.view == 2u) {
+    } else if (frame.view == VIEW_SPLIT_OCTAVE) {
         let t = clamp(in.split / f32(max(frame.octaves, 1u)), 0.0, 1.0);
         colour = mix(vec3<f32>(0.1, 0.1, 0.6), vec3<f32>(1.0, 0.9, 0.1), t);
-    } else if (frame.view == 4u) {
+    } else if (frame.view == VIEW_NORMALS) {
         colour = n * 0.5 + 0.5;
-    } else if (frame.view == 5u) {
+    } else if (frame.view == VIEW_COVERAGE) {
         return frag_out(vec3<f32>(1.0), in.clip.z);
     }
 #ifdef IMPORTANCE_VIEW

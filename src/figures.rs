@@ -8,7 +8,7 @@
 use crate::atlas::Atlas;
 use crate::cpu_stage::CpuStage;
 use crate::error::Result;
-use crate::output::write_image;
+use crate::output::Staged;
 use glam::DVec2;
 use std::path::Path;
 use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Stroke, Transform};
@@ -16,19 +16,22 @@ use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Stroke, Transform};
 const SIZE: u32 = 768;
 
 /// Writes the three figures into `dir`.
+/// The three figures, written together: all or none.
 pub fn write_all(dir: &Path, atlas: &Atlas, stage: &CpuStage, ratios: &[f32]) -> Result<()> {
-    write_importance(&dir.join("importance.png"), stage)?;
+    let mut out = Staged::default();
+    write_importance(&mut out, &dir.join("importance.png"), stage)?;
     let shade = shaded_relief(atlas, stage);
     let mut mesh = shade.clone();
     draw_mesh(&mut mesh, stage);
-    save(&dir.join("mesh.png"), &mesh)?;
+    save(&mut out, &dir.join("mesh.png"), &mesh)?;
     let mut ratio = shade;
     draw_ratio(&mut ratio, stage, ratios);
-    save(&dir.join("ratio.png"), &ratio)
+    save(&mut out, &dir.join("ratio.png"), &ratio)?;
+    out.commit()
 }
 
-fn save(path: &Path, p: &Pixmap) -> Result<()> {
-    write_image(path, p.width(), p.height(), p.data())
+fn save(out: &mut Staged, path: &Path, p: &Pixmap) -> Result<()> {
+    out.add_image(path, p.width(), p.height(), p.data())
 }
 
 /// World metres to pixels over the region.
@@ -41,7 +44,7 @@ fn to_px(stage: &CpuStage, w: DVec2) -> (f32, f32) {
     )
 }
 
-fn write_importance(path: &Path, stage: &CpuStage) -> Result<()> {
+fn write_importance(out: &mut Staged, path: &Path, stage: &CpuStage) -> Result<()> {
     let imp = &stage.importance;
     let n = imp.n;
     let logs: Vec<f32> = imp
@@ -66,7 +69,7 @@ fn write_importance(path: &Path, stage: &CpuStage) -> Result<()> {
             rgba[(py * side + px) * 4..][..3].copy_from_slice(&c);
         }
     }
-    write_image(path, side as u32, side as u32, &rgba)
+    out.add_image(path, side as u32, side as u32, &rgba)
 }
 
 /// Height-tinted hillshade of the atlas over the region (light from the north-west).

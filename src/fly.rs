@@ -14,7 +14,7 @@
 use crate::animation::{self, Apng};
 use crate::error::{Error, Result, Role};
 use crate::gpu::uniforms::View;
-use crate::output::{write_atomic, write_image};
+use crate::output::{Fixed, write_atomic, write_image};
 use crate::path::CameraPath;
 use crate::progress::Progress;
 use crate::render::SceneRenderer;
@@ -43,6 +43,45 @@ pub struct FrameRecord {
     pub triangles: u64,
     pub passes_ms: [Option<f64>; 3],
     pub file: String,
+}
+
+/// A line of `frames.csv`.
+#[derive(Serialize)]
+struct CsvRow<'a> {
+    frame: usize,
+    time_s: Fixed<4>,
+    x_m: Fixed<2>,
+    y_m: Fixed<2>,
+    z_m: Fixed<2>,
+    cpu_stage_us: Fixed<1>,
+    gpu_ms: Fixed<3>,
+    frame_ms: Fixed<3>,
+    triangles: u64,
+    warp_zoom_ms: Option<Fixed<3>>,
+    normals_ms: Option<Fixed<3>>,
+    terrain_ms: Option<Fixed<3>>,
+    file: &'a str,
+}
+
+impl CsvRow<'_> {
+    fn of(r: &FrameRecord) -> CsvRow<'_> {
+        let ms = |v: Option<f64>| v.map(Fixed);
+        CsvRow {
+            frame: r.frame,
+            time_s: Fixed(r.time_s),
+            x_m: Fixed(r.eye_m[0]),
+            y_m: Fixed(r.eye_m[1]),
+            z_m: Fixed(r.eye_m[2]),
+            cpu_stage_us: Fixed(r.cpu_stage_us),
+            gpu_ms: Fixed(r.gpu_ms),
+            frame_ms: Fixed(r.frame_ms),
+            triangles: r.triangles,
+            warp_zoom_ms: ms(r.passes_ms[0]),
+            normals_ms: ms(r.passes_ms[1]),
+            terrain_ms: ms(r.passes_ms[2]),
+            file: &r.file,
+        }
+    }
 }
 
 #[derive(Debug, Serialize)]
@@ -143,9 +182,6 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
     };
     r.render(&cameras[0])?; // warm-up
     let mut records = Vec::with_capacity(cameras.len());
-    let mut csv = String::from(
-        "frame,time_s,x_m,y_m,z_m,cpu_stage_us,gpu_ms,frame_ms,triangles,warp_zoom_ms,normals_ms,terrain_ms,file\n",
-    );
     for (k, (camera, &t)) in cameras.iter().zip(&times).enumerate() {
         let frame = r.render(camera)?;
         let file = format!("frame-{k:05}.png");
@@ -165,28 +201,15 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
             passes_ms: [p.warp_zoom_ms, p.normals_ms, p.terrain_ms],
             file,
         };
-        let opt = |v: Option<f64>| v.map(|v| format!("{v:.3}")).unwrap_or_default();
-        csv += &format!(
-            "{},{:.4},{:.2},{:.2},{:.2},{:.1},{:.3},{:.3},{},{},{},{},{}\n",
-            k,
-            t,
-            camera.eye.x,
-            camera.eye.y,
-            camera.eye.z,
-            record.cpu_stage_us,
-            record.gpu_ms,
-            record.frame_ms,
-            record.triangles,
-            opt(record.passes_ms[0]),
-            opt(record.passes_ms[1]),
-            opt(record.passes_ms[2]),
-            record.file
-        );
         records.push(record);
         progress.advance(1.0, &format!("frame {}/{}", k + 1, cameras.len()));
     }
     progress.finish();
-    write_atomic(&out_dir.join("frames.csv"), csv.as_bytes())?;
+    let rows: Vec<CsvRow> = records.iter().map(CsvRow::of).collect();
+    write_atomic(
+        &out_dir.join("frames.csv"),
+        &crate::output::csv_bytes(&rows),
+    )?;
     let (mp4, mp4_note) = match apng {
         Some(a) => {
             a.finish()?;

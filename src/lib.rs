@@ -23,6 +23,7 @@ pub mod geomipmap;
 pub mod gpu;
 pub mod importance;
 pub mod metrics;
+pub mod names;
 pub mod output;
 pub mod path;
 pub mod plot;

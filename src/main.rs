@@ -42,8 +42,8 @@ enum Command {
         #[arg(long)]
         out_dir: PathBuf,
         /// Overrides the scene's warp.method.
-        #[arg(long, value_parser = ["plain", "guarded"])]
-        method: Option<String>,
+        #[arg(long)]
+        method: Option<WarpMethod>,
         /// Timed runs of the stage (after one warm-up); the median is reported.
         #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..=10000))]
         repeat: u32,
@@ -66,10 +66,10 @@ enum Command {
         #[arg(long, value_name = "N|WxH", value_parser = size_arg)]
         size: Option<(u32, u32)>,
         /// Overrides the scene's render.mode.
-        #[arg(long, value_parser = ["warped", "geomipmap", "bruteforce", "reference"])]
-        mode: Option<String>,
-        #[arg(long, default_value = "shaded", value_parser = ["shaded", "wireframe", "split-octave", "importance", "normals", "coverage"])]
-        view: String,
+        #[arg(long)]
+        mode: Option<Mode>,
+        #[arg(long, default_value_t = View::Shaded)]
+        view: View,
         /// GeoMipMap's τ: the largest projected vertex error, pixels (overrides geomipmap.tau).
         #[arg(long, allow_negative_numbers = true, value_parser = positive_arg)]
         tau: Option<f64>,
@@ -96,8 +96,8 @@ enum Command {
         #[arg(long, value_name = "N|WxH", default_value = "256", value_parser = size_arg)]
         size: (u32, u32),
         /// Modes to compare, comma-separated.
-        #[arg(long, value_delimiter = ',', default_value = "warped,geomipmap,bruteforce", value_parser = ["warped", "geomipmap", "bruteforce"])]
-        modes: Vec<String>,
+        #[arg(long, value_delimiter = ',', default_value = "warped,geomipmap,bruteforce", value_parser = mesh_mode)]
+        modes: Vec<Mode>,
         /// Timed frames per setting after one warm-up; medians are reported.
         #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
         repeat: u32,
@@ -122,10 +122,10 @@ enum Command {
         scene: PathBuf,
         #[arg(long)]
         out_dir: PathBuf,
-        #[arg(long, value_parser = ["warped", "geomipmap", "bruteforce", "reference"])]
-        mode: Option<String>,
-        #[arg(long, default_value = "shaded", value_parser = ["shaded", "wireframe", "split-octave", "importance", "normals", "coverage"])]
-        view: String,
+        #[arg(long)]
+        mode: Option<Mode>,
+        #[arg(long, default_value_t = View::Shaded)]
+        view: View,
         /// Frames spread evenly over the whole path (default: --fps frames per second of travel,
         /// at most 300; a longer path is spread over 300 frames).
         #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
@@ -166,8 +166,8 @@ enum Command {
     /// V views, F freeze, R record the path, P screenshot, Esc quit).
     View {
         scene: PathBuf,
-        #[arg(long, value_parser = ["warped", "geomipmap", "bruteforce"])]
-        mode: Option<String>,
+        #[arg(long, value_parser = mesh_mode)]
+        mode: Option<Mode>,
         /// Window size: N (square) or WxH.
         #[arg(long, value_name = "N|WxH", default_value = "800x450", value_parser = size_arg)]
         size: (u32, u32),
@@ -237,15 +237,7 @@ fn main() {
             no_figures,
             set,
             json,
-        } => warp(
-            &scene,
-            &set,
-            &out_dir,
-            method.as_deref(),
-            repeat,
-            !no_figures,
-            json,
-        ),
+        } => warp(&scene, &set, &out_dir, method, repeat, !no_figures, json),
         Command::Render {
             scene,
             output,
@@ -295,11 +287,7 @@ fn main() {
             &out_dir,
             terrain::compare::Options {
                 size,
-                modes: modes
-                    .iter()
-                    .map(|m| parse_mode(m))
-                    .collect::<Result<_>>()
-                    .unwrap_or_default(),
+                modes,
                 repeat,
                 path_frames: path_frames as usize,
                 path_fps,
@@ -351,7 +339,7 @@ fn main() {
         } => view(
             &scene,
             &set,
-            mode.as_deref(),
+            mode,
             ViewArgs {
                 size,
                 frames,
@@ -465,18 +453,14 @@ fn warp(
     scene_path: &Path,
     set: &[String],
     out_dir: &Path,
-    method: Option<&str>,
+    method: Option<WarpMethod>,
     repeat: u32,
     figures_on: bool,
     json: bool,
 ) -> Result<()> {
     let mut scene = Scene::load_with(scene_path, set)?;
     if let Some(m) = method {
-        scene.warp.method = if m == "plain" {
-            WarpMethod::Plain
-        } else {
-            WarpMethod::Guarded
-        };
+        scene.warp.method = m;
     }
     let atlas = cpu_stage::load_atlas(&scene)?;
     let detail = cpu_stage::detail_of(&scene, &atlas);
@@ -503,7 +487,7 @@ fn warp(
     }
     let map = &stage.sketch_map;
     let out = json!({
-        "method": format!("{:?}", stage.warp.method).to_lowercase(),
+        "method": stage.warp.method.name(),
         "visible": map.visible,
         "cells_visible": q.cells_visible,
         "ratio_within_0_5_2": q.ratio_within_0_5_2,
@@ -538,13 +522,20 @@ fn warp(
     Ok(())
 }
 
-fn parse_mode(m: &str) -> Result<Mode> {
-    Mode::parse(m).with_context(|| format!("unknown mode {m}"))
+/// `--modes`, `view --mode`: a mode that draws a mesh (not the reference).
+fn mesh_mode(s: &str) -> Result<Mode, String> {
+    Mode::MESHES
+        .into_iter()
+        .find(|m| m.name() == s)
+        .ok_or_else(|| {
+            let names: Vec<&str> = Mode::MESHES.iter().map(|m| m.name()).collect();
+            format!("expected one of {}", names.join(", "))
+        })
 }
 
 struct FlyArgs {
-    mode: Option<String>,
-    view: String,
+    mode: Option<Mode>,
+    view: View,
     frames: Option<u32>,
     fps: f64,
     size: Option<(u32, u32)>,
@@ -556,13 +547,9 @@ fn fly(scene_path: &Path, set: &[String], out_dir: &Path, a: &FlyArgs, json: boo
     if let Some(size) = a.size {
         (scene.camera.width, scene.camera.height) = size;
     }
-    let mode = match a.mode.as_deref() {
-        Some(m) => parse_mode(m)?,
-        None => scene.render.mode,
-    };
     let opts = terrain::fly::Options {
-        mode,
-        view: View::parse(&a.view).context("unknown view")?,
+        mode: a.mode.unwrap_or(scene.render.mode),
+        view: a.view,
         frames: a.frames.map(|n| n as usize),
         fps: a.fps,
         mp4: a.mp4,
@@ -611,10 +598,10 @@ struct ViewArgs {
 }
 
 #[cfg(feature = "view")]
-fn view(scene_path: &Path, set: &[String], mode: Option<&str>, a: ViewArgs) -> Result<()> {
+fn view(scene_path: &Path, set: &[String], mode: Option<Mode>, a: ViewArgs) -> Result<()> {
     let scene = Scene::load_with(scene_path, set)?;
     let mode = match mode {
-        Some(m) => parse_mode(m)?,
+        Some(m) => m,
         None if scene.render.mode == Mode::Reference => Mode::Warped,
         None => scene.render.mode,
     };
@@ -630,7 +617,7 @@ fn view(scene_path: &Path, set: &[String], mode: Option<&str>, a: ViewArgs) -> R
 }
 
 #[cfg(not(feature = "view"))]
-fn view(_: &Path, _: &[String], _: Option<&str>, _: ViewArgs) -> Result<()> {
+fn view(_: &Path, _: &[String], _: Option<Mode>, _: ViewArgs) -> Result<()> {
     anyhow::bail!(
         "this terrain was built without the `view` feature (cargo build --release builds it)"
     )
@@ -761,17 +748,14 @@ fn render(
         .into());
     }
     let mut scene = Scene::load_with(scene_path, set)?;
-    let mode = match opts.mode.as_deref() {
-        Some(m) => parse_mode(m)?,
-        None => scene.render.mode,
-    };
+    let mode = opts.mode.unwrap_or(scene.render.mode);
     if let Some(tau) = opts.tau {
         scene.geomipmap.tau = tau;
     }
     if let Some(size) = opts.size {
         (scene.camera.width, scene.camera.height) = size;
     }
-    let view = View::parse(&opts.view).context("unknown view")?;
+    let view = opts.view;
     let mut r = SceneRenderer::with_positions(&scene, mode, view, opts.positions.is_some())?;
     let camera = cpu_stage::camera_of(&scene, r.atlas())?;
     let big = scene.camera.width as u64 * scene.camera.height as u64 > BIG_RENDER_PIXELS;
@@ -817,7 +801,7 @@ fn render(
     let mut report = json!({
         "adapter": r.ctx().adapter_name(),
         "mode": mode_name,
-        "view": view_name(view),
+        "view": view.name(),
         "width": last.width,
         "height": last.height,
         "visible": r.visible(),
@@ -871,20 +855,9 @@ fn detail_json(d: &terrain::detail::Detail) -> serde_json::Value {
 
 struct RenderOpts {
     size: Option<(u32, u32)>,
-    mode: Option<String>,
-    view: String,
+    mode: Option<Mode>,
+    view: View,
     tau: Option<f64>,
     repeat: u32,
     positions: Option<PathBuf>,
-}
-
-fn view_name(v: View) -> &'static str {
-    match v {
-        View::Shaded => "shaded",
-        View::Wireframe => "wireframe",
-        View::SplitOctave => "split-octave",
-        View::Importance => "importance",
-        View::Normals => "normals",
-        View::Coverage => "coverage",
-    }
 }

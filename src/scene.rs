@@ -103,14 +103,15 @@ impl Default for DetailSection {
     }
 }
 
-/// How the warp keeps cells from folding; see `warp.rs`.
-#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
-pub enum WarpMethod {
-    /// The paper's single row pass then column pass, nothing more.
-    Plain,
-    /// Row then column pass, with the column warps relaxed toward their common mean where cells fold.
-    Guarded,
+crate::named_enum! {
+    /// How the warp keeps cells from folding; see `warp.rs`.
+    pub enum WarpMethod ("warp method") {
+        /// The paper's single row pass then column pass, nothing more.
+        Plain = "plain",
+        /// Row then column pass, with the column warps relaxed toward their common mean where
+        /// cells fold.
+        Guarded = "guarded",
+    }
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -208,36 +209,19 @@ impl Default for ReferenceSection {
     }
 }
 
-#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
-pub enum Mode {
-    Warped,
-    Geomipmap,
-    Bruteforce,
-    Reference,
+crate::named_enum! {
+    /// The level-of-detail scheme that draws the terrain (`render.mode`, `--mode`).
+    pub enum Mode ("mode") {
+        Warped = "warped",
+        Geomipmap = "geomipmap",
+        Bruteforce = "bruteforce",
+        Reference = "reference",
+    }
 }
 
 impl Mode {
-    pub const ALL: [Mode; 4] = [
-        Mode::Warped,
-        Mode::Geomipmap,
-        Mode::Bruteforce,
-        Mode::Reference,
-    ];
-
-    /// The name in scene files, on the command line and in reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            Mode::Warped => "warped",
-            Mode::Geomipmap => "geomipmap",
-            Mode::Bruteforce => "bruteforce",
-            Mode::Reference => "reference",
-        }
-    }
-
-    pub fn parse(name: &str) -> Option<Mode> {
-        Mode::ALL.into_iter().find(|m| m.name() == name)
-    }
+    /// The modes that draw a mesh (every one but the ray-marched reference).
+    pub const MESHES: [Mode; 3] = [Mode::Warped, Mode::Geomipmap, Mode::Bruteforce];
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]

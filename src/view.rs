@@ -63,15 +63,6 @@ fn unused(dir: &Path, name: impl Fn(usize) -> String) -> PathBuf {
         .expect("some number is free")
 }
 
-const VIEWS: [View; 6] = [
-    View::Shaded,
-    View::Wireframe,
-    View::SplitOctave,
-    View::Importance,
-    View::Normals,
-    View::Coverage,
-];
-
 type Surface = softbuffer::Surface<Arc<Window>, Arc<Window>>;
 
 struct App {
@@ -99,17 +90,6 @@ struct App {
     surface: Option<Surface>,
     error: Option<Error>,
     message: String,
-}
-
-fn view_label(v: View) -> &'static str {
-    match v {
-        View::Shaded => "shaded",
-        View::Wireframe => "wireframe",
-        View::SplitOctave => "split octave",
-        View::Importance => "importance",
-        View::Normals => "normals",
-        View::Coverage => "coverage",
-    }
 }
 
 impl App {
@@ -206,7 +186,7 @@ impl App {
             format!(
                 "{} · {} · {}×{} · {:.1} fps {}",
                 crate::compare::figures::display(self.mode.name()),
-                view_label(self.view),
+                self.view.name(),
                 w,
                 h,
                 1.0 / dt.max(1e-6),
@@ -336,8 +316,8 @@ impl App {
         }
         match code {
             KeyCode::KeyV => {
-                let k = VIEWS.iter().position(|v| *v == self.view).unwrap_or(0);
-                self.view = VIEWS[(k + 1) % VIEWS.len()];
+                let k = View::ALL.iter().position(|v| *v == self.view).unwrap_or(0);
+                self.view = View::ALL[(k + 1) % View::ALL.len()];
                 self.renderer = None;
             }
             KeyCode::KeyF => self.frozen = !self.frozen,

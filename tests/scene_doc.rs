@@ -189,10 +189,21 @@ fn unset_detail_follows_the_sketch_and_set_detail_is_kept() {
     let flat = load("synthetic = \"flat\"", "");
     // The rugged DEM gets metres of detail, the gentle hills less, the flat plain the floor;
     // 74 m cells get one octave more than 30 m cells.
-    assert!((5.0..30.0).contains(&dem.amplitude_m), "{}", dem.amplitude_m);
-    assert!(hills.amplitude_m < dem.amplitude_m / 3.0, "{}", hills.amplitude_m);
+    assert!(
+        (5.0..30.0).contains(&dem.amplitude_m),
+        "{}",
+        dem.amplitude_m
+    );
+    assert!(
+        hills.amplitude_m < dem.amplitude_m / 3.0,
+        "{}",
+        hills.amplitude_m
+    );
     assert_eq!(flat.amplitude_m, 0.3);
     assert_eq!((dem.octaves, hills.octaves), (10, 9));
-    let set = load("synthetic = \"hills\"", "[detail]\namplitude_m = 8.0\noctaves = 12\n");
+    let set = load(
+        "synthetic = \"hills\"",
+        "[detail]\namplitude_m = 8.0\noctaves = 12\n",
+    );
     assert_eq!((set.amplitude_m, set.octaves), (8.0, 12));
 }

@@ -50,3 +50,24 @@ fn frame_uniforms_match_the_wgsl_layout() {
         std::mem::size_of::<FrameUniforms>()
     );
 }
+
+#[test]
+fn view_constants_in_wgsl_are_the_rust_enum() {
+    use terrain::gpu::uniforms::View;
+    let module = validate("terrain", &[]);
+    let mut found = 0;
+    for (_, c) in module.constants.iter() {
+        let Some(name) = c.name.as_deref().and_then(|n| n.strip_prefix("VIEW_")) else {
+            continue;
+        };
+        let view = View::parse(&name.to_lowercase().replace('_', "-"))
+            .unwrap_or_else(|| panic!("VIEW_{name} names no View"));
+        let value = match module.global_expressions[c.init] {
+            naga::Expression::Literal(naga::Literal::U32(v)) => v,
+            ref e => panic!("VIEW_{name} is {e:?}"),
+        };
+        assert_eq!(value, view as u32, "VIEW_{name}");
+        found += 1;
+    }
+    assert_eq!(found, View::ALL.len(), "a VIEW_ constant per View");
+}

@@ -10,6 +10,15 @@ struct Octave {
     pad: u32,
 }
 
+// The debug views, `frame.view`: the Rust enum `View` in declaration order (tests/shaders.rs
+// checks each name and number).
+const VIEW_SHADED: u32 = 0u;
+const VIEW_WIREFRAME: u32 = 1u;
+const VIEW_SPLIT_OCTAVE: u32 = 2u;
+const VIEW_IMPORTANCE: u32 = 3u;
+const VIEW_NORMALS: u32 = 4u;
+const VIEW_COVERAGE: u32 = 5u;
+
 struct Frame {
     view_proj: mat4x4<f32>,
     inv_view_proj: mat4x4<f32>,

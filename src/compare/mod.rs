@@ -31,6 +31,7 @@ use crate::error::{Error, Result, Role};
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::uniforms::View;
 use crate::metrics::{self, ScreenError};
+use crate::output::Fixed;
 use crate::output::{write_atomic, write_image};
 use crate::path::CameraPath;
 use crate::progress::Progress;
@@ -171,6 +172,21 @@ fn measure(
         ]),
     };
     Ok((row, last.rgba.clone()))
+}
+
+/// A line of `path.csv`: one mode at one frame of the camera path.
+#[derive(serde::Serialize)]
+struct PathRow {
+    frame: usize,
+    time_s: Fixed<4>,
+    mode: &'static str,
+    setting: String,
+    psnr_db: Fixed<3>,
+    sse_mean_px: Fixed<3>,
+    sse_p95_px: Fixed<3>,
+    /// Empty on the first frame, which has no previous level of detail.
+    lod_change_levels: Option<Fixed<4>>,
+    lod_changed_share: Option<Fixed<5>>,
 }
 
 /// Runs the comparison of `scene` (named `name` in titles) and writes its outputs to `out_dir`.
@@ -453,9 +469,7 @@ fn path_series(
         .collect();
     let mut sse: Vec<Vec<ScreenError>> = vec![Vec::new(); modes.len()];
     let mut changes: Vec<Vec<LodChange>> = vec![Vec::new(); modes.len()];
-    let mut csv = String::from(
-        "frame,time_s,mode,setting,psnr_db,sse_mean_px,sse_p95_px,lod_change_levels,lod_changed_share\n",
-    );
+    let mut csv: Vec<PathRow> = Vec::new();
     for (f, camera) in cameras.iter().enumerate() {
         let t = f as f64 / o.path_fps;
         let (truth, _) = truth(reference, camera)?;
@@ -476,19 +490,17 @@ fn path_series(
             );
             let db = metrics::psnr(&frame.rgba, &truth.rgba).min(report::PSNR_CAP_DB);
             // The first frame has no previous level of detail: its change cells stay empty.
-            csv += &format!(
-                "{f},{t:.4},{},{},{db:.3},{:.3},{:.3},{},{}\n",
-                s.mode_name(),
-                s.label(),
-                e.mean_px,
-                e.p95_px,
-                change
-                    .map(|c| format!("{:.4}", c.mean_levels))
-                    .unwrap_or_default(),
-                change
-                    .map(|c| format!("{:.5}", c.changed_share))
-                    .unwrap_or_default(),
-            );
+            csv.push(PathRow {
+                frame: f,
+                time_s: Fixed(t),
+                mode: s.mode_name(),
+                setting: s.label(),
+                psnr_db: Fixed(db),
+                sse_mean_px: Fixed(e.mean_px),
+                sse_p95_px: Fixed(e.p95_px),
+                lod_change_levels: change.map(|c| Fixed(c.mean_levels)),
+                lod_changed_share: change.map(|c| Fixed(c.changed_share)),
+            });
             series[k].1.push(figures::PathPoint {
                 t_s: t,
                 psnr_db: db,
@@ -499,7 +511,7 @@ fn path_series(
         }
         progress.advance(1.0, &format!("path frame {}/{}", f + 1, cameras.len()));
     }
-    write_atomic(&out_dir.join("path.csv"), csv.as_bytes())?;
+    write_atomic(&out_dir.join("path.csv"), &crate::output::csv_bytes(&csv))?;
     figures::path_error(&series, &format!("Along the camera path: {title}"))
         .write(&out_dir.join("path_error"))?;
     let stats = |v: Vec<f64>| -> Value {

@@ -69,29 +69,17 @@ pub struct FrameUniforms {
     pub image: [u32; 4],
 }
 
-/// The debug views of `render --view`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum View {
-    Shaded = 0,
-    Wireframe = 1,
-    SplitOctave = 2,
-    Importance = 3,
-    Normals = 4,
-    /// Terrain white, sky black: for finding holes.
-    Coverage = 5,
-}
-
-impl View {
-    pub fn parse(s: &str) -> Option<View> {
-        Some(match s {
-            "shaded" => View::Shaded,
-            "wireframe" => View::Wireframe,
-            "split-octave" => View::SplitOctave,
-            "importance" => View::Importance,
-            "normals" => View::Normals,
-            "coverage" => View::Coverage,
-            _ => return None,
-        })
+crate::named_enum! {
+    /// The debug views of `render --view`; the WGSL twins are `VIEW_*` in
+    /// `shaders/shared/frame.wgsl` (checked in `tests/shaders.rs`).
+    pub enum View ("view") {
+        Shaded = "shaded",
+        Wireframe = "wireframe",
+        SplitOctave = "split-octave",
+        Importance = "importance",
+        Normals = "normals",
+        /// Terrain white, sky black: for finding holes.
+        Coverage = "coverage",
     }
 }
 
