@@ -1,0 +1,118 @@
+//! `terrain batch JOBS --out-dir D`: many snapshots on one device (the library's `batch` module),
+//! sharded, resumed, or the shards' manifests merged.
+
+use crate::args;
+use anyhow::Result;
+use serde::Serialize;
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct Args {
+    jobs: PathBuf,
+    #[arg(long)]
+    out_dir: PathBuf,
+    /// Renders share i of n (items k with k mod n = i), e.g. --shard 0/4.
+    #[arg(long, value_name = "I/N", value_parser = args::shard)]
+    shard: Option<(usize, usize)>,
+    /// Skips items the manifest lists as done; retries failed ones.
+    #[arg(long)]
+    resume: bool,
+    /// Merges the shard manifests in --out-dir into manifest.jsonl instead of rendering.
+    #[arg(long, conflicts_with_all = ["shard", "resume"])]
+    merge: bool,
+    #[arg(long)]
+    json: bool,
+}
+
+/// `--json` of a batch.
+#[derive(Serialize)]
+struct Report {
+    items: usize,
+    rendered: usize,
+    skipped: usize,
+    failed: usize,
+    seconds: f64,
+    snapshots_per_s: f64,
+    manifest: PathBuf,
+}
+
+/// `--json` of `--merge`.
+#[derive(Serialize)]
+struct Merged {
+    lines: usize,
+    missing: Vec<String>,
+    failed: usize,
+}
+
+pub fn run(a: Args) -> Result<()> {
+    if a.merge {
+        return merge(&a);
+    }
+    let o = terrain::batch::Options {
+        shard: a.shard.unwrap_or((0, 1)),
+        resume: a.resume,
+    };
+    let s = terrain::batch::run(&a.jobs, &a.out_dir, &o)?;
+    let r = Report {
+        items: s.total,
+        rendered: s.rendered,
+        skipped: s.skipped,
+        failed: s.failed,
+        seconds: s.seconds,
+        snapshots_per_s: s.rendered as f64 / s.seconds.max(1e-9),
+        manifest: s.manifest,
+    };
+    if a.json {
+        crate::print_json(&r)?;
+    } else {
+        println!(
+            "{} of {} items rendered in {:.1} s ({:.2} snapshots/s), {} already done, {} failed; {}",
+            r.rendered,
+            r.items,
+            r.seconds,
+            r.snapshots_per_s,
+            r.skipped,
+            r.failed,
+            r.manifest.display()
+        );
+    }
+    anyhow::ensure!(
+        r.failed == 0,
+        "{} of {} snapshots failed; their causes are in {}",
+        r.failed,
+        r.items,
+        r.manifest.display()
+    );
+    Ok(())
+}
+
+fn merge(a: &Args) -> Result<()> {
+    let (lines, missing, failed) = terrain::batch::merge_manifests(&a.jobs, &a.out_dir)?;
+    let m = Merged {
+        lines,
+        missing,
+        failed,
+    };
+    if a.json {
+        crate::print_json(&m)?;
+    } else {
+        println!(
+            "{}: {} items, {} missing, {} failed",
+            a.out_dir.join("manifest.jsonl").display(),
+            m.lines,
+            m.missing.len(),
+            m.failed
+        );
+    }
+    anyhow::ensure!(
+        m.missing.is_empty() && m.failed == 0,
+        "{} items missing{}, {} failed: run the shards again with --resume",
+        m.missing.len(),
+        m.missing
+            .first()
+            .map(|s| format!(" (first {s})"))
+            .unwrap_or_default(),
+        m.failed
+    );
+    Ok(())
+}

@@ -1,0 +1,83 @@
+//! `terrain compare SCENE --out-dir D`: every mode against the reference (the library's
+//! `compare` module), or `--replot` of an earlier run's figures.
+
+use crate::args;
+use anyhow::Result;
+use std::path::PathBuf;
+use terrain::scene::{Mode, Scene};
+
+#[derive(clap::Args)]
+pub struct Args {
+    scene: PathBuf,
+    #[arg(long)]
+    out_dir: PathBuf,
+    /// Image size: N (square) or WxH.
+    #[arg(long, value_name = "N|WxH", default_value = "256", value_parser = args::size)]
+    size: (u32, u32),
+    /// Modes to compare, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "warped,geomipmap,bruteforce", value_parser = args::mesh_mode)]
+    modes: Vec<Mode>,
+    /// Timed frames per setting after one warm-up; medians are reported.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    repeat: u32,
+    /// Frames along the camera path (the scene's [path], else straight ahead); 0: none.
+    #[arg(long, default_value_t = 24, value_parser = clap::value_parser!(u32).range(0..=100000))]
+    path_frames: u32,
+    /// Frames per second along the path.
+    #[arg(long, default_value_t = 15.0, value_parser = args::fps)]
+    path_fps: f64,
+    /// Only redraws error_vs_time and summary.md from --out-dir's report.json.
+    #[arg(long)]
+    replot: bool,
+    /// Overrides a scene key (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(a: Args) -> Result<()> {
+    if a.replot {
+        let n = terrain::compare::replot(&a.out_dir)?;
+        println!("{n} rows redrawn in {}", a.out_dir.display());
+        return Ok(());
+    }
+    let mut modes = a.modes;
+    modes.dedup();
+    anyhow::ensure!(!modes.is_empty(), "--modes: give at least one mode");
+    let opts = terrain::compare::Options {
+        size: a.size,
+        modes,
+        repeat: a.repeat,
+        path_frames: a.path_frames as usize,
+        path_fps: a.path_fps,
+        ..Default::default()
+    };
+    let scene = Scene::load_with(&a.scene, &a.set)?;
+    let name = a
+        .scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let outcome = terrain::compare::run(&scene, &name, &opts, &a.out_dir)?;
+    if a.json {
+        return crate::print_json(&outcome.report);
+    }
+    print!(
+        "{}",
+        terrain::compare::report::summary_markdown(&name, &outcome.summary)
+    );
+    let skipped = outcome.report["skipped"].as_array().map_or(0, |a| a.len());
+    println!(
+        "\n{} settings measured{} in {:.0} s; report.csv, report.json and figures in {}",
+        outcome.rows.len(),
+        if skipped > 0 {
+            format!(", {skipped} skipped (see report.json)")
+        } else {
+            String::new()
+        },
+        outcome.report["elapsed_s"].as_f64().unwrap_or(0.0),
+        a.out_dir.display()
+    );
+    Ok(())
+}

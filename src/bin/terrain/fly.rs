@@ -1,0 +1,95 @@
+//! `terrain fly SCENE --out-dir D`: the scene's camera path as frames, an animation and
+//! `frames.csv` (the library's `fly` module does the work).
+
+use crate::args;
+use anyhow::Result;
+use serde::Serialize;
+use std::path::PathBuf;
+use terrain::gpu::uniforms::View;
+use terrain::scene::{Mode, Scene};
+
+#[derive(clap::Args)]
+pub struct Args {
+    scene: PathBuf,
+    #[arg(long)]
+    out_dir: PathBuf,
+    #[arg(long)]
+    mode: Option<Mode>,
+    #[arg(long, default_value_t = View::Shaded)]
+    view: View,
+    /// Frames spread evenly over the whole path (default: --fps frames per second of travel,
+    /// at most 300; a longer path is spread over 300 frames).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    frames: Option<u32>,
+    /// Frames per second of the animation (and of travel without --frames).
+    #[arg(long, default_value_t = 30.0, value_parser = args::fps)]
+    fps: f64,
+    /// Image size: N (square) or WxH; default the scene's.
+    #[arg(long, value_name = "N|WxH", value_parser = args::size)]
+    size: Option<(u32, u32)>,
+    /// Writes the animation as APNG even when ffmpeg could make an MP4.
+    #[arg(long)]
+    no_mp4: bool,
+    /// Overrides a scene key (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    #[arg(long)]
+    json: bool,
+}
+
+/// `--json`.
+#[derive(Serialize)]
+struct Report {
+    adapter: String,
+    frames: usize,
+    frame_ms_median: f64,
+    frame_ms_p95: f64,
+    spread_p95_over_median: f64,
+    /// `animation.mp4`, or `animation.png` (APNG).
+    animation: PathBuf,
+    mp4: Option<PathBuf>,
+    elapsed_s: f64,
+}
+
+pub fn run(a: Args) -> Result<()> {
+    let mut scene = Scene::load_with(&a.scene, &a.set)?;
+    if let Some(size) = a.size {
+        (scene.camera.width, scene.camera.height) = size;
+    }
+    let opts = terrain::fly::Options {
+        mode: a.mode.unwrap_or(scene.render.mode),
+        view: a.view,
+        frames: a.frames.map(|n| n as usize),
+        fps: a.fps,
+        mp4: !a.no_mp4,
+    };
+    let o = terrain::fly::run(&scene, &opts, &a.out_dir)?;
+    if let Some(note) = &o.mp4_note {
+        eprintln!("{note}");
+    }
+    let r = Report {
+        adapter: o.adapter,
+        frames: o.frames.len(),
+        frame_ms_median: o.frame_ms_median,
+        frame_ms_p95: o.frame_ms_p95,
+        spread_p95_over_median: o.spread,
+        animation: o.animation,
+        mp4: o.mp4,
+        elapsed_s: o.elapsed_s,
+    };
+    if a.json {
+        return crate::print_json(&r);
+    }
+    println!(
+        "{} frames on {} in {:.1} s: frame time median {:.1} ms, p95 {:.1} ms (p95/median {:.2}); {}, frames.csv in {}",
+        r.frames,
+        r.adapter,
+        r.elapsed_s,
+        r.frame_ms_median,
+        r.frame_ms_p95,
+        r.spread_p95_over_median,
+        r.animation.display(),
+        a.out_dir.display()
+    );
+    Ok(())
+}

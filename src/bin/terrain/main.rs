@@ -1,0 +1,123 @@
+//! The `terrain` command line: one file per command, each with its arguments (`Args`), its run
+//! and its `--json` output as a serde struct. Every command prints one line naming the cause and
+//! exits non-zero on bad input: 2 for a usage error (clap's, a bad option value, a bad `--set`),
+//! 1 for bad input found while working. `--json` prints one JSON object on stdout; messages go to
+//! stderr.
+
+mod args;
+mod batch;
+mod compare;
+mod fly;
+mod info;
+mod render;
+mod view;
+mod warp;
+
+use clap::{Parser, Subcommand};
+use terrain::error::Error;
+
+#[derive(Parser)]
+#[command(
+    name = "terrain",
+    version,
+    about = "Procedural terrain by geometry image warping"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Reads a sketch and prints its size, spacing, height range and nodata count.
+    Info(info::Args),
+    /// Runs the CPU stage for the scene's camera; writes importance.png, mesh.png, ratio.png.
+    Warp(warp::Args),
+    /// Renders a snapshot of the scene from its camera (headless, on whatever adapter there is).
+    Render(render::Args),
+    /// Every mode over a sweep of its quality setting against the reference image; writes
+    /// report.csv, report.json, summary.md and figures (error_vs_time.svg/.png, ...) to --out-dir.
+    Compare(compare::Args),
+    /// Renders the scene's camera path (its [path], else straight ahead) to numbered PNG
+    /// frames, an animation (MP4 when ffmpeg is installed, else APNG) and frames.csv in --out-dir.
+    Fly(fly::Args),
+    /// Many snapshots from a jobs file on one device; manifest.jsonl lists each with its status.
+    Batch(batch::Args),
+    /// An interactive window flying through the terrain (mouse look, WASD/QE, 1/2/3 modes,
+    /// V views, F freeze, R record the path, P screenshot, Esc quit).
+    View(view::Args),
+}
+
+/// The exit code of every usage error: an unknown option, a bad option value, a bad `--set`.
+/// Bad input found while working (a file, a scene key, the device) exits with 1.
+const USAGE: i32 = 2;
+
+fn main() {
+    // Mesa's EGL probes for a Wayland display whenever an adapter is requested; where
+    // XDG_RUNTIME_DIR is unset (a container, a CI job, ssh) libwayland then prints an error line
+    // about a display nobody asked for, breaking the one-line-error rule. Pointing it at the
+    // temporary folder makes the probe fail quietly instead; a real Wayland session always sets it.
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none()
+        && std::env::var_os("WAYLAND_DISPLAY").is_none()
+    {
+        // SAFETY: the first statement of main, before any thread exists.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+    }
+    // Usage errors as one line too, like every other bad input; help and version print in full.
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if !e.use_stderr() => e.exit(),
+        Err(e) => {
+            // The cause is everything before clap's usage block, on one line.
+            let text = e.to_string();
+            let cause: Vec<&str> = text
+                .lines()
+                .take_while(|l| !l.starts_with("Usage:"))
+                .map(str::trim)
+                .filter(|l| !l.is_empty() && !l.starts_with("tip:") && !l.starts_with("For more"))
+                .collect();
+            eprintln!(
+                "{} (terrain --help lists the commands and options)",
+                cause.join(" ")
+            );
+            std::process::exit(USAGE);
+        }
+    };
+    let result = match cli.command {
+        Command::Info(a) => info::run(a),
+        Command::Warp(a) => warp::run(a),
+        Command::Render(a) => render::run(a),
+        Command::Compare(a) => compare::run(a),
+        Command::Fly(a) => fly::run(a),
+        Command::Batch(a) => batch::run(a),
+        Command::View(a) => view::run(a),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {}", one_line(&e));
+        // A bad `--set` is a usage error like any bad option: the same exit code as clap's.
+        let usage = matches!(e.downcast_ref(), Some(Error::Override { .. }));
+        std::process::exit(if usage { USAGE } else { 1 });
+    }
+}
+
+/// The error and its causes on one line, each cause once: a library error prints its source
+/// already (`output x.png: No such file…`), which anyhow's `{:#}` would print again.
+fn one_line(e: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string().replace('\n', " ");
+        if !line.contains(&text) {
+            if !line.is_empty() {
+                line += ": ";
+            }
+            line += &text;
+        }
+    }
+    line
+}
+
+/// Prints `value` as one JSON object on stdout.
+fn print_json(value: &impl serde::Serialize) -> anyhow::Result<()> {
+    println!("{}", serde_json::to_string(value)?);
+    Ok(())
+}

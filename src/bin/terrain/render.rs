@@ -1,0 +1,219 @@
+//! `terrain render SCENE -o OUT`: one snapshot in any mode and view, with its timings.
+
+use crate::args;
+use anyhow::{Context, Result};
+use serde::Serialize;
+use std::path::PathBuf;
+use terrain::cpu_stage;
+use terrain::error::{Error, Role};
+use terrain::gpu::uniforms::View;
+use terrain::output::{self, ImageFormat, Staged};
+use terrain::progress::Spinner;
+use terrain::render::{Frame, SceneRenderer};
+use terrain::scene::{Mode, Scene};
+
+#[derive(clap::Args)]
+pub struct Args {
+    scene: PathBuf,
+    /// The image: .png or .jpg (its folder is created).
+    #[arg(short = 'o', long = "output")]
+    output: PathBuf,
+    /// Image size: N (square) or WxH; default the scene's camera.width × camera.height.
+    #[arg(long, value_name = "N|WxH", value_parser = args::size)]
+    size: Option<(u32, u32)>,
+    /// Overrides the scene's render.mode.
+    #[arg(long)]
+    mode: Option<Mode>,
+    #[arg(long, default_value_t = View::Shaded)]
+    view: View,
+    /// GeoMipMap's τ: the largest projected vertex error, pixels (overrides geomipmap.tau).
+    #[arg(long, allow_negative_numbers = true, value_parser = args::positive_px)]
+    tau: Option<f64>,
+    /// Overrides a scene key, e.g. `--set detail.octaves=0` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// Frames rendered after one warm-up frame; medians are reported, the last is written.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    repeat: u32,
+    /// Also writes each pixel's world position (x, y, z metres, then 1 on ground, 0 on sky)
+    /// as a NumPy .npy of f64, shape (height, width, 4).
+    #[arg(long, value_name = "FILE.npy")]
+    positions: Option<PathBuf>,
+    #[arg(long)]
+    json: bool,
+}
+
+/// Renders above this many pixels show a spinner: at 16384² a frame takes a minute on llvmpipe.
+const BIG_RENDER_PIXELS: u64 = 8 << 20;
+
+/// `--json`: the keys DESIGN.md fixes (`adapter`, `mode`, `triangles`, `cpu_stage_us`, `gpu_ms`,
+/// `frame_ms`) and the rest of what the frame tells; medians over the timed frames.
+#[derive(Serialize)]
+struct Report {
+    adapter: String,
+    mode: Mode,
+    view: View,
+    width: u32,
+    height: u32,
+    visible: bool,
+    triangles: u64,
+    cpu_stage_us: f64,
+    gpu_ms: f64,
+    frame_ms: f64,
+    gpu_wall_ms: f64,
+    gpu_timing: &'static str,
+    passes_ms: Passes,
+    gpu_memory_bytes: u64,
+    frames: u32,
+    output: PathBuf,
+    detail: Detail,
+    /// The baselines' figures (absent for the other modes).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    baseline: Option<Baseline>,
+}
+
+/// Per-pass GPU times, null where the adapter has no timestamp queries.
+#[derive(Serialize)]
+struct Passes {
+    warp_zoom: Option<f64>,
+    normals: Option<f64>,
+    terrain: Option<f64>,
+}
+
+/// The detail used, defaults resolved from the sketch included (docs/scene.md, [detail]).
+#[derive(Serialize)]
+struct Detail {
+    octaves: u32,
+    amplitude_m: f64,
+    gain: f64,
+    bias: f64,
+}
+
+#[derive(Serialize)]
+struct Baseline {
+    blocks_visible: Option<usize>,
+    precompute_ms: f64,
+    precompute_bytes: u64,
+    tau_px: f64,
+}
+
+pub fn run(a: Args) -> Result<()> {
+    // Refused before any work: an image format the extension does not name, positions that are
+    // not .npy.
+    ImageFormat::of(&a.output)?;
+    if let Some(p) = &a.positions
+        && p.extension().is_none_or(|e| !e.eq_ignore_ascii_case("npy"))
+    {
+        let why = "--positions writes NumPy: give a .npy file name";
+        return Err(Error::file(Role::Output, p, why).into());
+    }
+    let mut scene = Scene::load_with(&a.scene, &a.set)?;
+    let mode = a.mode.unwrap_or(scene.render.mode);
+    if let Some(tau) = a.tau {
+        scene.geomipmap.tau = tau;
+    }
+    if let Some(size) = a.size {
+        (scene.camera.width, scene.camera.height) = size;
+    }
+    let mut r = SceneRenderer::with_positions(&scene, mode, a.view, a.positions.is_some())?;
+    let camera = cpu_stage::camera_of(&scene, r.atlas())?;
+    let frames = frames(&mut r, &camera, &scene, a.repeat)?;
+    let last = frames.last().context("no frame rendered")?;
+    // The image and the positions land together or not at all.
+    let mut staged = Staged::default();
+    staged.add_image(&a.output, last.width, last.height, &last.rgba)?;
+    if let Some(p) = &a.positions {
+        let world = terrain::render::world_positions(&r.read_positions(&camera)?, &camera);
+        let shape = [last.height as usize, last.width as usize, 4];
+        staged.add(p, &output::npy_f64(&shape, &world))?;
+    }
+    staged.commit()?;
+
+    let median = |f: &dyn Fn(&Frame) -> f64| {
+        let mut v: Vec<f64> = frames.iter().map(f).collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let cpu_us = median(&|f| f.cpu_us);
+    let gpu_ms = median(&|f| f.gpu.gpu_ms);
+    let timed = r.ctx().timestamps;
+    let pass = |get: fn(&terrain::gpu::renderer::PassTimes) -> Option<f64>| {
+        timed.then(|| median(&|f| get(&f.gpu.passes).unwrap_or(0.0)))
+    };
+    let d = cpu_stage::detail_of(&scene, r.atlas());
+    let report = Report {
+        adapter: r.ctx().adapter_name(),
+        mode,
+        view: a.view,
+        width: last.width,
+        height: last.height,
+        visible: r.visible(),
+        triangles: last.gpu.triangles,
+        cpu_stage_us: cpu_us,
+        gpu_ms,
+        frame_ms: gpu_ms + cpu_us * 1e-3,
+        gpu_wall_ms: median(&|f| f.gpu.gpu_wall_ms),
+        gpu_timing: if timed {
+            "timestamp queries"
+        } else {
+            "wall time around submit"
+        },
+        passes_ms: Passes {
+            warp_zoom: pass(|p| p.warp_zoom_ms),
+            normals: pass(|p| p.normals_ms),
+            terrain: pass(|p| p.terrain_ms),
+        },
+        gpu_memory_bytes: r.gpu_bytes(),
+        frames: a.repeat,
+        output: a.output.clone(),
+        detail: Detail {
+            octaves: d.octaves,
+            amplitude_m: d.amplitude_m,
+            gain: d.gain,
+            bias: d.bias,
+        },
+        baseline: r.precompute().map(|(ms, bytes)| Baseline {
+            blocks_visible: last.blocks,
+            precompute_ms: ms,
+            precompute_bytes: bytes,
+            tau_px: scene.geomipmap.tau,
+        }),
+    };
+    if a.json {
+        return crate::print_json(&report);
+    }
+    println!(
+        "{}: {} × {} {} on {}, {} triangles; CPU {:.0} µs, GPU {:.2} ms ({})",
+        a.output.display(),
+        report.width,
+        report.height,
+        report.mode,
+        report.adapter,
+        report.triangles,
+        report.cpu_stage_us,
+        report.gpu_ms,
+        report.gpu_timing
+    );
+    Ok(())
+}
+
+/// One warm-up frame (shader compilation, first-use allocation), then `repeat` timed ones; a
+/// spinner while they render when the image is large.
+fn frames(
+    r: &mut SceneRenderer,
+    camera: &terrain::camera::Camera,
+    scene: &Scene,
+    repeat: u32,
+) -> Result<Vec<Frame>> {
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let spinner = (w as u64 * h as u64 > BIG_RENDER_PIXELS)
+        .then(|| Spinner::new(&format!("rendering {w}×{h} ({} frames)", repeat + 1)));
+    r.render(camera)?;
+    let frames = (0..repeat)
+        .map(|_| r.render(camera))
+        .collect::<terrain::Result<Vec<_>>>()?;
+    if let Some(s) = spinner {
+        s.finish();
+    }
+    Ok(frames)
+}

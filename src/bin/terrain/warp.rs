@@ -1,0 +1,114 @@
+//! `terrain warp SCENE --out-dir D`: the CPU stage alone, its quality figures and its three
+//! figures (importance, the warped mesh, the density ratio).
+
+use anyhow::Result;
+use serde::Serialize;
+use std::path::PathBuf;
+use terrain::cpu_stage::{self, CpuStage, StageTimes};
+use terrain::quality::{self, Quality};
+use terrain::scene::{Scene, WarpMethod};
+
+#[derive(clap::Args)]
+pub struct Args {
+    scene: PathBuf,
+    #[arg(long)]
+    out_dir: PathBuf,
+    /// Overrides the scene's warp.method.
+    #[arg(long)]
+    method: Option<WarpMethod>,
+    /// Timed runs of the stage (after one warm-up); the median is reported.
+    #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..=10000))]
+    repeat: u32,
+    /// Skips writing the figures (the statistics only).
+    #[arg(long)]
+    no_figures: bool,
+    /// Overrides a scene key, e.g. `--set warp.quad_px=4` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    #[arg(long)]
+    json: bool,
+}
+
+/// `--json`: the quality figures DESIGN.md fixes and the stage's times (median of the runs).
+#[derive(Serialize)]
+struct Report {
+    method: WarpMethod,
+    visible: bool,
+    #[serde(flatten)]
+    quality: Quality,
+    guarded_columns: usize,
+    cpu_stage_us: f64,
+    sketch_map_us: f64,
+    importance_us: f64,
+    warp_us: f64,
+    region: Region,
+}
+
+/// The sketch map's region: its south-west corner, texel spacing and size.
+#[derive(Serialize)]
+struct Region {
+    origin_m: [f64; 2],
+    spacing_m: f64,
+    size: usize,
+}
+
+pub fn run(a: Args) -> Result<()> {
+    let mut scene = Scene::load_with(&a.scene, &a.set)?;
+    if let Some(m) = a.method {
+        scene.warp.method = m;
+    }
+    let atlas = cpu_stage::load_atlas(&scene)?;
+    let detail = cpu_stage::detail_of(&scene, &atlas);
+    let camera = cpu_stage::camera_of(&scene, &atlas)?;
+    let mut stage = CpuStage::new(&scene, &detail)?;
+    stage.run(&atlas, &camera); // warm-up: first-touch page faults are not the stage's cost
+    let mut runs: Vec<StageTimes> = (0..a.repeat).map(|_| stage.run(&atlas, &camera)).collect();
+    runs.sort_by(|a, b| a.total_us().total_cmp(&b.total_us()));
+    let median = runs[runs.len() / 2];
+
+    let n = stage.sketch_map.n;
+    let mut ratios = Vec::with_capacity((n - 1) * (n - 1));
+    let q = quality::measure(
+        &stage.warp.phi,
+        n,
+        stage.sketch_map.spacing,
+        &stage.importance,
+        &mut ratios,
+    );
+    if !a.no_figures {
+        terrain::figures::write_all(&a.out_dir, &atlas, &stage, &ratios)?;
+    }
+    let map = &stage.sketch_map;
+    let r = Report {
+        method: stage.warp.method,
+        visible: map.visible,
+        quality: q,
+        guarded_columns: stage.warp.guarded_columns,
+        cpu_stage_us: median.total_us(),
+        sketch_map_us: median.sketch_map_us,
+        importance_us: median.importance_us,
+        warp_us: median.warp_us,
+        region: Region {
+            origin_m: [map.origin.x, map.origin.y],
+            spacing_m: map.spacing,
+            size: n,
+        },
+    };
+    if a.json {
+        return crate::print_json(&r);
+    }
+    let q = &r.quality;
+    println!(
+        "{} visible cells: {:.1} % with ratio in [0.5, 2], {:.1} % in [0.5, 1]; {} flipped, {} non-finite; CPU stage {:.0} µs (sketch map {:.0}, importance {:.0}, warp {:.0})",
+        q.cells_visible,
+        100.0 * q.ratio_within_0_5_2,
+        100.0 * q.ratio_within_0_5_1,
+        q.flipped_cells,
+        q.nonfinite,
+        r.cpu_stage_us,
+        r.sketch_map_us,
+        r.importance_us,
+        r.warp_us
+    );
+    Ok(())
+}
