@@ -13,7 +13,11 @@
 
 use crate::animation::{self, Apng};
 use crate::error::{Error, Result, Role};
+use crate::gpu::frame_io::PassTimes;
 use crate::gpu::uniforms::View;
+use crate::gpu::{
+    normals::NormalsPass, reference::ReferencePass, terrain::TerrainPass, warp_zoom::WarpZoomPass,
+};
 use crate::output::{Fixed, write_atomic, write_image};
 use crate::path::CameraPath;
 use crate::progress::Progress;
@@ -41,7 +45,7 @@ pub struct FrameRecord {
     pub gpu_ms: f64,
     pub frame_ms: f64,
     pub triangles: u64,
-    pub passes_ms: [Option<f64>; 3],
+    pub passes_ms: PassTimes,
     pub file: String,
 }
 
@@ -60,12 +64,13 @@ struct CsvRow<'a> {
     warp_zoom_ms: Option<Fixed<3>>,
     normals_ms: Option<Fixed<3>>,
     terrain_ms: Option<Fixed<3>>,
+    reference_ms: Option<Fixed<3>>,
     file: &'a str,
 }
 
 impl CsvRow<'_> {
     fn of(r: &FrameRecord) -> CsvRow<'_> {
-        let ms = |v: Option<f64>| v.map(Fixed);
+        let ms = |name: &str| r.passes_ms.get(name).map(Fixed);
         CsvRow {
             frame: r.frame,
             time_s: Fixed(r.time_s),
@@ -76,9 +81,10 @@ impl CsvRow<'_> {
             gpu_ms: Fixed(r.gpu_ms),
             frame_ms: Fixed(r.frame_ms),
             triangles: r.triangles,
-            warp_zoom_ms: ms(r.passes_ms[0]),
-            normals_ms: ms(r.passes_ms[1]),
-            terrain_ms: ms(r.passes_ms[2]),
+            warp_zoom_ms: ms(WarpZoomPass::NAME),
+            normals_ms: ms(NormalsPass::NAME),
+            terrain_ms: ms(TerrainPass::NAME),
+            reference_ms: ms(ReferencePass::NAME),
             file: &r.file,
         }
     }
@@ -198,7 +204,7 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
             gpu_ms: frame.gpu.gpu_ms,
             frame_ms: frame.gpu.gpu_ms + frame.cpu_us * 1e-3,
             triangles: frame.gpu.triangles,
-            passes_ms: [p.warp_zoom_ms, p.normals_ms, p.terrain_ms],
+            passes_ms: p.clone(),
             file,
         };
         records.push(record);

@@ -299,7 +299,7 @@ impl ReferenceRenderer {
         let pass =
             ReferencePass::new(&ctx.device, &frame, &atlas_buffer, w, h, detail.octaves > 0)?;
         Ok(ReferenceRenderer {
-            timer: Timer::new(&ctx),
+            timer: Timer::new(&ctx, &[ReferencePass::NAME]),
             ctx,
             pass,
             atlas,
@@ -328,16 +328,18 @@ impl ReferenceRenderer {
             .write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniforms));
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         let t = self.timer.as_ref();
-        self.pass.record(&mut encoder, t.map(|t| t.compute(2)));
+        let ran = [ReferencePass::NAME];
+        self.pass
+            .record(&mut encoder, t.map(|t| t.compute(ReferencePass::NAME)));
         if let Some(t) = t {
-            t.resolve(&mut encoder, 2);
+            t.resolve(&mut encoder, &ran);
         }
         let start = std::time::Instant::now();
         self.ctx.queue.submit([encoder.finish()]);
         let rgba = self.pass.read_image(&self.ctx)?;
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
         let passes = match t {
-            Some(t) => t.read(&self.ctx, 2)?,
+            Some(t) => t.read(&self.ctx, &ran)?,
             None => PassTimes::default(),
         };
         Ok(Frame {

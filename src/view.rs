@@ -168,8 +168,17 @@ impl App {
             return frame.rgba.clone();
         };
         let g = &frame.gpu;
-        let p = &g.passes;
-        let ms = |v: Option<f64>| v.map_or("–".into(), |v| format!("{v:.1}"));
+        let passes = if g.passes.0.is_empty() {
+            "passes not timed".to_string()
+        } else {
+            let each: Vec<String> = g
+                .passes
+                .0
+                .iter()
+                .map(|(n, ms)| format!("{n} {ms:.1}"))
+                .collect();
+            each.join(", ")
+        };
         let ground = ground_under(&self.atlas, self.cam.eye.truncate());
         let above = self.cam.eye.z - ground.unwrap_or(self.atlas.min_m as f64);
         let mut flags = Vec::new();
@@ -193,15 +202,13 @@ impl App {
                 flags.join(" · ")
             ),
             format!(
-                "CPU {:.2} ms (sketch map {:.2}, importance {:.2}, warp {:.2}) · GPU {:.1} ms (warp & zoom {}, normals {}, terrain {})",
+                "CPU {:.2} ms (sketch map {:.2}, importance {:.2}, warp {:.2}) · GPU {:.1} ms ({})",
                 frame.cpu_us * 1e-3,
                 frame.cpu.sketch_map_us * 1e-3,
                 frame.cpu.importance_us * 1e-3,
                 frame.cpu.warp_us * 1e-3,
                 g.gpu_ms,
-                ms(p.warp_zoom_ms),
-                ms(p.normals_ms),
-                ms(p.terrain_ms)
+                passes
             ),
             format!(
                 "{} triangles · {:.0} m above the ground · {:.0} m/s",

@@ -541,3 +541,44 @@ fn size_has_one_syntax_one_range_and_one_exit_code_everywhere() {
     let (w, h, _) = read_png(&dir.join("s.png")).unwrap();
     assert_eq!((w, h), (24, 16));
 }
+
+#[test]
+fn pass_times_are_keyed_by_the_passes_that_ran() {
+    let scene = manifest_dir().join("sketches/jacksboro-small.toml");
+    let dir = scratch("cli-passes");
+    for (mode, passes) in [
+        ("warped", &["warp_zoom", "normals", "terrain"][..]),
+        ("geomipmap", &["terrain"][..]),
+        ("reference", &["reference"][..]),
+    ] {
+        let png = dir.join(format!("{mode}.png"));
+        let (code, out, err) = terrain(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+            "--mode",
+            mode,
+            "--size",
+            "32",
+            "--json",
+        ]);
+        assert_eq!(code, 0, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        let got: Vec<&str> = v["passes_ms"]
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(String::as_str)
+            .collect();
+        if v["gpu_timing"] == "timestamp queries" {
+            let mut want = passes.to_vec();
+            want.sort();
+            let mut got = got.clone();
+            got.sort();
+            assert_eq!(got, want, "{mode}");
+        } else {
+            assert!(got.is_empty(), "{mode}: untimed passes reported: {got:?}");
+        }
+    }
+}

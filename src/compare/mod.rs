@@ -29,6 +29,7 @@ use crate::camera::Camera;
 use crate::cpu_stage::{self, CpuStage};
 use crate::error::{Error, Result, Role};
 use crate::gpu::context::{GpuContext, Needs};
+use crate::gpu::frame_io::PassTimes;
 use crate::gpu::uniforms::View;
 use crate::metrics::{self, ScreenError};
 use crate::output::Fixed;
@@ -141,10 +142,7 @@ fn measure(
     let sse = metrics::screen_space_error(&positions, &truth.positions, width as usize, o.window);
     let cpu_us = median(frames.iter().map(|f| f.cpu_us).collect());
     let gpu_ms = median(frames.iter().map(|f| f.gpu.gpu_ms).collect());
-    let timed = r.ctx().timestamps;
-    let pass = |get: fn(&Frame) -> Option<f64>| {
-        timed.then(|| median(frames.iter().map(|f| get(f).unwrap_or(0.0)).collect()))
-    };
+    let passes: Vec<&PassTimes> = frames.iter().map(|f| &f.gpu.passes).collect();
     let (pre_ms, pre_bytes) = r.precompute().unwrap_or((0.0, 0));
     let row = Row {
         mode: s.mode_name().to_string(),
@@ -165,11 +163,7 @@ fn measure(
         frames: o.repeat.max(1),
         pareto_psnr: false,
         pareto_sse: false,
-        passes_ms: Some([
-            pass(|f| f.gpu.passes.warp_zoom_ms),
-            pass(|f| f.gpu.passes.normals_ms),
-            pass(|f| f.gpu.passes.terrain_ms),
-        ]),
+        passes_ms: PassTimes::median(&passes),
     };
     Ok((row, last.rgba.clone()))
 }

@@ -7,6 +7,7 @@
 //! "error at equal frame time" is each mode's best error among its rows no slower than the
 //! common budget, the slowest of the modes' fastest rows (so every mode has a row within it).
 
+use crate::gpu::frame_io::PassTimes;
 use crate::output::Fixed;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
@@ -36,9 +37,10 @@ pub struct Row {
     pub frames: u32,
     pub pareto_psnr: bool,
     pub pareto_sse: bool,
-    /// Per-pass GPU times (JSON only; null where the adapter has no timestamp queries).
-    #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub passes_ms: Option<[Option<f64>; 3]>,
+    /// Per-pass GPU medians by pass name (JSON only; empty where the adapter has no timestamp
+    /// queries). Not read back by `--replot`, which needs none of them.
+    #[serde(skip_deserializing)]
+    pub passes_ms: PassTimes,
 }
 
 pub const CSV_COLUMNS: [&str; 18] = [
@@ -272,7 +274,7 @@ mod tests {
             frames: 1,
             pareto_psnr: false,
             pareto_sse: false,
-            passes_ms: None,
+            passes_ms: PassTimes::default(),
         }
     }
 

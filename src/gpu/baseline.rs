@@ -215,7 +215,7 @@ impl BaselineRenderer {
             block_buffer,
             terrain,
             readback,
-            timer: Timer::new(ctx),
+            timer: Timer::new(ctx, &[TerrainPass::NAME]),
             kind: o.kind,
             gpu_bytes,
         })
@@ -260,17 +260,17 @@ impl BaselineRenderer {
         let t = self.timer.as_ref();
         let draw = !self.indices.is_empty();
         self.terrain
-            .record(&mut encoder, draw, t.map(|t| t.render(2)));
+            .record(&mut encoder, draw, t.map(|t| t.render(TerrainPass::NAME)));
         self.readback.record(&mut encoder, &self.terrain.colour);
         if let Some(t) = t {
-            t.resolve(&mut encoder, 2);
+            t.resolve(&mut encoder, &[TerrainPass::NAME]);
         }
         let start = Instant::now();
         queue.submit([encoder.finish()]);
         let pixels = self.readback.read(ctx)?;
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
         let passes = match t {
-            Some(t) => t.read(ctx, 2)?,
+            Some(t) => t.read(ctx, &[TerrainPass::NAME])?,
             None => PassTimes::default(),
         };
         let triangles = self.indices.len() as u64 / 3;

@@ -7,15 +7,47 @@ use crate::atlas::Atlas;
 use crate::error::{Error, Result};
 use serde::Serialize;
 
-/// Milliseconds per pass (`None` where the adapter cannot time passes).
-#[derive(Clone, Copy, Debug, Default, Serialize)]
-pub struct PassTimes {
-    pub warp_zoom_ms: Option<f64>,
-    pub normals_ms: Option<f64>,
-    pub terrain_ms: Option<f64>,
+/// Milliseconds of each pass that ran, by the pass's name, in the order they ran; empty where
+/// the adapter cannot time passes. JSON: an object `{ "warp_zoom": 1.2, … }`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PassTimes(pub Vec<(&'static str, f64)>);
+
+impl PassTimes {
+    /// The time of the pass called `name`, if it ran and was timed.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.0.iter().find(|(n, _)| *n == name).map(|&(_, ms)| ms)
+    }
+
+    pub fn total(&self) -> f64 {
+        self.0.iter().map(|&(_, ms)| ms).sum()
+    }
+
+    /// Per pass (those of the last frame), the median over `frames`.
+    pub fn median(frames: &[&PassTimes]) -> PassTimes {
+        let Some(last) = frames.last() else {
+            return PassTimes::default();
+        };
+        let median = |name: &str| {
+            let mut v: Vec<f64> = frames.iter().filter_map(|p| p.get(name)).collect();
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        PassTimes(last.0.iter().map(|&(n, _)| (n, median(n))).collect())
+    }
 }
 
-#[derive(Clone, Copy, Debug, Serialize)]
+impl Serialize for PassTimes {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (name, ms) in &self.0 {
+            map.serialize_entry(name, ms)?;
+        }
+        map.end()
+    }
+}
+
+#[derive(Clone, Debug, Serialize)]
 pub struct FrameStats {
     /// GPU time of the frame: the passes' sum with timestamps, else submit-to-idle wall time.
     pub gpu_ms: f64,
@@ -27,12 +59,8 @@ pub struct FrameStats {
 
 impl FrameStats {
     pub fn new(passes: PassTimes, timed: bool, wall_ms: f64, triangles: u64) -> FrameStats {
-        let summed = [passes.warp_zoom_ms, passes.normals_ms, passes.terrain_ms]
-            .iter()
-            .map(|v| v.unwrap_or(0.0))
-            .sum::<f64>();
         FrameStats {
-            gpu_ms: if timed { summed } else { wall_ms },
+            gpu_ms: if timed { passes.total() } else { wall_ms },
             gpu_wall_ms: wall_ms,
             passes,
             triangles,
@@ -64,32 +92,36 @@ pub fn upload_atlas(ctx: &GpuContext, atlas: &Atlas) -> (wgpu::Buffer, u64) {
     (buffer, texels.len() as u64 * 4)
 }
 
-/// Timestamp queries for three passes (warp & zoom, normals, terrain): pairs 0, 1, 2.
+/// Timestamp queries for a renderer's passes, a pair each, keyed by the pass's name: the passes
+/// a frame may record, in the order it records them (a frame may skip leading ones, as a sky-only
+/// frame skips the warped mode's compute passes).
 pub struct Timer {
+    names: &'static [&'static str],
     queries: wgpu::QuerySet,
     resolve: wgpu::Buffer,
     read: wgpu::Buffer,
     period_ns: f64,
 }
 
-const PASSES: u32 = 3;
-
 impl Timer {
-    pub fn new(ctx: &GpuContext) -> Option<Timer> {
+    /// `None` where the adapter has no timestamp queries.
+    pub fn new(ctx: &GpuContext, names: &'static [&'static str]) -> Option<Timer> {
         let device = &ctx.device;
+        let passes = names.len() as u64;
         let buffer = |label, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
-                size: 16 * PASSES as u64,
+                size: 16 * passes,
                 usage,
                 mapped_at_creation: false,
             })
         };
         ctx.timestamps.then(|| Timer {
+            names,
             queries: device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("pass times"),
                 ty: wgpu::QueryType::Timestamp,
-                count: 2 * PASSES,
+                count: 2 * passes as u32,
             }),
             resolve: buffer(
                 "timestamps",
@@ -103,7 +135,17 @@ impl Timer {
         })
     }
 
-    pub fn compute(&self, pass: u32) -> wgpu::ComputePassTimestampWrites<'_> {
+    /// The slot of pass `name`; the names are the renderer's own constants.
+    fn slot(&self, name: &str) -> u32 {
+        self.names
+            .iter()
+            .position(|n| *n == name)
+            .unwrap_or_else(|| panic!("pass {name} is not one of the timer's {:?}", self.names))
+            as u32
+    }
+
+    pub fn compute(&self, name: &str) -> wgpu::ComputePassTimestampWrites<'_> {
+        let pass = self.slot(name);
         wgpu::ComputePassTimestampWrites {
             query_set: &self.queries,
             beginning_of_pass_write_index: Some(2 * pass),
@@ -111,7 +153,8 @@ impl Timer {
         }
     }
 
-    pub fn render(&self, pass: u32) -> wgpu::RenderPassTimestampWrites<'_> {
+    pub fn render(&self, name: &str) -> wgpu::RenderPassTimestampWrites<'_> {
+        let pass = self.slot(name);
         wgpu::RenderPassTimestampWrites {
             query_set: &self.queries,
             beginning_of_pass_write_index: Some(2 * pass),
@@ -119,28 +162,28 @@ impl Timer {
         }
     }
 
-    /// Resolves the pairs `first..3` (those written this frame) to the start of the buffer;
-    /// resolve offsets must be aligned, so skipped passes cannot keep their slots.
-    pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder, first: u32) {
-        encoder.resolve_query_set(&self.queries, 2 * first..2 * PASSES, &self.resolve, 0);
-        encoder.copy_buffer_to_buffer(&self.resolve, 0, &self.read, 0, 16 * PASSES as u64);
+    /// The slot of the first of the passes that ran; those after it ran too.
+    fn first(&self, ran: &[&str]) -> u32 {
+        ran.iter().map(|n| self.slot(n)).min().unwrap_or(0)
     }
 
-    /// Milliseconds of the passes `first..3`, after the frame's submission completed.
-    pub fn read(&self, ctx: &GpuContext, first: u32) -> Result<PassTimes> {
+    /// Resolves the pairs of the passes that ran (a tail of the timer's passes) to the start of
+    /// the buffer; resolve offsets must be aligned, so skipped passes cannot keep their slots.
+    pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder, ran: &[&str]) {
+        let (first, passes) = (self.first(ran), self.names.len() as u32);
+        encoder.resolve_query_set(&self.queries, 2 * first..2 * passes, &self.resolve, 0);
+        encoder.copy_buffer_to_buffer(&self.resolve, 0, &self.read, 0, 16 * passes as u64);
+    }
+
+    /// Milliseconds of the passes that ran, after the frame's submission completed.
+    pub fn read(&self, ctx: &GpuContext, ran: &[&'static str]) -> Result<PassTimes> {
         let ticks: Vec<u64> = read_buffer(ctx, &self.read, |b| bytemuck::cast_slice(b).to_vec())?;
-        let ms = |pass: u32| {
-            if pass < first {
-                return Some(0.0);
-            }
-            let k = 2 * (pass - first) as usize;
-            Some(ticks[k + 1].saturating_sub(ticks[k]) as f64 * self.period_ns * 1e-6)
+        let first = self.first(ran);
+        let ms = |name: &str| {
+            let k = 2 * (self.slot(name) - first) as usize;
+            ticks[k + 1].saturating_sub(ticks[k]) as f64 * self.period_ns * 1e-6
         };
-        Ok(PassTimes {
-            warp_zoom_ms: ms(0),
-            normals_ms: ms(1),
-            terrain_ms: ms(2),
-        })
+        Ok(PassTimes(ran.iter().map(|&n| (n, ms(n))).collect()))
     }
 }
 

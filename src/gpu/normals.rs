@@ -13,6 +13,9 @@ pub struct NormalsPass {
 }
 
 impl NormalsPass {
+    /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
+    pub const NAME: &'static str = "normals";
+
     pub fn new(
         device: &wgpu::Device,
         frame: &wgpu::Buffer,

@@ -19,6 +19,9 @@ pub struct ReferencePass {
 }
 
 impl ReferencePass {
+    /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
+    pub const NAME: &'static str = "reference";
+
     pub fn new(
         device: &wgpu::Device,
         frame: &wgpu::Buffer,

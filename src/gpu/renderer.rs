@@ -26,6 +26,9 @@ pub struct Options {
     pub positions: bool,
 }
 
+/// The passes of a warped frame, in order.
+const PASS_NAMES: [&str; 3] = [WarpZoomPass::NAME, NormalsPass::NAME, TerrainPass::NAME];
+
 pub struct Renderer {
     frame: wgpu::Buffer,
     _atlas: wgpu::Buffer,
@@ -91,7 +94,7 @@ impl Renderer {
             terrain,
             importance,
             readback,
-            timer: Timer::new(ctx),
+            timer: Timer::new(ctx, &PASS_NAMES),
             gpu_bytes,
         })
     }
@@ -115,23 +118,30 @@ impl Renderer {
         }
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         let t = self.timer.as_ref();
+        // A sky-only frame runs the terrain pass alone (for the sky).
+        let ran: &[&'static str] = if visible {
+            &PASS_NAMES
+        } else {
+            &PASS_NAMES[2..]
+        };
         if visible {
-            self.warp_zoom.record(&mut encoder, t.map(|t| t.compute(0)));
-            self.normals.record(&mut encoder, t.map(|t| t.compute(1)));
+            let warp_zoom = t.map(|t| t.compute(WarpZoomPass::NAME));
+            self.warp_zoom.record(&mut encoder, warp_zoom);
+            self.normals
+                .record(&mut encoder, t.map(|t| t.compute(NormalsPass::NAME)));
         }
-        self.terrain
-            .record(&mut encoder, visible, t.map(|t| t.render(2)));
+        let terrain = t.map(|t| t.render(TerrainPass::NAME));
+        self.terrain.record(&mut encoder, visible, terrain);
         self.readback.record(&mut encoder, &self.terrain.colour);
-        let first = if visible { 0 } else { 2 };
         if let Some(t) = t {
-            t.resolve(&mut encoder, first);
+            t.resolve(&mut encoder, ran);
         }
         let start = Instant::now();
         queue.submit([encoder.finish()]);
         let pixels = self.readback.read(ctx)?;
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
         let passes = match t {
-            Some(t) => t.read(ctx, first)?,
+            Some(t) => t.read(ctx, ran)?,
             None => PassTimes::default(),
         };
         let triangles = if visible { self.terrain.triangles() } else { 0 };

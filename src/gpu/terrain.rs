@@ -42,6 +42,9 @@ pub struct Variant {
 }
 
 impl TerrainPass {
+    /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
+    pub const NAME: &'static str = "terrain";
+
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         device: &wgpu::Device,

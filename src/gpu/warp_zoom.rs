@@ -21,6 +21,9 @@ pub struct WarpZoomPass {
 }
 
 impl WarpZoomPass {
+    /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
+    pub const NAME: &'static str = "warp_zoom";
+
     pub fn new(
         device: &wgpu::Device,
         frame: &wgpu::Buffer,

@@ -6,6 +6,7 @@ use serde::Serialize;
 use std::path::PathBuf;
 use terrain::cpu_stage;
 use terrain::error::{Error, Role};
+use terrain::gpu::frame_io::PassTimes;
 use terrain::gpu::uniforms::View;
 use terrain::output::{self, ImageFormat, Staged};
 use terrain::progress::Spinner;
@@ -62,7 +63,8 @@ struct Report {
     frame_ms: f64,
     gpu_wall_ms: f64,
     gpu_timing: &'static str,
-    passes_ms: Passes,
+    /// Per pass that ran, by its name (empty without timestamp queries).
+    passes_ms: PassTimes,
     gpu_memory_bytes: u64,
     frames: u32,
     output: PathBuf,
@@ -70,14 +72,6 @@ struct Report {
     /// The baselines' figures (absent for the other modes).
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     baseline: Option<Baseline>,
-}
-
-/// Per-pass GPU times, null where the adapter has no timestamp queries.
-#[derive(Serialize)]
-struct Passes {
-    warp_zoom: Option<f64>,
-    normals: Option<f64>,
-    terrain: Option<f64>,
 }
 
 /// The detail used, defaults resolved from the sketch included (docs/scene.md, [detail]).
@@ -137,9 +131,7 @@ pub fn run(a: Args) -> Result<()> {
     let cpu_us = median(&|f| f.cpu_us);
     let gpu_ms = median(&|f| f.gpu.gpu_ms);
     let timed = r.ctx().timestamps;
-    let pass = |get: fn(&terrain::gpu::renderer::PassTimes) -> Option<f64>| {
-        timed.then(|| median(&|f| get(&f.gpu.passes).unwrap_or(0.0)))
-    };
+    let passes: Vec<&PassTimes> = frames.iter().map(|f| &f.gpu.passes).collect();
     let d = cpu_stage::detail_of(&scene, r.atlas());
     let report = Report {
         adapter: r.ctx().adapter_name(),
@@ -158,11 +150,7 @@ pub fn run(a: Args) -> Result<()> {
         } else {
             "wall time around submit"
         },
-        passes_ms: Passes {
-            warp_zoom: pass(|p| p.warp_zoom_ms),
-            normals: pass(|p| p.normals_ms),
-            terrain: pass(|p| p.terrain_ms),
-        },
+        passes_ms: PassTimes::median(&passes),
         gpu_memory_bytes: r.gpu_bytes(),
         frames: a.repeat,
         output: a.output.clone(),
