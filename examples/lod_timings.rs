@@ -3,10 +3,12 @@
 //!
 //! `cargo run --release --example lod_timings [SCENE]` (default: the bundled jacksboro scene).
 
+use anyhow::Context;
 use std::path::PathBuf;
-use terrain::gpu::baseline::Baseline;
 use terrain::gpu::uniforms::View;
-use terrain::render::{BaselineSceneRenderer, Frame, WarpedRenderer};
+use terrain::lod::baseline::Baselines;
+use terrain::render::{Frame, Renderer};
+use terrain::scene::Mode;
 use terrain::scene::Scene;
 
 const FRAMES: usize = 10;
@@ -41,7 +43,7 @@ fn main() -> anyhow::Result<()> {
         "| mode | CPU µs (stage or block selection) | GPU ms | frame ms | triangles | blocks |"
     );
     println!("|---|---|---|---|---|---|");
-    let mut warped = WarpedRenderer::new(&scene, View::Shaded)?;
+    let mut warped = Renderer::new(&scene, Mode::Warped, View::Shaded)?;
     let camera = terrain::cpu_stage::camera_of(&scene, &warped.atlas)?;
     warped.render(&camera)?;
     let frames: Vec<Frame> = (0..FRAMES)
@@ -50,16 +52,17 @@ fn main() -> anyhow::Result<()> {
     row("warped", &frames);
     let adapter = warped.ctx.adapter_name();
     drop(warped);
-    for kind in [Baseline::GeoMipMap, Baseline::BruteForce] {
-        let mut r = BaselineSceneRenderer::new(&scene, View::Shaded, kind)?;
+    for kind in [Mode::Geomipmap, Mode::Bruteforce] {
+        let mut r = Renderer::new(&scene, kind, View::Shaded)?;
+        let b = r.lod::<Baselines>().context("a baseline mode")?;
         eprintln!(
-            "{kind:?}: baked {}² grid in {:.0} ms, {:.0} MiB",
-            r.renderer.bake.grid.n,
-            r.renderer.precompute_ms,
-            r.renderer.bake.bytes as f64 / 1048576.0
+            "{kind}: baked {}² grid in {:.0} ms, {:.0} MiB",
+            b.bake.grid.n,
+            b.precompute_ms,
+            b.bake.bytes as f64 / 1048576.0
         );
         let settings: Vec<(String, f64, bool)> = match kind {
-            Baseline::GeoMipMap => [1.0, 2.0, 4.0, 8.0]
+            Mode::Geomipmap => [1.0, 2.0, 4.0, 8.0]
                 .iter()
                 .flat_map(|&tau| {
                     [
@@ -68,11 +71,12 @@ fn main() -> anyhow::Result<()> {
                     ]
                 })
                 .collect(),
-            Baseline::BruteForce => vec![("bruteforce".to_string(), 1.0, false)],
+            _ => vec![("bruteforce".to_string(), 1.0, false)],
         };
         for (label, tau, exact) in settings {
-            r.lod.tau = tau;
-            r.lod.exact = exact;
+            let b = r.lod_mut::<Baselines>().context("a baseline mode")?;
+            b.params.tau = tau;
+            b.params.exact = exact;
             r.render(&camera)?;
             let frames: Vec<Frame> = (0..FRAMES)
                 .map(|_| r.render(&camera))

@@ -27,7 +27,7 @@ use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::uniforms::View;
 use crate::output::{write_atomic, write_image};
 use crate::progress::Progress;
-use crate::render::SceneRenderer;
+use crate::render::Renderer;
 use crate::scene::Scene;
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
@@ -361,7 +361,7 @@ fn plain_name(name: &str) -> bool {
 struct Cache {
     ctx: Option<GpuContext>,
     key: String,
-    renderer: Option<SceneRenderer>,
+    renderer: Option<Renderer>,
 }
 
 fn scene_key(scene: &Scene) -> String {
@@ -372,7 +372,7 @@ fn scene_key(scene: &Scene) -> String {
 }
 
 impl Cache {
-    fn renderer(&mut self, scene: &Scene) -> Result<&mut SceneRenderer> {
+    fn renderer(&mut self, scene: &Scene) -> Result<&mut Renderer> {
         let key = scene_key(scene);
         if self.renderer.is_none() || self.key != key {
             self.renderer = None;
@@ -385,14 +385,8 @@ impl Cache {
                     c
                 }
             };
-            let r = SceneRenderer::with_context(
-                ctx,
-                scene,
-                atlas,
-                scene.render.mode,
-                View::Shaded,
-                false,
-            )?;
+            let r =
+                Renderer::with_context(ctx, scene, atlas, scene.render.mode, View::Shaded, false)?;
             self.renderer = Some(r);
             self.key = key;
         }

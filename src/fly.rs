@@ -21,7 +21,7 @@ use crate::gpu::{
 use crate::output::{Fixed, write_atomic, write_image};
 use crate::path::CameraPath;
 use crate::progress::Progress;
-use crate::render::SceneRenderer;
+use crate::render::Renderer;
 use crate::scene::{Mode, Scene};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -155,7 +155,7 @@ pub fn frame_times(path: &CameraPath, o: &Options) -> (Vec<f64>, Option<String>)
 
 pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
-    let mut r = SceneRenderer::new(scene, o.mode, o.view)?;
+    let mut r = Renderer::new(scene, o.mode, o.view)?;
     let atlas = r.atlas().clone();
     let path = CameraPath::of_scene(scene)?;
     let (times, frames_note) = frame_times(&path, o);

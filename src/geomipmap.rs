@@ -2,9 +2,10 @@
 //!
 //! Rules:
 //! - The baked grid holds the terrain function (sketch plus octaves up to K) at spacing
-//!   `d_atlas / 2^K`, `32·B + 1` vertices a side; block (bx, by) owns vertices
-//!   `[32·bx, 32·bx + 32] × [32·by, 32·by + 32]` (neighbours share their edge).
-//! - Level l draws every `2^l`-th vertex (l = 0..5). δ_l is the largest vertical distance between
+//!   `d_atlas / 2^K`, `c·B + 1` vertices a side for blocks of `c` cells (`geomipmap.block` − 1:
+//!   16, 32, 64 or 128); block (bx, by) owns vertices `[c·bx, c·bx + c] × [c·by, c·by + c]`
+//!   (neighbours share their edge).
+//! - Level l draws every `2^l`-th vertex (l = 0..log2 c). δ_l is the largest vertical distance between
 //!   a level-0 vertex and the level-l surface (cells split along (i, j)–(i+s, j+s), as drawn), raised
 //!   to at least twice δ_{l−1}; `D_l = δ_l · f_px / τ` (de Boer's equations 1–2). The doubling
 //!   over-estimates errors (τ still holds) and gives every level a distance range to morph over.

@@ -22,6 +22,7 @@ pub mod flycam;
 pub mod geomipmap;
 pub mod gpu;
 pub mod importance;
+pub mod lod;
 pub mod metrics;
 pub mod names;
 pub mod output;

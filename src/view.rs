@@ -29,7 +29,7 @@ use crate::gpu::uniforms::View;
 use crate::output::{write_atomic, write_image};
 use crate::plot::raster::RasterCanvas;
 use crate::plot::{Anchor, Canvas, Rgb};
-use crate::render::{Frame, SceneRenderer};
+use crate::render::{Frame, Renderer};
 use crate::scene::{Mode, Scene};
 use std::collections::HashSet;
 use std::num::NonZeroU32;
@@ -73,7 +73,7 @@ struct App {
     /// The scene camera's far distance (default: the sketch's farthest corner), kept in flight.
     far: f64,
     ctx: GpuContext,
-    renderer: Option<SceneRenderer>,
+    renderer: Option<Renderer>,
     mode: Mode,
     view: View,
     size: (u32, u32),
@@ -112,7 +112,7 @@ impl App {
         }
     }
 
-    fn renderer(&mut self) -> Result<&mut SceneRenderer> {
+    fn renderer(&mut self) -> Result<&mut Renderer> {
         if self.renderer.is_none() {
             let mut scene = self.scene.clone();
             (scene.camera.width, scene.camera.height) = self.size;
@@ -122,7 +122,7 @@ impl App {
             } else {
                 self.view
             };
-            self.renderer = Some(SceneRenderer::with_context(
+            self.renderer = Some(Renderer::with_context(
                 self.ctx.clone(),
                 &scene,
                 self.atlas.clone(),

@@ -3,9 +3,10 @@
 
 mod common;
 use common::*;
-use terrain::gpu::baseline::Baseline;
 use terrain::gpu::uniforms::View;
-use terrain::render::BaselineSceneRenderer;
+use terrain::lod::baseline::Baselines;
+use terrain::render::Renderer;
+use terrain::scene::Mode;
 use terrain::scene::Scene;
 
 /// Background pixels below the first terrain pixel of their column in a coverage image (terrain
@@ -55,7 +56,7 @@ fn no_cracks_between_blocks_any_levels_apart() {
             "[sketch]\nsynthetic = \"{sketch}\"\nsize = 129\n[camera]\nposition = {eye:?}\nlook_at = {at:?}\nwidth = 160\nheight = 160\n[geomipmap]\nk = 1\n"
         );
         let s = scene(&toml, manifest_dir());
-        let mut r = BaselineSceneRenderer::new(&s, View::Coverage, Baseline::GeoMipMap).unwrap();
+        let mut r = Renderer::new(&s, Mode::Geomipmap, View::Coverage).unwrap();
         let cam = terrain::cpu_stage::camera_of(&s, &r.atlas).unwrap();
         let chosen = r.render(&cam).unwrap();
         assert_eq!(
@@ -63,17 +64,18 @@ fn no_cracks_between_blocks_any_levels_apart() {
             0,
             "{sketch} {what}: holes at the chosen levels"
         );
-        let per_side = r.renderer.blocks.per_side;
+        let per_side = r.lod::<Baselines>().unwrap().blocks.per_side;
         for d in 1..=3u8 {
-            let sel = &mut r.renderer.selection;
+            let b = r.lod_mut::<Baselines>().unwrap();
+            let sel = &mut b.selection;
             for k in 0..per_side * per_side {
                 if sel.level[k] != u8::MAX {
                     let level = 1 + d * ((k % per_side + k / per_side) % 2) as u8;
-                    sel.level[k] = level.min(r.renderer.blocks.levels as u8 - 1);
+                    sel.level[k] = level.min(b.blocks.levels as u8 - 1);
                 }
             }
-            sel.fill_gpu(&r.renderer.blocks, cam.f_px(), &r.lod);
-            let frame = r.draw(&cam, 0.0).unwrap();
+            sel.fill_gpu(&b.blocks, cam.f_px(), &b.params);
+            let frame = r.render_held(&cam).unwrap();
             let n = holes(&frame.rgba, 160);
             if n > 0 {
                 let out = scratch(&format!("cracks-{sketch}-{what}-{d}"));
@@ -111,11 +113,11 @@ fn bundled(name: &str) -> Scene {
 fn geomipmap_at_half_a_pixel_matches_brute_force_with_far_fewer_triangles() {
     for name in ["jacksboro", "gaussian", "hills"] {
         let s = bundled(name);
-        let mut lod = BaselineSceneRenderer::new(&s, View::Shaded, Baseline::GeoMipMap).unwrap();
+        let mut lod = Renderer::new(&s, Mode::Geomipmap, View::Shaded).unwrap();
         let cam = terrain::cpu_stage::camera_of(&s, &lod.atlas).unwrap();
         let a = lod.render(&cam).unwrap();
         drop(lod);
-        let mut brute = BaselineSceneRenderer::new(&s, View::Shaded, Baseline::BruteForce).unwrap();
+        let mut brute = Renderer::new(&s, Mode::Bruteforce, View::Shaded).unwrap();
         let b = brute.render(&cam).unwrap();
         let db = psnr(&a.rgba, &b.rgba);
         eprintln!(

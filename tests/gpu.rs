@@ -15,7 +15,9 @@ use common::*;
 use glam::IVec2;
 use terrain::gpu::uniforms::View;
 use terrain::gpu::warp_zoom::vertex_cpu;
-use terrain::render::WarpedRenderer;
+use terrain::lod::warped::Warped;
+use terrain::render::Renderer;
+use terrain::scene::Mode;
 use terrain::scene::Scene;
 
 fn bundled(name: &str, size: u32, mesh: u32) -> Scene {
@@ -27,8 +29,13 @@ fn bundled(name: &str, size: u32, mesh: u32) -> Scene {
     s
 }
 
-fn render(scene: &Scene, view: View) -> (WarpedRenderer, terrain::render::Frame) {
-    let mut r = WarpedRenderer::new(scene, view).expect("renderer");
+/// The warped scheme inside a renderer built in warped mode.
+fn warped(r: &Renderer) -> &Warped {
+    r.lod::<Warped>().expect("warped mode")
+}
+
+fn render(scene: &Scene, view: View) -> (Renderer, terrain::render::Frame) {
+    let mut r = Renderer::new(scene, Mode::Warped, view).expect("renderer");
     let camera = terrain::cpu_stage::camera_of(scene, &r.atlas).unwrap();
     let frame = r.render(&camera).expect("frame");
     (r, frame)
@@ -41,7 +48,7 @@ fn gpu_warp_and_zoom_matches_its_cpu_twin() {
         let (r, _) = render(&scene, View::Shaded);
         let camera = terrain::cpu_stage::camera_of(&scene, &r.atlas).unwrap();
         let uniforms = r.uniforms(&camera);
-        let gpu = r.renderer.read_detailed(&r.ctx).unwrap();
+        let gpu = warped(&r).read_detailed(&r.ctx).unwrap();
         let range = (r.atlas.max_m - r.atlas.min_m) as f64;
         let m = scene.warp.mesh as i32;
         let (mut worst_z, mut worst_xy, mut checked) = (0.0f64, 0.0f64, 0);
@@ -49,7 +56,7 @@ fn gpu_warp_and_zoom_matches_its_cpu_twin() {
             for i in (0..m).step_by(7).chain([m - 1]) {
                 let cpu = vertex_cpu(
                     &uniforms,
-                    &r.stage.warp.phi,
+                    &warped(&r).stage.warp.phi,
                     &r.atlas,
                     true,
                     IVec2::new(i, j),
@@ -58,7 +65,7 @@ fn gpu_warp_and_zoom_matches_its_cpu_twin() {
                 worst_z = worst_z.max((g[2] - cpu[2]).abs() as f64);
                 // Φ interpolates coordinates as large as the region: f32 rounding (fused or not)
                 // scales with the region's extent.
-                let extent = r.stage.sketch_map.extent();
+                let extent = warped(&r).stage.sketch_map.extent();
                 worst_xy =
                     worst_xy.max((g[0] - cpu[0]).abs().max((g[1] - cpu[1]).abs()) as f64 / extent);
                 assert!(
@@ -71,7 +78,7 @@ fn gpu_warp_and_zoom_matches_its_cpu_twin() {
             }
         }
         // The normals pass against its twin, fed the GPU's own vertices.
-        let normals = r.renderer.read_normals(&r.ctx).unwrap();
+        let normals = warped(&r).read_normals(&r.ctx).unwrap();
         let mut worst_n = 0.0f32;
         for j in (0..m).step_by(7) {
             for i in (0..m).step_by(7) {
@@ -191,7 +198,7 @@ fn extreme_cameras_render_without_holes() {
             manifest_dir(),
         );
         let (r, frame) = render(&scene, View::Shaded);
-        let detailed = r.renderer.read_detailed(&r.ctx).unwrap();
+        let detailed = warped(&r).read_detailed(&r.ctx).unwrap();
         if name == "sky" {
             assert_eq!(frame.gpu.triangles, 0, "sky view drew terrain");
             assert_eq!(frame.gpu.passes.get("warp_zoom").unwrap_or(0.0), 0.0);

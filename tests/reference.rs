@@ -4,9 +4,10 @@
 mod common;
 use common::*;
 use glam::{DVec2, DVec4};
-use terrain::gpu::baseline::Baseline;
 use terrain::gpu::uniforms::{View, view_proj};
-use terrain::render::{BaselineSceneRenderer, ReferenceRenderer, WarpedRenderer};
+use terrain::lod::reference::Reference;
+use terrain::render::Renderer;
+use terrain::scene::Mode;
 use terrain::scene::Scene;
 
 fn bundled(name: &str, extra: &[&str]) -> Scene {
@@ -24,18 +25,18 @@ fn bundled(name: &str, extra: &[&str]) -> Scene {
 fn reference_converges_below_the_differences_it_measures() {
     for name in ["gaussian", "hills"] {
         let scene = bundled(name, &[]);
-        let mut r = ReferenceRenderer::new(&scene).unwrap();
+        let mut r = Renderer::new(&scene, Mode::Reference, View::Shaded).unwrap();
         let camera = terrain::cpu_stage::camera_of(&scene, &r.atlas).unwrap();
         let reference = r.render(&camera).unwrap();
-        r.step *= 0.5;
+        r.lod_mut::<Reference>().unwrap().step *= 0.5;
         let finer = r.render(&camera).unwrap();
         let converged = psnr(&reference.rgba, &finer.rgba);
-        let warped = WarpedRenderer::new(&scene, View::Shaded)
+        let warped = Renderer::new(&scene, Mode::Warped, View::Shaded)
             .unwrap()
             .render(&camera)
             .unwrap();
         let gmm_scene = bundled(name, &["geomipmap.tau=0.5"]);
-        let gmm = BaselineSceneRenderer::new(&gmm_scene, View::Shaded, Baseline::GeoMipMap)
+        let gmm = Renderer::new(&gmm_scene, Mode::Geomipmap, View::Shaded)
             .unwrap()
             .render(&camera)
             .unwrap();
@@ -60,10 +61,10 @@ fn reference_converges_below_the_differences_it_measures() {
 #[test]
 fn reference_positions_project_to_their_pixels_and_sky_has_none() {
     let scene = bundled("jacksboro", &[]);
-    let mut r = ReferenceRenderer::new(&scene).unwrap();
+    let mut r = Renderer::new(&scene, Mode::Reference, View::Shaded).unwrap();
     let camera = terrain::cpu_stage::camera_of(&scene, &r.atlas).unwrap();
     r.render(&camera).unwrap();
-    let positions = r.pass.read_positions(&r.ctx).unwrap();
+    let positions = r.read_positions(&camera).unwrap();
     let vp = view_proj(&camera, camera.eye.truncate());
     let (w, h) = (camera.width as usize, camera.height as usize);
     let (mut hits, mut sky, mut worst) = (0, 0, 0.0f64);
@@ -90,20 +91,18 @@ fn meshes_stay_within_pixels_of_the_reference() {
     use terrain::metrics::screen_space_error;
     for name in ["gaussian", "hills"] {
         let scene = bundled(name, &["geomipmap.tau=0.5"]);
-        let mut reference = ReferenceRenderer::new(&scene).unwrap();
+        let mut reference = Renderer::new(&scene, Mode::Reference, View::Shaded).unwrap();
         let camera = terrain::cpu_stage::camera_of(&scene, &reference.atlas).unwrap();
         let truth_image = reference.render(&camera).unwrap().rgba;
-        let truth = reference.pass.read_positions(&reference.ctx).unwrap();
-        let atlas = terrain::cpu_stage::load_atlas(&scene).unwrap();
-        let mut warped = WarpedRenderer::with_atlas(&scene, atlas, View::Shaded, true).unwrap();
+        let truth = reference.read_positions(&camera).unwrap();
+        let mut warped =
+            Renderer::with_positions(&scene, Mode::Warped, View::Shaded, true).unwrap();
         let warped_image = warped.render(&camera).unwrap().rgba;
-        let vp = view_proj(&camera, camera.eye.truncate());
-        let w = warped.renderer.read_positions(&warped.ctx, vp).unwrap();
+        let w = warped.read_positions(&camera).unwrap();
         let mut gmm =
-            BaselineSceneRenderer::with_positions(&scene, View::Shaded, Baseline::GeoMipMap, true)
-                .unwrap();
+            Renderer::with_positions(&scene, Mode::Geomipmap, View::Shaded, true).unwrap();
         let gmm_image = gmm.render(&camera).unwrap().rgba;
-        let g = gmm.renderer.read_positions(&gmm.ctx, vp).unwrap();
+        let g = gmm.read_positions(&camera).unwrap();
         let width32 = camera.width;
         for (mode, image) in [("warped", &warped_image), ("GeoMipMap τ=0.5", &gmm_image)] {
             let (ssim, flip) = (

@@ -31,12 +31,14 @@ use crate::error::{Error, Result, Role};
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::frame_io::PassTimes;
 use crate::gpu::uniforms::View;
+use crate::lod::baseline::Baselines;
+use crate::lod::reference::Reference;
 use crate::metrics::{self, ScreenError};
 use crate::output::Fixed;
 use crate::output::{write_atomic, write_image};
 use crate::path::CameraPath;
 use crate::progress::Progress;
-use crate::render::{Frame, ReferenceRenderer, SceneRenderer};
+use crate::render::{Frame, Renderer};
 use crate::scene::{Mode, Scene};
 use report::Row;
 use serde_json::{Value, json};
@@ -86,15 +88,23 @@ pub struct Outcome {
     pub report: Value,
 }
 
+/// The reference renderer's march step (a fraction of the height above the ground).
+fn march_step(reference: &mut Renderer) -> &mut f32 {
+    &mut reference
+        .lod_mut::<Reference>()
+        .expect("built in reference mode")
+        .step
+}
+
 /// The reference for one camera: its image and positions.
 struct Truth {
     rgba: Vec<u8>,
     positions: Vec<[f32; 4]>,
 }
 
-fn truth(r: &mut ReferenceRenderer, camera: &Camera) -> Result<(Truth, Frame)> {
+fn truth(r: &mut Renderer, camera: &Camera) -> Result<(Truth, Frame)> {
     let frame = r.render(camera)?;
-    let positions = r.pass.read_positions(&r.ctx)?;
+    let positions = r.read_positions(camera)?;
     Ok((
         Truth {
             rgba: frame.rgba.clone(),
@@ -104,9 +114,9 @@ fn truth(r: &mut ReferenceRenderer, camera: &Camera) -> Result<(Truth, Frame)> {
     ))
 }
 
-fn renderer(ctx: &GpuContext, scene: &Scene, atlas: &Atlas, s: &Setting) -> Result<SceneRenderer> {
+fn renderer(ctx: &GpuContext, scene: &Scene, atlas: &Atlas, s: &Setting) -> Result<Renderer> {
     let scene = s.apply(scene);
-    SceneRenderer::with_context(
+    Renderer::with_context(
         ctx.clone(),
         &scene,
         atlas.clone(),
@@ -123,7 +133,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// Times `repeat` frames after a warm-up and measures the last against `truth`.
 fn measure(
-    r: &mut SceneRenderer,
+    r: &mut Renderer,
     s: &Setting,
     camera: &Camera,
     truth: &Truth,
@@ -212,15 +222,22 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
         (2 + settings.len() + path_frames + 1) as f64,
     );
 
-    let mut reference = ReferenceRenderer::with_context(ctx.clone(), &scene, atlas.clone())?;
+    let mut reference = Renderer::with_context(
+        ctx.clone(),
+        &scene,
+        atlas.clone(),
+        Mode::Reference,
+        View::Shaded,
+        true,
+    )?;
     let (mut truth0, mut ref_frame) = truth(&mut reference, &camera)?;
     progress.advance(1.0, "reference");
     // Converged: halving the step moves the image less than REFERENCE_CONVERGED_DB; else the
     // finer image becomes the reference and is tested in turn.
-    let mut step = reference.step;
+    let mut step = *march_step(&mut reference);
     let mut halving_db = 0.0;
     for _ in 0..=MAX_REFERENCE_HALVINGS {
-        reference.step = 0.5 * step;
+        *march_step(&mut reference) = 0.5 * step;
         let (finer, finer_frame) = truth(&mut reference, &camera)?;
         halving_db = metrics::psnr(&truth0.rgba, &finer.rgba);
         if halving_db >= REFERENCE_CONVERGED_DB {
@@ -228,13 +245,13 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
         }
         (step, truth0, ref_frame) = (0.5 * step, finer, finer_frame);
     }
-    reference.step = step;
+    *march_step(&mut reference) = step;
     progress.advance(1.0, "reference at half the step");
 
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
     let mut images: Vec<(Setting, Vec<u8>)> = Vec::new();
-    let mut gmm: Option<(u32, SceneRenderer)> = None;
+    let mut gmm: Option<(u32, Renderer)> = None;
     for s in &settings {
         let result = (|| -> Result<(Row, Vec<u8>)> {
             if let Setting::GeoMipMap { tau, block } = *s {
@@ -243,8 +260,8 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
                     gmm = Some((block, renderer(&ctx, &scene, &atlas, s)?));
                 }
                 let (_, r) = gmm.as_mut().expect("just built");
-                if let SceneRenderer::Baseline(b) = r {
-                    b.lod.tau = tau;
+                if let Some(b) = r.lod_mut::<Baselines>() {
+                    b.params.tau = tau;
                 }
                 return measure(r, s, &camera, &truth0, o);
             }
@@ -442,7 +459,7 @@ fn path_series(
     ctx: &GpuContext,
     scene: &Scene,
     atlas: &Atlas,
-    reference: &mut ReferenceRenderer,
+    reference: &mut Renderer,
     o: &Options,
     progress: &mut Progress,
     out: &Out,
@@ -450,7 +467,7 @@ fn path_series(
     let (out_dir, title) = (out.dir, out.title);
     let path = CameraPath::of_scene(scene)?;
     let cameras = path.cameras(o.path_frames, o.path_fps, scene, atlas)?;
-    let mut modes: Vec<(Setting, SceneRenderer)> = Vec::new();
+    let mut modes: Vec<(Setting, Renderer)> = Vec::new();
     for &m in &o.modes {
         if let Some(s) = Setting::of_scene(m, scene, atlas) {
             modes.push((s, renderer(ctx, scene, atlas, &s)?));

@@ -11,7 +11,7 @@
 //! values at one mesh size show that at a third of the cost.
 
 use crate::atlas::Atlas;
-use crate::gpu::baseline::default_k;
+use crate::lod::baseline::default_k;
 use crate::scene::{Mode, Scene};
 
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -2,12 +2,10 @@
 //! each owning its pipeline, bind-group layout and resources, each with a WGSL file of the same
 //! name in `shaders/`. [`renderer::Renderer`] runs them as a flat list.
 
-pub mod baseline;
 pub mod context;
 pub mod frame_io;
 pub mod normals;
 pub mod reference;
-pub mod renderer;
 pub mod shaders;
 pub mod terrain;
 pub mod uniforms;

@@ -10,7 +10,7 @@ use terrain::gpu::frame_io::PassTimes;
 use terrain::gpu::uniforms::View;
 use terrain::output::{self, ImageFormat, Staged};
 use terrain::progress::Spinner;
-use terrain::render::{Frame, SceneRenderer};
+use terrain::render::{Frame, Renderer};
 use terrain::scene::{Mode, Scene};
 
 #[derive(clap::Args)]
@@ -109,7 +109,7 @@ pub fn run(a: Args) -> Result<()> {
     if let Some(size) = a.size {
         (scene.camera.width, scene.camera.height) = size;
     }
-    let mut r = SceneRenderer::with_positions(&scene, mode, a.view, a.positions.is_some())?;
+    let mut r = Renderer::with_positions(&scene, mode, a.view, a.positions.is_some())?;
     let camera = cpu_stage::camera_of(&scene, r.atlas())?;
     let frames = frames(&mut r, &camera, &scene, a.repeat)?;
     let last = frames.last().context("no frame rendered")?;
@@ -188,7 +188,7 @@ pub fn run(a: Args) -> Result<()> {
 /// One warm-up frame (shader compilation, first-use allocation), then `repeat` timed ones; a
 /// spinner while they render when the image is large.
 fn frames(
-    r: &mut SceneRenderer,
+    r: &mut Renderer,
     camera: &terrain::camera::Camera,
     scene: &Scene,
     repeat: u32,

@@ -1,22 +1,25 @@
-//! The baselines on the GPU: the terrain function baked once per scene on a regular grid, drawn
-//! by GeoMipMapping (blocks, levels, stitching, geomorphing) or whole (brute force).
+//! The baselines: the terrain function baked once per scene on a regular grid, drawn by
+//! GeoMipMapping (blocks, levels, stitching, geomorphing; `geomipmap.rs`) or whole (brute force).
+//! A frame is one named pass, the terrain draw.
 //!
 //! The bake is the warp & zoom pass run with Φ the identity grid: the same code, hence the same
 //! terrain function, as the warped mode's (heights, split octave K − bias, octaves up to K as
 //! geometry); the terrain pass's GEOMIPMAP variant draws it with the same shading and bump detail.
 
-use super::context::GpuContext;
-use super::frame_io::{
-    ColourReadback, FrameStats, PassTimes, Timer, read_vec4, uniform_buffer, upload_atlas,
-};
-use super::normals::NormalsPass;
-use super::terrain::{TerrainPass, Variant};
-use super::uniforms::{FrameUniforms, View};
-use super::warp_zoom::WarpZoomPass;
+use super::{CpuTimes, Lod, Shared};
 use crate::atlas::Atlas;
+use crate::camera::Camera;
 use crate::detail::Detail;
 use crate::error::{Error, Result};
 use crate::geomipmap::{BlockGpu, Blocks, Grid, LodParams, Selection, Templates};
+use crate::gpu::context::GpuContext;
+use crate::gpu::frame_io::{ColourReadback, Timer, read_vec4, uniform_buffer};
+use crate::gpu::normals::NormalsPass;
+use crate::gpu::terrain::{TerrainPass, Variant};
+use crate::gpu::uniforms::{FrameInputs, FrameUniforms, view_proj};
+use crate::gpu::warp_zoom::WarpZoomPass;
+use crate::scene::Mode;
+use std::any::Any;
 use std::time::Instant;
 
 /// The largest baked grid the default K allows (2^22 vertices: 64 MiB of vertices and normals).
@@ -113,99 +116,82 @@ pub fn bake(
     })
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Baseline {
-    GeoMipMap,
-    BruteForce,
-}
-
-pub struct BaselineOptions {
-    pub width: u32,
-    pub height: u32,
-    pub bump: bool,
-    pub view: View,
-    pub k: u32,
-    /// Cells per block side.
-    pub cells: usize,
-    pub kind: Baseline,
-    /// Also write each pixel's ground position (for screen-space error).
-    pub positions: bool,
-}
-
-pub struct BaselineRenderer {
-    frame: wgpu::Buffer,
-    _atlas: wgpu::Buffer,
+/// GeoMipMap or brute force (`kind`) over one baked grid.
+pub struct Baselines {
+    pub kind: Mode,
     pub bake: Bake,
     pub blocks: Blocks,
     pub templates: Templates,
     pub selection: Selection,
+    /// τ, the exact bound, geomorphing: how GeoMipMap chooses levels.
+    pub params: LodParams,
     indices: Vec<u32>,
     block_buffer: wgpu::Buffer,
     terrain: TerrainPass,
     readback: ColourReadback,
-    timer: Option<Timer>,
-    pub kind: Baseline,
     /// Precomputation (bake, δ, quadtree), milliseconds.
     pub precompute_ms: f64,
-    pub gpu_bytes: u64,
+    gpu_bytes: u64,
 }
 
-impl BaselineRenderer {
-    pub fn new(
-        ctx: &GpuContext,
-        atlas: &Atlas,
-        detail: &Detail,
-        o: &BaselineOptions,
-    ) -> Result<BaselineRenderer> {
+impl Baselines {
+    /// `kind`: `Mode::Geomipmap` or `Mode::Bruteforce`.
+    pub fn new(s: &Shared, kind: Mode) -> Result<Baselines> {
         let start = Instant::now();
+        let (ctx, scene, detail) = (s.ctx, s.scene, s.detail);
         let device = &ctx.device;
-        let (atlas_buffer, atlas_bytes) = upload_atlas(ctx, atlas);
-        let bake = bake(ctx, atlas, &atlas_buffer, detail, o.k, o.cells)?;
+        let k = scene.geomipmap.k.unwrap_or_else(|| default_k(s.atlas));
+        let cells = scene.geomipmap.block as usize - 1;
+        let bake = bake(ctx, s.atlas, s.atlas_buffer, detail, k, cells)?;
         let blocks = Blocks::new(&bake.grid);
         let templates = Templates::new(&bake.grid);
         let per_side = blocks.per_side;
-        let capacity = (per_side * per_side * o.cells * o.cells * 6) as u64;
+        let capacity = (per_side * per_side * cells * cells * 6) as u64;
         let block_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("blocks"),
             size: (per_side * per_side * std::mem::size_of::<BlockGpu>()) as u64,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let frame = uniform_buffer(device);
         let noise = detail.octaves > 0;
         let variant = Variant {
             noise,
-            bump: noise && o.bump,
+            bump: noise && scene.detail.bump,
             importance: None,
             geomipmap: Some((block_buffer.clone(), capacity)),
-            positions: o.positions,
+            positions: s.positions,
         };
         let n = bake.grid.n as u32;
+        let (width, height) = (scene.camera.width, scene.camera.height);
         let terrain = TerrainPass::new(
             device,
-            &frame,
+            s.frame,
             &bake.detailed,
             &bake.normals,
             n,
-            o.width,
-            o.height,
+            width,
+            height,
             &variant,
         )?;
-        let readback = ColourReadback::new(device, o.width, o.height);
+        let readback = ColourReadback::new(device, width, height);
         let mut selection = Selection::default();
-        if o.kind == Baseline::BruteForce {
+        if kind == Mode::Bruteforce {
             selection.all_at(&bake.grid, &blocks, 0);
         }
-        let gpu_bytes = frame.size()
-            + atlas_bytes
-            + bake.bytes
+        let gpu_bytes = bake.bytes
             + capacity * 4
             + block_buffer.size()
             + terrain.target_bytes()
             + readback.bytes();
-        Ok(BaselineRenderer {
-            frame,
-            _atlas: atlas_buffer,
+        let g = &scene.geomipmap;
+        Ok(Baselines {
+            kind,
+            params: LodParams {
+                tau: g.tau,
+                exact: g.exact,
+                morph: g.morph,
+                reach_m: detail.reach_m(),
+            },
             precompute_ms: start.elapsed().as_secs_f64() * 1e3,
             bake,
             blocks,
@@ -215,39 +201,43 @@ impl BaselineRenderer {
             block_buffer,
             terrain,
             readback,
-            timer: Timer::new(ctx, &[TerrainPass::NAME]),
-            kind: o.kind,
             gpu_bytes,
         })
     }
+}
 
-    /// Chooses the blocks for `camera` (GeoMipMap; brute force draws all, always). Returns µs.
-    pub fn select(&mut self, camera: &crate::camera::Camera, lod: &LodParams) -> f64 {
+impl Lod for Baselines {
+    fn passes(&self) -> &'static [&'static str] {
+        &[TerrainPass::NAME]
+    }
+
+    /// Chooses the blocks for `camera` (GeoMipMap; brute force draws all, always).
+    fn prepare(&mut self, _: &Atlas, camera: &Camera) -> CpuTimes {
         let start = Instant::now();
-        if self.kind == Baseline::GeoMipMap {
+        if self.kind == Mode::Geomipmap {
             self.selection
-                .select(&self.bake.grid, &self.blocks, camera, lod);
+                .select(&self.bake.grid, &self.blocks, camera, &self.params);
         }
-        start.elapsed().as_secs_f64() * 1e6
+        CpuTimes {
+            us: start.elapsed().as_secs_f64() * 1e6,
+            ..CpuTimes::default()
+        }
     }
 
-    /// Ground positions of the last frame's pixels; needs `positions` at construction.
-    pub fn read_positions(
-        &self,
-        ctx: &GpuContext,
-        view_proj: glam::DMat4,
-    ) -> Result<Vec<[f32; 4]>> {
-        self.terrain.read_positions(ctx, view_proj)
+    fn frame_inputs<'a>(&'a self, f: &mut FrameInputs<'a>) {
+        let g = &self.bake.grid;
+        f.mesh_origin = Some(g.origin);
+        f.mesh = g.n as u32;
+        f.block = [g.cells as u32, g.slot_shift(), g.levels() as u32, 0];
     }
 
-    /// Draws the current selection and reads the image back.
-    pub fn render(
+    fn record(
         &mut self,
         ctx: &GpuContext,
-        uniforms: &FrameUniforms,
-    ) -> Result<(Vec<u8>, FrameStats)> {
+        encoder: &mut wgpu::CommandEncoder,
+        t: Option<&Timer>,
+    ) -> &'static [&'static str] {
         let queue = &ctx.queue;
-        queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(uniforms));
         self.templates
             .append(&self.selection.gpu, &mut self.indices);
         queue.write_buffer(
@@ -256,27 +246,47 @@ impl BaselineRenderer {
             bytemuck::cast_slice(&self.selection.gpu),
         );
         self.terrain.write_indices(queue, &self.indices);
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        let t = self.timer.as_ref();
         let draw = !self.indices.is_empty();
         self.terrain
-            .record(&mut encoder, draw, t.map(|t| t.render(TerrainPass::NAME)));
-        self.readback.record(&mut encoder, &self.terrain.colour);
-        if let Some(t) = t {
-            t.resolve(&mut encoder, &[TerrainPass::NAME]);
-        }
-        let start = Instant::now();
-        queue.submit([encoder.finish()]);
-        let pixels = self.readback.read(ctx)?;
-        let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        let passes = match t {
-            Some(t) => t.read(ctx, &[TerrainPass::NAME])?,
-            None => PassTimes::default(),
-        };
-        let triangles = self.indices.len() as u64 / 3;
-        Ok((
-            pixels,
-            FrameStats::new(passes, t.is_some(), wall_ms, triangles),
-        ))
+            .record(encoder, draw, t.map(|t| t.render(TerrainPass::NAME)));
+        self.readback.record(encoder, &self.terrain.colour);
+        &[TerrainPass::NAME]
+    }
+
+    fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
+        self.readback.read(ctx)
+    }
+
+    fn read_positions(&self, ctx: &GpuContext, camera: &Camera) -> Result<Vec<[f32; 4]>> {
+        let vp = view_proj(camera, camera.eye.truncate());
+        self.terrain.read_positions(ctx, vp)
+    }
+
+    fn triangles(&self) -> u64 {
+        self.indices.len() as u64 / 3
+    }
+
+    fn visible(&self) -> bool {
+        !self.selection.visible.is_empty()
+    }
+
+    fn gpu_bytes(&self) -> u64 {
+        self.gpu_bytes
+    }
+
+    fn blocks(&self) -> Option<usize> {
+        Some(self.selection.gpu.len())
+    }
+
+    fn precompute(&self) -> Option<(f64, u64)> {
+        Some((self.precompute_ms, self.bake.bytes))
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn Any {
+        self
     }
 }

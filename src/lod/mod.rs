@@ -1,0 +1,90 @@
+//! The level-of-detail schemes behind the one [`Renderer`](crate::render::Renderer): the warped
+//! geometry image, GeoMipMap and brute force over a baked grid, and the ray-marched reference.
+//!
+//! Rules: the renderer owns what every mode shares (device, frame uniforms, atlas buffer, timer,
+//! submission and timing); a scheme owns its passes and buffers and answers the renderer through
+//! [`Lod`]: prepare on the CPU for a camera, fill its part of the frame's uniforms, record its
+//! passes (named, so the timer and the reports key them by name), give back its image. Adding a
+//! mode is one module here, its WGSL and its CPU twin.
+//!
+//! Rejected alternative: an enum of the modes with a `match` in every method (what this replaced:
+//! three renderer types each wrapped again, their submit–read–time code written three times). A
+//! trait object costs one indirect call per method per frame, nothing beside a GPU frame.
+
+pub mod baseline;
+pub mod reference;
+pub mod warped;
+
+use crate::atlas::Atlas;
+use crate::camera::Camera;
+use crate::cpu_stage::StageTimes;
+use crate::detail::Detail;
+use crate::error::Result;
+use crate::gpu::context::GpuContext;
+use crate::gpu::frame_io::Timer;
+use crate::gpu::uniforms::{FrameInputs, View};
+use crate::scene::Scene;
+use std::any::Any;
+
+/// What a scheme is built from: the scene, and what the renderer already holds.
+pub struct Shared<'a> {
+    pub ctx: &'a GpuContext,
+    pub scene: &'a Scene,
+    pub atlas: &'a Atlas,
+    pub detail: &'a Detail,
+    /// The frame's uniform block.
+    pub frame: &'a wgpu::Buffer,
+    /// The sketch's pyramid on the GPU.
+    pub atlas_buffer: &'a wgpu::Buffer,
+    pub view: View,
+    /// Also write each pixel's ground position (for screen-space error).
+    pub positions: bool,
+}
+
+/// The CPU's part of a frame.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CpuTimes {
+    /// The warped mode's CPU stage, by part (zero for the other modes).
+    pub stage: StageTimes,
+    /// All the CPU work of the frame: the stage, or the baselines' block selection (µs).
+    pub us: f64,
+}
+
+/// One level-of-detail scheme.
+pub trait Lod: Any {
+    /// The passes it may record, in the order it records them (the timer's slots).
+    fn passes(&self) -> &'static [&'static str];
+    /// The CPU work for `camera`: the warped mode's stage, GeoMipMap's block selection.
+    fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes;
+    /// Fills its part of the frame's uniform inputs (the rest is the renderer's).
+    fn frame_inputs<'a>(&'a self, inputs: &mut FrameInputs<'a>);
+    /// Uploads its per-frame data and records its passes and the copy of its image; returns the
+    /// passes it recorded (a tail of [`passes`](Lod::passes)).
+    fn record(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: Option<&Timer>,
+    ) -> &'static [&'static str];
+    /// The image of the submitted frame: RGBA8 sRGB, rows top first.
+    fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>>;
+    /// Ground positions of the last frame's pixels, relative to `camera`'s ground point (w = 1
+    /// on ground, 0 on sky).
+    fn read_positions(&self, ctx: &GpuContext, camera: &Camera) -> Result<Vec<[f32; 4]>>;
+    /// Triangles drawn in the last frame.
+    fn triangles(&self) -> u64;
+    /// Whether any terrain was in view in the last frame.
+    fn visible(&self) -> bool;
+    /// Bytes of GPU memory it allocated (beside the renderer's uniforms and atlas).
+    fn gpu_bytes(&self) -> u64;
+    /// Blocks drawn in the last frame (GeoMipMap and brute force).
+    fn blocks(&self) -> Option<usize> {
+        None
+    }
+    /// Precomputation: milliseconds and bytes (the baselines' baked grid).
+    fn precompute(&self) -> Option<(f64, u64)> {
+        None
+    }
+    fn as_any(&self) -> &dyn Any;
+    fn as_any_mut(&mut self) -> &mut dyn Any;
+}

@@ -1,0 +1,186 @@
+//! The warped mode (Dachsbacher & Stamminger): the CPU stage places the geometry image, then a
+//! frame is three named passes: warp & zoom, normals, terrain (with the sky). Sky-only frames
+//! skip the first two and the terrain draw.
+
+use super::{CpuTimes, Lod, Shared};
+use crate::atlas::Atlas;
+use crate::camera::Camera;
+use crate::cpu_stage::CpuStage;
+use crate::error::Result;
+use crate::gpu::context::GpuContext;
+use crate::gpu::frame_io::{ColourReadback, Timer, read_vec4};
+use crate::gpu::normals::NormalsPass;
+use crate::gpu::terrain::{TerrainPass, Variant};
+use crate::gpu::uniforms::{FrameInputs, View, view_proj};
+use crate::gpu::warp_zoom::WarpZoomPass;
+use std::any::Any;
+
+/// The passes of a warped frame, in order.
+const PASSES: [&str; 3] = [WarpZoomPass::NAME, NormalsPass::NAME, TerrainPass::NAME];
+
+pub struct Warped {
+    pub stage: CpuStage,
+    mesh: u32,
+    warp_zoom: WarpZoomPass,
+    normals: NormalsPass,
+    terrain: TerrainPass,
+    importance: Option<wgpu::Buffer>,
+    readback: ColourReadback,
+    gpu_bytes: u64,
+}
+
+impl Warped {
+    pub fn new(s: &Shared) -> Result<Warped> {
+        let device = &s.ctx.device;
+        let (n, mesh) = (s.scene.warp.size, s.scene.warp.mesh);
+        let (width, height) = (s.scene.camera.width, s.scene.camera.height);
+        let stage = CpuStage::new(s.scene, s.detail)?;
+        let noise = s.detail.octaves > 0;
+        let warp_zoom = WarpZoomPass::new(device, s.frame, s.atlas_buffer, n, mesh, noise)?;
+        let normals = NormalsPass::new(device, s.frame, &warp_zoom.detailed, mesh)?;
+        // The importance map goes to the GPU only for the view that shows it.
+        let importance = (s.view == View::Importance).then(|| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("importance"),
+                size: (n * n) as u64 * 4,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        let variant = Variant {
+            noise,
+            bump: noise && s.scene.detail.bump,
+            importance: importance.clone(),
+            geomipmap: None,
+            positions: s.positions,
+        };
+        let (detailed, normal_buffer) = (&warp_zoom.detailed, &normals.normals);
+        let terrain = TerrainPass::new(
+            device,
+            s.frame,
+            detailed,
+            normal_buffer,
+            mesh,
+            width,
+            height,
+            &variant,
+        )?;
+        let readback = ColourReadback::new(device, width, height);
+        let mesh_bytes = (mesh * mesh) as u64 * 16;
+        let gpu_bytes = (n * n) as u64 * 8
+            + 2 * mesh_bytes
+            + terrain.triangles() * 12
+            + terrain.target_bytes()
+            + readback.bytes()
+            + importance.as_ref().map_or(0, |b| b.size());
+        Ok(Warped {
+            stage,
+            mesh,
+            warp_zoom,
+            normals,
+            terrain,
+            importance,
+            readback,
+            gpu_bytes,
+        })
+    }
+
+    /// The detailed geometry image of the last frame, read back (for tests).
+    pub fn read_detailed(&self, ctx: &GpuContext) -> Result<Vec<[f32; 4]>> {
+        read_vec4(ctx, &self.warp_zoom.detailed)
+    }
+
+    /// The normals of the last frame, read back (for tests).
+    pub fn read_normals(&self, ctx: &GpuContext) -> Result<Vec<[f32; 4]>> {
+        read_vec4(ctx, &self.normals.normals)
+    }
+}
+
+impl Lod for Warped {
+    fn passes(&self) -> &'static [&'static str] {
+        &PASSES
+    }
+
+    fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes {
+        let stage = self.stage.run(atlas, camera);
+        CpuTimes {
+            stage,
+            us: stage.total_us(),
+        }
+    }
+
+    fn frame_inputs<'a>(&'a self, f: &mut FrameInputs<'a>) {
+        f.map = Some(&self.stage.sketch_map);
+        f.mesh = self.mesh;
+        f.importance_max = self
+            .stage
+            .importance
+            .importance
+            .iter()
+            .copied()
+            .fold(0.0, f32::max);
+    }
+
+    fn record(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        t: Option<&Timer>,
+    ) -> &'static [&'static str] {
+        let visible = self.stage.sketch_map.visible;
+        if visible {
+            let queue = &ctx.queue;
+            queue.write_buffer(
+                &self.warp_zoom.phi,
+                0,
+                bytemuck::cast_slice(&self.stage.warp.phi),
+            );
+            if let Some(buffer) = &self.importance {
+                let values = &self.stage.importance.importance;
+                queue.write_buffer(buffer, 0, bytemuck::cast_slice(values));
+            }
+            let warp_zoom = t.map(|t| t.compute(WarpZoomPass::NAME));
+            self.warp_zoom.record(encoder, warp_zoom);
+            self.normals
+                .record(encoder, t.map(|t| t.compute(NormalsPass::NAME)));
+        }
+        let terrain = t.map(|t| t.render(TerrainPass::NAME));
+        self.terrain.record(encoder, visible, terrain);
+        self.readback.record(encoder, &self.terrain.colour);
+        // A sky-only frame runs the terrain pass alone (for the sky).
+        if visible { &PASSES } else { &PASSES[2..] }
+    }
+
+    fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
+        self.readback.read(ctx)
+    }
+
+    fn read_positions(&self, ctx: &GpuContext, camera: &Camera) -> Result<Vec<[f32; 4]>> {
+        let vp = view_proj(camera, camera.eye.truncate());
+        self.terrain.read_positions(ctx, vp)
+    }
+
+    fn triangles(&self) -> u64 {
+        if self.stage.sketch_map.visible {
+            self.terrain.triangles()
+        } else {
+            0
+        }
+    }
+
+    fn visible(&self) -> bool {
+        self.stage.sketch_map.visible
+    }
+
+    fn gpu_bytes(&self) -> u64 {
+        self.gpu_bytes
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn Any {
+        self
+    }
+}
