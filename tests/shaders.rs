@@ -35,20 +35,87 @@ fn every_pass_validates_in_every_variant() {
     assert_eq!(count, PASSES.len() << FLAGS.len());
 }
 
-#[test]
-fn frame_uniforms_match_the_wgsl_layout() {
-    let module = validate("warp_zoom", &[]);
+/// (name, offset, size) of each field of a Rust struct shared with WGSL, in declaration order.
+macro_rules! rust_layout {
+    ($t:ty { $($f:ident),* $(,)? }) => {{
+        let z: $t = bytemuck::Zeroable::zeroed();
+        vec![$((
+            stringify!($f).to_string(),
+            std::mem::offset_of!($t, $f) as u32,
+            std::mem::size_of_val(&z.$f) as u32,
+        )),*]
+    }};
+}
+
+/// (name, offset, size) of each member of the WGSL struct `name`, and the struct's size.
+fn wgsl_layout(module: &naga::Module, name: &str) -> (Vec<(String, u32, u32)>, u32) {
     let mut layouter = naga::proc::Layouter::default();
     layouter.update(module.to_ctx()).unwrap();
-    let (handle, _) = module
+    let (handle, ty) = module
         .types
         .iter()
-        .find(|(_, t)| t.name.as_deref() == Some("Frame"))
-        .expect("Frame in frame.wgsl");
-    assert_eq!(
-        layouter[handle].size as usize,
-        std::mem::size_of::<FrameUniforms>()
-    );
+        .find(|(_, t)| t.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("{name} in the WGSL"));
+    let naga::TypeInner::Struct { members, .. } = &ty.inner else {
+        panic!("{name} is not a struct");
+    };
+    let fields = members
+        .iter()
+        .map(|m| {
+            (
+                m.name.clone().unwrap_or_default(),
+                m.offset,
+                layouter[m.ty].size,
+            )
+        })
+        .collect();
+    (fields, layouter[handle].size)
+}
+
+#[test]
+fn uniform_structs_match_the_wgsl_field_by_field() {
+    use terrain::gpu::uniforms::OctaveGpu;
+    let module = validate("warp_zoom", &[]);
+    let frame = rust_layout!(FrameUniforms {
+        view_proj,
+        inv_view_proj,
+        eye,
+        phi_offset,
+        atlas_offset,
+        atlas_inv_spacing,
+        d_atlas,
+        bias,
+        n,
+        mesh,
+        octaves,
+        levels,
+        sun,
+        view,
+        importance_max,
+        mesh_offset,
+        octave,
+        turbulence,
+        level,
+        block,
+        march,
+        image,
+    });
+    let octave = rust_layout!(OctaveGpu {
+        lattice,
+        phase,
+        scale,
+        weight,
+        seed,
+        pad
+    });
+    for (name, rust, size) in [
+        ("Frame", frame, std::mem::size_of::<FrameUniforms>()),
+        ("Octave", octave, std::mem::size_of::<OctaveGpu>()),
+    ] {
+        let (wgsl, wgsl_size) = wgsl_layout(&module, name);
+        assert_eq!(rust, wgsl, "{name}: (field, offset, size) in Rust and WGSL");
+        assert_eq!(size as u32, wgsl_size, "{name}: size");
+    }
 }
 
 #[test]
