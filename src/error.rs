@@ -40,7 +40,9 @@ impl fmt::Display for Role {
     }
 }
 
+/// Errors of the library. New causes may be added: match with a wildcard arm.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum Error {
     /// The operating system refused a file: missing, unreadable, a full disk.
     #[error("{role} {path}: {source}")]
@@ -63,9 +65,16 @@ pub enum Error {
     /// A camera that cannot be built (NaN, eye at its own target, zero-size image).
     #[error("camera: {0}")]
     Camera(String),
-    /// No adapter, a limit the adapter lacks, a lost device.
+    /// A limit the adapter lacks, a grid too large for it.
     #[error("GPU: {0}")]
     Gpu(String),
+    /// The graphics API refused: no adapter, no device, a lost device, a failed read-back;
+    /// `what` says what was being done, `source` is wgpu's error.
+    #[error("GPU: {what}: {source}")]
+    Device {
+        what: String,
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
     /// No window can be opened (no display, a window system error).
     #[error("window: {0}")]
     Window(String),
@@ -89,6 +98,16 @@ impl Error {
             role,
             path: path.into(),
             reason: reason.into(),
+        }
+    }
+    /// The graphics API's `source` refused `what`.
+    pub fn device(
+        what: impl Into<String>,
+        source: impl std::error::Error + Send + Sync + 'static,
+    ) -> Self {
+        Error::Device {
+            what: what.into(),
+            source: Box::new(source),
         }
     }
     pub fn sketch(path: impl Into<PathBuf>, reason: impl Into<String>) -> Self {

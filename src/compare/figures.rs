@@ -8,23 +8,25 @@ use crate::plot::chart::{Axis, Figure, Panel, Scale, Series, Style};
 use crate::plot::raster::RasterCanvas;
 use crate::plot::{Anchor, Canvas, Rgb};
 use crate::quality::Bin;
+use crate::scene::Mode;
 use std::path::Path;
 
+/// A mode's colour in every figure (rows name their mode as `Mode::name` writes it).
 pub fn colour(mode: &str) -> Rgb {
-    match mode {
-        "warped" => Rgb(230, 120, 20),
-        "geomipmap" => Rgb(40, 100, 200),
-        "bruteforce" => Rgb(40, 160, 70),
+    match Mode::parse(mode) {
+        Some(Mode::Warped) => Rgb(230, 120, 20),
+        Some(Mode::Geomipmap) => Rgb(40, 100, 200),
+        Some(Mode::Bruteforce) => Rgb(40, 160, 70),
         _ => Rgb(120, 120, 120),
     }
 }
 
+/// A mode's name in figure legends, as the papers write it.
 pub fn display(mode: &str) -> &str {
-    match mode {
-        "warped" => "warped",
-        "geomipmap" => "GeoMipMap",
-        "bruteforce" => "brute force",
-        m => m,
+    match Mode::parse(mode) {
+        Some(Mode::Geomipmap) => "GeoMipMap",
+        Some(Mode::Bruteforce) => "brute force",
+        _ => mode,
     }
 }
 
@@ -134,7 +136,7 @@ pub fn ratio_histogram(bins: &[Bin], visible: usize, title: &str) -> Figure {
             y: Axis::new("visible cells (%)", Scale::Linear),
             series: vec![Series {
                 name: "warped geometry image".into(),
-                colour: colour("warped"),
+                colour: colour(Mode::Warped.name()),
                 style: Style::Bars(0.5),
                 points,
             }],

@@ -32,9 +32,10 @@ impl GpuContext {
             apply_limit_buckets: false,
         }))
         .map_err(|e| {
-            Error::Gpu(format!(
-                "no GPU adapter ({e}); without a GPU install Mesa (Debian: apt-get install libegl1 libgl1-mesa-dri, or mesa-vulkan-drivers)"
-            ))
+            Error::device(
+                "no adapter (without a GPU, install Mesa; Debian: apt-get install libegl1 libgl1-mesa-dri, or mesa-vulkan-drivers)",
+                e,
+            )
         })?;
         let info = adapter.get_info();
         let limits = adapter.limits();
@@ -59,7 +60,7 @@ impl GpuContext {
             memory_hints: wgpu::MemoryHints::Performance,
             trace: wgpu::Trace::Off,
         }))
-        .map_err(|e| Error::Gpu(format!("{name}: cannot open the device: {e}")))?;
+        .map_err(|e| Error::device(format!("{name}: cannot open the device"), e))?;
         Ok(GpuContext {
             device,
             queue,
@@ -85,7 +86,7 @@ impl GpuContext {
         self.device
             .poll(wgpu::PollType::wait_indefinitely())
             .map(|_| ())
-            .map_err(|e| Error::Gpu(format!("device lost while waiting: {e}")))
+            .map_err(|e| Error::device("device lost while waiting", e))
     }
 }
 

@@ -339,12 +339,12 @@ fn read_buffer<T>(
     });
     ctx.wait()?;
     rx.recv()
-        .map_err(|_| Error::Gpu("readback callback never ran".into()))?
-        .map_err(|e| Error::Gpu(format!("readback failed: {e}")))?;
+        .map_err(|e| Error::device("readback callback never ran", e))?
+        .map_err(|e| Error::device("readback failed", e))?;
     let out = {
         let view = slice
             .get_mapped_range()
-            .map_err(|e| Error::Gpu(format!("readback mapping: {e}")))?;
+            .map_err(|e| Error::device("readback mapping", e))?;
         f(&view)
     };
     buffer.unmap();
