@@ -188,7 +188,7 @@ impl Jobs {
             .parent()
             .unwrap_or(Path::new(""))
             .to_path_buf();
-        Scene::parse(&text, dir).map_err(|reason| name_the_key(&text, &reason))
+        Scene::parse(&text, dir).map_err(|fault| name_the_key(&text, &fault.to_string()))
     }
 
     pub fn base_scene(&self) -> Result<Scene> {
@@ -198,7 +198,7 @@ impl Jobs {
             .parent()
             .unwrap_or(Path::new(""))
             .to_path_buf();
-        Scene::parse(&text, dir).map_err(|reason| Error::scene(&self.scene_path, reason))
+        Scene::parse(&text, dir).map_err(|fault| fault.into_error(&self.scene_path))
     }
 }
 

@@ -287,8 +287,8 @@ impl Scene {
     }
 
     /// Parses and checks a scene; the error is one line naming the key.
-    pub fn parse(text: &str, base_dir: PathBuf) -> std::result::Result<Scene, String> {
-        Scene::parse_with(text, base_dir, &[]).map_err(|f| f.to_string())
+    pub fn parse(text: &str, base_dir: PathBuf) -> std::result::Result<Scene, Fault> {
+        Scene::parse_with(text, base_dir, &[])
     }
 
     /// Like [`Scene::load`], with `key.path=value` overrides (TOML values; bare words are strings)
@@ -564,7 +564,9 @@ mod tests {
     const MIN: &str = "[sketch]\nsynthetic = \"gaussian\"\n[camera]\nposition = [0.0, 0.0, 900.0]\nlook_at = [100.0, 100.0, 0.0]\n";
 
     fn err(extra: &str) -> String {
-        Scene::parse(&format!("{MIN}{extra}"), PathBuf::new()).unwrap_err()
+        Scene::parse(&format!("{MIN}{extra}"), PathBuf::new())
+            .unwrap_err()
+            .to_string()
     }
 
     #[test]
@@ -582,18 +584,22 @@ mod tests {
         assert!(err("[warp]\nquad_px = -1\n").contains("warp.quad_px"));
         assert!(err("[render]\nmode = \"fast\"\n").contains("fast"));
         assert!(err("[warp]\nmethod = \"magic\"\n").contains("magic"));
-        let nan = Scene::parse(&MIN.replace("900.0", "nan"), PathBuf::new()).unwrap_err();
+        let nan = Scene::parse(&MIN.replace("900.0", "nan"), PathBuf::new())
+            .unwrap_err()
+            .to_string();
         assert!(nan.contains("camera.position"), "{nan}");
         let same = MIN.replace("[100.0, 100.0, 0.0]", "[0.0, 0.0, 900.0]");
         assert!(
             Scene::parse(&same, PathBuf::new())
                 .unwrap_err()
+                .to_string()
                 .contains("look_at")
         );
         let fov = format!("{MIN}fov_y_deg = 180.0\n");
         assert!(
             Scene::parse(&fov, PathBuf::new())
                 .unwrap_err()
+                .to_string()
                 .contains("camera.fov_y_deg")
         );
         assert!(err("[path]\nkeys = [{ position = [0.0, 0.0, 1.0] }]\n").contains("path.keys"));

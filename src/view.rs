@@ -6,8 +6,9 @@
 //! the level of detail (the warped mode's CPU stage, GeoMipMap's levels) to look at the mesh from
 //! outside; R starts and stops recording the path flown (written to `--out-dir` as
 //! `<scene>-flown.toml`, the scene with that `[path]`); P writes a screenshot to `--out-dir`
-//! (`<scene>-view-<n>.png`); neither ever overwrites a file, taking the next free number; Esc quits. The figures on screen: mode, view,
-//! frame time per stage, triangles, height above the ground.
+//! (`<scene>-view-<n>.png`); neither ever overwrites a file, taking the next free number; Esc
+//! quits. The figures on screen: mode, view, frame time per pass, triangles, height above the
+//! ground.
 //!
 //! Rules: the frame is rendered headless by the same renderers as every other command (one
 //! device, renderers rebuilt only when the mode, the view or the window's size changes), then
@@ -24,7 +25,7 @@ use crate::atlas::Atlas;
 use crate::cpu_stage::{self, ground_under};
 use crate::error::{Error, Result, Role};
 use crate::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder, scene_with_path};
-use crate::gpu::context::{GpuContext, Needs};
+use crate::gpu::context::GpuContext;
 use crate::gpu::uniforms::View;
 use crate::output::{write_atomic, write_image};
 use crate::plot::raster::RasterCanvas;
@@ -474,9 +475,8 @@ pub fn run(scene: Scene, o: Options) -> Result<()> {
     let atlas = cpu_stage::load_atlas(&scene)?;
     let camera = cpu_stage::camera_of(&scene, &atlas)?;
     let reach_m = cpu_stage::detail_of(&scene, &atlas).reach_m();
-    let ctx = GpuContext::new(&Needs {
-        storage_bytes: atlas.bytes(),
-    })?;
+    // Enough for every mode the window can switch to (the warped mode's mesh the largest).
+    let ctx = GpuContext::new(&crate::render::needs(&scene, Mode::Warped, &atlas))?;
     let event_loop = EventLoop::new().map_err(|e| Error::Window(no_display(&e.to_string())))?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App {
