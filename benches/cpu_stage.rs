@@ -6,17 +6,18 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use std::path::Path;
-use terrain::cpu_stage::{self, CpuStage};
+use terrain::scene;
 use terrain::scene::{Scene, WarpMethod};
+use terrain::stage::CpuStage;
 
 fn bench_scene(c: &mut Criterion, name: &str) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("sketches")
         .join(format!("{name}.toml"));
     let scene = Scene::load(&path).expect("bundled scene");
-    let atlas = cpu_stage::load_atlas(&scene).expect("bundled sketch");
-    let detail = cpu_stage::detail_of(&scene, &atlas);
-    let camera = cpu_stage::camera_of(&scene, &atlas).expect("bundled camera");
+    let atlas = scene::load_atlas(&scene).expect("bundled sketch");
+    let detail = scene::detail_of(&scene, &atlas);
+    let camera = scene::camera_of(&scene, &atlas).expect("bundled camera");
     let mut stage = CpuStage::new(&scene, &detail).expect("stage");
     stage.run(&atlas, &camera);
     let bounds = (atlas.origin, atlas.max_corner());

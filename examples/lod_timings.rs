@@ -44,7 +44,7 @@ fn main() -> anyhow::Result<()> {
     );
     println!("|---|---|---|---|---|---|");
     let mut warped = Renderer::new(&scene, Mode::Warped, View::Shaded)?;
-    let camera = terrain::cpu_stage::camera_of(&scene, &warped.atlas)?;
+    let camera = terrain::scene::camera_of(&scene, &warped.atlas)?;
     warped.render(&camera)?;
     let frames: Vec<Frame> = (0..FRAMES)
         .map(|_| warped.render(&camera))

@@ -7,9 +7,7 @@
 //! submits, reads the image back and times it (timestamp queries keyed by pass name where the
 //! adapter has them, wall time around submit always).
 
-use crate::atlas::Atlas;
 use crate::camera::Camera;
-use crate::cpu_stage::{self, StageTimes};
 use crate::detail::Detail;
 use crate::error::Result;
 use crate::gpu::context::{GpuContext, Needs};
@@ -19,7 +17,10 @@ use crate::lod::baseline::Baselines;
 use crate::lod::reference::Reference;
 use crate::lod::warped::Warped;
 use crate::lod::{CpuTimes, Lod, Shared};
+use crate::scene;
 use crate::scene::{Mode, Scene};
+use crate::sketch::Atlas;
+use crate::stage::StageTimes;
 use std::time::Instant;
 
 /// One rendered frame: RGBA8 sRGB pixels, rows top first.
@@ -73,7 +74,7 @@ impl Renderer {
         view: View,
         positions: bool,
     ) -> Result<Renderer> {
-        let atlas = cpu_stage::load_atlas(scene)?;
+        let atlas = scene::load_atlas(scene)?;
         let ctx = GpuContext::new(&needs(scene, mode, &atlas))?;
         Renderer::with_context(ctx, scene, atlas, mode, view, positions)
     }
@@ -88,7 +89,7 @@ impl Renderer {
         positions: bool,
     ) -> Result<Renderer> {
         ctx.check(&needs(scene, mode, &atlas))?;
-        let detail = cpu_stage::detail_of(scene, &atlas);
+        let detail = scene::detail_of(scene, &atlas);
         let frame = uniform_buffer(&ctx.device);
         let (atlas_buffer, atlas_bytes) = upload_atlas(&ctx, &atlas);
         let shared = Shared {

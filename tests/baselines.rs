@@ -57,7 +57,7 @@ fn no_cracks_between_blocks_any_levels_apart() {
         );
         let s = scene(&toml, manifest_dir());
         let mut r = Renderer::new(&s, Mode::Geomipmap, View::Coverage).unwrap();
-        let cam = terrain::cpu_stage::camera_of(&s, &r.atlas).unwrap();
+        let cam = terrain::scene::camera_of(&s, &r.atlas).unwrap();
         let chosen = r.render(&cam).unwrap();
         assert_eq!(
             holes(&chosen.rgba, 160),
@@ -79,7 +79,7 @@ fn no_cracks_between_blocks_any_levels_apart() {
             let n = holes(&frame.rgba, 160);
             if n > 0 {
                 let out = scratch(&format!("cracks-{sketch}-{what}-{d}"));
-                terrain::output::write_image(&out.join("coverage.png"), 160, 160, &frame.rgba)
+                terrain::app::output::write_image(&out.join("coverage.png"), 160, 160, &frame.rgba)
                     .unwrap();
             }
             assert_eq!(
@@ -114,7 +114,7 @@ fn geomipmap_at_half_a_pixel_matches_brute_force_with_far_fewer_triangles() {
     for name in ["jacksboro", "gaussian", "hills"] {
         let s = bundled(name);
         let mut lod = Renderer::new(&s, Mode::Geomipmap, View::Shaded).unwrap();
-        let cam = terrain::cpu_stage::camera_of(&s, &lod.atlas).unwrap();
+        let cam = terrain::scene::camera_of(&s, &lod.atlas).unwrap();
         let a = lod.render(&cam).unwrap();
         drop(lod);
         let mut brute = Renderer::new(&s, Mode::Bruteforce, View::Shaded).unwrap();

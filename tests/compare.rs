@@ -4,8 +4,8 @@
 
 mod common;
 use common::*;
-use terrain::compare::report::CSV_COLUMNS;
-use terrain::compare::sweep::{Setting, default_sweep};
+use terrain::eval::compare::report::CSV_COLUMNS;
+use terrain::eval::compare::sweep::{Setting, default_sweep};
 use terrain::scene::Mode;
 
 fn sketch(name: &str) -> String {
@@ -47,7 +47,7 @@ fn compare_reports_every_setting_with_every_column_filled() {
 
     let scene =
         terrain::scene::Scene::load(&manifest_dir().join("sketches/gaussian.toml")).unwrap();
-    let atlas = terrain::cpu_stage::load_atlas(&scene).unwrap();
+    let atlas = terrain::scene::load_atlas(&scene).unwrap();
     let modes = [Mode::Warped, Mode::Geomipmap, Mode::Bruteforce];
     let settings = default_sweep(&modes, &atlas);
     let csv = std::fs::read_to_string(dir.join("report.csv")).unwrap();
@@ -209,7 +209,7 @@ fn scene_settings_are_in_the_default_sweep() {
         let scene =
             terrain::scene::Scene::load(&manifest_dir().join(format!("sketches/{name}.toml")))
                 .unwrap();
-        let atlas = terrain::cpu_stage::load_atlas(&scene).unwrap();
+        let atlas = terrain::scene::load_atlas(&scene).unwrap();
         let sweep = default_sweep(&[Mode::Warped, Mode::Geomipmap, Mode::Bruteforce], &atlas);
         for m in [Mode::Warped, Mode::Geomipmap, Mode::Bruteforce] {
             let s: Setting = Setting::of_scene(m, &scene, &atlas).unwrap();

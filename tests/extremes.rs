@@ -4,7 +4,7 @@ mod common;
 use common::*;
 use glam::DVec2;
 use terrain::scene::WarpMethod;
-use terrain::warp::Warp;
+use terrain::stage::warp::Warp;
 
 fn synthetic(name: &str, size: usize, position: [f64; 3], look_at: [f64; 3]) -> String {
     format!(
@@ -18,7 +18,7 @@ fn ground(name: &str, x: f64, y: f64) -> f64 {
         &synthetic(name, 257, [0.0, 0.0, 1e4], [1.0, 1.0, 0.0]),
         manifest_dir(),
     );
-    let a = terrain::cpu_stage::load_atlas(&s).unwrap();
+    let a = terrain::scene::load_atlas(&s).unwrap();
     a.sample_texel(x / a.dx, y / a.dy, 0.0) as f64
 }
 
@@ -278,7 +278,7 @@ fn importance_spanning_twelve_orders_of_magnitude() {
         );
         for s in 0..n - 1 {
             assert!(
-                terrain::warp::pair_unfolded(phi, n, s),
+                terrain::stage::warp::pair_unfolded(phi, n, s),
                 "{what}: fold at column {s}"
             );
         }

@@ -3,12 +3,12 @@
 
 use glam::{DVec2, DVec3, DVec4};
 use proptest::prelude::*;
-use terrain::atlas::{Atlas, LoadOptions};
 use terrain::camera::Camera;
 use terrain::geomipmap::{
     Blocks, Grid, LodParams, Selection, Templates, choose_level, morphed_height,
 };
 use terrain::gpu::uniforms::view_proj;
+use terrain::sketch::{Atlas, LoadOptions};
 
 /// Cells per block side in these tests (the default).
 const BLOCK: usize = terrain::geomipmap::DEFAULT_CELLS;

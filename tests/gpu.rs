@@ -36,7 +36,7 @@ fn warped(r: &Renderer) -> &Warped {
 
 fn render(scene: &Scene, view: View) -> (Renderer, terrain::render::Frame) {
     let mut r = Renderer::new(scene, Mode::Warped, view).expect("renderer");
-    let camera = terrain::cpu_stage::camera_of(scene, &r.atlas).unwrap();
+    let camera = terrain::scene::camera_of(scene, &r.atlas).unwrap();
     let frame = r.render(&camera).expect("frame");
     (r, frame)
 }
@@ -46,7 +46,7 @@ fn gpu_warp_and_zoom_matches_its_cpu_twin() {
     for name in ["jacksboro", "gaussian-high", "hills"] {
         let scene = bundled(name, 64, 512);
         let (r, _) = render(&scene, View::Shaded);
-        let camera = terrain::cpu_stage::camera_of(&scene, &r.atlas).unwrap();
+        let camera = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
         let uniforms = r.uniforms(&camera);
         let gpu = warped(&r).read_detailed(&r.ctx).unwrap();
         let range = (r.atlas.max_m - r.atlas.min_m) as f64;
@@ -114,7 +114,7 @@ fn snapshots_match_their_references() {
         let reference = dir.join(format!("{name}.png"));
         if update {
             std::fs::create_dir_all(&dir).unwrap();
-            terrain::output::write_image(&reference, frame.width, frame.height, &frame.rgba)
+            terrain::app::output::write_image(&reference, frame.width, frame.height, &frame.rgba)
                 .unwrap();
             continue;
         }
@@ -129,8 +129,8 @@ fn snapshots_match_their_references() {
         eprintln!("{name}: {db:.1} dB");
         if db < 40.0 {
             let actual = out.join(format!("{name}.png"));
-            terrain::output::write_image(&actual, w, h, &frame.rgba).unwrap();
-            terrain::output::write_image(
+            terrain::app::output::write_image(&actual, w, h, &frame.rgba).unwrap();
+            terrain::app::output::write_image(
                 &out.join(format!("{name}-diff.png")),
                 w,
                 h,
@@ -167,7 +167,7 @@ fn a_scene_moved_4000_km_renders_the_same() {
 fn two_renders_are_identical() {
     let scene = bundled("gaussian", 128, 256);
     let (mut r, a) = render(&scene, View::Shaded);
-    let camera = terrain::cpu_stage::camera_of(&scene, &r.atlas).unwrap();
+    let camera = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
     let b = r.render(&camera).unwrap();
     assert!(a.rgba == b.rgba, "PSNR {:.1} dB", psnr(&a.rgba, &b.rgba));
 }

@@ -144,7 +144,7 @@ fn uniform_importance_gives_the_budget_ratio_everywhere() {
     // Φ is the identity; k·I·d0 = (n−1)/n, so every cell's ratio is n/(n−1).
     let mut ratios = Vec::new();
     let st = &r.stage;
-    terrain::quality::measure(
+    terrain::stage::quality::measure(
         &st.warp.phi,
         st.sketch_map.n,
         st.sketch_map.spacing,

@@ -365,7 +365,8 @@ fn bad_jobs_fail_alone_with_their_cause() {
 #[test]
 fn the_bundled_jobs_file_and_flight_load() {
     let jobs =
-        terrain::batch::Jobs::load(&manifest_dir().join("sketches/random-snapshots.toml")).unwrap();
+        terrain::app::batch::Jobs::load(&manifest_dir().join("sketches/random-snapshots.toml"))
+            .unwrap();
     let items = jobs.items();
     assert_eq!(items.len(), 202);
     assert_eq!(
@@ -374,7 +375,7 @@ fn the_bundled_jobs_file_and_flight_load() {
     );
     let scene = terrain::scene::Scene::load(&manifest_dir().join("sketches/jacksboro-flight.toml"))
         .unwrap();
-    let path = terrain::path::CameraPath::of_scene(&scene).unwrap();
+    let path = terrain::app::path::CameraPath::of_scene(&scene).unwrap();
     assert!(
         (9000.0..10000.0).contains(&path.length_m()),
         "{}",
@@ -402,7 +403,7 @@ fn a_long_path_without_frames_is_spread_over_the_default_count_and_says_so() {
         "--no-mp4",
     ]);
     assert_eq!(code, 0, "{err}");
-    let n = terrain::fly::DEFAULT_MAX_FRAMES;
+    let n = terrain::app::fly::DEFAULT_MAX_FRAMES;
     assert!(stdout.contains(&format!("{n} frames")), "{stdout}");
     // Said before the first frame: how many frames, spread over the path, and what is written.
     assert!(

@@ -26,7 +26,7 @@ fn reference_converges_below_the_differences_it_measures() {
     for name in ["gaussian", "hills"] {
         let scene = bundled(name, &[]);
         let mut r = Renderer::new(&scene, Mode::Reference, View::Shaded).unwrap();
-        let camera = terrain::cpu_stage::camera_of(&scene, &r.atlas).unwrap();
+        let camera = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
         let reference = r.render(&camera).unwrap();
         r.lod_mut::<Reference>().unwrap().step *= 0.5;
         let finer = r.render(&camera).unwrap();
@@ -62,7 +62,7 @@ fn reference_converges_below_the_differences_it_measures() {
 fn reference_positions_project_to_their_pixels_and_sky_has_none() {
     let scene = bundled("jacksboro", &[]);
     let mut r = Renderer::new(&scene, Mode::Reference, View::Shaded).unwrap();
-    let camera = terrain::cpu_stage::camera_of(&scene, &r.atlas).unwrap();
+    let camera = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
     r.render(&camera).unwrap();
     let positions = r.read_positions(&camera).unwrap();
     let vp = view_proj(&camera, camera.eye.truncate());
@@ -88,11 +88,11 @@ fn reference_positions_project_to_their_pixels_and_sky_has_none() {
 
 #[test]
 fn meshes_stay_within_pixels_of_the_reference() {
-    use terrain::metrics::screen_space_error;
+    use terrain::eval::metrics::screen_space_error;
     for name in ["gaussian", "hills"] {
         let scene = bundled(name, &["geomipmap.tau=0.5"]);
         let mut reference = Renderer::new(&scene, Mode::Reference, View::Shaded).unwrap();
-        let camera = terrain::cpu_stage::camera_of(&scene, &reference.atlas).unwrap();
+        let camera = terrain::scene::camera_of(&scene, &reference.atlas).unwrap();
         let truth_image = reference.render(&camera).unwrap().rgba;
         let truth = reference.read_positions(&camera).unwrap();
         let mut warped =
@@ -106,8 +106,8 @@ fn meshes_stay_within_pixels_of_the_reference() {
         let width32 = camera.width;
         for (mode, image) in [("warped", &warped_image), ("GeoMipMap τ=0.5", &gmm_image)] {
             let (ssim, flip) = (
-                terrain::metrics::ssim(&truth_image, image, width32).unwrap(),
-                terrain::metrics::flip_mean(&truth_image, image, width32).unwrap(),
+                terrain::eval::metrics::ssim(&truth_image, image, width32).unwrap(),
+                terrain::eval::metrics::flip_mean(&truth_image, image, width32).unwrap(),
             );
             eprintln!(
                 "{name}: {mode}: PSNR {:.1} dB, SSIM {ssim:.3}, FLIP {flip:.3}",

@@ -6,7 +6,7 @@ mod common;
 use common::manifest_dir;
 use serde_aux::serde_introspection::serde_introspect;
 use std::collections::{BTreeMap, BTreeSet};
-use terrain::batch::{JobsFile, RandomSection};
+use terrain::app::batch::{JobsFile, RandomSection};
 use terrain::scene::*;
 
 /// The documented keys of each table, by its dotted name, with their default cells.
@@ -181,8 +181,8 @@ fn unset_detail_follows_the_sketch_and_set_detail_is_kept() {
             manifest_dir().join("sketches"),
         )
         .unwrap();
-        let atlas = terrain::cpu_stage::load_atlas(&scene).unwrap();
-        terrain::cpu_stage::detail_of(&scene, &atlas)
+        let atlas = terrain::scene::load_atlas(&scene).unwrap();
+        terrain::scene::detail_of(&scene, &atlas)
     };
     let dem = load("path = \"jacksboro_fault_dem.asc\"", "");
     let hills = load("synthetic = \"hills\"", "");

@@ -207,5 +207,5 @@ fn view_keys_switch_mode_record_the_path_and_quit() {
         (last[0] - first[0]).abs() < 1.0,
         "moved sideways: {first:?} → {last:?}"
     );
-    assert!(terrain::path::CameraPath::new(&path).is_ok());
+    assert!(terrain::app::path::CameraPath::new(&path).is_ok());
 }

@@ -3,8 +3,8 @@
 
 use super::context::GpuContext;
 use super::uniforms::FrameUniforms;
-use crate::atlas::Atlas;
 use crate::error::{Error, Result};
+use crate::sketch::Atlas;
 use serde::Serialize;
 
 /// Milliseconds of each pass that ran, by the pass's name, in the order they ran; empty where

@@ -1,10 +1,10 @@
 //! The per-frame uniform block (`shaders/shared/frame.wgsl`'s `Frame`), built on the CPU in f64
 //! and handed to the GPU in f32 relative to the frame origin, the camera's ground point.
 
-use crate::atlas::Atlas;
 use crate::camera::Camera;
 use crate::detail::{Detail, OctaveFrame};
-use crate::sketch_map::SketchMap;
+use crate::sketch::Atlas;
+use crate::stage::sketch_map::SketchMap;
 use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DVec2, DVec3, DVec4};
 

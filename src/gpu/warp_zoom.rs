@@ -4,9 +4,9 @@
 
 use super::uniforms::FrameUniforms;
 use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
-use crate::atlas::Atlas;
 use crate::detail::{OctaveFrame, gradient_noise};
 use crate::error::Result;
+use crate::sketch::Atlas;
 use glam::{IVec2, Vec2};
 use wgpu::ShaderStages as S;
 

@@ -7,7 +7,6 @@
 //! geometry); the terrain pass's GEOMIPMAP variant draws it with the same shading and bump detail.
 
 use super::{CpuTimes, Lod, Shared};
-use crate::atlas::Atlas;
 use crate::camera::Camera;
 use crate::detail::Detail;
 use crate::error::{Error, Result};
@@ -19,6 +18,7 @@ use crate::gpu::terrain::{TerrainPass, Variant};
 use crate::gpu::uniforms::{FrameInputs, FrameUniforms, view_proj};
 use crate::gpu::warp_zoom::WarpZoomPass;
 use crate::scene::Mode;
+use crate::sketch::Atlas;
 use std::any::Any;
 use std::time::Instant;
 

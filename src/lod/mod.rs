@@ -15,15 +15,15 @@ pub mod baseline;
 pub mod reference;
 pub mod warped;
 
-use crate::atlas::Atlas;
 use crate::camera::Camera;
-use crate::cpu_stage::StageTimes;
 use crate::detail::Detail;
 use crate::error::Result;
 use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::Timer;
 use crate::gpu::uniforms::{FrameInputs, View};
 use crate::scene::Scene;
+use crate::sketch::Atlas;
+use crate::stage::StageTimes;
 use std::any::Any;
 
 /// What a scheme is built from: the scene, and what the renderer already holds.

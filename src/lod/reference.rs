@@ -3,13 +3,13 @@
 //! has one look whatever the view.
 
 use super::{CpuTimes, Lod, Shared};
-use crate::atlas::Atlas;
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::Timer;
 use crate::gpu::reference::ReferencePass;
 use crate::gpu::uniforms::{FrameInputs, View};
+use crate::sketch::Atlas;
 use std::any::Any;
 
 pub struct Reference {

@@ -3,9 +3,7 @@
 //! skip the first two and the terrain draw.
 
 use super::{CpuTimes, Lod, Shared};
-use crate::atlas::Atlas;
 use crate::camera::Camera;
-use crate::cpu_stage::CpuStage;
 use crate::error::Result;
 use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::{ColourReadback, Timer, read_vec4};
@@ -13,6 +11,8 @@ use crate::gpu::normals::NormalsPass;
 use crate::gpu::terrain::{TerrainPass, Variant};
 use crate::gpu::uniforms::{FrameInputs, View, view_proj};
 use crate::gpu::warp_zoom::WarpZoomPass;
+use crate::sketch::Atlas;
+use crate::stage::CpuStage;
 use std::any::Any;
 
 /// The passes of a warped frame, in order.

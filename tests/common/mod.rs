@@ -2,12 +2,13 @@
 #![allow(dead_code)]
 
 use std::path::PathBuf;
-use terrain::atlas::Atlas;
 use terrain::camera::Camera;
-use terrain::cpu_stage::{self, CpuStage};
-use terrain::quality::{self, Quality};
+use terrain::scene;
 use terrain::scene::Scene;
-use terrain::warp::pair_unfolded;
+use terrain::sketch::Atlas;
+use terrain::stage::CpuStage;
+use terrain::stage::quality::{self, Quality};
+use terrain::stage::warp::pair_unfolded;
 
 pub fn manifest_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -36,13 +37,13 @@ pub struct Run {
 }
 
 pub fn run(scene: &Scene) -> Run {
-    let atlas = cpu_stage::load_atlas(scene).expect("atlas");
+    let atlas = scene::load_atlas(scene).expect("atlas");
     run_with(scene, atlas)
 }
 
 pub fn run_with(scene: &Scene, atlas: Atlas) -> Run {
-    let detail = cpu_stage::detail_of(scene, &atlas);
-    let camera = cpu_stage::camera_of(scene, &atlas).expect("camera");
+    let detail = scene::detail_of(scene, &atlas);
+    let camera = scene::camera_of(scene, &atlas).expect("camera");
     let mut stage = CpuStage::new(scene, &detail).expect("stage");
     stage.run(&atlas, &camera);
     let n = stage.sketch_map.n;
@@ -123,7 +124,7 @@ pub fn assert_sound(r: &Run, what: &str) {
 }
 
 #[allow(unused_imports)] // not every test file compares images
-pub use terrain::metrics::psnr;
+pub use terrain::eval::metrics::psnr;
 
 /// An image of |a − b| × 4, for looking at where two renders differ.
 pub fn difference(a: &[u8], b: &[u8]) -> Vec<u8> {

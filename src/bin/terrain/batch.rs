@@ -48,11 +48,11 @@ pub fn run(a: Args) -> Result<()> {
     if a.merge {
         return merge(&a);
     }
-    let o = terrain::batch::Options {
+    let o = terrain::app::batch::Options {
         shard: a.shard.unwrap_or((0, 1)),
         resume: a.resume,
     };
-    let s = terrain::batch::run(&a.jobs, &a.out_dir, &o)?;
+    let s = terrain::app::batch::run(&a.jobs, &a.out_dir, &o)?;
     let r = Report {
         items: s.total,
         rendered: s.rendered,
@@ -87,7 +87,7 @@ pub fn run(a: Args) -> Result<()> {
 }
 
 fn merge(a: &Args) -> Result<()> {
-    let (lines, missing, failed) = terrain::batch::merge_manifests(&a.jobs, &a.out_dir)?;
+    let (lines, missing, failed) = terrain::app::batch::merge_manifests(&a.jobs, &a.out_dir)?;
     let m = Merged {
         lines,
         missing,

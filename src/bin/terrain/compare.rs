@@ -38,14 +38,14 @@ pub struct Args {
 
 pub fn run(a: Args) -> Result<()> {
     if a.replot {
-        let n = terrain::compare::replot(&a.out_dir)?;
+        let n = terrain::eval::compare::replot(&a.out_dir)?;
         println!("{n} rows redrawn in {}", a.out_dir.display());
         return Ok(());
     }
     let mut modes = a.modes;
     modes.dedup();
     anyhow::ensure!(!modes.is_empty(), "--modes: give at least one mode");
-    let opts = terrain::compare::Options {
+    let opts = terrain::eval::compare::Options {
         size: a.size,
         modes,
         repeat: a.repeat,
@@ -59,13 +59,13 @@ pub fn run(a: Args) -> Result<()> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
-    let outcome = terrain::compare::run(&scene, &name, &opts, &a.out_dir)?;
+    let outcome = terrain::eval::compare::run(&scene, &name, &opts, &a.out_dir)?;
     if a.json {
         return crate::print_json(&outcome.report);
     }
     print!(
         "{}",
-        terrain::compare::report::summary_markdown(&name, &outcome.summary)
+        terrain::eval::compare::report::summary_markdown(&name, &outcome.summary)
     );
     let skipped = outcome.report["skipped"].as_array().map_or(0, |a| a.len());
     println!(

@@ -56,14 +56,14 @@ pub fn run(a: Args) -> Result<()> {
     if let Some(size) = a.size {
         (scene.camera.width, scene.camera.height) = size;
     }
-    let opts = terrain::fly::Options {
+    let opts = terrain::app::fly::Options {
         mode: a.mode.unwrap_or(scene.render.mode),
         view: a.view,
         frames: a.frames.map(|n| n as usize),
         fps: a.fps,
         mp4: !a.no_mp4,
     };
-    let o = terrain::fly::run(&scene, &opts, &a.out_dir)?;
+    let o = terrain::app::fly::run(&scene, &opts, &a.out_dir)?;
     if let Some(note) = &o.mp4_note {
         eprintln!("{note}");
     }

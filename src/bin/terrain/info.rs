@@ -3,7 +3,7 @@
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
-use terrain::atlas::{Atlas, LoadOptions};
+use terrain::sketch::{Atlas, LoadOptions};
 
 #[derive(clap::Args)]
 pub struct Args {

@@ -4,13 +4,13 @@ use crate::args;
 use anyhow::{Context, Result};
 use serde::Serialize;
 use std::path::PathBuf;
-use terrain::cpu_stage;
+use terrain::app::output::{self, ImageFormat, Staged};
+use terrain::app::progress::Spinner;
 use terrain::error::{Error, Role};
 use terrain::gpu::frame_io::PassTimes;
 use terrain::gpu::uniforms::View;
-use terrain::output::{self, ImageFormat, Staged};
-use terrain::progress::Spinner;
 use terrain::render::{Frame, Renderer};
+use terrain::scene;
 use terrain::scene::{Mode, Scene};
 
 #[derive(clap::Args)]
@@ -110,7 +110,7 @@ pub fn run(a: Args) -> Result<()> {
         (scene.camera.width, scene.camera.height) = size;
     }
     let mut r = Renderer::with_positions(&scene, mode, a.view, a.positions.is_some())?;
-    let camera = cpu_stage::camera_of(&scene, r.atlas())?;
+    let camera = scene::camera_of(&scene, r.atlas())?;
     let frames = frames(&mut r, &camera, &scene, a.repeat)?;
     let last = frames.last().context("no frame rendered")?;
     // The image and the positions land together or not at all.
@@ -132,7 +132,7 @@ pub fn run(a: Args) -> Result<()> {
     let gpu_ms = median(&|f| f.gpu.gpu_ms);
     let timed = r.ctx().timestamps;
     let passes: Vec<&PassTimes> = frames.iter().map(|f| &f.gpu.passes).collect();
-    let d = cpu_stage::detail_of(&scene, r.atlas());
+    let d = scene::detail_of(&scene, r.atlas());
     let report = Report {
         adapter: r.ctx().adapter_name(),
         mode,

@@ -37,7 +37,7 @@ pub fn run(a: Args) -> Result<()> {
         None if scene.render.mode == Mode::Reference => Mode::Warped,
         None => scene.render.mode,
     };
-    let opts = terrain::view::Options {
+    let opts = terrain::app::view::Options {
         scene_path: a.scene,
         mode,
         size: a.size,
@@ -45,7 +45,7 @@ pub fn run(a: Args) -> Result<()> {
         out_dir: a.out_dir,
         screenshot: a.screenshot,
     };
-    Ok(terrain::view::run(scene, opts)?)
+    Ok(terrain::app::view::run(scene, opts)?)
 }
 
 #[cfg(not(feature = "view"))]

@@ -4,9 +4,10 @@
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
-use terrain::cpu_stage::{self, CpuStage, StageTimes};
-use terrain::quality::{self, Quality};
+use terrain::scene;
 use terrain::scene::{Scene, WarpMethod};
+use terrain::stage::quality::{self, Quality};
+use terrain::stage::{CpuStage, StageTimes};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -57,9 +58,9 @@ pub fn run(a: Args) -> Result<()> {
     if let Some(m) = a.method {
         scene.warp.method = m;
     }
-    let atlas = cpu_stage::load_atlas(&scene)?;
-    let detail = cpu_stage::detail_of(&scene, &atlas);
-    let camera = cpu_stage::camera_of(&scene, &atlas)?;
+    let atlas = scene::load_atlas(&scene)?;
+    let detail = scene::detail_of(&scene, &atlas);
+    let camera = scene::camera_of(&scene, &atlas)?;
     let mut stage = CpuStage::new(&scene, &detail)?;
     stage.run(&atlas, &camera); // warm-up: first-touch page faults are not the stage's cost
     let mut runs: Vec<StageTimes> = (0..a.repeat).map(|_| stage.run(&atlas, &camera)).collect();
@@ -76,7 +77,7 @@ pub fn run(a: Args) -> Result<()> {
         &mut ratios,
     );
     if !a.no_figures {
-        terrain::figures::write_all(&a.out_dir, &atlas, &stage, &ratios)?;
+        terrain::stage::figures::write_all(&a.out_dir, &atlas, &stage, &ratios)?;
     }
     let map = &stage.sketch_map;
     let r = Report {

@@ -24,22 +24,23 @@ pub mod report;
 pub mod sweep;
 pub mod temporal;
 
-use crate::atlas::Atlas;
+use crate::app::output::Fixed;
+use crate::app::output::{write_atomic, write_image};
+use crate::app::path::CameraPath;
+use crate::app::progress::Progress;
 use crate::camera::Camera;
-use crate::cpu_stage::{self, CpuStage};
 use crate::error::{Error, Result, Role};
+use crate::eval::metrics::{self, ScreenError};
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::frame_io::PassTimes;
 use crate::gpu::uniforms::View;
 use crate::lod::baseline::Baselines;
 use crate::lod::reference::Reference;
-use crate::metrics::{self, ScreenError};
-use crate::output::Fixed;
-use crate::output::{write_atomic, write_image};
-use crate::path::CameraPath;
-use crate::progress::Progress;
 use crate::render::{Frame, Renderer};
+use crate::scene;
 use crate::scene::{Mode, Scene};
+use crate::sketch::Atlas;
+use crate::stage::CpuStage;
 use report::Row;
 use serde_json::{Value, json};
 use std::path::Path;
@@ -198,9 +199,9 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     let mut scene = scene.clone();
     (scene.camera.width, scene.camera.height) = o.size;
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
-    let atlas = cpu_stage::load_atlas(&scene)?;
-    let camera = cpu_stage::camera_of(&scene, &atlas)?;
-    let detail = cpu_stage::detail_of(&scene, &atlas);
+    let atlas = scene::load_atlas(&scene)?;
+    let camera = scene::camera_of(&scene, &atlas)?;
+    let detail = scene::detail_of(&scene, &atlas);
     let settings = o
         .settings
         .clone()
@@ -305,7 +306,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     };
     write_outputs(out_dir, &rows, &summary, &title)?;
     write_image(&out_dir.join("reference.png"), w, h, &truth0.rgba)?;
-    crate::output::write_npy_f64(
+    crate::app::output::write_npy_f64(
         &out_dir.join("reference_positions.npy"),
         &[h as usize, w as usize, 4],
         &crate::render::world_positions(&truth0.positions, &camera),
@@ -418,11 +419,11 @@ fn ratio_histogram(
     out_dir: &Path,
     title: &str,
 ) -> Result<Value> {
-    let detail = cpu_stage::detail_of(scene, atlas);
+    let detail = scene::detail_of(scene, atlas);
     let mut stage = CpuStage::new(scene, &detail)?;
     stage.run(atlas, camera);
     let mut ratios = Vec::new();
-    let q = crate::quality::measure(
+    let q = crate::stage::quality::measure(
         &stage.warp.phi,
         stage.sketch_map.n,
         stage.sketch_map.spacing,
@@ -522,7 +523,10 @@ fn path_series(
         }
         progress.advance(1.0, &format!("path frame {}/{}", f + 1, cameras.len()));
     }
-    write_atomic(&out_dir.join("path.csv"), &crate::output::csv_bytes(&csv))?;
+    write_atomic(
+        &out_dir.join("path.csv"),
+        &crate::app::output::csv_bytes(&csv),
+    )?;
     figures::path_error(&series, &format!("Along the camera path: {title}"))
         .write(&out_dir.join("path_error"))?;
     let stats = |v: Vec<f64>| -> Value {

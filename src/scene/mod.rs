@@ -5,9 +5,13 @@
 //! number is range-checked after parsing with the key's full dotted name in the message, and
 //! relative paths resolve against the scene file's folder. An error caused by a `--set` override
 //! blames the override, not the file. Defaults live in the `Default` impls, one place each; keys
-//! whose default follows the sketch are `Option`s resolved in `cpu_stage::detail_of`.
+//! whose default follows the sketch are `Option`s resolved in `scene::detail_of`.
 //! `docs/scene.md` documents every key; a test (`tests/scene_doc.rs`) checks it against these
 //! structs, their defaults included.
+
+mod build;
+
+pub use build::{camera_of, detail_of, ground_under, load_atlas, scene_load_options};
 
 use crate::error::{Error, Result, Role};
 use serde::{Deserialize, Serialize};
@@ -363,10 +367,10 @@ impl Scene {
         match (&s.path, &s.synthetic) {
             (Some(_), Some(_)) => return Err("sketch: give `path` or `synthetic`, not both".into()),
             (None, None) => return Err("sketch: give `path` or `synthetic`".into()),
-            (None, Some(name)) if !crate::atlas::synthetic::NAMES.contains(&name.as_str()) => {
+            (None, Some(name)) if !crate::sketch::synthetic::NAMES.contains(&name.as_str()) => {
                 return Err(format!(
                     "sketch.synthetic = \"{name}\": one of {}",
-                    crate::atlas::synthetic::NAMES.join(", ")
+                    crate::sketch::synthetic::NAMES.join(", ")
                 ));
             }
             (Some(_), None) if s.size.is_some() => {

@@ -19,8 +19,8 @@
 //! the all-or-nothing commit of several is what this module is for, and the temporary name
 //! beside the target (same file system, so `rename` is atomic) is two lines.
 
+use crate::app::progress::Progress;
 use crate::error::{Error, Result, Role};
-use crate::progress::Progress;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 

@@ -11,16 +11,16 @@
 //! as frames come. MP4 is preferred because the APNG of a long flight (363 MB for the bundled
 //! one) is more than browsers play smoothly; where ffmpeg fails, the APNG is made from the frames.
 
-use crate::animation::{self, Apng};
+use crate::app::animation::{self, Apng};
+use crate::app::output::{Fixed, write_atomic, write_image};
+use crate::app::path::CameraPath;
+use crate::app::progress::Progress;
 use crate::error::{Error, Result, Role};
 use crate::gpu::frame_io::PassTimes;
 use crate::gpu::uniforms::View;
 use crate::gpu::{
     normals::NormalsPass, reference::ReferencePass, terrain::TerrainPass, warp_zoom::WarpZoomPass,
 };
-use crate::output::{Fixed, write_atomic, write_image};
-use crate::path::CameraPath;
-use crate::progress::Progress;
 use crate::render::Renderer;
 use crate::scene::{Mode, Scene};
 use serde::Serialize;
@@ -214,7 +214,7 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
     let rows: Vec<CsvRow> = records.iter().map(CsvRow::of).collect();
     write_atomic(
         &out_dir.join("frames.csv"),
-        &crate::output::csv_bytes(&rows),
+        &crate::app::output::csv_bytes(&rows),
     )?;
     let (mp4, mp4_note) = match apng {
         Some(a) => {

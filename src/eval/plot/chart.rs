@@ -8,8 +8,8 @@
 use super::raster::RasterCanvas;
 use super::svg::SvgCanvas;
 use super::{Anchor, Canvas, Rgb};
+use crate::app::output::{write_atomic, write_image};
 use crate::error::{Error, Result};
-use crate::output::{write_atomic, write_image};
 use std::path::Path;
 
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -10,9 +10,9 @@
 //! changes Φ only where the surface bound `I_s` or the floor clip the importance; three of its
 //! values at one mesh size show that at a third of the cost.
 
-use crate::atlas::Atlas;
 use crate::lod::baseline::default_k;
 use crate::scene::{Mode, Scene};
+use crate::sketch::Atlas;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Setting {

@@ -19,16 +19,16 @@
 //! Rejected alternative: one process per snapshot (a shell loop over `terrain render`). Every
 //! launch opens the device and compiles the pipelines again; `batch` measures what that costs.
 
-use crate::atlas::Atlas;
+use crate::app::output::{write_atomic, write_image};
+use crate::app::progress::Progress;
 use crate::camera::Camera;
-use crate::cpu_stage::{self, ground_under};
 use crate::error::{Error, Result, Role};
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::uniforms::View;
-use crate::output::{write_atomic, write_image};
-use crate::progress::Progress;
 use crate::render::Renderer;
 use crate::scene::Scene;
+use crate::scene::{self, ground_under};
+use crate::sketch::Atlas;
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
@@ -298,7 +298,7 @@ pub fn random_camera(
     } else {
         target.to_array()
     };
-    cpu_stage::camera_of(&s, atlas)
+    scene::camera_of(&s, atlas)
 }
 
 pub struct Options {
@@ -376,7 +376,7 @@ impl Cache {
         let key = scene_key(scene);
         if self.renderer.is_none() || self.key != key {
             self.renderer = None;
-            let atlas = cpu_stage::load_atlas(scene)?;
+            let atlas = scene::load_atlas(scene)?;
             let ctx = match &self.ctx {
                 Some(c) => c.clone(),
                 None => {
@@ -408,14 +408,14 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
                 .job_scene(k)
                 .map_err(|reason| Error::Invalid(format!("job {:?}: {reason}", item.name)))?;
             let r = cache.renderer(&scene)?;
-            let camera = cpu_stage::camera_of(&scene, r.atlas())?;
+            let camera = scene::camera_of(&scene, r.atlas())?;
             (scene, camera)
         }
         ItemKind::Random(i) => {
             let scene = jobs.base_scene()?;
             let seed = jobs.random.as_ref().map_or(0, |r| r.seed);
             let r = cache.renderer(&scene)?;
-            let reach = cpu_stage::detail_of(&scene, r.atlas()).reach_m();
+            let reach = scene::detail_of(&scene, r.atlas()).reach_m();
             let camera = random_camera(&scene, r.atlas(), reach, seed, i)?;
             (scene, camera)
         }

@@ -13,8 +13,8 @@
 //! Rejected alternative: the exact bounding square, resampled anew each frame. Its samples slide
 //! over the atlas as the camera moves, and the terrain's silhouette wobbles with them.
 
-use crate::atlas::Atlas;
 use crate::camera::Camera;
+use crate::sketch::Atlas;
 use glam::DVec2;
 
 #[derive(Clone, Debug)]
@@ -172,7 +172,7 @@ pub fn resample(
     }
 }
 
-fn bilinear_tap(level: &crate::atlas::Level, tx: &Taps, ty: &Taps, i: usize, j: usize) -> f32 {
+fn bilinear_tap(level: &crate::sketch::Level, tx: &Taps, ty: &Taps, i: usize, j: usize) -> f32 {
     let w = level.width;
     let (x, fx) = (tx.index[i] as usize, tx.frac[i]);
     let (y, fy) = (ty.index[j] as usize, ty.frac[j]);
@@ -183,13 +183,20 @@ fn bilinear_tap(level: &crate::atlas::Level, tx: &Taps, ty: &Taps, i: usize, j: 
     a + (b - a) * fy
 }
 
-fn sample_row(level: &crate::atlas::Level, tx: &Taps, ty: &Taps, j: usize, row: &mut [f32]) {
+fn sample_row(level: &crate::sketch::Level, tx: &Taps, ty: &Taps, j: usize, row: &mut [f32]) {
     for (i, h) in row.iter_mut().enumerate() {
         *h = bilinear_tap(level, tx, ty, i, j);
     }
 }
 
-fn blend_row(level: &crate::atlas::Level, tx: &Taps, ty: &Taps, j: usize, row: &mut [f32], t: f32) {
+fn blend_row(
+    level: &crate::sketch::Level,
+    tx: &Taps,
+    ty: &Taps,
+    j: usize,
+    row: &mut [f32],
+    t: f32,
+) {
     for (i, h) in row.iter_mut().enumerate() {
         let b = bilinear_tap(level, tx, ty, i, j);
         *h += (b - *h) * t;
@@ -199,7 +206,7 @@ fn blend_row(level: &crate::atlas::Level, tx: &Taps, ty: &Taps, j: usize, row: &
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::atlas::LoadOptions;
+    use crate::sketch::LoadOptions;
     use glam::DVec3;
 
     fn hills() -> Atlas {

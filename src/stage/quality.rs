@@ -6,8 +6,8 @@
 //! importance map, with `k` fixing the total demand to the `(n−1)²` cells there are. A cell is
 //! visible when `S_f ≥ 0.5` at its centre; it is flipped when its signed area is ≤ 0.
 
-use crate::importance::ImportanceMap;
-use crate::warp::cell_area;
+use crate::stage::importance::ImportanceMap;
+use crate::stage::warp::cell_area;
 use serde::Serialize;
 
 /// Histogram bin edges in log2(ratio): 1/8 … 8 in half-octave steps, plus the two open ends.

@@ -110,7 +110,9 @@ impl Atlas {
         // A large sketch takes seconds to parse and fill: say so while it does.
         let spinner = std::fs::metadata(path)
             .is_ok_and(|m| m.len() > LARGE_FILE_BYTES)
-            .then(|| crate::progress::Spinner::new(&format!("reading sketch {}", path.display())));
+            .then(|| {
+                crate::app::progress::Spinner::new(&format!("reading sketch {}", path.display()))
+            });
         let atlas = Atlas::load_quietly(path, opts);
         if let Some(s) = spinner {
             s.finish();

@@ -2,13 +2,13 @@
 //! density-ratio histogram, the error along the camera path, and the image strip.
 
 use super::report::{PSNR_CAP_DB, Row, TARGET_PSNR_DB, TARGET_SSE_PX};
+use crate::app::output::write_image;
 use crate::error::{Error, Result};
-use crate::output::write_image;
-use crate::plot::chart::{Axis, Figure, Panel, Scale, Series, Style};
-use crate::plot::raster::RasterCanvas;
-use crate::plot::{Anchor, Canvas, Rgb};
-use crate::quality::Bin;
+use crate::eval::plot::chart::{Axis, Figure, Panel, Scale, Series, Style};
+use crate::eval::plot::raster::RasterCanvas;
+use crate::eval::plot::{Anchor, Canvas, Rgb};
 use crate::scene::Mode;
+use crate::stage::quality::Bin;
 use std::path::Path;
 
 /// A mode's colour in every figure (rows name their mode as `Mode::name` writes it).

@@ -3,16 +3,22 @@
 //! [`CpuStage`] owns every buffer the stage needs, sized once for the scene's `warp.size`, so a
 //! frame allocates nothing; its three parts are timed separately.
 
-use crate::atlas::{Atlas, LoadOptions};
+pub mod figures;
+pub mod importance;
+pub mod quality;
+pub mod sketch_map;
+pub mod warp;
+
 use crate::camera::Camera;
 use crate::detail::Detail;
-use crate::error::{Error, Result};
-use crate::importance::{ImportanceMap, ImportanceParams};
+use crate::error::Result;
 use crate::scene::Scene;
-use crate::sketch_map::{Resampler, SketchMap, resample};
-use crate::warp::Warp;
-use glam::{DVec2, DVec3};
+use crate::sketch::Atlas;
+use glam::DVec2;
+use importance::{ImportanceMap, ImportanceParams};
+use sketch_map::{Resampler, SketchMap, resample};
 use std::time::Instant;
+use warp::Warp;
 
 /// Microseconds spent in each part of the stage.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
@@ -46,7 +52,10 @@ impl CpuStage {
         let n = scene.warp.size as usize;
         let imp = &scene.importance;
         let surface_max_atlas = match &imp.max_map {
-            Some(p) => Some(Atlas::load(&scene.resolve(p), &scene_load_options(scene))?),
+            Some(p) => Some(Atlas::load(
+                &scene.resolve(p),
+                &crate::scene::scene_load_options(scene),
+            )?),
             None => None,
         };
         Ok(CpuStage {
@@ -116,102 +125,4 @@ impl CpuStage {
         let p = self.warp.phi[t * self.sketch_map.n + s];
         self.sketch_map.origin + DVec2::new(p[0] as f64, p[1] as f64)
     }
-}
-
-/// The scene's overrides for reading its sketch (and its maps).
-pub fn scene_load_options(scene: &Scene) -> LoadOptions {
-    let s = &scene.sketch;
-    LoadOptions {
-        spacing_m: s.spacing_m,
-        origin_m: s.origin_m.map(DVec2::from),
-        height_scale: s.height_scale,
-        height_range_m: s.height_range_m,
-    }
-}
-
-/// The scene's sketch atlas, from its file or synthetic generator.
-pub fn load_atlas(scene: &Scene) -> Result<Atlas> {
-    let opts = scene_load_options(scene);
-    match (&scene.sketch.path, &scene.sketch.synthetic) {
-        (Some(p), _) => Atlas::load(&scene.resolve(p), &opts),
-        (None, Some(name)) => Atlas::synthetic(
-            name,
-            scene
-                .sketch
-                .size
-                .unwrap_or(crate::atlas::synthetic::DEFAULT_SIZE),
-            &opts,
-        ),
-        (None, None) => Err(Error::Invalid("scene has no sketch".into())),
-    }
-}
-
-/// The sketch's height under a world position, if the position is over the sketch.
-pub fn ground_under(atlas: &Atlas, p: DVec2) -> Option<f64> {
-    let (lo, hi) = (atlas.origin, atlas.max_corner());
-    if p.x < lo.x || p.y < lo.y || p.x > hi.x || p.y > hi.y {
-        return None;
-    }
-    let u = (p.x - atlas.origin.x) / atlas.dx;
-    let v = (p.y - atlas.origin.y) / atlas.dy;
-    Some(atlas.sample_texel(u, v, 0.0) as f64)
-}
-
-/// The scene's detail parameters over `atlas`; unset octaves and amplitude follow the sketch
-/// (`detail::default_octaves`, `detail::default_amplitude_m`; docs/scene.md states the rule).
-pub fn detail_of(scene: &Scene, atlas: &Atlas) -> Detail {
-    let d = &scene.detail;
-    let d_atlas = atlas.d_atlas();
-    Detail {
-        octaves: d.octaves.unwrap_or_else(|| {
-            crate::detail::default_octaves(
-                d_atlas,
-                crate::scene::FINEST_WAVELENGTH_M,
-                crate::scene::MAX_OCTAVES,
-            )
-        }),
-        amplitude_m: d.amplitude_m.unwrap_or_else(|| {
-            crate::detail::default_amplitude_m(atlas.finest_relief()[0], d.gain, d_atlas)
-        }),
-        gain: d.gain,
-        seed: d.seed,
-        bias: d.bias,
-        d_atlas: atlas.d_atlas(),
-        // Anchored to the sketch, so the same sketch anywhere on Earth has the same detail.
-        lattice_origin_m: atlas.origin,
-    }
-}
-
-/// The scene's camera; the far distance defaults to the sketch's farthest corner. A camera below
-/// the sketch's surface is an error: every view from there shows the underside of the ground.
-pub fn camera_of(scene: &Scene, atlas: &Atlas) -> Result<Camera> {
-    let c = &scene.camera;
-    let eye = DVec3::from(c.position);
-    if let Some(ground) = ground_under(atlas, eye.truncate())
-        && eye.z < ground
-    {
-        return Err(Error::Camera(format!(
-            "camera.position is {:.1} m below the ground ({ground:.1} m at {:.1}, {:.1})",
-            ground - eye.z,
-            eye.x,
-            eye.y
-        )));
-    }
-    let far = c.far_m.unwrap_or_else(|| {
-        let (lo, hi) = (atlas.origin, atlas.max_corner());
-        let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
-        let z = [atlas.min_m as f64, atlas.max_m as f64];
-        corners
-            .iter()
-            .flat_map(|c| z.map(|z| (c.extend(z) - eye).length()))
-            .fold(1.0, f64::max)
-    });
-    Camera::new(
-        eye,
-        DVec3::from(c.look_at),
-        c.fov_y_deg,
-        c.width,
-        c.height,
-        far,
-    )
 }

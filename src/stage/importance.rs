@@ -15,7 +15,7 @@
 //! - Computed in f32 relative to the region's corner; world-scale values never enter the loop.
 
 use crate::camera::Camera;
-use crate::sketch_map::SketchMap;
+use crate::stage::sketch_map::SketchMap;
 use glam::DVec2;
 
 #[derive(Clone, Debug)]

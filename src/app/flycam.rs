@@ -261,6 +261,6 @@ mod tests {
             std::path::PathBuf::new(),
         )
         .unwrap();
-        assert!(crate::path::CameraPath::new(scene.path.as_ref().unwrap()).is_ok());
+        assert!(crate::app::path::CameraPath::new(scene.path.as_ref().unwrap()).is_ok());
     }
 }

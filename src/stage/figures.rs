@@ -5,10 +5,10 @@
 //! Ratio colours: < 1/4 blue, [1/4, 1/2) cyan, [1/2, 1) green, [1, 2] yellow-green, (2, 4] orange,
 //! > 4 red; cells out of view grey.
 
-use crate::atlas::Atlas;
-use crate::cpu_stage::CpuStage;
+use crate::app::output::Staged;
 use crate::error::Result;
-use crate::output::Staged;
+use crate::sketch::Atlas;
+use crate::stage::CpuStage;
 use glam::DVec2;
 use std::path::Path;
 use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Stroke, Transform};

@@ -13,11 +13,11 @@
 //! speed changes with the spacing of the keys (a camera that lurches), and its uniform
 //! parameterisation loops past closely spaced keys.
 
-use crate::atlas::Atlas;
 use crate::camera::Camera;
-use crate::cpu_stage::ground_under;
 use crate::error::{Error, Result};
+use crate::scene::ground_under;
 use crate::scene::{PathKey, PathSection, Scene};
+use crate::sketch::Atlas;
 use glam::{DVec2, DVec3};
 
 /// Arc-length samples per segment.
@@ -192,7 +192,7 @@ impl CameraPath {
         let mut base = scene.clone();
         base.camera.position = eye.to_array();
         base.camera.look_at = (eye + self.direction(s) * 100.0).to_array();
-        crate::cpu_stage::camera_of(&base, atlas)
+        crate::scene::camera_of(&base, atlas)
     }
 
     /// `frames` cameras `1/fps` seconds apart from the start (the last no further than the end).

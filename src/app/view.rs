@@ -21,17 +21,17 @@
 //! and a GL context on the X display, which llvmpipe under Xvfb provides unreliably. The cost of
 //! the CPU path is one readback per frame (a few ms at 1080p on a discrete GPU).
 
-use crate::atlas::Atlas;
-use crate::cpu_stage::{self, ground_under};
+use crate::app::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder, scene_with_path};
+use crate::app::output::{write_atomic, write_image};
 use crate::error::{Error, Result, Role};
-use crate::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder, scene_with_path};
+use crate::eval::plot::raster::RasterCanvas;
+use crate::eval::plot::{Anchor, Canvas, Rgb};
 use crate::gpu::context::GpuContext;
 use crate::gpu::uniforms::View;
-use crate::output::{write_atomic, write_image};
-use crate::plot::raster::RasterCanvas;
-use crate::plot::{Anchor, Canvas, Rgb};
 use crate::render::{Frame, Renderer};
+use crate::scene::{self, ground_under};
 use crate::scene::{Mode, Scene};
+use crate::sketch::Atlas;
 use std::collections::HashSet;
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
@@ -195,7 +195,7 @@ impl App {
         let lines = [
             format!(
                 "{} · {} · {}×{} · {:.1} fps {}",
-                crate::compare::figures::display(self.mode.name()),
+                crate::eval::compare::figures::display(self.mode.name()),
                 self.view.name(),
                 w,
                 h,
@@ -472,9 +472,9 @@ fn no_display(winit: &str) -> String {
 
 /// Opens the window and flies until it is closed (or `frames` are drawn).
 pub fn run(scene: Scene, o: Options) -> Result<()> {
-    let atlas = cpu_stage::load_atlas(&scene)?;
-    let camera = cpu_stage::camera_of(&scene, &atlas)?;
-    let reach_m = cpu_stage::detail_of(&scene, &atlas).reach_m();
+    let atlas = scene::load_atlas(&scene)?;
+    let camera = scene::camera_of(&scene, &atlas)?;
+    let reach_m = scene::detail_of(&scene, &atlas).reach_m();
     // Enough for every mode the window can switch to (the warped mode's mesh the largest).
     let ctx = GpuContext::new(&crate::render::needs(&scene, Mode::Warped, &atlas))?;
     let event_loop = EventLoop::new().map_err(|e| Error::Window(no_display(&e.to_string())))?;
