@@ -67,7 +67,7 @@ pub fn run(a: Args) -> Result<()> {
         "{}",
         terrain::eval::compare::report::summary_markdown(&name, &outcome.summary)
     );
-    let skipped = outcome.report["skipped"].as_array().map_or(0, |a| a.len());
+    let skipped = outcome.report.skipped.len();
     println!(
         "\n{} settings measured{} in {:.0} s; report.csv, report.json and figures in {}",
         outcome.rows.len(),
@@ -76,7 +76,7 @@ pub fn run(a: Args) -> Result<()> {
         } else {
             String::new()
         },
-        outcome.report["elapsed_s"].as_f64().unwrap_or(0.0),
+        outcome.report.elapsed_s,
         a.out_dir.display()
     );
     Ok(())

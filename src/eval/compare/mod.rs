@@ -42,7 +42,7 @@ use crate::scene::{Mode, Scene};
 use crate::sketch::Atlas;
 use crate::stage::CpuStage;
 use report::Row;
-use serde_json::{Value, json};
+use serde::{Deserialize, Serialize};
 use std::path::Path;
 use sweep::Setting;
 use temporal::LodChange;
@@ -86,7 +86,7 @@ impl Default for Options {
 pub struct Outcome {
     pub rows: Vec<Row>,
     pub summary: report::Summary,
-    pub report: Value,
+    pub report: Report,
 }
 
 /// The reference renderer's march step (a fraction of the height above the ground).
@@ -177,6 +177,112 @@ fn measure(
         passes_ms: PassTimes::median(&passes),
     };
     Ok((row, last.rgba.clone()))
+}
+
+/// `report.json`: everything one run measured. The keys DESIGN.md and the README name stay.
+#[derive(Debug, Serialize)]
+pub struct Report {
+    pub scene: String,
+    /// The detail used, defaults resolved from the sketch included.
+    pub detail: DetailUsed,
+    pub adapter: String,
+    /// Image width and height, pixels.
+    pub size: [u32; 2],
+    pub gpu_timing: &'static str,
+    pub timed_frames: u32,
+    pub reference: ReferenceFigures,
+    pub rows: Vec<Row>,
+    pub summary: report::Summary,
+    pub path: Option<PathReport>,
+    pub density_ratio: Option<RatioReport>,
+    /// Settings that failed, with their cause; the rest were measured.
+    pub skipped: Vec<Skipped>,
+    pub elapsed_s: f64,
+}
+
+/// What `--replot` reads back of a `report.json`.
+#[derive(Deserialize)]
+struct Replot {
+    scene: String,
+    adapter: String,
+    size: [u32; 2],
+    rows: Vec<Row>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct DetailUsed {
+    pub octaves: u32,
+    pub amplitude_m: f64,
+    pub gain: f64,
+    pub bias: f64,
+}
+
+/// The reference's march step and how far halving it moves the image.
+#[derive(Debug, Serialize)]
+pub struct ReferenceFigures {
+    pub step: f32,
+    pub ms: f64,
+    pub psnr_halving_step_db: f64,
+    pub converged_db: f64,
+}
+
+#[derive(Debug, Serialize)]
+pub struct Skipped {
+    pub mode: &'static str,
+    pub setting: String,
+    pub error: String,
+}
+
+/// The warped mode's density ratio over the visible cells.
+#[derive(Debug, Serialize)]
+pub struct RatioReport {
+    pub cells_visible: usize,
+    pub ratio_within_0_5_2: f64,
+    pub ratio_within_0_5_1: f64,
+    pub histogram: Vec<crate::stage::quality::Bin>,
+}
+
+/// The camera path's statistics, per mode.
+#[derive(Debug, Serialize)]
+pub struct PathReport {
+    pub frames: usize,
+    pub fps: f64,
+    pub length_m: f64,
+    pub source: &'static str,
+    pub modes: Vec<PathMode>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct PathMode {
+    pub mode: &'static str,
+    pub setting: String,
+    pub psnr_db: Option<Stats>,
+    pub sse_mean_px: Option<Stats>,
+    pub lod_change_levels: Option<Stats>,
+    pub lod_changed_share: Option<Stats>,
+}
+
+/// Mean, 95th percentile and maximum of a series.
+#[derive(Debug, Serialize)]
+pub struct Stats {
+    pub mean: f64,
+    pub p95: f64,
+    pub max: f64,
+}
+
+impl Stats {
+    /// `None` for an empty series (a path of one frame has no LOD change).
+    fn of(mut v: Vec<f64>) -> Option<Stats> {
+        if v.is_empty() {
+            return None;
+        }
+        v.sort_by(f64::total_cmp);
+        Some(Stats {
+            mean: v.iter().sum::<f64>() / v.len() as f64,
+            p95: v[((v.len() as f64 * 0.95) as usize).min(v.len() - 1)],
+            max: v[v.len() - 1],
+        })
+    }
 }
 
 /// A line of `path.csv`: one mode at one frame of the camera path.
@@ -275,9 +381,11 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
                 rows.push(row);
                 images.push((*s, rgba));
             }
-            Err(e) => skipped.push(
-                json!({ "mode": s.mode_name(), "setting": s.label(), "error": e.to_string() }),
-            ),
+            Err(e) => skipped.push(Skipped {
+                mode: s.mode_name(),
+                setting: s.label(),
+                error: e.to_string(),
+            }),
         }
         progress.advance(1.0, &format!("{} {}", s.mode_name(), s.label()));
     }
@@ -336,31 +444,35 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     progress.advance(1.0, "figures");
     progress.finish();
 
-    let report = json!({
-        "scene": name,
-        "detail": {
-            "octaves": detail.octaves,
-            "amplitude_m": detail.amplitude_m,
-            "gain": detail.gain,
-            "bias": detail.bias,
+    let report = Report {
+        scene: name.to_string(),
+        detail: DetailUsed {
+            octaves: detail.octaves,
+            amplitude_m: detail.amplitude_m,
+            gain: detail.gain,
+            bias: detail.bias,
         },
-        "adapter": ctx.adapter_name(),
-        "size": [w, h],
-        "gpu_timing": if ctx.timestamps { "timestamp queries" } else { "wall time around submit" },
-        "timed_frames": o.repeat.max(1),
-        "reference": {
-            "step": step,
-            "ms": ref_frame.gpu.gpu_ms,
-            "psnr_halving_step_db": halving_db.min(report::PSNR_CAP_DB),
-            "converged_db": REFERENCE_CONVERGED_DB,
+        adapter: ctx.adapter_name(),
+        size: [w, h],
+        gpu_timing: if ctx.timestamps {
+            "timestamp queries"
+        } else {
+            "wall time around submit"
         },
-        "rows": rows,
-        "summary": summary,
-        "path": path,
-        "density_ratio": histogram,
-        "skipped": skipped,
-        "elapsed_s": progress.elapsed().as_secs_f64(),
-    });
+        timed_frames: o.repeat.max(1),
+        reference: ReferenceFigures {
+            step,
+            ms: ref_frame.gpu.gpu_ms,
+            psnr_halving_step_db: halving_db.min(report::PSNR_CAP_DB),
+            converged_db: REFERENCE_CONVERGED_DB,
+        },
+        rows: rows.clone(),
+        summary: summary.clone(),
+        path,
+        density_ratio: histogram,
+        skipped,
+        elapsed_s: progress.elapsed().as_secs_f64(),
+    };
     write_atomic(
         &out_dir.join("report.json"),
         serde_json::to_string_pretty(&report)
@@ -380,18 +492,11 @@ pub fn replot(out_dir: &Path) -> Result<usize> {
     let path = out_dir.join("report.json");
     let text = std::fs::read_to_string(&path).map_err(|e| Error::io(Role::Report, &path, e))?;
     let bad = |why: String| Error::file(Role::Report, &path, why);
-    let report: Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
-    let mut rows: Vec<Row> =
-        serde_json::from_value(report["rows"].clone()).map_err(|e| bad(format!("rows: {e}")))?;
+    let report: Replot = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+    let mut rows = report.rows;
     report::mark_fronts(&mut rows);
-    let side = |k: usize| report["size"][k].as_u64().unwrap_or(0);
-    let title = format!(
-        "{}: {}×{} px on {}",
-        report["scene"].as_str().unwrap_or("scene"),
-        side(0),
-        side(1),
-        report["adapter"].as_str().unwrap_or("?")
-    );
+    let [w, h] = report.size;
+    let title = format!("{}: {w}×{h} px on {}", report.scene, report.adapter);
     write_outputs(out_dir, &rows, &report::summarise(&rows), &title)?;
     Ok(rows.len())
 }
@@ -418,7 +523,7 @@ fn ratio_histogram(
     camera: &Camera,
     out_dir: &Path,
     title: &str,
-) -> Result<Value> {
+) -> Result<RatioReport> {
     let detail = scene::detail_of(scene, atlas);
     let mut stage = CpuStage::new(scene, &detail)?;
     stage.run(atlas, camera);
@@ -440,12 +545,12 @@ fn ratio_histogram(
         ),
     )
     .write(&out_dir.join("ratio_histogram"))?;
-    Ok(json!({
-        "cells_visible": q.cells_visible,
-        "ratio_within_0_5_2": q.ratio_within_0_5_2,
-        "ratio_within_0_5_1": q.ratio_within_0_5_1,
-        "histogram": q.histogram,
-    }))
+    Ok(RatioReport {
+        cells_visible: q.cells_visible,
+        ratio_within_0_5_2: q.ratio_within_0_5_2,
+        ratio_within_0_5_1: q.ratio_within_0_5_1,
+        histogram: q.histogram,
+    })
 }
 
 /// Per frame along the path: each mode (at the scene's setting) against the reference, and the
@@ -464,7 +569,7 @@ fn path_series(
     o: &Options,
     progress: &mut Progress,
     out: &Out,
-) -> Result<Value> {
+) -> Result<PathReport> {
     let (out_dir, title) = (out.dir, out.title);
     let path = CameraPath::of_scene(scene)?;
     let cameras = path.cameras(o.path_frames, o.path_fps, scene, atlas)?;
@@ -529,38 +634,31 @@ fn path_series(
     )?;
     figures::path_error(&series, &format!("Along the camera path: {title}"))
         .write(&out_dir.join("path_error"))?;
-    let stats = |v: Vec<f64>| -> Value {
-        if v.is_empty() {
-            return Value::Null;
-        }
-        let mut s = v.clone();
-        s.sort_by(f64::total_cmp);
-        json!({
-            "mean": s.iter().sum::<f64>() / s.len() as f64,
-            "p95": s[((s.len() as f64 * 0.95) as usize).min(s.len() - 1)],
-            "max": s[s.len() - 1],
-        })
-    };
-    let per_mode: Vec<Value> = modes
+    let per_mode = modes
         .iter()
         .enumerate()
         .map(|(k, (s, _))| {
             let pts = &series[k].1;
-            json!({
-                "mode": s.mode_name(),
-                "setting": s.label(),
-                "psnr_db": stats(pts.iter().map(|p| p.psnr_db).collect()),
-                "sse_mean_px": stats(sse[k].iter().map(|e| e.mean_px).collect()),
-                "lod_change_levels": stats(changes[k].iter().map(|c| c.mean_levels).collect()),
-                "lod_changed_share": stats(changes[k].iter().map(|c| c.changed_share).collect()),
-            })
+            PathMode {
+                mode: s.mode_name(),
+                setting: s.label(),
+                psnr_db: Stats::of(pts.iter().map(|p| p.psnr_db).collect()),
+                sse_mean_px: Stats::of(sse[k].iter().map(|e| e.mean_px).collect()),
+                lod_change_levels: Stats::of(changes[k].iter().map(|c| c.mean_levels).collect()),
+                lod_changed_share: Stats::of(changes[k].iter().map(|c| c.changed_share).collect()),
+            }
         })
         .collect();
-    Ok(json!({
-        "frames": cameras.len(),
-        "fps": o.path_fps,
-        "length_m": path.length_m().min(path.speed_mps * (cameras.len().saturating_sub(1)) as f64 / o.path_fps),
-        "source": if scene.path.is_some() { "scene [path]" } else { "default: straight ahead at 150 m/s" },
-        "modes": per_mode,
-    }))
+    let travelled = path.speed_mps * (cameras.len().saturating_sub(1)) as f64 / o.path_fps;
+    Ok(PathReport {
+        frames: cameras.len(),
+        fps: o.path_fps,
+        length_m: path.length_m().min(travelled),
+        source: if scene.path.is_some() {
+            "scene [path]"
+        } else {
+            "default: straight ahead at 150 m/s"
+        },
+        modes: per_mode,
+    })
 }
