@@ -26,12 +26,11 @@ use crate::error::{Error, Result, Role};
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::uniforms::View;
 use crate::render::Renderer;
-use crate::scene::Scene;
-use crate::scene::{self, ground_under};
+
+use crate::scene::{self, Mode, Scene, ground_under};
 use crate::sketch::Atlas;
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
-use serde_json::{Value, json};
 use std::collections::HashSet;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -333,13 +332,14 @@ fn resume_from(manifest: &Path, out_dir: &Path) -> Result<HashSet<String>> {
     let mut done = HashSet::new();
     let mut kept = String::new();
     for line in text.lines() {
-        let Ok(v) = serde_json::from_str::<Value>(line) else {
+        let Ok(v) = serde_json::from_str::<ManifestLine>(line) else {
             continue;
         };
-        let (Some(name), Some("ok")) = (v["name"].as_str(), v["status"].as_str()) else {
+        if v.status != Status::Ok {
             continue;
-        };
-        if out_dir.join(format!("{name}.png")).is_file() && done.insert(name.to_string()) {
+        }
+        let name = v.name;
+        if out_dir.join(format!("{name}.png")).is_file() && done.insert(name) {
             kept += line;
             kept.push('\n');
         }
@@ -395,7 +395,7 @@ impl Cache {
 }
 
 /// Renders item `item`: its scene, its camera, the snapshot written to `out_dir`.
-fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> Result<Value> {
+fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> Result<Snapshot> {
     if !plain_name(&item.name) {
         return Err(Error::Invalid(format!(
             "name {:?}: use letters, digits, '-', '_' and '.' (it names the output file)",
@@ -424,21 +424,64 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
     let frame = r.render(&camera)?;
     let output = out_dir.join(format!("{}.png", item.name));
     write_image(&output, frame.width, frame.height, &frame.rgba)?;
-    Ok(json!({
-        "output": output.file_name().map(|n| n.to_string_lossy().into_owned()),
-        "mode": scene.render.mode.name(),
-        "camera": {
-            "position": camera.eye.to_array(),
-            "look_at": (camera.eye + camera.forward * 100.0).to_array(),
-            "fov_y_deg": camera.fov_y.to_degrees(),
+    Ok(Snapshot {
+        output: output.file_name().map(|n| n.to_string_lossy().into_owned()),
+        mode: scene.render.mode,
+        camera: SnapshotCamera {
+            position: camera.eye.to_array(),
+            look_at: (camera.eye + camera.forward * 100.0).to_array(),
+            fov_y_deg: camera.fov_y.to_degrees(),
         },
-        "width": frame.width,
-        "height": frame.height,
-        "triangles": frame.gpu.triangles,
-        "cpu_stage_us": frame.cpu_us,
-        "gpu_ms": frame.gpu.gpu_ms,
-        "frame_ms": frame.gpu.gpu_ms + frame.cpu_us * 1e-3,
-    }))
+        width: frame.width,
+        height: frame.height,
+        triangles: frame.gpu.triangles,
+        cpu_stage_us: frame.cpu_us,
+        gpu_ms: frame.gpu.gpu_ms,
+        frame_ms: frame.gpu.gpu_ms + frame.cpu_us * 1e-3,
+    })
+}
+
+/// A line of the manifest: one item, done or failed.
+#[derive(Debug, Serialize, Deserialize)]
+pub struct ManifestLine {
+    pub index: usize,
+    pub name: String,
+    pub shard: String,
+    pub seconds: f64,
+    pub status: Status,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub error: Option<String>,
+    /// What was rendered (`ok` lines).
+    #[serde(flatten, skip_serializing_if = "Option::is_none", default)]
+    pub snapshot: Option<Snapshot>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Status {
+    Ok,
+    Failed,
+}
+
+/// A snapshot's figures in its manifest line.
+#[derive(Debug, Serialize, Deserialize)]
+pub struct Snapshot {
+    pub output: Option<String>,
+    pub mode: Mode,
+    pub camera: SnapshotCamera,
+    pub width: u32,
+    pub height: u32,
+    pub triangles: u64,
+    pub cpu_stage_us: f64,
+    pub gpu_ms: f64,
+    pub frame_ms: f64,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+pub struct SnapshotCamera {
+    pub position: [f64; 3],
+    pub look_at: [f64; 3],
+    pub fov_y_deg: f64,
 }
 
 pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
@@ -483,29 +526,30 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
                 item.name
             )))
         };
-        let mut line = json!({
-            "index": item.index,
-            "name": item.name,
-            "shard": format!("{}/{}", o.shard.0, o.shard.1),
-            "seconds": t0.elapsed().as_secs_f64(),
-        });
+        let mut line = ManifestLine {
+            index: item.index,
+            name: item.name.clone(),
+            shard: format!("{}/{}", o.shard.0, o.shard.1),
+            seconds: t0.elapsed().as_secs_f64(),
+            status: Status::Ok,
+            error: None,
+            snapshot: None,
+        };
         match result {
-            Ok(fields) => {
-                line["status"] = json!("ok");
-                for (k, v) in fields.as_object().into_iter().flatten() {
-                    line[k] = v.clone();
-                }
+            Ok(snapshot) => {
+                line.snapshot = Some(snapshot);
                 rendered += 1;
             }
             Err(e) => {
-                line["status"] = json!("failed");
-                line["error"] = json!(e.to_string());
+                line.status = Status::Failed;
+                line.error = Some(e.to_string());
                 failed += 1;
                 // A device error may leave the renderer unusable; the next item builds a new one.
                 cache.renderer = None;
             }
         }
-        writeln!(file, "{line}")
+        let text = serde_json::to_string(&line).map_err(|e| Error::Invalid(e.to_string()))?;
+        writeln!(file, "{text}")
             .and_then(|_| file.flush())
             .map_err(|e| Error::io(Role::Manifest, &manifest, e))?;
         progress.advance(1.0, &item.name);
@@ -526,7 +570,7 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
 pub fn merge_manifests(jobs_path: &Path, out_dir: &Path) -> Result<(usize, Vec<String>, usize)> {
     let jobs = Jobs::load(jobs_path)?;
     let items = jobs.items();
-    let mut lines: Vec<Option<Value>> = vec![None; items.len()];
+    let mut lines: Vec<Option<ManifestLine>> = (0..items.len()).map(|_| None).collect();
     let entries =
         std::fs::read_dir(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
     for entry in entries.flatten() {
@@ -538,17 +582,14 @@ pub fn merge_manifests(jobs_path: &Path, out_dir: &Path) -> Result<(usize, Vec<S
             .map_err(|e| Error::io(Role::Manifest, entry.path(), e))?;
         for v in text
             .lines()
-            .filter_map(|l| serde_json::from_str::<Value>(l).ok())
+            .filter_map(|l| serde_json::from_str::<ManifestLine>(l).ok())
         {
-            let Some(k) = v["index"]
-                .as_u64()
-                .map(|k| k as usize)
-                .filter(|&k| k < items.len())
-            else {
+            let k = v.index;
+            if k >= items.len() {
                 continue;
-            };
+            }
             // An ok line wins over a failed one for the same item.
-            if lines[k].as_ref().is_none_or(|old| old["status"] != "ok") {
+            if lines[k].as_ref().is_none_or(|old| old.status != Status::Ok) {
                 lines[k] = Some(v);
             }
         }
@@ -562,9 +603,13 @@ pub fn merge_manifests(jobs_path: &Path, out_dir: &Path) -> Result<(usize, Vec<S
     let failed = lines
         .iter()
         .flatten()
-        .filter(|v| v["status"] != "ok")
+        .filter(|v| v.status != Status::Ok)
         .count();
-    let text: String = lines.iter().flatten().map(|v| format!("{v}\n")).collect();
+    let mut text = String::new();
+    for v in lines.iter().flatten() {
+        text += &serde_json::to_string(v).map_err(|e| Error::Invalid(e.to_string()))?;
+        text.push('\n');
+    }
     write_atomic(&out_dir.join("manifest.jsonl"), text.as_bytes())?;
     Ok((lines.iter().flatten().count(), missing, failed))
 }
