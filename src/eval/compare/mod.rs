@@ -41,8 +41,10 @@ use crate::scene;
 use crate::scene::{Mode, Scene};
 use crate::sketch::Atlas;
 use crate::stage::CpuStage;
-use report::Row;
-use serde::{Deserialize, Serialize};
+use report::{
+    DetailUsed, PathMode, PathReport, RatioReport, ReferenceFigures, Replot, Report, Row, Skipped,
+    Stats,
+};
 use std::path::Path;
 use sweep::Setting;
 use temporal::LodChange;
@@ -177,112 +179,6 @@ fn measure(
         passes_ms: PassTimes::median(&passes),
     };
     Ok((row, last.rgba.clone()))
-}
-
-/// `report.json`: everything one run measured. The keys DESIGN.md and the README name stay.
-#[derive(Debug, Serialize)]
-pub struct Report {
-    pub scene: String,
-    /// The detail used, defaults resolved from the sketch included.
-    pub detail: DetailUsed,
-    pub adapter: String,
-    /// Image width and height, pixels.
-    pub size: [u32; 2],
-    pub gpu_timing: &'static str,
-    pub timed_frames: u32,
-    pub reference: ReferenceFigures,
-    pub rows: Vec<Row>,
-    pub summary: report::Summary,
-    pub path: Option<PathReport>,
-    pub density_ratio: Option<RatioReport>,
-    /// Settings that failed, with their cause; the rest were measured.
-    pub skipped: Vec<Skipped>,
-    pub elapsed_s: f64,
-}
-
-/// What `--replot` reads back of a `report.json`.
-#[derive(Deserialize)]
-struct Replot {
-    scene: String,
-    adapter: String,
-    size: [u32; 2],
-    rows: Vec<Row>,
-}
-
-#[derive(Debug, Serialize)]
-pub struct DetailUsed {
-    pub octaves: u32,
-    pub amplitude_m: f64,
-    pub gain: f64,
-    pub bias: f64,
-}
-
-/// The reference's march step and how far halving it moves the image.
-#[derive(Debug, Serialize)]
-pub struct ReferenceFigures {
-    pub step: f32,
-    pub ms: f64,
-    pub psnr_halving_step_db: f64,
-    pub converged_db: f64,
-}
-
-#[derive(Debug, Serialize)]
-pub struct Skipped {
-    pub mode: &'static str,
-    pub setting: String,
-    pub error: String,
-}
-
-/// The warped mode's density ratio over the visible cells.
-#[derive(Debug, Serialize)]
-pub struct RatioReport {
-    pub cells_visible: usize,
-    pub ratio_within_0_5_2: f64,
-    pub ratio_within_0_5_1: f64,
-    pub histogram: Vec<crate::stage::quality::Bin>,
-}
-
-/// The camera path's statistics, per mode.
-#[derive(Debug, Serialize)]
-pub struct PathReport {
-    pub frames: usize,
-    pub fps: f64,
-    pub length_m: f64,
-    pub source: &'static str,
-    pub modes: Vec<PathMode>,
-}
-
-#[derive(Debug, Serialize)]
-pub struct PathMode {
-    pub mode: &'static str,
-    pub setting: String,
-    pub psnr_db: Option<Stats>,
-    pub sse_mean_px: Option<Stats>,
-    pub lod_change_levels: Option<Stats>,
-    pub lod_changed_share: Option<Stats>,
-}
-
-/// Mean, 95th percentile and maximum of a series.
-#[derive(Debug, Serialize)]
-pub struct Stats {
-    pub mean: f64,
-    pub p95: f64,
-    pub max: f64,
-}
-
-impl Stats {
-    /// `None` for an empty series (a path of one frame has no LOD change).
-    fn of(mut v: Vec<f64>) -> Option<Stats> {
-        if v.is_empty() {
-            return None;
-        }
-        v.sort_by(f64::total_cmp);
-        Some(Stats {
-            mean: v.iter().sum::<f64>() / v.len() as f64,
-            p95: v[((v.len() as f64 * 0.95) as usize).min(v.len() - 1)],
-            max: v[v.len() - 1],
-        })
-    }
 }
 
 /// A line of `path.csv`: one mode at one frame of the camera path.

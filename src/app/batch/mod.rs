@@ -27,9 +27,12 @@ use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::uniforms::View;
 use crate::render::Renderer;
 
-use crate::scene::{self, Mode, Scene, ground_under};
+use crate::scene::{self, Scene, ground_under};
 use crate::sketch::Atlas;
 use glam::{DVec2, DVec3};
+mod manifest;
+
+pub use manifest::{ManifestLine, Snapshot, SnapshotCamera, Status};
 use serde::{Deserialize, Serialize};
 use std::collections::HashSet;
 use std::io::Write;
@@ -439,49 +442,6 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
         gpu_ms: frame.gpu.gpu_ms,
         frame_ms: frame.gpu.gpu_ms + frame.cpu_us * 1e-3,
     })
-}
-
-/// A line of the manifest: one item, done or failed.
-#[derive(Debug, Serialize, Deserialize)]
-pub struct ManifestLine {
-    pub index: usize,
-    pub name: String,
-    pub shard: String,
-    pub seconds: f64,
-    pub status: Status,
-    #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub error: Option<String>,
-    /// What was rendered (`ok` lines).
-    #[serde(flatten, skip_serializing_if = "Option::is_none", default)]
-    pub snapshot: Option<Snapshot>,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Status {
-    Ok,
-    Failed,
-}
-
-/// A snapshot's figures in its manifest line.
-#[derive(Debug, Serialize, Deserialize)]
-pub struct Snapshot {
-    pub output: Option<String>,
-    pub mode: Mode,
-    pub camera: SnapshotCamera,
-    pub width: u32,
-    pub height: u32,
-    pub triangles: u64,
-    pub cpu_stage_us: f64,
-    pub gpu_ms: f64,
-    pub frame_ms: f64,
-}
-
-#[derive(Debug, Serialize, Deserialize)]
-pub struct SnapshotCamera {
-    pub position: [f64; 3],
-    pub look_at: [f64; 3],
-    pub fov_y_deg: f64,
 }
 
 pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {

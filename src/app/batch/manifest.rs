@@ -1,0 +1,49 @@
+//! The manifest (`manifest.jsonl`, or `manifest-<i>-of-<n>.jsonl` for a shard): one JSON line
+//! per item, done or failed, appended and flushed as items finish; `--resume` and `--merge` read
+//! it back as these types.
+
+use crate::scene::Mode;
+use serde::{Deserialize, Serialize};
+
+/// A line of the manifest: one item, done or failed.
+#[derive(Debug, Serialize, Deserialize)]
+pub struct ManifestLine {
+    pub index: usize,
+    pub name: String,
+    pub shard: String,
+    pub seconds: f64,
+    pub status: Status,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub error: Option<String>,
+    /// What was rendered (`ok` lines).
+    #[serde(flatten, skip_serializing_if = "Option::is_none", default)]
+    pub snapshot: Option<Snapshot>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Status {
+    Ok,
+    Failed,
+}
+
+/// A snapshot's figures in its manifest line.
+#[derive(Debug, Serialize, Deserialize)]
+pub struct Snapshot {
+    pub output: Option<String>,
+    pub mode: Mode,
+    pub camera: SnapshotCamera,
+    pub width: u32,
+    pub height: u32,
+    pub triangles: u64,
+    pub cpu_stage_us: f64,
+    pub gpu_ms: f64,
+    pub frame_ms: f64,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+pub struct SnapshotCamera {
+    pub position: [f64; 3],
+    pub look_at: [f64; 3],
+    pub fov_y_deg: f64,
+}
