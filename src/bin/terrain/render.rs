@@ -132,7 +132,8 @@ pub fn run(a: Args) -> Result<()> {
     let gpu_ms = median(&|f| f.gpu.gpu_ms);
     let timed = r.ctx().timestamps;
     let passes: Vec<&PassTimes> = frames.iter().map(|f| &f.gpu.passes).collect();
-    let d = scene::detail_of(&scene, r.atlas());
+    // The renderer resolved the detail (defaults from the sketch) when it was built.
+    let d = &r.detail;
     let report = Report {
         adapter: r.ctx().adapter_name(),
         mode,

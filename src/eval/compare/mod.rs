@@ -203,7 +203,6 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
     let atlas = scene::load_atlas(&scene)?;
     let camera = scene::camera_of(&scene, &atlas)?;
-    let detail = scene::detail_of(&scene, &atlas);
     let settings = o
         .settings
         .clone()
@@ -343,10 +342,10 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     let report = Report {
         scene: name.to_string(),
         detail: DetailUsed {
-            octaves: detail.octaves,
-            amplitude_m: detail.amplitude_m,
-            gain: detail.gain,
-            bias: detail.bias,
+            octaves: reference.detail.octaves,
+            amplitude_m: reference.detail.amplitude_m,
+            gain: reference.detail.gain,
+            bias: reference.detail.bias,
         },
         adapter: ctx.adapter_name(),
         size: [w, h],
