@@ -59,15 +59,35 @@ pub enum Error {
         path: PathBuf,
         reason: String,
     },
+    /// A file whose decoder refused it; `what` says what the file was taken for ("a readable
+    /// TIFF"), `source` is the decoder's error (tiff, png, toml).
+    #[error("{role} {path}: {what}: {source}")]
+    Decode {
+        role: Role,
+        path: PathBuf,
+        what: &'static str,
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
     /// A `--set key=value` override that is not a key, or whose value is out of range.
     #[error("--set {arg}: {reason}")]
     Override { arg: String, reason: String },
     /// A camera that cannot be built (NaN, eye at its own target, zero-size image).
     #[error("camera: {0}")]
     Camera(String),
-    /// A limit the adapter lacks, a grid too large for it.
-    #[error("GPU: {0}")]
-    Gpu(String),
+    /// A limit of the adapter below what a scene needs; `limit` is wgpu's name for it.
+    #[error(
+        "GPU: {what} needs {needed}{unit} of `{limit}`, the adapter allows {allowed}{unit}{advice}"
+    )]
+    Limit {
+        what: String,
+        limit: &'static str,
+        needed: u64,
+        allowed: u64,
+        /// The unit of `needed` and `allowed` as printed (" MiB", or "" for a count).
+        unit: &'static str,
+        /// What the user can do about it, starting with "; ", or empty.
+        advice: &'static str,
+    },
     /// The graphics API refused: no adapter, no device, a lost device, a failed read-back;
     /// `what` says what was being done, `source` is wgpu's error.
     #[error("GPU: {what}: {source}")]
@@ -75,12 +95,36 @@ pub enum Error {
         what: String,
         source: Box<dyn std::error::Error + Send + Sync>,
     },
-    /// No window can be opened (no display, a window system error).
-    #[error("window: {0}")]
-    Window(String),
-    /// A value that cannot be used (synthetic name, empty grid).
-    #[error("{0}")]
-    Invalid(String),
+    /// No window can be opened (no display, a window system error); `source` is winit's or
+    /// softbuffer's error.
+    #[error("window: {what}: {source}")]
+    Window {
+        what: String,
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+    /// No display to open a window on; `cause` is winit's reason in the user's terms (its
+    /// source-file location dropped) with what to do about it.
+    #[error("window: {cause}")]
+    NoDisplay { cause: String },
+    /// A scene value that cannot be used although it parsed (a synthetic sketch's name, a camera
+    /// path whose keys coincide); `key` names it as the scene file spells it.
+    #[error("{key}: {reason}")]
+    Value { key: &'static str, reason: String },
+    /// One job of a batch that cannot run as the jobs file gives it.
+    #[error("job {name:?}: {reason}")]
+    Job { name: String, reason: String },
+    /// A report, manifest line or scene that serde could not encode.
+    #[error("cannot encode the {what}: {source}")]
+    Encode {
+        what: &'static str,
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+    /// A shader source the preprocessor cannot expand (a defect of the program, not of input).
+    #[error("shader {file}.wgsl: {reason}")]
+    Shader { file: String, reason: String },
+    /// A library call its own callers should never make (a defect of the program, not of input).
+    #[error("internal: {0}")]
+    Internal(&'static str),
 }
 
 pub type Result<T> = std::result::Result<T, Error>;
@@ -100,6 +144,20 @@ impl Error {
             reason: reason.into(),
         }
     }
+    /// `source`, the decoder of a `role` file, refused it as `what`.
+    pub fn decode(
+        role: Role,
+        path: impl Into<PathBuf>,
+        what: &'static str,
+        source: impl std::error::Error + Send + Sync + 'static,
+    ) -> Self {
+        Error::Decode {
+            role,
+            path: path.into(),
+            what,
+            source: Box::new(source),
+        }
+    }
     /// The graphics API's `source` refused `what`.
     pub fn device(
         what: impl Into<String>,
@@ -116,6 +174,29 @@ impl Error {
     pub fn scene(path: impl Into<PathBuf>, reason: impl Into<String>) -> Self {
         Error::file(Role::Scene, path, reason)
     }
+    pub fn value(key: &'static str, reason: impl Into<String>) -> Self {
+        Error::Value {
+            key,
+            reason: reason.into(),
+        }
+    }
+    pub fn encode(
+        what: &'static str,
+        source: impl std::error::Error + Send + Sync + 'static,
+    ) -> Self {
+        Error::Encode {
+            what,
+            source: Box::new(source),
+        }
+    }
+    /// The window system refused `what`; its error is kept as text, since winit's and
+    /// softbuffer's errors hold raw window handles and cannot cross threads.
+    pub fn window(what: impl Into<String>, source: impl fmt::Display) -> Self {
+        Error::Window {
+            what: what.into(),
+            source: source.to_string().into(),
+        }
+    }
 
     /// The same error with its file in another role (a sketch reader's error about the file that
     /// is, to this command, the importance map).
@@ -130,6 +211,14 @@ impl Error {
                 role: new,
                 path,
                 reason,
+            },
+            Error::Decode {
+                path, what, source, ..
+            } => Error::Decode {
+                role: new,
+                path,
+                what,
+                source,
             },
             e => e,
         }

@@ -12,9 +12,10 @@
 //! it takes minutes to cross the sketch.
 
 use crate::camera::Camera;
-use crate::error::Result;
+use crate::error::{Error, Result, Role};
 use crate::scene::{PathKey, PathSection};
 use glam::DVec3;
+use std::path::Path;
 
 /// Metres kept between the eye and the highest the terrain can reach under it.
 pub const CLEARANCE_M: f64 = 2.0;
@@ -151,14 +152,12 @@ impl PathRecorder {
     }
 }
 
-/// The scene file's text with its `[path]` replaced by `path` (other keys untouched).
-pub fn scene_with_path(
-    scene_text: &str,
-    path: &PathSection,
-) -> std::result::Result<String, String> {
+/// The text of the scene file `scene_path` with its `[path]` replaced by `path` (other keys
+/// untouched).
+pub fn scene_with_path(scene_text: &str, scene_path: &Path, path: &PathSection) -> Result<String> {
     let mut table: toml::Table = scene_text
         .parse()
-        .map_err(|e: toml::de::Error| e.message().to_string())?;
+        .map_err(|e| Error::decode(Role::Scene, scene_path, "not TOML", e))?;
     let keys: Vec<toml::Value> = path
         .keys
         .iter()
@@ -178,7 +177,7 @@ pub fn scene_with_path(
     p.insert("speed_mps".into(), toml::Value::Float(path.speed_mps));
     p.insert("keys".into(), toml::Value::Array(keys));
     table.insert("path".into(), toml::Value::Table(p));
-    toml::to_string(&table).map_err(|e| e.to_string())
+    toml::to_string(&table).map_err(|e| Error::encode("flown scene", e))
 }
 
 #[cfg(test)]
@@ -251,6 +250,7 @@ mod tests {
         assert!((path.speed_mps - 80.0).abs() < 1.0, "{}", path.speed_mps);
         let text = scene_with_path(
             "[sketch]\nsynthetic = \"hills\"\n[path]\nkeys = []\n",
+            Path::new("flown.toml"),
             &path,
         )
         .unwrap();

@@ -37,7 +37,10 @@ pub struct CameraPath {
 impl CameraPath {
     pub fn new(section: &PathSection) -> Result<CameraPath> {
         if section.keys.len() < 2 {
-            return Err(Error::Invalid("a camera path needs at least 2 keys".into()));
+            return Err(Error::value(
+                "path.keys",
+                "a camera path needs at least 2 keys",
+            ));
         }
         let mut path = CameraPath {
             keys: section.keys.clone(),
@@ -56,8 +59,9 @@ impl CameraPath {
             }
         }
         if !(total.is_finite() && total > 1e-6) {
-            return Err(Error::Invalid(
-                "the camera path has no length (its keys coincide)".into(),
+            return Err(Error::value(
+                "path.keys",
+                "the camera path has no length (its keys coincide)",
             ));
         }
         Ok(path)

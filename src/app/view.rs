@@ -254,7 +254,7 @@ impl App {
         ) else {
             return Ok(());
         };
-        let gpu = |e: softbuffer::SoftBufferError| Error::Window(e.to_string());
+        let gpu = |e: softbuffer::SoftBufferError| Error::window("cannot draw into it", e);
         surface.resize(w, h).map_err(gpu)?;
         let mut buffer = surface.buffer_mut().map_err(gpu)?;
         if buffer.len() * 4 != rgba.len() {
@@ -299,7 +299,7 @@ impl App {
         };
         let text = std::fs::read_to_string(&self.o.scene_path)
             .map_err(|e| Error::io(Role::Scene, &self.o.scene_path, e))?;
-        let out = scene_with_path(&text, &path).map_err(Error::Invalid)?;
+        let out = scene_with_path(&text, &self.o.scene_path, &path)?;
         let stem = self.stem();
         let file = unused(&self.o.out_dir, |n| match n {
             0 => format!("{stem}-flown.toml"),
@@ -356,14 +356,14 @@ impl ApplicationHandler for App {
             .with_inner_size(PhysicalSize::new(self.size.0, self.size.1));
         let window = match el.create_window(attrs) {
             Ok(w) => Arc::new(w),
-            Err(e) => return self.fail(el, Error::Window(format!("cannot open one: {e}"))),
+            Err(e) => return self.fail(el, Error::window("cannot open one", e)),
         };
         let surface = softbuffer::Context::new(window.clone())
             .and_then(|c| softbuffer::Surface::new(&c, window.clone()));
         match surface {
             Ok(s) => self.surface = Some(s),
             Err(e) => {
-                return self.fail(el, Error::Window(format!("cannot draw into it: {e}")));
+                return self.fail(el, Error::window("cannot draw into it", e));
             }
         }
         let size = window.inner_size();
@@ -477,7 +477,9 @@ pub fn run(scene: Scene, o: Options) -> Result<()> {
     let reach_m = scene::detail_of(&scene, &atlas).reach_m();
     // Enough for every mode the window can switch to (the warped mode's mesh the largest).
     let ctx = GpuContext::new(&crate::render::needs(&scene, Mode::Warped, &atlas))?;
-    let event_loop = EventLoop::new().map_err(|e| Error::Window(no_display(&e.to_string())))?;
+    let event_loop = EventLoop::new().map_err(|e| Error::NoDisplay {
+        cause: no_display(&e.to_string()),
+    })?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App {
         size: o.size,
@@ -506,7 +508,7 @@ pub fn run(scene: Scene, o: Options) -> Result<()> {
     };
     event_loop
         .run_app(&mut app)
-        .map_err(|e| Error::Window(format!("event loop: {e}")))?;
+        .map_err(|e| Error::window("event loop", e))?;
     if let Some(e) = app.error {
         return Err(e);
     }

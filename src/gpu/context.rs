@@ -92,17 +92,24 @@ impl GpuContext {
 
 fn check(name: &str, limits: &wgpu::Limits, needs: &Needs) -> Result<()> {
     if limits.max_storage_buffer_binding_size < needs.storage_bytes {
-        return Err(Error::Gpu(format!(
-            "{name}: the sketch's pyramid or the mesh needs a {} MiB storage buffer, the adapter allows {} MiB",
-            needs.storage_bytes >> 20,
-            limits.max_storage_buffer_binding_size >> 20
-        )));
+        return Err(Error::Limit {
+            what: format!("{name}: the sketch's pyramid or the mesh"),
+            limit: "max_storage_buffer_binding_size",
+            needed: needs.storage_bytes >> 20,
+            allowed: limits.max_storage_buffer_binding_size >> 20,
+            unit: " MiB",
+            advice: "",
+        });
     }
     if limits.max_storage_buffers_per_shader_stage < 3 {
-        return Err(Error::Gpu(format!(
-            "{name}: needs 3 storage buffers per shader stage (vertex included), has {}",
-            limits.max_storage_buffers_per_shader_stage
-        )));
+        return Err(Error::Limit {
+            what: name.to_string(),
+            limit: "max_storage_buffers_per_shader_stage",
+            needed: 3,
+            allowed: limits.max_storage_buffers_per_shader_stage.into(),
+            unit: "",
+            advice: " (the vertex stage reads 3)",
+        });
     }
     Ok(())
 }

@@ -40,7 +40,10 @@ pub fn compose(name: &str, flags: &[&str]) -> Result<String> {
         .iter()
         .find(|(n, _)| *n == name)
         .map(|(_, s)| *s)
-        .ok_or_else(|| Error::Invalid(format!("no shader named {name}")))?;
+        .ok_or_else(|| Error::Shader {
+            file: name.to_string(),
+            reason: "no such pass".into(),
+        })?;
     let mut out = String::new();
     let mut imported: Vec<&str> = Vec::new();
     expand(name, source, flags, &mut imported, &mut out)?;
@@ -56,7 +59,10 @@ fn expand<'a>(
 ) -> Result<()> {
     // Each open block: (this block is kept, an enclosing block is kept).
     let mut stack: Vec<(bool, bool)> = Vec::new();
-    let bad = |line: usize, what: &str| Error::Invalid(format!("{file}.wgsl:{}: {what}", line + 1));
+    let bad = |line: usize, what: &str| Error::Shader {
+        file: file.to_string(),
+        reason: format!("line {}: {what}", line + 1),
+    };
     for (k, line) in source.lines().enumerate() {
         let trimmed = line.trim();
         let live = stack.iter().all(|&(keep, _)| keep);
@@ -88,9 +94,10 @@ fn expand<'a>(
         }
     }
     if !stack.is_empty() {
-        return Err(Error::Invalid(format!(
-            "{file}.wgsl: #ifdef without #endif"
-        )));
+        return Err(Error::Shader {
+            file: file.to_string(),
+            reason: "#ifdef without #endif".into(),
+        });
     }
     Ok(())
 }

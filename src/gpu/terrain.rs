@@ -222,8 +222,8 @@ impl TerrainPass {
         view_proj: glam::DMat4,
     ) -> Result<Vec<[f32; 4]>> {
         let depth = self.depth_copy.as_ref().ok_or_else(|| {
-            crate::error::Error::Invalid(
-                "positions were not asked for when the renderer was built".into(),
+            crate::error::Error::Internal(
+                "positions were not asked for when the renderer was built",
             )
         })?;
         super::frame_io::positions_from_depth(ctx, depth, view_proj)

@@ -60,15 +60,18 @@ pub fn bake(
     let bytes = (n * n) as u64 * 16;
     if bytes > ctx.limits.max_storage_buffer_binding_size {
         let advice = if k > 0 {
-            "lower geomipmap.k"
+            "; lower geomipmap.k"
         } else {
-            "the sketch is too large to bake at its own spacing; crop it or use the warped mode"
+            "; the sketch is too large to bake at its own spacing: crop it or use the warped mode"
         };
-        return Err(Error::Gpu(format!(
-            "a {n}² baked grid needs {} MiB buffers, the adapter allows {} MiB; {advice}",
-            bytes >> 20,
-            ctx.limits.max_storage_buffer_binding_size >> 20
-        )));
+        return Err(Error::Limit {
+            what: format!("a {n}² baked grid"),
+            limit: "max_storage_buffer_binding_size",
+            needed: bytes >> 20,
+            allowed: ctx.limits.max_storage_buffer_binding_size >> 20,
+            unit: " MiB",
+            advice,
+        });
     }
     let device = &ctx.device;
     let frame = uniform_buffer(device);

@@ -32,7 +32,10 @@ pub fn load_atlas(scene: &Scene) -> Result<Atlas> {
                 .unwrap_or(crate::sketch::synthetic::DEFAULT_SIZE),
             &opts,
         ),
-        (None, None) => Err(Error::Invalid("scene has no sketch".into())),
+        (None, None) => Err(Error::value(
+            "sketch",
+            "the scene has no sketch (give `path` or `synthetic`)",
+        )),
     }
 }
 

@@ -16,7 +16,7 @@ pub fn read_png(path: &Path, opts: &LoadOptions) -> Result<RawGrid> {
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder
         .read_info()
-        .map_err(|e| bad(format!("not a readable PNG: {e}")))?;
+        .map_err(|e| Error::decode(Role::Sketch, path, "not a readable PNG", e))?;
     let (w, h) = (reader.info().width, reader.info().height);
     let (w, h) = RawGrid::check_size(path, w as i64, h as i64)?;
     let size = reader
@@ -25,7 +25,7 @@ pub fn read_png(path: &Path, opts: &LoadOptions) -> Result<RawGrid> {
     let mut buf = vec![0u8; size];
     let info = reader
         .next_frame(&mut buf)
-        .map_err(|e| bad(format!("corrupt or truncated PNG: {e}")))?;
+        .map_err(|e| Error::decode(Role::Sketch, path, "corrupt or truncated PNG", e))?;
     let channels = match info.color_type {
         png::ColorType::Grayscale => 1,
         png::ColorType::GrayscaleAlpha => 2,
@@ -64,11 +64,9 @@ pub fn read_png(path: &Path, opts: &LoadOptions) -> Result<RawGrid> {
 pub fn read_tiff(path: &Path) -> Result<RawGrid> {
     let bad = |reason: String| Error::sketch(path, reason);
     let file = std::fs::File::open(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
-    let mut dec =
-        Decoder::new(BufReader::new(file)).map_err(|e| bad(format!("not a readable TIFF: {e}")))?;
-    let (w, h) = dec
-        .dimensions()
-        .map_err(|e| bad(format!("TIFF has no dimensions: {e}")))?;
+    let tiff = |what: &'static str| move |e| Error::decode(Role::Sketch, path, what, e);
+    let mut dec = Decoder::new(BufReader::new(file)).map_err(tiff("not a readable TIFF"))?;
+    let (w, h) = dec.dimensions().map_err(tiff("TIFF has no dimensions"))?;
     let (w, h) = RawGrid::check_size(path, w as i64, h as i64)?;
     match dec.colortype() {
         Ok(tiff::ColorType::Gray(_)) => {}
@@ -77,7 +75,7 @@ pub fn read_tiff(path: &Path) -> Result<RawGrid> {
                 "TIFF is {other:?}; a height map has one channel"
             )));
         }
-        Err(e) => return Err(bad(format!("TIFF colour type unreadable: {e}"))),
+        Err(e) => return Err(tiff("TIFF colour type unreadable")(e)),
     }
     let nodata: Option<f64> = dec
         .get_tag_ascii_string(Tag::GdalNodata)
@@ -87,7 +85,7 @@ pub fn read_tiff(path: &Path) -> Result<RawGrid> {
     let tie = dec.get_tag_f64_vec(Tag::ModelTiepointTag).ok();
     let image = dec
         .read_image()
-        .map_err(|e| bad(format!("corrupt or truncated TIFF: {e}")))?;
+        .map_err(tiff("corrupt or truncated TIFF"))?;
     let values: Vec<f64> = match image {
         DecodingResult::U8(v) => v.into_iter().map(f64::from).collect(),
         DecodingResult::U16(v) => v.into_iter().map(f64::from).collect(),

@@ -154,7 +154,7 @@ impl Atlas {
             }
         };
         Atlas::from_raw(raw, opts).map_err(|e| match e {
-            Error::Invalid(reason) => Error::sketch(path, reason),
+            Error::Value { reason, .. } => Error::sketch(path, reason),
             e => e,
         })
     }
@@ -166,10 +166,13 @@ impl Atlas {
             raw.dy = s;
         }
         if !(raw.dx.is_finite() && raw.dy.is_finite() && raw.dx > 0.0 && raw.dy > 0.0) {
-            return Err(Error::Invalid(format!(
-                "grid spacing {} × {} m is not positive and finite",
-                raw.dx, raw.dy
-            )));
+            return Err(Error::value(
+                "sketch.spacing_m",
+                format!(
+                    "grid spacing {} × {} m is not positive and finite",
+                    raw.dx, raw.dy
+                ),
+            ));
         }
         let scale = opts.height_scale.unwrap_or(1.0) as f32;
         let nodata = fill::fill_nodata(&mut raw.data, raw.width, raw.height);
@@ -178,9 +181,10 @@ impl Atlas {
         for h in &mut raw.data {
             *h *= scale;
             if !h.is_finite() {
-                return Err(Error::Invalid(format!(
-                    "height {h} overflows after height_scale {scale}"
-                )));
+                return Err(Error::value(
+                    "sketch.height_scale",
+                    format!("height {h} overflows after height_scale {scale}"),
+                ));
             }
             min_m = min_m.min(*h);
             max_m = max_m.max(*h);
@@ -332,9 +336,10 @@ impl Atlas {
     /// A synthetic sketch (see [`synthetic::NAMES`]), `size`² nodes.
     pub fn synthetic(name: &str, size: usize, opts: &LoadOptions) -> Result<Atlas> {
         if !(2..=4097).contains(&size) {
-            return Err(Error::Invalid(format!(
-                "synthetic size {size} is outside 2..=4097"
-            )));
+            return Err(Error::value(
+                "sketch.size",
+                format!("synthetic size {size} is outside 2..=4097"),
+            ));
         }
         let spacing = opts.spacing_m.unwrap_or(synthetic::DEFAULT_SPACING_M);
         Atlas::from_raw(synthetic::generate(name, size, spacing)?, opts)

@@ -35,10 +35,13 @@ pub(crate) fn generate(name: &str, size: usize, spacing_m: f64) -> Result<RawGri
         .position(|&n| n == name)
         .map(|k| KINDS[k])
         .ok_or_else(|| {
-            Error::Invalid(format!(
-                "unknown synthetic sketch `{name}` (one of {})",
-                NAMES.join(", ")
-            ))
+            Error::value(
+                "sketch.synthetic",
+                format!(
+                    "unknown synthetic sketch `{name}` (one of {})",
+                    NAMES.join(", ")
+                ),
+            )
         })?;
     let n = size;
     let mut data = Vec::with_capacity(n * n);

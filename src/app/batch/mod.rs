@@ -194,7 +194,7 @@ impl Jobs {
     }
 
     pub fn base_scene(&self) -> Result<Scene> {
-        let text = toml::to_string(&self.base).map_err(|e| Error::Invalid(e.to_string()))?;
+        let text = toml::to_string(&self.base).map_err(|e| Error::encode("base scene", e))?;
         let dir = self
             .scene_path
             .parent()
@@ -400,16 +400,18 @@ impl Cache {
 /// Renders item `item`: its scene, its camera, the snapshot written to `out_dir`.
 fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> Result<Snapshot> {
     if !plain_name(&item.name) {
-        return Err(Error::Invalid(format!(
-            "name {:?}: use letters, digits, '-', '_' and '.' (it names the output file)",
-            item.name
-        )));
+        return Err(Error::Job {
+            name: item.name.clone(),
+            reason: "use letters, digits, '-', '_' and '.' in its name (it names the output file)"
+                .into(),
+        });
     }
     let (scene, camera) = match item.kind {
         ItemKind::Explicit(k) => {
-            let scene = jobs
-                .job_scene(k)
-                .map_err(|reason| Error::Invalid(format!("job {:?}: {reason}", item.name)))?;
+            let scene = jobs.job_scene(k).map_err(|reason| Error::Job {
+                name: item.name.clone(),
+                reason,
+            })?;
             let r = cache.renderer(&scene)?;
             let camera = scene::camera_of(&scene, r.atlas())?;
             (scene, camera)
@@ -481,10 +483,10 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
         let result = if names.insert(item.name.clone()) {
             render_item(&jobs, item, &mut cache, out_dir)
         } else {
-            Err(Error::Invalid(format!(
-                "name {:?} is used by an earlier job",
-                item.name
-            )))
+            Err(Error::Job {
+                name: item.name.clone(),
+                reason: "its name is used by an earlier job".into(),
+            })
         };
         let mut line = ManifestLine {
             index: item.index,
@@ -508,7 +510,7 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
                 cache.renderer = None;
             }
         }
-        let text = serde_json::to_string(&line).map_err(|e| Error::Invalid(e.to_string()))?;
+        let text = serde_json::to_string(&line).map_err(|e| Error::encode("manifest line", e))?;
         writeln!(file, "{text}")
             .and_then(|_| file.flush())
             .map_err(|e| Error::io(Role::Manifest, &manifest, e))?;
@@ -567,7 +569,7 @@ pub fn merge_manifests(jobs_path: &Path, out_dir: &Path) -> Result<(usize, Vec<S
         .count();
     let mut text = String::new();
     for v in lines.iter().flatten() {
-        text += &serde_json::to_string(v).map_err(|e| Error::Invalid(e.to_string()))?;
+        text += &serde_json::to_string(v).map_err(|e| Error::encode("manifest line", e))?;
         text.push('\n');
     }
     write_atomic(&out_dir.join("manifest.jsonl"), text.as_bytes())?;

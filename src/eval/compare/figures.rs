@@ -205,8 +205,7 @@ pub fn strip(
     let label_h = 36;
     let columns = 1 + modes.len() as u32;
     let (w, h) = (columns * width, 2 * (height + label_h));
-    let mut c =
-        RasterCanvas::new(w, h).ok_or_else(|| Error::Invalid(format!("strip of {w}×{h}")))?;
+    let mut c = RasterCanvas::new(w, h).ok_or(Error::Internal("an image strip of zero size"))?;
     let blit = |c: &mut RasterCanvas, x0: u32, y0: u32, rgba: &[u8]| {
         let data = c.pixmap.data_mut();
         let row = (width * 4) as usize;

@@ -143,13 +143,12 @@ fn measure(
     o: &Options,
 ) -> Result<(Row, Vec<u8>)> {
     r.render(camera)?;
-    let mut frames = Vec::with_capacity(o.repeat as usize);
-    for _ in 0..o.repeat.max(1) {
+    // At least one timed frame: `last` below is the one whose image is kept.
+    let mut frames = vec![r.render(camera)?];
+    for _ in 1..o.repeat {
         frames.push(r.render(camera)?);
     }
-    let last = frames
-        .last()
-        .ok_or_else(|| Error::Invalid("no frame".into()))?;
+    let last = &frames[frames.len() - 1];
     let positions = r.read_positions(camera)?;
     let width = camera.width;
     let sse = metrics::screen_space_error(&positions, &truth.positions, width as usize, o.window);
@@ -371,7 +370,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     write_atomic(
         &out_dir.join("report.json"),
         serde_json::to_string_pretty(&report)
-            .map_err(|e| Error::Invalid(e.to_string()))?
+            .map_err(|e| Error::encode("compare report", e))?
             .as_bytes(),
     )?;
     Ok(Outcome {

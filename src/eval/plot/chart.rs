@@ -254,9 +254,8 @@ impl Figure {
 
     /// RGBA8 pixels.
     pub fn png_rgba(&self) -> Result<Vec<u8>> {
-        let mut r = RasterCanvas::new(self.width, self.height).ok_or_else(|| {
-            Error::Invalid(format!("figure of {}×{} pixels", self.width, self.height))
-        })?;
+        let mut r = RasterCanvas::new(self.width, self.height)
+            .ok_or_else(|| Error::Internal("a figure of zero size"))?;
         self.draw(&mut r);
         Ok(r.pixmap.data().to_vec())
     }
