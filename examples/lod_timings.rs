@@ -59,7 +59,7 @@ fn main() -> anyhow::Result<()> {
             "{kind}: baked {}² grid in {:.0} ms, {:.0} MiB",
             b.bake.grid.n,
             b.precompute_ms,
-            b.bake.bytes as f64 / 1048576.0
+            b.bake.bytes() as f64 / 1048576.0
         );
         let settings: Vec<(String, f64, bool)> = match kind {
             Mode::Geomipmap => [1.0, 2.0, 4.0, 8.0]

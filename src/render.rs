@@ -10,6 +10,7 @@
 use crate::camera::Camera;
 use crate::detail::Detail;
 use crate::error::Result;
+use crate::gpu::alloc::{Alloc, Buffer, Ledger};
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::frame_io::{FrameStats, PassTimes, Timer, uniform_buffer, upload_atlas};
 use crate::gpu::uniforms::{FrameInputs, FrameUniforms, View};
@@ -43,11 +44,11 @@ pub struct Renderer {
     pub detail: Detail,
     pub mode: Mode,
     view: View,
-    frame: wgpu::Buffer,
-    _atlas_buffer: wgpu::Buffer,
-    atlas_bytes: u64,
+    frame: Buffer,
+    _atlas_buffer: Buffer,
     timer: Option<Timer>,
     lod: Box<dyn Lod>,
+    ledger: Ledger,
 }
 
 /// What a scene in `mode` needs of the adapter: the atlas, and the warped mode's mesh.
@@ -90,10 +91,16 @@ impl Renderer {
     ) -> Result<Renderer> {
         ctx.check(&needs(scene, mode, &atlas))?;
         let detail = scene::detail_of(scene, &atlas);
-        let frame = uniform_buffer(&ctx.device);
-        let (atlas_buffer, atlas_bytes) = upload_atlas(&ctx, &atlas);
+        let ledger = Ledger::default();
+        let alloc = Alloc {
+            device: &ctx.device,
+            ledger: &ledger,
+        };
+        let frame = uniform_buffer(&alloc);
+        let atlas_buffer = upload_atlas(&alloc, &atlas);
         let shared = Shared {
             ctx: &ctx,
+            alloc,
             scene,
             atlas: &atlas,
             detail: &detail,
@@ -108,7 +115,7 @@ impl Renderer {
             Mode::Reference => Box::new(Reference::new(&shared)?),
         };
         Ok(Renderer {
-            timer: Timer::new(&ctx, lod.passes()),
+            timer: Timer::new(&ctx, &alloc, lod.passes()),
             ctx,
             atlas,
             detail,
@@ -116,8 +123,8 @@ impl Renderer {
             view,
             frame,
             _atlas_buffer: atlas_buffer,
-            atlas_bytes,
             lod,
+            ledger,
         })
     }
 
@@ -200,9 +207,10 @@ impl Renderer {
         })
     }
 
-    /// Bytes of GPU memory: the uniforms, the atlas and what the scheme allocated.
+    /// Bytes of GPU memory the renderer holds now: its uniforms, the atlas, the timer's
+    /// queries and whatever the scheme allocated, as counted at allocation (see [`crate::gpu::alloc`]).
     pub fn gpu_bytes(&self) -> u64 {
-        self.frame.size() + self.atlas_bytes + self.lod.gpu_bytes()
+        self.ledger.bytes()
     }
 
     /// The baselines' precomputation: milliseconds and bytes of the baked grid.

@@ -251,3 +251,24 @@ fn every_debug_view_renders() {
         last = Some(frame.rgba);
     }
 }
+
+/// GPU memory is what the renderer holds: growing the mesh from 64² to 128² adds exactly the
+/// larger detailed geometry image and normals (16 bytes a vertex each) and quad indices (6 per
+/// cell, 4 bytes each), and a renderer's bytes are returned when it is dropped.
+#[test]
+fn gpu_memory_is_counted_from_the_allocations() {
+    let small = Renderer::new(&bundled("hills", 64, 64), Mode::Warped, View::Shaded).unwrap();
+    let large = Renderer::new(&bundled("hills", 64, 128), Mode::Warped, View::Shaded).unwrap();
+    let per_mesh = |m: u64| 2 * m * m * 16 + (m - 1) * (m - 1) * 6 * 4;
+    assert_eq!(
+        large.gpu_bytes() - small.gpu_bytes(),
+        per_mesh(128) - per_mesh(64)
+    );
+    // At least the 64×64 colour and depth targets and the colour's read-back.
+    assert!(small.gpu_bytes() > 3 * 64 * 64 * 4, "{}", small.gpu_bytes());
+    // The importance view adds its n² f32 map, and nothing else.
+    let importance =
+        Renderer::new(&bundled("hills", 64, 64), Mode::Warped, View::Importance).unwrap();
+    let n = bundled("hills", 64, 64).warp.size as u64;
+    assert_eq!(importance.gpu_bytes() - small.gpu_bytes(), n * n * 4);
+}

@@ -1,6 +1,7 @@
 //! What every renderer does around its passes: the uniform buffer, the atlas upload, timing with
 //! timestamp queries, and reading the image back.
 
+use super::alloc::{Alloc, Buffer, Tracked};
 use super::context::GpuContext;
 use super::uniforms::FrameUniforms;
 use crate::error::{Error, Result};
@@ -68,7 +69,7 @@ impl FrameStats {
     }
 }
 
-pub fn uniform_buffer(device: &wgpu::Device) -> wgpu::Buffer {
+pub fn uniform_buffer(device: &Alloc) -> Buffer {
     device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("frame"),
         size: std::mem::size_of::<FrameUniforms>() as u64,
@@ -78,18 +79,26 @@ pub fn uniform_buffer(device: &wgpu::Device) -> wgpu::Buffer {
 }
 
 /// The atlas pyramid in a read-only storage buffer (see `shaders/shared/atlas.wgsl` for why not
-/// a texture), and its size in bytes.
-pub fn upload_atlas(ctx: &GpuContext, atlas: &Atlas) -> (wgpu::Buffer, u64) {
+/// a texture).
+pub fn upload_atlas(device: &Alloc, atlas: &Atlas) -> Buffer {
     let texels = super::uniforms::atlas_texels(atlas);
-    let buffer = wgpu::util::DeviceExt::create_buffer_init(
-        &ctx.device,
-        &wgpu::util::BufferInitDescriptor {
-            label: Some("sketch atlas"),
-            contents: bytemuck::cast_slice(&texels),
-            usage: wgpu::BufferUsages::STORAGE,
-        },
-    );
-    (buffer, texels.len() as u64 * 4)
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("sketch atlas"),
+        contents: bytemuck::cast_slice(&texels),
+        usage: wgpu::BufferUsages::STORAGE,
+    })
+}
+
+/// A mappable buffer for one read-back, dropped before the call that made it returns; the only
+/// allocation outside the ledger, which counts what a renderer keeps.
+#[allow(clippy::disallowed_methods)]
+fn staging(ctx: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }
 
 /// Timestamp queries for a renderer's passes, a pair each, keyed by the pass's name: the passes
@@ -97,16 +106,15 @@ pub fn upload_atlas(ctx: &GpuContext, atlas: &Atlas) -> (wgpu::Buffer, u64) {
 /// frame skips the warped mode's compute passes).
 pub struct Timer {
     names: &'static [&'static str],
-    queries: wgpu::QuerySet,
-    resolve: wgpu::Buffer,
-    read: wgpu::Buffer,
+    queries: Tracked<wgpu::QuerySet>,
+    resolve: Buffer,
+    read: Buffer,
     period_ns: f64,
 }
 
 impl Timer {
     /// `None` where the adapter has no timestamp queries.
-    pub fn new(ctx: &GpuContext, names: &'static [&'static str]) -> Option<Timer> {
-        let device = &ctx.device;
+    pub fn new(ctx: &GpuContext, device: &Alloc, names: &'static [&'static str]) -> Option<Timer> {
         let passes = names.len() as u64;
         let buffer = |label, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
@@ -189,13 +197,13 @@ impl Timer {
 
 /// The colour target copied to a mappable buffer, rows padded to the copy alignment.
 pub struct ColourReadback {
-    buffer: wgpu::Buffer,
+    buffer: Buffer,
     width: u32,
     height: u32,
 }
 
 impl ColourReadback {
-    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> ColourReadback {
+    pub fn new(device: &Alloc, width: u32, height: u32) -> ColourReadback {
         let buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
             size: padded_row(width) as u64 * height as u64,
@@ -207,10 +215,6 @@ impl ColourReadback {
             width,
             height,
         }
-    }
-
-    pub fn bytes(&self) -> u64 {
-        self.buffer.size()
     }
 
     pub fn record(&self, encoder: &mut wgpu::CommandEncoder, colour: &wgpu::Texture) {
@@ -254,12 +258,7 @@ pub fn positions_from_depth(
 ) -> Result<Vec<[f32; 4]>> {
     let (width, height) = (depth.width(), depth.height());
     let padded = padded_row(width);
-    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("depth readback"),
-        size: padded as u64 * height as u64,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
+    let staging = staging(ctx, "depth readback", padded as u64 * height as u64);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     encoder.copy_texture_to_buffer(
         depth.as_image_copy(),
@@ -315,12 +314,7 @@ fn padded_row(width: u32) -> u32 {
 /// A storage buffer of vec4 f32 copied back (tests, and the baseline's δ computation).
 pub fn read_vec4(ctx: &GpuContext, source: &wgpu::Buffer) -> Result<Vec<[f32; 4]>> {
     let size = source.size();
-    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
+    let staging = staging(ctx, "readback", size);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     encoder.copy_buffer_to_buffer(source, 0, &staging, 0, size);
     ctx.queue.submit([encoder.finish()]);

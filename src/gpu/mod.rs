@@ -2,6 +2,7 @@
 //! each owning its pipeline, bind-group layout and resources, each with a WGSL file of the same
 //! name in `shaders/`. [`renderer::Renderer`] runs them as a flat list.
 
+pub mod alloc;
 pub mod context;
 pub mod frame_io;
 pub mod normals;

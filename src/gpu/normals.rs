@@ -1,5 +1,6 @@
 //! Normals of the detailed geometry image (`shaders/normals.wgsl`).
 
+use super::alloc::{Alloc, Buffer};
 use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
@@ -8,7 +9,7 @@ pub struct NormalsPass {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
     /// mesh² vec4 (unit normal, 0).
-    pub normals: wgpu::Buffer,
+    pub normals: Buffer,
     mesh: u32,
 }
 
@@ -17,7 +18,7 @@ impl NormalsPass {
     pub const NAME: &'static str = "normals";
 
     pub fn new(
-        device: &wgpu::Device,
+        device: &Alloc,
         frame: &wgpu::Buffer,
         detailed: &wgpu::Buffer,
         mesh: u32,
@@ -81,7 +82,7 @@ pub fn normal_cpu(detailed: &[[f32; 4]], mesh: u32, ij: glam::IVec2) -> [f32; 3]
 }
 
 impl NormalsPass {
-    pub fn into_normals(self) -> wgpu::Buffer {
+    pub fn into_normals(self) -> Buffer {
         self.normals
     }
 }

@@ -1,6 +1,7 @@
 //! The reference pass (`shaders/reference.wgsl`): the terrain function ray-marched per pixel with
 //! every octave down to the pixel's footprint; linear colour and hit positions per pixel.
 
+use super::alloc::{Alloc, Buffer};
 use super::context::GpuContext;
 use super::frame_io::read_vec4;
 use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
@@ -11,9 +12,9 @@ pub struct ReferencePass {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
     /// Linear RGB and 1 per pixel, rows top first.
-    pub colour: wgpu::Buffer,
+    pub colour: Buffer,
     /// Hit position (metres from the frame origin) and 1, or 0 for sky, per pixel.
-    pub position: wgpu::Buffer,
+    pub position: Buffer,
     width: u32,
     height: u32,
 }
@@ -23,7 +24,7 @@ impl ReferencePass {
     pub const NAME: &'static str = "reference";
 
     pub fn new(
-        device: &wgpu::Device,
+        device: &Alloc,
         frame: &wgpu::Buffer,
         atlas: &wgpu::Buffer,
         width: u32,

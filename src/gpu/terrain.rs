@@ -2,6 +2,7 @@
 //! detailed geometry image as an indexed quad mesh read from its storage buffers (no vertex upload).
 //! Reversed-Z depth with an infinite far plane. Owns the colour and depth targets.
 
+use super::alloc::{Alloc, Buffer, Texture};
 use super::{bind, entry, shader_module, storage, uniform};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
@@ -16,15 +17,14 @@ pub struct TerrainPass {
     sky: wgpu::RenderPipeline,
     terrain: wgpu::RenderPipeline,
     bind_group: wgpu::BindGroup,
-    index: wgpu::Buffer,
+    index: Buffer,
     index_count: u32,
-    pub colour: wgpu::Texture,
+    pub colour: Texture,
     colour_view: wgpu::TextureView,
     /// Each pixel's depth as a colour target, when the variant asks for positions.
-    pub depth_copy: Option<wgpu::Texture>,
+    pub depth_copy: Option<Texture>,
     depth_copy_view: Option<wgpu::TextureView>,
     depth_view: wgpu::TextureView,
-    target_bytes: u64,
 }
 
 /// Which variant of the shaders to build.
@@ -47,7 +47,7 @@ impl TerrainPass {
 
     #[allow(clippy::too_many_arguments)]
     pub fn new(
-        device: &wgpu::Device,
+        device: &Alloc,
         frame: &wgpu::Buffer,
         detailed: &wgpu::Buffer,
         normals: &wgpu::Buffer,
@@ -156,14 +156,11 @@ impl TerrainPass {
             }
             None => {
                 let indices = quad_indices(mesh);
-                let index = wgpu::util::DeviceExt::create_buffer_init(
-                    device,
-                    &wgpu::util::BufferInitDescriptor {
-                        label: Some("quad mesh indices"),
-                        contents: bytemuck::cast_slice(&indices),
-                        usage: wgpu::BufferUsages::INDEX,
-                    },
-                );
+                let index = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("quad mesh indices"),
+                    contents: bytemuck::cast_slice(&indices),
+                    usage: wgpu::BufferUsages::INDEX,
+                });
                 (index, indices.len() as u32)
             }
         };
@@ -205,7 +202,6 @@ impl TerrainPass {
                 .as_ref()
                 .map(|t| t.create_view(&Default::default())),
             depth_copy,
-            target_bytes: (2 + variant.positions as u64) * width as u64 * height as u64 * 4,
             colour,
         })
     }
@@ -227,11 +223,6 @@ impl TerrainPass {
             )
         })?;
         super::frame_io::positions_from_depth(ctx, depth, view_proj)
-    }
-
-    /// Bytes of the colour and depth targets.
-    pub fn target_bytes(&self) -> u64 {
-        self.target_bytes
     }
 
     /// The GeoMipMap variant's indices for this frame.

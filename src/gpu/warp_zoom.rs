@@ -2,6 +2,7 @@
 //! split octaves, displacement up to them. [`vertex_cpu`] is its CPU twin, used by the tests to
 //! hold the GPU to the CPU stage's definitions.
 
+use super::alloc::{Alloc, Buffer};
 use super::uniforms::FrameUniforms;
 use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
 use crate::detail::{OctaveFrame, gradient_noise};
@@ -14,9 +15,9 @@ pub struct WarpZoomPass {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
     /// Φ, n² vec2 f32, written each frame.
-    pub phi: wgpu::Buffer,
+    pub phi: Buffer,
     /// The detailed geometry image, mesh² vec4 (x, y, z, split octave).
-    pub detailed: wgpu::Buffer,
+    pub detailed: Buffer,
     mesh: u32,
 }
 
@@ -25,7 +26,7 @@ impl WarpZoomPass {
     pub const NAME: &'static str = "warp_zoom";
 
     pub fn new(
-        device: &wgpu::Device,
+        device: &Alloc,
         frame: &wgpu::Buffer,
         atlas: &wgpu::Buffer,
         n: u32,
@@ -192,7 +193,7 @@ pub fn vertex_cpu(
 
 impl WarpZoomPass {
     /// The detailed geometry image, keeping nothing else (the bake's Φ is dropped).
-    pub fn into_detailed(self) -> wgpu::Buffer {
+    pub fn into_detailed(self) -> Buffer {
         self.detailed
     }
 }

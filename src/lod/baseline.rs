@@ -11,6 +11,7 @@ use crate::camera::Camera;
 use crate::detail::Detail;
 use crate::error::{Error, Result};
 use crate::geomipmap::{BlockGpu, Blocks, Grid, LodParams, Selection, Templates};
+use crate::gpu::alloc::{Alloc, Buffer};
 use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::{ColourReadback, Timer, read_vec4, uniform_buffer};
 use crate::gpu::normals::NormalsPass;
@@ -36,16 +37,23 @@ pub fn default_k(atlas: &Atlas) -> u32 {
 
 pub struct Bake {
     pub grid: Grid,
-    pub detailed: wgpu::Buffer,
-    pub normals: wgpu::Buffer,
+    pub detailed: Buffer,
+    pub normals: Buffer,
     pub ms: f64,
-    pub bytes: u64,
+}
+
+impl Bake {
+    /// GPU bytes the baked grid keeps: its positions and normals.
+    pub fn bytes(&self) -> u64 {
+        self.detailed.bytes() + self.normals.bytes()
+    }
 }
 
 /// Bakes the terrain function over the square enclosing the atlas at spacing d_atlas / 2^k, in
 /// blocks of `cells` cells a side.
 pub fn bake(
     ctx: &GpuContext,
+    device: &Alloc,
     atlas: &Atlas,
     atlas_buffer: &wgpu::Buffer,
     detail: &Detail,
@@ -73,7 +81,6 @@ pub fn bake(
             advice,
         });
     }
-    let device = &ctx.device;
     let frame = uniform_buffer(device);
     let uniforms = FrameUniforms::for_bake(atlas, detail, atlas.origin, n as u32);
     ctx.queue
@@ -115,7 +122,6 @@ pub fn bake(
         detailed,
         normals: normals.into_normals(),
         ms: start.elapsed().as_secs_f64() * 1e3,
-        bytes: 2 * bytes,
     })
 }
 
@@ -129,12 +135,11 @@ pub struct Baselines {
     /// τ, the exact bound, geomorphing: how GeoMipMap chooses levels.
     pub params: LodParams,
     indices: Vec<u32>,
-    block_buffer: wgpu::Buffer,
+    block_buffer: Buffer,
     terrain: TerrainPass,
     readback: ColourReadback,
     /// Precomputation (bake, δ, quadtree), milliseconds.
     pub precompute_ms: f64,
-    gpu_bytes: u64,
 }
 
 impl Baselines {
@@ -142,10 +147,10 @@ impl Baselines {
     pub fn new(s: &Shared, kind: Mode) -> Result<Baselines> {
         let start = Instant::now();
         let (ctx, scene, detail) = (s.ctx, s.scene, s.detail);
-        let device = &ctx.device;
+        let device = &s.alloc;
         let k = scene.geomipmap.k.unwrap_or_else(|| default_k(s.atlas));
         let cells = scene.geomipmap.block as usize - 1;
-        let bake = bake(ctx, s.atlas, s.atlas_buffer, detail, k, cells)?;
+        let bake = bake(ctx, device, s.atlas, s.atlas_buffer, detail, k, cells)?;
         let blocks = Blocks::new(&bake.grid);
         let templates = Templates::new(&bake.grid);
         let per_side = blocks.per_side;
@@ -161,7 +166,7 @@ impl Baselines {
             noise,
             bump: noise && scene.detail.bump,
             importance: None,
-            geomipmap: Some((block_buffer.clone(), capacity)),
+            geomipmap: Some((wgpu::Buffer::clone(&block_buffer), capacity)),
             positions: s.positions,
         };
         let n = bake.grid.n as u32;
@@ -181,11 +186,6 @@ impl Baselines {
         if kind == Mode::Bruteforce {
             selection.all_at(&bake.grid, &blocks, 0);
         }
-        let gpu_bytes = bake.bytes
-            + capacity * 4
-            + block_buffer.size()
-            + terrain.target_bytes()
-            + readback.bytes();
         let g = &scene.geomipmap;
         Ok(Baselines {
             kind,
@@ -204,7 +204,6 @@ impl Baselines {
             block_buffer,
             terrain,
             readback,
-            gpu_bytes,
         })
     }
 }
@@ -273,16 +272,12 @@ impl Lod for Baselines {
         !self.selection.visible.is_empty()
     }
 
-    fn gpu_bytes(&self) -> u64 {
-        self.gpu_bytes
-    }
-
     fn blocks(&self) -> Option<usize> {
         Some(self.selection.gpu.len())
     }
 
     fn precompute(&self) -> Option<(f64, u64)> {
-        Some((self.precompute_ms, self.bake.bytes))
+        Some((self.precompute_ms, self.bake.bytes()))
     }
 
     fn as_any(&self) -> &dyn Any {

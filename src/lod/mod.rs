@@ -18,6 +18,7 @@ pub mod warped;
 use crate::camera::Camera;
 use crate::detail::Detail;
 use crate::error::Result;
+use crate::gpu::alloc::Alloc;
 use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::Timer;
 use crate::gpu::uniforms::{FrameInputs, View};
@@ -29,6 +30,8 @@ use std::any::Any;
 /// What a scheme is built from: the scene, and what the renderer already holds.
 pub struct Shared<'a> {
     pub ctx: &'a GpuContext,
+    /// The device, counting what the scheme allocates in the renderer's ledger.
+    pub alloc: Alloc<'a>,
     pub scene: &'a Scene,
     pub atlas: &'a Atlas,
     pub detail: &'a Detail,
@@ -75,8 +78,6 @@ pub trait Lod: Any {
     fn triangles(&self) -> u64;
     /// Whether any terrain was in view in the last frame.
     fn visible(&self) -> bool;
-    /// Bytes of GPU memory it allocated (beside the renderer's uniforms and atlas).
-    fn gpu_bytes(&self) -> u64;
     /// Blocks drawn in the last frame (GeoMipMap and brute force).
     fn blocks(&self) -> Option<usize> {
         None

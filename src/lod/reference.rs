@@ -23,7 +23,7 @@ impl Reference {
     pub fn new(s: &Shared) -> Result<Reference> {
         let (w, h) = (s.scene.camera.width, s.scene.camera.height);
         let noise = s.detail.octaves > 0;
-        let pass = ReferencePass::new(&s.ctx.device, s.frame, s.atlas_buffer, w, h, noise)?;
+        let pass = ReferencePass::new(&s.alloc, s.frame, s.atlas_buffer, w, h, noise)?;
         Ok(Reference {
             pass,
             step: s.scene.reference.step as f32,
@@ -70,10 +70,6 @@ impl Lod for Reference {
 
     fn visible(&self) -> bool {
         true
-    }
-
-    fn gpu_bytes(&self) -> u64 {
-        self.pass.colour.size() + self.pass.position.size()
     }
 
     fn as_any(&self) -> &dyn Any {

@@ -5,6 +5,7 @@
 use super::{CpuTimes, Lod, Shared};
 use crate::camera::Camera;
 use crate::error::Result;
+use crate::gpu::alloc::Buffer;
 use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::{ColourReadback, Timer, read_vec4};
 use crate::gpu::normals::NormalsPass;
@@ -24,14 +25,13 @@ pub struct Warped {
     warp_zoom: WarpZoomPass,
     normals: NormalsPass,
     terrain: TerrainPass,
-    importance: Option<wgpu::Buffer>,
+    importance: Option<Buffer>,
     readback: ColourReadback,
-    gpu_bytes: u64,
 }
 
 impl Warped {
     pub fn new(s: &Shared) -> Result<Warped> {
-        let device = &s.ctx.device;
+        let device = &s.alloc;
         let (n, mesh) = (s.scene.warp.size, s.scene.warp.mesh);
         let (width, height) = (s.scene.camera.width, s.scene.camera.height);
         let stage = CpuStage::new(s.scene, s.detail)?;
@@ -50,7 +50,7 @@ impl Warped {
         let variant = Variant {
             noise,
             bump: noise && s.scene.detail.bump,
-            importance: importance.clone(),
+            importance: importance.as_ref().map(|b| wgpu::Buffer::clone(b)),
             geomipmap: None,
             positions: s.positions,
         };
@@ -66,13 +66,6 @@ impl Warped {
             &variant,
         )?;
         let readback = ColourReadback::new(device, width, height);
-        let mesh_bytes = (mesh * mesh) as u64 * 16;
-        let gpu_bytes = (n * n) as u64 * 8
-            + 2 * mesh_bytes
-            + terrain.triangles() * 12
-            + terrain.target_bytes()
-            + readback.bytes()
-            + importance.as_ref().map_or(0, |b| b.size());
         Ok(Warped {
             stage,
             mesh,
@@ -81,7 +74,6 @@ impl Warped {
             terrain,
             importance,
             readback,
-            gpu_bytes,
         })
     }
 
@@ -170,10 +162,6 @@ impl Lod for Warped {
 
     fn visible(&self) -> bool {
         self.stage.sketch_map.visible
-    }
-
-    fn gpu_bytes(&self) -> u64 {
-        self.gpu_bytes
     }
 
     fn as_any(&self) -> &dyn Any {
