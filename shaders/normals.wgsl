@@ -7,14 +7,14 @@
 @group(0) @binding(4) var<storage, read_write> normals: array<vec4<f32>>;
 
 fn vertex(ij: vec2<i32>) -> vec3<f32> {
-    let m = i32(frame.mesh);
+    let m = i32(frame.mesh.mesh);
     let c = clamp(ij, vec2<i32>(0), vec2<i32>(m - 1));
     return detailed[u32(c.y * m + c.x)].xyz;
 }
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (id.x >= frame.mesh || id.y >= frame.mesh) {
+    if (id.x >= frame.mesh.mesh || id.y >= frame.mesh.mesh) {
         return;
     }
     let ij = vec2<i32>(id.xy);
@@ -27,5 +27,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (len > 0.0) {
         n = c / len;
     }
-    normals[id.y * frame.mesh + id.x] = vec4<f32>(n, 0.0);
+    normals[id.y * frame.mesh.mesh + id.x] = vec4<f32>(n, 0.0);
 }

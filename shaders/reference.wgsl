@@ -25,11 +25,11 @@ const MAX_STEPS: u32 = 4096u;
 fn octaves(p: vec2<f32>, footprint: f32) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
 #ifdef NOISE
-    let o_px = log2(frame.d_atlas / max(footprint, 1e-6));
-    let last = min(frame.octaves, u32(max(ceil(o_px), 0.0)));
+    let o_px = log2(frame.atlas.d_atlas / max(footprint, 1e-6));
+    let last = min(frame.detail.octaves, u32(max(ceil(o_px), 0.0)));
     for (var k = 1u; k <= last; k++) {
         let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
-        sum += frame.octave[k - 1u].weight * b * octave_local(frame.octave[k - 1u], p);
+        sum += frame.detail.octave[k - 1u].weight * b * octave_local(frame.detail.octave[k - 1u], p);
     }
 #endif
     return sum;
@@ -42,7 +42,7 @@ fn height(p: vec2<f32>, footprint: f32) -> f32 {
 
 // Its gradient: the octaves' analytically, the sketch's by central differences of the bicubic.
 fn gradient(p: vec2<f32>, footprint: f32) -> vec2<f32> {
-    let e = max(footprint, 0.05 * frame.d_atlas);
+    let e = max(footprint, 0.05 * frame.atlas.d_atlas);
     let sx = atlas_height(p + vec2<f32>(e, 0.0), footprint) - atlas_height(p - vec2<f32>(e, 0.0), footprint);
     let sy = atlas_height(p + vec2<f32>(0.0, e), footprint) - atlas_height(p - vec2<f32>(0.0, e), footprint);
     return vec2<f32>(sx, sy) / (2.0 * e) + octaves(p, footprint).yz;
@@ -50,10 +50,10 @@ fn gradient(p: vec2<f32>, footprint: f32) -> vec2<f32> {
 
 // The part of the ray inside the box of the sketch's rectangle and its heights, or t0 > t1.
 fn span(eye: vec3<f32>, dir: vec3<f32>) -> vec2<f32> {
-    let lo_xy = -frame.atlas_offset;
-    let hi_xy = lo_xy + vec2<f32>(frame.level[0].xy - 1u) / frame.atlas_inv_spacing;
-    let lo = vec3<f32>(lo_xy, frame.march.x);
-    let hi = vec3<f32>(hi_xy, frame.march.y);
+    let lo_xy = -frame.atlas.offset;
+    let hi_xy = lo_xy + vec2<f32>(frame.atlas.level[0].xy - 1u) / frame.atlas.inv_spacing;
+    let lo = vec3<f32>(lo_xy, frame.march.lo);
+    let hi = vec3<f32>(hi_xy, frame.march.hi);
     var t0 = 0.0;
     var t1 = 3.0e38;
     for (var a = 0; a < 3; a++) {
@@ -73,7 +73,7 @@ fn span(eye: vec3<f32>, dir: vec3<f32>) -> vec2<f32> {
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let size = frame.image.xy;
+    let size = frame.camera.image;
     if (id.x >= size.x || id.y >= size.y) {
         return;
     }
@@ -83,8 +83,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     );
     // Reversed-Z: depth 1e-4 is ~500 m out, far enough that f32 rounding of the point does not
     // bend the direction (at 0.5 it lay 0.1 m from the eye, and rays missed by 0.1 px).
-    let far = frame.inv_view_proj * vec4<f32>(ndc, 1e-4, 1.0);
-    let eye = frame.eye.xyz;
+    let far = frame.camera.inv_view_proj * vec4<f32>(ndc, 1e-4, 1.0);
+    let eye = frame.camera.eye;
     let dir = normalize(far.xyz / far.w - eye);
     let k = id.y * size.x + id.x;
     let range = span(eye, dir);
@@ -93,14 +93,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     var hit = false;
     for (var step = 0u; step < MAX_STEPS && t <= range.y; step++) {
         let p = eye + dir * t;
-        let footprint = t * frame.eye.w;
+        let footprint = t * frame.camera.pixel_scale;
         let above = p.z - height(p.xy, footprint);
         if (above <= 0.0) {
             hit = true;
             break;
         }
         t_prev = t;
-        t += max(above, footprint) * frame.march.z;
+        t += max(above, footprint) * frame.march.step;
     }
     if (!hit) {
         colour_out[k] = vec4<f32>(sky_colour(dir), 1.0);
@@ -113,14 +113,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var i = 0u; i < 16u; i++) {
         let mid = 0.5 * (lo + hi);
         let p = eye + dir * mid;
-        if (p.z - height(p.xy, mid * frame.eye.w) > 0.0) {
+        if (p.z - height(p.xy, mid * frame.camera.pixel_scale) > 0.0) {
             lo = mid;
         } else {
             hi = mid;
         }
     }
     let t_hit = 0.5 * (lo + hi);
-    let footprint = t_hit * frame.eye.w;
+    let footprint = t_hit * frame.camera.pixel_scale;
     let p = eye + dir * t_hit;
     let g = gradient(p.xy, footprint);
     let n = normalize(vec3<f32>(-g, 1.0));

@@ -56,11 +56,11 @@ fn sky_vs(@builtin(vertex_index) vi: u32) -> SkyOut {
 
 @fragment
 fn sky_fs(in: SkyOut) -> FragOut {
-    if (frame.view == VIEW_COVERAGE) {
+    if (frame.camera.view == VIEW_COVERAGE) {
         return frag_out(vec3<f32>(0.0), 0.0);
     }
-    let far = frame.inv_view_proj * vec4<f32>(in.ndc, 1e-4, 1.0);
-    let dir = normalize(far.xyz / far.w - frame.eye.xyz);
+    let far = frame.camera.inv_view_proj * vec4<f32>(in.ndc, 1e-4, 1.0);
+    let dir = normalize(far.xyz / far.w - frame.camera.eye);
     return frag_out(sky_colour(dir), 0.0);
 }
 
@@ -86,18 +86,18 @@ struct Block {
 @group(0) @binding(6) var<storage, read> blocks: array<Block>;
 
 fn grid_index(g: vec2<u32>) -> u32 {
-    return g.y * frame.mesh + g.x;
+    return g.y * frame.mesh.mesh + g.x;
 }
 
-// Index = block slot << bits | (j·(cells+1) + i), cells and bits from frame.block. Vertices that
+// Index = block slot << bits | (j·(cells+1) + i), cells and bits from frame.blocks. Vertices that
 // the next level drops move toward the midpoint of their two neighbours on it (Wagner's
 // geomorph); edge vertices follow the level and morph range of the coarser block of their edge,
 // so neighbours agree on them.
 @vertex
 fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
-    let cells = frame.block.x;
-    let b = blocks[vi >> frame.block.y];
-    let local = vi & ((1u << frame.block.y) - 1u);
+    let cells = frame.blocks.cells;
+    let b = blocks[vi >> frame.blocks.index_bits];
+    let local = vi & ((1u << frame.blocks.index_bits) - 1u);
     let l2 = vec2<u32>(local % (cells + 1u), local / (cells + 1u));
     let g = b.origin + l2;
     var p = detailed[grid_index(g)];
@@ -114,7 +114,7 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     }
     let s = 1u << level;
     let s2 = 2u << level;
-    if (level + 1u < frame.block.z && (g.x % s2 != 0u || g.y % s2 != 0u)) {
+    if (level + 1u < frame.blocks.levels && (g.x % s2 != 0u || g.y % s2 != 0u)) {
         let d = vec2<u32>(select(0u, s, g.x % s2 != 0u), select(0u, s, g.y % s2 != 0u));
         let a = detailed[grid_index(g - d)];
         let c = detailed[grid_index(g + d)];
@@ -122,7 +122,7 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
         // vertex's own distance over the edge's shared range (both blocks compute the same).
         var m = b.morph.z;
         if (side < 4u) {
-            let eye_d = distance(p.xyz + vec3<f32>(frame.mesh_offset, 0.0), frame.eye.xyz);
+            let eye_d = distance(p.xyz + vec3<f32>(frame.mesh.mesh_offset, 0.0), frame.camera.eye);
             m = 0.0;
             if (end > start) {
                 m = clamp((eye_d - start) / (end - start), 0.0, 1.0);
@@ -132,9 +132,9 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
         let nc = normals[grid_index(g - d)].xyz + normals[grid_index(g + d)].xyz;
         n = normalize(mix(n, normalize(nc), m));
     }
-    let local_pos = p.xyz + vec3<f32>(frame.mesh_offset, 0.0);
+    let local_pos = p.xyz + vec3<f32>(frame.mesh.mesh_offset, 0.0);
     var out: VsOut;
-    out.clip = frame.view_proj * vec4<f32>(local_pos, 1.0);
+    out.clip = frame.camera.view_proj * vec4<f32>(local_pos, 1.0);
     out.local = local_pos;
     out.normal = n;
     out.split = p.w;
@@ -146,11 +146,11 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
 fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     let p = detailed[vi];
     var out: VsOut;
-    out.clip = frame.view_proj * vec4<f32>(p.xyz, 1.0);
+    out.clip = frame.camera.view_proj * vec4<f32>(p.xyz, 1.0);
     out.local = p.xyz;
     out.normal = normals[vi].xyz;
     out.split = p.w;
-    out.grid = vec2<f32>(f32(vi % frame.mesh), f32(vi / frame.mesh));
+    out.grid = vec2<f32>(f32(vi % frame.mesh.mesh), f32(vi / frame.mesh.mesh));
     return out;
 }
 #endif
@@ -159,48 +159,48 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
 fn terrain_fs(in: VsOut) -> FragOut {
     // The sketch ends at its edge, as the reference's does: the warped region (a square on a
     // quantised lattice) and the baked grid (the square enclosing the sketch) may reach past it.
-    let atlas_texel = (in.local.xy + frame.atlas_offset) * frame.atlas_inv_spacing;
-    let edge = vec2<f32>(frame.level[0].xy - 1u);
+    let atlas_texel = (in.local.xy + frame.atlas.offset) * frame.atlas.inv_spacing;
+    let edge = vec2<f32>(frame.atlas.level[0].xy - 1u);
     if (any(atlas_texel < vec2<f32>(-1e-3)) || any(atlas_texel > edge + 1e-3)) {
         discard;
     }
-    let to_eye = frame.eye.xyz - in.local;
+    let to_eye = frame.camera.eye - in.local;
     let dist = max(length(to_eye), 1e-3);
     var n = normalize(in.normal);
 #ifdef BUMP
     // Bump detail: octaves from the vertex's split octave up to the pixel's own octave; the
     // geometry already holds g_k of each, octaves past the pixel octave are never evaluated.
-    let o_px = log2(frame.d_atlas / max(dist * frame.eye.w, 1e-6));
-    let last = min(frame.octaves, u32(max(ceil(o_px), 0.0)));
+    let o_px = log2(frame.atlas.d_atlas / max(dist * frame.camera.pixel_scale, 1e-6));
+    let last = min(frame.detail.octaves, u32(max(ceil(o_px), 0.0)));
     var grad = vec2<f32>(0.0);
     for (var k = 1u; k <= last; k++) {
         let g = clamp(in.split - f32(k) + 1.0, 0.0, 1.0);
         let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
         let share = (1.0 - g) * b;
         if (share > 0.0) {
-            grad += frame.octave[k - 1u].weight * share * octave_local(frame.octave[k - 1u], in.local.xy).yz;
+            grad += frame.detail.octave[k - 1u].weight * share * octave_local(frame.detail.octave[k - 1u], in.local.xy).yz;
         }
     }
     n = normalize(vec3<f32>(n.xy / max(n.z, 0.05) - grad, 1.0));
 #endif
     var colour = lit(in.local, n, to_eye, dist);
-    if (frame.view == VIEW_WIREFRAME) {
+    if (frame.camera.view == VIEW_WIREFRAME) {
         // Wireframe: the quad mesh's grid lines over the shaded terrain.
         let d = abs(fract(in.grid + 0.5) - 0.5) / max(fwidth(in.grid), vec2<f32>(1e-6));
         colour = mix(vec3<f32>(0.05, 0.05, 0.08), colour, clamp(min(d.x, d.y), 0.0, 1.0));
-    } else if (frame.view == VIEW_SPLIT_OCTAVE) {
-        let t = clamp(in.split / f32(max(frame.octaves, 1u)), 0.0, 1.0);
+    } else if (frame.camera.view == VIEW_SPLIT_OCTAVE) {
+        let t = clamp(in.split / f32(max(frame.detail.octaves, 1u)), 0.0, 1.0);
         colour = mix(vec3<f32>(0.1, 0.1, 0.6), vec3<f32>(1.0, 0.9, 0.1), t);
-    } else if (frame.view == VIEW_NORMALS) {
+    } else if (frame.camera.view == VIEW_NORMALS) {
         colour = n * 0.5 + 0.5;
-    } else if (frame.view == VIEW_COVERAGE) {
+    } else if (frame.camera.view == VIEW_COVERAGE) {
         return frag_out(vec3<f32>(1.0), in.clip.z);
     }
 #ifdef IMPORTANCE_VIEW
-    let texel = (in.local.xy - frame.phi_offset) / frame.sun.w;
-    let i = clamp(vec2<u32>(max(texel, vec2<f32>(0.0))), vec2<u32>(0u), vec2<u32>(frame.n - 1u));
-    let v = importance[i.y * frame.n + i.x];
-    let t = clamp(log2(v / frame.importance_max) / 12.0 + 1.0, 0.0, 1.0);
+    let texel = (in.local.xy - frame.mesh.phi_offset) / frame.mesh.d0;
+    let i = clamp(vec2<u32>(max(texel, vec2<f32>(0.0))), vec2<u32>(0u), vec2<u32>(frame.mesh.n - 1u));
+    let v = importance[i.y * frame.mesh.n + i.x];
+    let t = clamp(log2(v / frame.mesh.importance_max) / 12.0 + 1.0, 0.0, 1.0);
     colour = mix(vec3<f32>(0.27, 0.0, 0.33), vec3<f32>(0.99, 0.9, 0.14), t);
 #endif
     return frag_out(aerial(colour, to_eye, dist), in.clip.z);

@@ -17,7 +17,7 @@
 
 // Φ at warp coordinates `st` (bilinear), metres from the frame origin.
 fn phi_at(st: vec2<f32>) -> vec2<f32> {
-    let n = frame.n;
+    let n = frame.mesh.n;
     let c = clamp(st, vec2<f32>(0.0), vec2<f32>(f32(n - 1u)));
     let i = min(vec2<u32>(c), vec2<u32>(n - 2u));
     let f = c - vec2<f32>(i);
@@ -25,19 +25,19 @@ fn phi_at(st: vec2<f32>) -> vec2<f32> {
     let p10 = phi[i.y * n + i.x + 1u];
     let p01 = phi[(i.y + 1u) * n + i.x];
     let p11 = phi[(i.y + 1u) * n + i.x + 1u];
-    return mix(mix(p00, p10, f.x), mix(p01, p11, f.x), f.y) + frame.phi_offset;
+    return mix(mix(p00, p10, f.x), mix(p01, p11, f.x), f.y) + frame.mesh.phi_offset;
 }
 
 // The horizontal position of mesh vertex `ij` (clamped to the mesh).
 fn mesh_xy(ij: vec2<i32>) -> vec2<f32> {
-    let m = i32(frame.mesh);
+    let m = i32(frame.mesh.mesh);
     let c = clamp(ij, vec2<i32>(0), vec2<i32>(m - 1));
-    return phi_at(vec2<f32>(c) * (f32(frame.n - 1u) / f32(frame.mesh - 1u)));
+    return phi_at(vec2<f32>(c) * (f32(frame.mesh.n - 1u) / f32(frame.mesh.mesh - 1u)));
 }
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (id.x >= frame.mesh || id.y >= frame.mesh) {
+    if (id.x >= frame.mesh.mesh || id.y >= frame.mesh.mesh) {
         return;
     }
     let ij = vec2<i32>(id.xy);
@@ -47,13 +47,13 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         max(distance(p, mesh_xy(ij + vec2<i32>(0, 1))), distance(p, mesh_xy(ij - vec2<i32>(0, 1)))),
     );
     var z = atlas_height(p, d_max);
-    let o = log2(frame.d_atlas / max(d_max, 1e-6)) - frame.bias;
+    let o = log2(frame.atlas.d_atlas / max(d_max, 1e-6)) - frame.detail.bias;
 #ifdef DETAIL
-    let last = min(frame.octaves, u32(max(ceil(o), 0.0)));
+    let last = min(frame.detail.octaves, u32(max(ceil(o), 0.0)));
     for (var k = 1u; k <= last; k++) {
         let g = clamp(o - f32(k) + 1.0, 0.0, 1.0);
-        z += frame.octave[k - 1u].weight * g * octave_local(frame.octave[k - 1u], p).x;
+        z += frame.detail.octave[k - 1u].weight * g * octave_local(frame.detail.octave[k - 1u], p).x;
     }
 #endif
-    detailed[id.y * frame.mesh + id.x] = vec4<f32>(p, z, o);
+    detailed[id.y * frame.mesh.mesh + id.x] = vec4<f32>(p, z, o);
 }

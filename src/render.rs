@@ -169,7 +169,7 @@ impl Renderer {
             mesh: 0,
             view: self.view,
             importance_max: 0.0,
-            block: [0; 4],
+            block: Default::default(),
             step_factor: 0.0,
         };
         self.lod.frame_inputs(&mut inputs);

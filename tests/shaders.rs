@@ -2,7 +2,6 @@
 //! naga (no GPU needed), and the uniform block's Rust twin has the WGSL struct's size.
 
 use terrain::gpu::shaders::{FLAGS, PASSES, compose};
-use terrain::gpu::uniforms::FrameUniforms;
 
 fn validate(name: &str, flags: &[&str]) -> naga::Module {
     let source = compose(name, flags).unwrap_or_else(|e| panic!("{name} {flags:?}: {e}"));
@@ -74,44 +73,108 @@ fn wgsl_layout(module: &naga::Module, name: &str) -> (Vec<(String, u32, u32)>, u
 
 #[test]
 fn uniform_structs_match_the_wgsl_field_by_field() {
-    use terrain::gpu::uniforms::OctaveGpu;
+    use std::mem::size_of;
+    use terrain::gpu::uniforms::*;
     let module = validate("warp_zoom", &[]);
-    let frame = rust_layout!(FrameUniforms {
-        view_proj,
-        inv_view_proj,
-        eye,
-        phi_offset,
-        atlas_offset,
-        atlas_inv_spacing,
-        d_atlas,
-        bias,
-        n,
-        mesh,
-        octaves,
-        levels,
-        sun,
-        view,
-        importance_max,
-        mesh_offset,
-        octave,
-        turbulence,
-        level,
-        block,
-        march,
-        image,
-    });
-    let octave = rust_layout!(OctaveGpu {
-        lattice,
-        phase,
-        scale,
-        weight,
-        seed,
-        pad
-    });
-    for (name, rust, size) in [
-        ("Frame", frame, std::mem::size_of::<FrameUniforms>()),
-        ("Octave", octave, std::mem::size_of::<OctaveGpu>()),
-    ] {
+    let structs = [
+        (
+            "Frame",
+            rust_layout!(FrameUniforms {
+                camera,
+                shading,
+                atlas,
+                detail,
+                mesh,
+                blocks,
+                march
+            }),
+            size_of::<FrameUniforms>(),
+        ),
+        (
+            "CameraUniforms",
+            rust_layout!(CameraUniforms {
+                view_proj,
+                inv_view_proj,
+                eye,
+                pixel_scale,
+                image,
+                view,
+                pad
+            }),
+            size_of::<CameraUniforms>(),
+        ),
+        (
+            "ShadingUniforms",
+            rust_layout!(ShadingUniforms {
+                sun,
+                pad,
+                turbulence
+            }),
+            size_of::<ShadingUniforms>(),
+        ),
+        (
+            "AtlasUniforms",
+            rust_layout!(AtlasUniforms {
+                level,
+                offset,
+                inv_spacing,
+                d_atlas,
+                levels,
+                pad
+            }),
+            size_of::<AtlasUniforms>(),
+        ),
+        (
+            "DetailUniforms",
+            rust_layout!(DetailUniforms {
+                octave,
+                octaves,
+                bias,
+                pad
+            }),
+            size_of::<DetailUniforms>(),
+        ),
+        (
+            "MeshUniforms",
+            rust_layout!(MeshUniforms {
+                phi_offset,
+                mesh_offset,
+                n,
+                mesh,
+                d0,
+                importance_max
+            }),
+            size_of::<MeshUniforms>(),
+        ),
+        (
+            "BlockUniforms",
+            rust_layout!(BlockUniforms {
+                cells,
+                index_bits,
+                levels,
+                pad
+            }),
+            size_of::<BlockUniforms>(),
+        ),
+        (
+            "MarchUniforms",
+            rust_layout!(MarchUniforms { lo, hi, step, pad }),
+            size_of::<MarchUniforms>(),
+        ),
+        (
+            "Octave",
+            rust_layout!(OctaveGpu {
+                lattice,
+                phase,
+                scale,
+                weight,
+                seed,
+                pad
+            }),
+            size_of::<OctaveGpu>(),
+        ),
+    ];
+    for (name, rust, size) in structs {
         let (wgsl, wgsl_size) = wgsl_layout(&module, name);
         assert_eq!(rust, wgsl, "{name}: (field, offset, size) in Rust and WGSL");
         assert_eq!(size as u32, wgsl_size, "{name}: size");

@@ -22,7 +22,7 @@ fn catmull_rom(f: f32) -> vec4<f32> {
 
 fn atlas_texel(x: i32, y: i32, l: u32, size: vec2<i32>) -> f32 {
     let c = vec2<u32>(clamp(vec2<i32>(x, y), vec2<i32>(0), size - 1));
-    return atlas[frame.level[l].z + c.y * frame.level[l].x + c.x];
+    return atlas[frame.atlas.level[l].z + c.y * frame.atlas.level[l].x + c.x];
 }
 
 // One row of four taps.
@@ -39,7 +39,7 @@ fn atlas_row(x: i32, y: i32, l: u32, size: vec2<i32>, w: vec4<f32>) -> f32 {
 fn atlas_level(uv: vec2<f32>, l: u32) -> f32 {
     let s = f32(1u << l);
     let x = (uv - vec2<f32>((s - 1.0) * 0.5)) / s;
-    let size = vec2<i32>(frame.level[l].xy);
+    let size = vec2<i32>(frame.atlas.level[l].xy);
     let i = floor(x);
     let f = x - i;
     let wx = catmull_rom(f.x);
@@ -56,12 +56,12 @@ fn atlas_level(uv: vec2<f32>, l: u32) -> f32 {
 
 // Height at `local` (metres from the frame origin) for a mesh spacing of `spacing` metres.
 fn atlas_height(local: vec2<f32>, spacing: f32) -> f32 {
-    let uv = (local + frame.atlas_offset) * frame.atlas_inv_spacing;
-    let lod = clamp(log2(max(spacing, 1e-6) / frame.d_atlas), 0.0, f32(frame.levels - 1u));
+    let uv = (local + frame.atlas.offset) * frame.atlas.inv_spacing;
+    let lod = clamp(log2(max(spacing, 1e-6) / frame.atlas.d_atlas), 0.0, f32(frame.atlas.levels - 1u));
     let l0 = u32(lod);
     let t = lod - f32(l0);
     let a = atlas_level(uv, l0);
-    if (t <= 0.0 || l0 + 1u >= frame.levels) {
+    if (t <= 0.0 || l0 + 1u >= frame.atlas.levels) {
         return a;
     }
     return a + (atlas_level(uv, l0 + 1u) - a) * t;

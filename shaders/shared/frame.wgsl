@@ -10,7 +10,7 @@ struct Octave {
     pad: u32,
 }
 
-// The debug views, `frame.view`: the Rust enum `View` in declaration order (tests/shaders.rs
+// The debug views, `frame.camera.view`: the Rust enum `View` in declaration order (tests/shaders.rs
 // checks each name and number).
 const VIEW_SHADED: u32 = 0u;
 const VIEW_WIREFRAME: u32 = 1u;
@@ -19,31 +19,78 @@ const VIEW_IMPORTANCE: u32 = 3u;
 const VIEW_NORMALS: u32 = 4u;
 const VIEW_COVERAGE: u32 = 5u;
 
-struct Frame {
+// The frame's uniform block, one struct per concern, each with its Rust twin of the same name in
+// `gpu::uniforms` (tests/shaders.rs checks every field's offset and size). `pad` fields only fill
+// to the uniform address space's 16-byte alignment; no value lives in a spare lane.
+
+// The eye and the image.
+struct CameraUniforms {
     view_proj: mat4x4<f32>,
     inv_view_proj: mat4x4<f32>,
-    eye: vec4<f32>,              // xyz: eye; w: pixel scale (2·tan(fov/2)/height)
-    phi_offset: vec2<f32>,       // sketch-map region corner − frame origin
-    atlas_offset: vec2<f32>,     // frame origin − atlas origin
-    atlas_inv_spacing: vec2<f32>,
+    eye: vec3<f32>,
+    pixel_scale: f32,            // 2·tan(fov/2)/height: a pixel's footprint per metre of distance
+    image: vec2<u32>,            // width, height in pixels
+    view: u32,                   // debug view, one of VIEW_*
+    pad: u32,
+}
+
+// Sunlight and the surface types' variation.
+struct ShadingUniforms {
+    sun: vec3<f32>,              // direction to the sun
+    pad: f32,
+    turbulence: array<Octave, 2>,
+}
+
+// The sketch's pyramid in the atlas buffer.
+struct AtlasUniforms {
+    level: array<vec4<u32>, 16>, // per level: width, height, first texel, 0
+    offset: vec2<f32>,           // frame origin − atlas origin
+    inv_spacing: vec2<f32>,
     d_atlas: f32,
+    levels: u32,                 // mip levels in use
+    pad: vec2<u32>,
+}
+
+// The procedural octaves.
+struct DetailUniforms {
+    octave: array<Octave, 24>,
+    octaves: u32,
     bias: f32,
+    pad: vec2<u32>,
+}
+
+// The mesh the terrain pass draws: the warped geometry image (or GeoMipMap's baked grid).
+struct MeshUniforms {
+    phi_offset: vec2<f32>,       // sketch-map region corner − frame origin
+    mesh_offset: vec2<f32>,      // origin of the mesh's coordinates − frame origin (0 for warped)
     n: u32,                      // warp size (128)
     mesh: u32,                   // detailed geometry image size (512)
-    octaves: u32,
-    levels: u32,                 // atlas mip levels
-    sun: vec4<f32>,              // xyz: direction to the sun; w: sketch-map spacing d0
-    view: u32,                   // debug view: 0 shaded, 1 wireframe, 2 split octave, 3 importance, 4 normals, 5 coverage
-    importance_max: f32,
-    mesh_offset: vec2<f32>,      // origin of the mesh's coordinates − frame origin (0 for warped)
-    octave: array<Octave, 24>,
-    turbulence: array<Octave, 2>,
-    // The atlas pyramid's levels in the atlas buffer: (width, height, first texel, 0).
-    level: array<vec4<u32>, 16>,
-    // GeoMipMap blocks: cells per side, bits of the block-local vertex in an index, levels, 0.
-    block: vec4<u32>,
-    // Reference ray march: lowest and highest ground (with the detail's reach), step factor, 0.
-    march: vec4<f32>,
-    // Image width and height in pixels, 0, 0.
-    image: vec4<u32>,
+    d0: f32,                     // sketch-map spacing: metres per warp texel
+    importance_max: f32,         // the importance view's scale
+}
+
+// GeoMipMap's blocks.
+struct BlockUniforms {
+    cells: u32,                  // cells per block side
+    index_bits: u32,             // bits of the block-local vertex in an index
+    levels: u32,
+    pad: u32,
+}
+
+// The reference's ray march.
+struct MarchUniforms {
+    lo: f32,                     // lowest ground, with the detail's reach
+    hi: f32,                     // highest ground, with the detail's reach
+    step: f32,                   // step as a fraction of the height above ground
+    pad: f32,
+}
+
+struct Frame {
+    camera: CameraUniforms,
+    shading: ShadingUniforms,
+    atlas: AtlasUniforms,
+    detail: DetailUniforms,
+    mesh: MeshUniforms,
+    blocks: BlockUniforms,
+    march: MarchUniforms,
 }

@@ -12,7 +12,7 @@ fn sky_colour(dir: vec3<f32>) -> vec3<f32> {
     let horizon = vec3<f32>(0.72, 0.80, 0.90);
     let zenith = vec3<f32>(0.22, 0.42, 0.78);
     var c = mix(horizon, zenith, pow(max(up, 0.0), 0.6));
-    let sun = max(dot(dir, frame.sun.xyz), 0.0);
+    let sun = max(dot(dir, frame.shading.sun), 0.0);
     c += vec3<f32>(1.0, 0.85, 0.6) * (pow(sun, 400.0) * 4.0 + pow(sun, 12.0) * 0.25);
     return c;
 }
@@ -20,7 +20,7 @@ fn sky_colour(dir: vec3<f32>) -> vec3<f32> {
 // Low-frequency turbulence that moves the boundaries between surface types.
 fn turbulence(local: vec2<f32>) -> f32 {
 #ifdef NOISE
-    return octave_local(frame.turbulence[0], local).x + 0.5 * octave_local(frame.turbulence[1], local).x;
+    return octave_local(frame.shading.turbulence[0], local).x + 0.5 * octave_local(frame.shading.turbulence[1], local).x;
 #else
     return 0.0;
 #endif
@@ -52,7 +52,7 @@ fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32
         let reflected = sky_colour(reflect(-to_eye / dist, vec3<f32>(0.0, 0.0, 1.0)));
         return mix(vec3<f32>(0.04, 0.12, 0.20), reflected, fresnel);
     }
-    let sun = max(dot(n, frame.sun.xyz), 0.0);
+    let sun = max(dot(n, frame.shading.sun), 0.0);
     let sky = 0.35 * (0.6 + 0.4 * n.z);
     let light = vec3<f32>(1.0, 0.95, 0.85) * sun * 1.1 + vec3<f32>(0.55, 0.65, 0.85) * sky;
     return albedo(local, n) * light;

@@ -38,35 +38,108 @@ impl From<OctaveFrame> for OctaveGpu {
     }
 }
 
+/// The eye and the image.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct CameraUniforms {
+    pub view_proj: [[f32; 4]; 4],
+    pub inv_view_proj: [[f32; 4]; 4],
+    pub eye: [f32; 3],
+    /// 2·tan(fov/2)/height: a pixel's footprint per metre of distance.
+    pub pixel_scale: f32,
+    /// Width and height in pixels.
+    pub image: [u32; 2],
+    pub view: u32,
+    pub pad: u32,
+}
+
+/// Sunlight and the surface types' variation.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct ShadingUniforms {
+    /// Direction to the sun.
+    pub sun: [f32; 3],
+    pub pad: f32,
+    pub turbulence: [OctaveGpu; 2],
+}
+
+/// The sketch's pyramid in the atlas buffer.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct AtlasUniforms {
+    /// Per level: width, height, first texel, 0.
+    pub level: [[u32; 4]; MAX_LEVELS],
+    /// Frame origin − atlas origin.
+    pub offset: [f32; 2],
+    pub inv_spacing: [f32; 2],
+    pub d_atlas: f32,
+    pub levels: u32,
+    pub pad: [u32; 2],
+}
+
+/// The procedural octaves.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct DetailUniforms {
+    pub octave: [OctaveGpu; MAX_OCTAVES],
+    pub octaves: u32,
+    pub bias: f32,
+    pub pad: [u32; 2],
+}
+
+/// The mesh the terrain pass draws: the warped geometry image, or GeoMipMap's baked grid.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct MeshUniforms {
+    /// Sketch-map region corner − frame origin.
+    pub phi_offset: [f32; 2],
+    /// Origin of the mesh's coordinates − frame origin (0 for the warped mesh).
+    pub mesh_offset: [f32; 2],
+    /// Warp size.
+    pub n: u32,
+    /// Detailed geometry image size.
+    pub mesh: u32,
+    /// Sketch-map spacing: metres per warp texel.
+    pub d0: f32,
+    /// The importance view's scale.
+    pub importance_max: f32,
+}
+
+/// GeoMipMap's blocks.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct BlockUniforms {
+    /// Cells per block side.
+    pub cells: u32,
+    /// Bits of the block-local vertex in an index.
+    pub index_bits: u32,
+    pub levels: u32,
+    pub pad: u32,
+}
+
+/// The reference's ray march.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct MarchUniforms {
+    /// Lowest and highest ground, with the detail's reach.
+    pub lo: f32,
+    pub hi: f32,
+    /// Step as a fraction of the height above ground.
+    pub step: f32,
+    pub pad: f32,
+}
+
+/// The frame's uniform block (`shaders/shared/frame.wgsl`'s `Frame`): one struct per concern.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct FrameUniforms {
-    pub view_proj: [[f32; 4]; 4],
-    pub inv_view_proj: [[f32; 4]; 4],
-    pub eye: [f32; 4],
-    pub phi_offset: [f32; 2],
-    pub atlas_offset: [f32; 2],
-    pub atlas_inv_spacing: [f32; 2],
-    pub d_atlas: f32,
-    pub bias: f32,
-    pub n: u32,
-    pub mesh: u32,
-    pub octaves: u32,
-    pub levels: u32,
-    pub sun: [f32; 4],
-    pub view: u32,
-    pub importance_max: f32,
-    pub mesh_offset: [f32; 2],
-    pub octave: [OctaveGpu; MAX_OCTAVES],
-    pub turbulence: [OctaveGpu; 2],
-    /// The atlas pyramid's levels in the atlas buffer: width, height, first texel, 0.
-    pub level: [[u32; 4]; MAX_LEVELS],
-    /// GeoMipMap blocks: cells per side, index bits of the block-local vertex, levels, 0.
-    pub block: [u32; 4],
-    /// Reference ray march: lowest and highest ground (with the detail's reach), step factor, 0.
-    pub march: [f32; 4],
-    /// Image width and height in pixels, 0, 0.
-    pub image: [u32; 4],
+    pub camera: CameraUniforms,
+    pub shading: ShadingUniforms,
+    pub atlas: AtlasUniforms,
+    pub detail: DetailUniforms,
+    pub mesh: MeshUniforms,
+    pub blocks: BlockUniforms,
+    pub march: MarchUniforms,
 }
 
 crate::named_enum! {
@@ -119,8 +192,8 @@ pub struct FrameInputs<'a> {
     pub mesh: u32,
     pub view: View,
     pub importance_max: f32,
-    /// GeoMipMap's block shape (cells, index bits, levels, 0); zeros for the warped mode.
-    pub block: [u32; 4],
+    /// GeoMipMap's block shape; zeros for the other modes.
+    pub block: BlockUniforms,
     /// The reference's step: a fraction of the height above ground and of the pixel footprint.
     pub step_factor: f32,
 }
@@ -128,57 +201,110 @@ pub struct FrameInputs<'a> {
 impl FrameUniforms {
     pub fn new(f: &FrameInputs) -> FrameUniforms {
         let origin = frame_origin(f.camera);
-        let vp = view_proj(f.camera, origin);
-        let eye = f.camera.eye - origin.extend(0.0);
-        let pixel_scale = 2.0 * f.camera.tan_half_y() / f.camera.height as f64;
-        let mut octave = [OctaveGpu::default(); MAX_OCTAVES];
-        for (slot, o) in octave.iter_mut().zip(f.detail.frame(origin)) {
-            *slot = o.into();
+        FrameUniforms {
+            camera: CameraUniforms::new(f.camera, origin, f.view),
+            shading: ShadingUniforms::new(f.detail, origin),
+            atlas: AtlasUniforms::new(f.atlas, origin),
+            detail: DetailUniforms::new(f.detail, origin),
+            mesh: MeshUniforms {
+                phi_offset: f
+                    .map
+                    .map_or([0.0; 2], |m| (m.origin - origin).as_vec2().to_array()),
+                mesh_offset: f
+                    .mesh_origin
+                    .map_or([0.0; 2], |m| (m - origin).as_vec2().to_array()),
+                n: f.map.map_or(0, |m| m.n as u32),
+                mesh: f.mesh,
+                d0: f.map.map_or(0.0, |m| m.spacing as f32),
+                importance_max: f.importance_max,
+            },
+            blocks: f.block,
+            march: MarchUniforms {
+                lo: (f.atlas.min_m as f64 - f.detail.reach_m()) as f32,
+                hi: (f.atlas.max_m as f64 + f.detail.reach_m()) as f32,
+                step: f.step_factor,
+                pad: 0.0,
+            },
         }
+    }
+
+    /// The block for baking the terrain function on a regular `n`² grid with warp & zoom: Φ is
+    /// the identity grid relative to `origin`, which is also the frame origin; no camera, no
+    /// shading.
+    pub fn for_bake(atlas: &Atlas, detail: &Detail, origin: DVec2, n: u32) -> FrameUniforms {
+        FrameUniforms {
+            camera: CameraUniforms::default(),
+            shading: ShadingUniforms::default(),
+            atlas: AtlasUniforms::new(atlas, origin),
+            detail: DetailUniforms::new(detail, origin),
+            mesh: MeshUniforms {
+                n,
+                mesh: n,
+                ..MeshUniforms::default()
+            },
+            blocks: BlockUniforms::default(),
+            march: MarchUniforms::default(),
+        }
+    }
+}
+
+impl CameraUniforms {
+    pub fn new(camera: &Camera, origin: DVec2, view: View) -> CameraUniforms {
+        let vp = view_proj(camera, origin);
+        let eye = camera.eye - origin.extend(0.0);
+        CameraUniforms {
+            view_proj: vp.as_mat4().to_cols_array_2d(),
+            inv_view_proj: vp.inverse().as_mat4().to_cols_array_2d(),
+            eye: eye.as_vec3().to_array(),
+            pixel_scale: (2.0 * camera.tan_half_y() / camera.height as f64) as f32,
+            image: [camera.width, camera.height],
+            view: view as u32,
+            pad: 0,
+        }
+    }
+}
+
+impl ShadingUniforms {
+    pub fn new(detail: &Detail, origin: DVec2) -> ShadingUniforms {
         // Two octaves of turbulence, 600 m and 150 m, for the surface types' boundaries.
-        let turbulence_seed = crate::detail::hash(f.detail.seed ^ 0x5eed);
+        let turbulence_seed = crate::detail::hash(detail.seed ^ 0x5eed);
         let turbulence = [600.0, 150.0].map(|wavelength: f64| {
-            let rel = origin - f.detail.lattice_origin_m;
+            let rel = origin - detail.lattice_origin_m;
             OctaveFrame::split(rel, 1.6 / wavelength, 1.0, turbulence_seed).into()
         });
         let sun = DVec3::new(0.41, -0.71, 0.57).normalize();
-        FrameUniforms {
-            view_proj: vp.as_mat4().to_cols_array_2d(),
-            inv_view_proj: vp.inverse().as_mat4().to_cols_array_2d(),
-            eye: [eye.x as f32, eye.y as f32, eye.z as f32, pixel_scale as f32],
-            phi_offset: f
-                .map
-                .map_or([0.0; 2], |m| (m.origin - origin).as_vec2().to_array()),
-            atlas_offset: (origin - f.atlas.origin).as_vec2().to_array(),
-            atlas_inv_spacing: [(1.0 / f.atlas.dx) as f32, (1.0 / f.atlas.dy) as f32],
-            d_atlas: f.atlas.d_atlas() as f32,
-            bias: f.detail.bias as f32,
-            n: f.map.map_or(0, |m| m.n as u32),
-            mesh: f.mesh,
-            octaves: f.detail.octaves.min(MAX_OCTAVES as u32),
-            levels: f.atlas.levels.len().min(MAX_LEVELS) as u32,
-            sun: [
-                sun.x as f32,
-                sun.y as f32,
-                sun.z as f32,
-                f.map.map_or(0.0, |m| m.spacing as f32),
-            ],
-            view: f.view as u32,
-            importance_max: f.importance_max,
-            mesh_offset: f
-                .mesh_origin
-                .map_or([0.0; 2], |m| (m - origin).as_vec2().to_array()),
-            octave,
+        ShadingUniforms {
+            sun: sun.as_vec3().to_array(),
+            pad: 0.0,
             turbulence,
-            level: level_table(f.atlas),
-            block: f.block,
-            march: [
-                (f.atlas.min_m as f64 - f.detail.reach_m()) as f32,
-                (f.atlas.max_m as f64 + f.detail.reach_m()) as f32,
-                f.step_factor,
-                0.0,
-            ],
-            image: [f.camera.width, f.camera.height, 0, 0],
+        }
+    }
+}
+
+impl AtlasUniforms {
+    pub fn new(atlas: &Atlas, origin: DVec2) -> AtlasUniforms {
+        AtlasUniforms {
+            level: level_table(atlas),
+            offset: (origin - atlas.origin).as_vec2().to_array(),
+            inv_spacing: [(1.0 / atlas.dx) as f32, (1.0 / atlas.dy) as f32],
+            d_atlas: atlas.d_atlas() as f32,
+            levels: atlas.levels.len().min(MAX_LEVELS) as u32,
+            pad: [0; 2],
+        }
+    }
+}
+
+impl DetailUniforms {
+    pub fn new(detail: &Detail, origin: DVec2) -> DetailUniforms {
+        let mut octave = [OctaveGpu::default(); MAX_OCTAVES];
+        for (slot, o) in octave.iter_mut().zip(detail.frame(origin)) {
+            *slot = o.into();
+        }
+        DetailUniforms {
+            octave,
+            octaves: detail.octaves.min(MAX_OCTAVES as u32),
+            bias: detail.bias as f32,
+            pad: [0; 2],
         }
     }
 }
@@ -202,39 +328,4 @@ pub fn atlas_texels(atlas: &Atlas) -> Vec<f32> {
         .take(MAX_LEVELS)
         .flat_map(|l| l.data.iter().copied())
         .collect()
-}
-
-impl FrameUniforms {
-    /// The block for baking the terrain function on a regular `n`² grid of `spacing` metres with
-    /// warp & zoom: Φ is the identity grid relative to `origin`, which is also the frame origin.
-    pub fn for_bake(atlas: &Atlas, detail: &Detail, origin: DVec2, n: u32) -> FrameUniforms {
-        let mut octave = [OctaveGpu::default(); MAX_OCTAVES];
-        for (slot, o) in octave.iter_mut().zip(detail.frame(origin)) {
-            *slot = o.into();
-        }
-        FrameUniforms {
-            view_proj: [[0.0; 4]; 4],
-            inv_view_proj: [[0.0; 4]; 4],
-            eye: [0.0; 4],
-            phi_offset: [0.0; 2],
-            atlas_offset: (origin - atlas.origin).as_vec2().to_array(),
-            atlas_inv_spacing: [(1.0 / atlas.dx) as f32, (1.0 / atlas.dy) as f32],
-            d_atlas: atlas.d_atlas() as f32,
-            bias: detail.bias as f32,
-            n,
-            mesh: n,
-            octaves: detail.octaves.min(MAX_OCTAVES as u32),
-            levels: atlas.levels.len().min(MAX_LEVELS) as u32,
-            sun: [0.0; 4],
-            view: 0,
-            importance_max: 0.0,
-            mesh_offset: [0.0; 2],
-            octave,
-            turbulence: [OctaveGpu::default(); 2],
-            level: level_table(atlas),
-            block: [0; 4],
-            march: [0.0; 4],
-            image: [0; 4],
-        }
-    }
 }

@@ -87,23 +87,23 @@ impl WarpZoomPass {
 
 /// Φ at warp coordinates (bilinear), metres from the frame origin (`phi_at` in the shader).
 fn phi_at(f: &FrameUniforms, phi: &[[f32; 2]], st: Vec2) -> Vec2 {
-    let n = f.n;
+    let n = f.mesh.n;
     let c = st.clamp(Vec2::ZERO, Vec2::splat((n - 1) as f32));
     let i = c.as_uvec2().min(glam::UVec2::splat(n - 2));
     let fr = c - i.as_vec2();
     let at = |x: u32, y: u32| Vec2::from(phi[(y * n + x) as usize]);
     let (p00, p10) = (at(i.x, i.y), at(i.x + 1, i.y));
     let (p01, p11) = (at(i.x, i.y + 1), at(i.x + 1, i.y + 1));
-    p00.lerp(p10, fr.x).lerp(p01.lerp(p11, fr.x), fr.y) + Vec2::from(f.phi_offset)
+    p00.lerp(p10, fr.x).lerp(p01.lerp(p11, fr.x), fr.y) + Vec2::from(f.mesh.phi_offset)
 }
 
 fn mesh_xy(f: &FrameUniforms, phi: &[[f32; 2]], ij: IVec2) -> Vec2 {
-    let m = f.mesh as i32;
+    let m = f.mesh.mesh as i32;
     let c = ij.clamp(IVec2::ZERO, IVec2::splat(m - 1));
     phi_at(
         f,
         phi,
-        c.as_vec2() * ((f.n - 1) as f32 / (f.mesh - 1) as f32),
+        c.as_vec2() * ((f.mesh.n - 1) as f32 / (f.mesh.mesh - 1) as f32),
     )
 }
 
@@ -139,14 +139,14 @@ fn atlas_level(atlas: &Atlas, uv: Vec2, l: usize) -> f32 {
 }
 
 fn atlas_height(f: &FrameUniforms, atlas: &Atlas, local: Vec2, spacing: f32) -> f32 {
-    let uv = (local + Vec2::from(f.atlas_offset)) * Vec2::from(f.atlas_inv_spacing);
-    let lod = (spacing.max(1e-6) / f.d_atlas)
+    let uv = (local + Vec2::from(f.atlas.offset)) * Vec2::from(f.atlas.inv_spacing);
+    let lod = (spacing.max(1e-6) / f.atlas.d_atlas)
         .log2()
-        .clamp(0.0, (f.levels - 1) as f32);
+        .clamp(0.0, (f.atlas.levels - 1) as f32);
     let l0 = lod as u32;
     let t = lod - l0 as f32;
     let a = atlas_level(atlas, uv, l0 as usize);
-    if t <= 0.0 || l0 + 1 >= f.levels {
+    if t <= 0.0 || l0 + 1 >= f.atlas.levels {
         return a;
     }
     a + (atlas_level(atlas, uv, l0 as usize + 1) - a) * t
@@ -179,12 +179,12 @@ pub fn vertex_cpu(
         .max(d(-IVec2::X))
         .max(d(IVec2::Y).max(d(-IVec2::Y)));
     let mut z = atlas_height(f, atlas, p, d_max);
-    let o = (f.d_atlas / d_max.max(1e-6)).log2() - f.bias;
+    let o = (f.atlas.d_atlas / d_max.max(1e-6)).log2() - f.detail.bias;
     if detail {
-        let last = f.octaves.min(o.ceil().max(0.0) as u32);
+        let last = f.detail.octaves.min(o.ceil().max(0.0) as u32);
         for k in 1..=last {
             let g = (o - k as f32 + 1.0).clamp(0.0, 1.0);
-            let oct = &f.octave[(k - 1) as usize];
+            let oct = &f.detail.octave[(k - 1) as usize];
             z += oct.weight * g * octave_local(oct, p);
         }
     }

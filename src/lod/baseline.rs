@@ -16,7 +16,7 @@ use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::{ColourReadback, Timer, read_vec4, uniform_buffer};
 use crate::gpu::normals::NormalsPass;
 use crate::gpu::terrain::{TerrainPass, Variant};
-use crate::gpu::uniforms::{FrameInputs, FrameUniforms, view_proj};
+use crate::gpu::uniforms::{BlockUniforms, FrameInputs, FrameUniforms, view_proj};
 use crate::gpu::warp_zoom::WarpZoomPass;
 use crate::scene::Mode;
 use crate::sketch::Atlas;
@@ -230,7 +230,12 @@ impl Lod for Baselines {
         let g = &self.bake.grid;
         f.mesh_origin = Some(g.origin);
         f.mesh = g.n as u32;
-        f.block = [g.cells as u32, g.slot_shift(), g.levels() as u32, 0];
+        f.block = BlockUniforms {
+            cells: g.cells as u32,
+            index_bits: g.slot_shift(),
+            levels: g.levels() as u32,
+            pad: 0,
+        };
     }
 
     fn record(

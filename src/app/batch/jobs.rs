@@ -1,0 +1,255 @@
+//! The jobs file: its base scene, its `[[job]]` tables merged into that scene's TOML, its
+//! `[random]` cameras, and the items they make, in order.
+
+use crate::error::{Error, Result, Role};
+use crate::scene::Scene;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The most random cameras one jobs file asks for.
+pub const MAX_RANDOM: usize = 10_000_000;
+
+#[derive(Clone, Debug)]
+pub struct Random {
+    pub count: usize,
+    pub seed: u64,
+}
+
+/// A parsed jobs file.
+pub struct Jobs {
+    pub scene_path: PathBuf,
+    base: toml::Table,
+    explicit: Vec<toml::Value>,
+    pub random: Option<Random>,
+}
+
+/// One snapshot to take.
+#[derive(Clone, Debug)]
+pub struct Item {
+    pub index: usize,
+    pub name: String,
+    pub kind: ItemKind,
+}
+
+#[derive(Clone, Debug)]
+pub enum ItemKind {
+    /// `[[job]]` number k of the file.
+    Explicit(usize),
+    /// Random camera number i.
+    Random(usize),
+}
+
+fn bad(path: &Path, reason: impl Into<String>) -> Error {
+    Error::file(Role::JobsFile, path, reason)
+}
+
+/// The jobs file as written (docs/scene.md, "Jobs file"); unknown keys are refused by name.
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct JobsFile {
+    /// The base scene every job starts from, relative to the jobs file.
+    pub scene: PathBuf,
+    pub random: Option<RandomSection>,
+    /// Explicit jobs: `name`, and any scene keys, which override the base scene's.
+    #[serde(default)]
+    pub job: Vec<toml::Table>,
+}
+
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RandomSection {
+    /// How many random cameras.
+    pub count: u64,
+    /// The seed of the cameras (each a function of the seed and its index alone).
+    #[serde(default)]
+    pub seed: u64,
+}
+
+impl Jobs {
+    pub fn load(path: &Path) -> Result<Jobs> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(Role::JobsFile, path, e))?;
+        let de = toml::Deserializer::parse(&text).map_err(|e| bad(path, e.message()))?;
+        let file: JobsFile = serde_path_to_error::deserialize(de).map_err(|e| {
+            let key = e.path().to_string();
+            let message = e.into_inner().message().replace('\n', " ");
+            if key.is_empty() || key == "." || message.contains(&key) {
+                bad(path, message)
+            } else {
+                bad(path, format!("{key}: {message}"))
+            }
+        })?;
+        let random = match file.random {
+            Some(r) if r.count > MAX_RANDOM as u64 => {
+                return Err(bad(
+                    path,
+                    format!("random.count = {}: at most {MAX_RANDOM}", r.count),
+                ));
+            }
+            Some(r) => Some(Random {
+                count: r.count as usize,
+                seed: r.seed,
+            }),
+            None => None,
+        };
+        let base_dir = path.parent().unwrap_or(Path::new(""));
+        let scene_path = base_dir.join(&file.scene);
+        let base_text = std::fs::read_to_string(&scene_path)
+            .map_err(|e| Error::io(Role::Scene, &scene_path, e))?;
+        let base: toml::Table = base_text
+            .parse()
+            .map_err(|e: toml::de::Error| Error::scene(&scene_path, e.message()))?;
+        Ok(Jobs {
+            scene_path,
+            base,
+            explicit: file.job.into_iter().map(toml::Value::Table).collect(),
+            random,
+        })
+    }
+
+    /// Every item of the batch, in order.
+    pub fn items(&self) -> Vec<Item> {
+        let mut out: Vec<Item> = self
+            .explicit
+            .iter()
+            .enumerate()
+            .map(|(k, job)| Item {
+                index: k,
+                name: job
+                    .get("name")
+                    .and_then(|n| n.as_str())
+                    .map(str::to_string)
+                    .unwrap_or_else(|| format!("job-{k}")),
+                kind: ItemKind::Explicit(k),
+            })
+            .collect();
+        let n = out.len();
+        if let Some(r) = &self.random {
+            out.extend((0..r.count).map(|i| Item {
+                index: n + i,
+                name: format!("random-{i}"),
+                kind: ItemKind::Random(i),
+            }));
+        }
+        out
+    }
+
+    /// The scene of item `k` of the explicit jobs: the base with the job's keys merged in.
+    pub(super) fn job_scene(&self, k: usize) -> std::result::Result<Scene, String> {
+        let job = self.explicit[k]
+            .as_table()
+            .ok_or_else(|| format!("job {k}: expected a table"))?;
+        let mut merged = self.base.clone();
+        for (key, value) in job {
+            if key == "name" {
+                if !value.is_str() {
+                    return Err("name: expected a string".into());
+                }
+                continue;
+            }
+            merge(&mut merged, key, value.clone());
+        }
+        let text = toml::to_string(&merged).map_err(|e| e.to_string())?;
+        let dir = self
+            .scene_path
+            .parent()
+            .unwrap_or(Path::new(""))
+            .to_path_buf();
+        Scene::parse(&text, dir).map_err(|fault| name_the_key(&text, &fault.to_string()))
+    }
+
+    pub fn base_scene(&self) -> Result<Scene> {
+        let text = toml::to_string(&self.base).map_err(|e| Error::encode("base scene", e))?;
+        let dir = self
+            .scene_path
+            .parent()
+            .unwrap_or(Path::new(""))
+            .to_path_buf();
+        Scene::parse(&text, dir).map_err(|fault| fault.into_error(&self.scene_path))
+    }
+}
+
+/// Merges `value` into `table[key]`, tables key by key, anything else replaced.
+fn merge(table: &mut toml::Table, key: &str, value: toml::Value) {
+    match (table.get_mut(key), value) {
+        (Some(toml::Value::Table(old)), toml::Value::Table(new)) => {
+            for (k, v) in new {
+                merge(old, &k, v);
+            }
+        }
+        (_, v) => {
+            table.insert(key.to_string(), v);
+        }
+    }
+}
+
+/// A scene error about `line N` of the merged TOML (which the user never sees) restated with the
+/// key on that line, `section.key: …`.
+fn name_the_key(text: &str, reason: &str) -> String {
+    let Some((n, rest)) = reason
+        .strip_prefix("line ")
+        .and_then(|r| r.split_once(": "))
+        .and_then(|(n, rest)| Some((n.parse::<usize>().ok()?, rest)))
+    else {
+        return reason.to_string();
+    };
+    let mut section = String::new();
+    for (k, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if let Some(h) = line.strip_prefix('[').and_then(|h| h.strip_suffix(']')) {
+            section = h.trim_matches(['[', ']']).to_string();
+        }
+        if k + 1 == n {
+            let key = line
+                .split_once('=')
+                .map(|(key, _)| key.trim())
+                .unwrap_or(line);
+            let path = if section.is_empty() {
+                key.to_string()
+            } else {
+                format!("{section}.{key}")
+            };
+            // The scene reader names the key itself where serde knows it.
+            if rest.starts_with(&path) {
+                return rest.to_string();
+            }
+            return format!("{path}: {rest}");
+        }
+    }
+    rest.to_string()
+}
+
+/// SplitMix64: a tiny, well-mixed generator, so a random camera is a pure function of
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn merge_replaces_leaves_and_merges_tables() {
+        let mut base: toml::Table = "[camera]\nwidth = 5\nheight = 6\n[detail]\noctaves = 3\n"
+            .parse()
+            .unwrap();
+        let job: toml::Table = "camera = { width = 7 }\nrender = { mode = \"geomipmap\" }\n"
+            .parse()
+            .unwrap();
+        for (k, v) in job {
+            merge(&mut base, &k, v);
+        }
+        assert_eq!(base["camera"]["width"].as_integer(), Some(7));
+        assert_eq!(base["camera"]["height"].as_integer(), Some(6));
+        assert_eq!(base["render"]["mode"].as_str(), Some("geomipmap"));
+    }
+
+    #[test]
+    fn errors_name_the_key_not_a_line_of_the_merged_text() {
+        let text = "[camera]\nwidth = 5\nposition = \"x\"\n";
+        assert_eq!(
+            name_the_key(text, "line 3: invalid type"),
+            "camera.position: invalid type"
+        );
+        assert_eq!(
+            name_the_key(text, "camera.fov_y_deg: out of range"),
+            "camera.fov_y_deg: out of range"
+        );
+    }
+}

@@ -1,0 +1,132 @@
+//! The ranges a parsed scene must keep, each fault naming its dotted key.
+
+use super::{MAX_OCTAVES, Scene};
+
+impl Scene {
+    pub(super) fn check(&self) -> std::result::Result<(), String> {
+        let s = &self.sketch;
+        match (&s.path, &s.synthetic) {
+            (Some(_), Some(_)) => return Err("sketch: give `path` or `synthetic`, not both".into()),
+            (None, None) => return Err("sketch: give `path` or `synthetic`".into()),
+            (None, Some(name)) if !crate::sketch::synthetic::NAMES.contains(&name.as_str()) => {
+                return Err(format!(
+                    "sketch.synthetic = \"{name}\": one of {}",
+                    crate::sketch::synthetic::NAMES.join(", ")
+                ));
+            }
+            (Some(_), None) if s.size.is_some() => {
+                return Err("sketch.size applies to synthetic sketches only".into());
+            }
+            _ => {}
+        }
+        positive("sketch.spacing_m", s.spacing_m)?;
+        positive("sketch.height_scale", s.height_scale)?;
+        if let Some(size) = s.size {
+            within("sketch.size", size as f64, 2.0, 4097.0)?;
+        }
+        if let Some(o) = s.origin_m {
+            finite_all("sketch.origin_m", &o)?;
+        }
+        if let Some(r) = s.height_range_m {
+            finite_all("sketch.height_range_m", &r)?;
+        }
+        let c = &self.camera;
+        finite_all("camera.position", &c.position)?;
+        finite_all("camera.look_at", &c.look_at)?;
+        if c.position == c.look_at {
+            return Err("camera.look_at equals camera.position: no view direction".into());
+        }
+        open_range("camera.fov_y_deg", c.fov_y_deg, 0.0, 180.0)?;
+        within("camera.width", c.width as f64, 1.0, 16384.0)?;
+        within("camera.height", c.height as f64, 1.0, 16384.0)?;
+        positive("camera.far_m", c.far_m)?;
+        let d = &self.detail;
+        if let Some(o) = d.octaves {
+            within("detail.octaves", o as f64, 0.0, MAX_OCTAVES as f64)?;
+        }
+        if let Some(a) = d.amplitude_m {
+            within("detail.amplitude_m", a, 0.0, 1e5)?;
+        }
+        within("detail.gain", d.gain, 0.0, 1.0)?;
+        within("detail.bias", d.bias, -4.0, 8.0)?;
+        let w = &self.warp;
+        open_range("warp.quad_px", w.quad_px, 0.0, 1e4)?;
+        within("warp.mesh", w.mesh as f64, 2.0, 4096.0)?;
+        within("warp.size", w.size as f64, 2.0, 4096.0)?;
+        within("warp.max_log2_step", w.max_log2_step, 0.0, 64.0)?;
+        let g = &self.geomipmap;
+        open_range("geomipmap.tau", g.tau, 0.0, 1e6)?;
+        if ![17, 33, 65, 129].contains(&g.block) {
+            return Err(format!(
+                "geomipmap.block = {}: one of 17, 33, 65, 129",
+                g.block
+            ));
+        }
+        if let Some(k) = g.k {
+            within("geomipmap.k", k as f64, 0.0, 6.0)?;
+        }
+        open_range(
+            "reference.step",
+            self.reference.step,
+            0.0,
+            1.0 + f64::EPSILON,
+        )?;
+        let i = &self.importance;
+        positive("importance.max_per_m", i.max_per_m)?;
+        open_range("importance.floor", i.floor, 0.0, 1.0 + f64::EPSILON)?;
+        open_range(
+            "importance.backface_floor",
+            i.backface_floor,
+            0.0,
+            1.0 + f64::EPSILON,
+        )?;
+        if let Some(p) = &self.path {
+            positive("path.speed_mps", Some(p.speed_mps))?;
+            if p.keys.len() < 2 {
+                return Err(format!(
+                    "path.keys: {} given, a path needs at least 2",
+                    p.keys.len()
+                ));
+            }
+            for (k, key) in p.keys.iter().enumerate() {
+                finite_all(&format!("path.keys[{k}].position"), &key.position)?;
+                if let Some(l) = key.look_at {
+                    finite_all(&format!("path.keys[{k}].look_at"), &l)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn finite_all(key: &str, v: &[f64]) -> std::result::Result<(), String> {
+    match v.iter().find(|x| !x.is_finite()) {
+        Some(x) => Err(format!("{key}: {x} is not a finite number")),
+        None => Ok(()),
+    }
+}
+
+fn within(key: &str, v: f64, lo: f64, hi: f64) -> std::result::Result<(), String> {
+    if v.is_finite() && (lo..=hi).contains(&v) {
+        Ok(())
+    } else {
+        Err(format!("{key} = {v}: must be in [{lo}, {hi}]"))
+    }
+}
+
+fn open_range(key: &str, v: f64, lo: f64, hi: f64) -> std::result::Result<(), String> {
+    if v.is_finite() && v > lo && v < hi {
+        Ok(())
+    } else {
+        Err(format!("{key} = {v}: must be in ({lo}, {hi})"))
+    }
+}
+
+fn positive(key: &str, v: Option<f64>) -> std::result::Result<(), String> {
+    match v {
+        Some(x) if !(x.is_finite() && x > 0.0) => {
+            Err(format!("{key} = {x}: must be a positive number"))
+        }
+        _ => Ok(()),
+    }
+}

@@ -1,0 +1,180 @@
+//! Reading a scene: TOML to [`Scene`] with every fault named by its dotted key (and line, where
+//! the parser knows it), `--set` overrides applied to the table first and blamed for their own
+//! faults, then [`Scene::check`]'s ranges.
+
+use super::Scene;
+use crate::error::{Error, Result, Role};
+use std::path::{Path, PathBuf};
+
+/// Where a scene's fault lies: in its text, or in a `--set` override given with it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Fault {
+    /// In the scene's text; the reason names the key (and the line, where the parser knows it).
+    Text(String),
+    /// In the override `arg` (`key.path=value`).
+    Override { arg: String, reason: String },
+}
+
+impl std::fmt::Display for Fault {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Fault::Text(reason) => f.write_str(reason),
+            Fault::Override { arg, reason } => write!(f, "--set {arg}: {reason}"),
+        }
+    }
+}
+
+impl Fault {
+    /// The error of a scene read from `path`.
+    pub fn into_error(self, path: &Path) -> Error {
+        match self {
+            Fault::Text(reason) => Error::scene(path, reason),
+            Fault::Override { arg, reason } => Error::Override { arg, reason },
+        }
+    }
+}
+
+impl Scene {
+    pub fn load(path: &Path) -> Result<Scene> {
+        Scene::load_with(path, &[])
+    }
+
+    /// Parses and checks a scene; the error is one line naming the key.
+    pub fn parse(text: &str, base_dir: PathBuf) -> std::result::Result<Scene, Fault> {
+        Scene::parse_with(text, base_dir, &[])
+    }
+
+    /// Like [`Scene::load`], with `key.path=value` overrides (TOML values; bare words are strings)
+    /// applied before the scene is checked, as `--set` gives them.
+    pub fn load_with(path: &Path, overrides: &[String]) -> Result<Scene> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(Role::Scene, path, e))?;
+        let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
+        Scene::parse_with(&text, base, overrides).map_err(|f| f.into_error(path))
+    }
+
+    pub fn parse_with(
+        text: &str,
+        base_dir: PathBuf,
+        overrides: &[String],
+    ) -> std::result::Result<Scene, Fault> {
+        let mut scene = if overrides.is_empty() {
+            deserialize_text(text).map_err(Fault::Text)?
+        } else {
+            let mut table: toml::Table = toml::from_str(text)
+                .map_err(|e| Fault::Text(one_line(e.message(), e.span(), text)))?;
+            for o in overrides {
+                apply_override(&mut table, o).map_err(|reason| Fault::Override {
+                    arg: o.clone(),
+                    reason,
+                })?;
+            }
+            match serde_path_to_error::deserialize::<_, Scene>(toml::Value::Table(table)) {
+                Ok(scene) => scene,
+                Err(e) => {
+                    let key = e.path().to_string();
+                    let message = e.inner().message().replace('\n', " ");
+                    return Err(match overrides.iter().find(|o| blames(o, &key, &message)) {
+                        Some(o) => Fault::Override {
+                            arg: o.clone(),
+                            reason: message,
+                        },
+                        // The file's own fault, with its line where the file alone shows it.
+                        None => Fault::Text(
+                            deserialize_text(text)
+                                .err()
+                                .unwrap_or_else(|| keyed(&key, &message)),
+                        ),
+                    });
+                }
+            }
+        };
+        scene.base_dir = base_dir;
+        scene.check().map_err(|reason| {
+            match overrides
+                .iter()
+                .find(|o| reason.starts_with(override_key(o)))
+            {
+                Some(o) => Fault::Override {
+                    arg: o.clone(),
+                    // The argument names the key and value already.
+                    reason: reason
+                        .split_once(": ")
+                        .map_or(reason.clone(), |(_, r)| r.to_string()),
+                },
+                None => Fault::Text(reason),
+            }
+        })?;
+        Ok(scene)
+    }
+}
+
+/// Deserialises a scene's text; the error names the line and the key's full dotted path.
+fn deserialize_text(text: &str) -> std::result::Result<Scene, String> {
+    let de = toml::Deserializer::parse(text).map_err(|e| one_line(e.message(), e.span(), text))?;
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let key = e.path().to_string();
+        let inner = e.into_inner();
+        one_line(&keyed(&key, inner.message()), inner.span(), text)
+    })
+}
+
+/// `key: message`, unless the key is the root or the message names it already.
+fn keyed(key: &str, message: &str) -> String {
+    if key.is_empty() || key == "." || message.contains(key) {
+        message.to_string()
+    } else {
+        format!("{key}: {message}")
+    }
+}
+
+/// The message on one line, after `line N: ` where the span says.
+fn one_line(message: &str, span: Option<std::ops::Range<usize>>, text: &str) -> String {
+    let line = span
+        .map(|s| {
+            format!(
+                "line {}: ",
+                text[..s.start.min(text.len())].matches('\n').count() + 1
+            )
+        })
+        .unwrap_or_default();
+    format!("{line}{}", message.replace('\n', " "))
+}
+
+fn override_key(o: &str) -> &str {
+    o.split_once('=').map_or(o, |(k, _)| k).trim()
+}
+
+/// Whether the override `o` caused serde's error at `path`: the path is its key, or the error is
+/// an unknown field of the table the override's key names.
+fn blames(o: &str, path: &str, message: &str) -> bool {
+    let key = override_key(o);
+    if key == path {
+        return true;
+    }
+    let (table, last) = key.rsplit_once('.').unwrap_or(("", key));
+    let path = if path == "." { "" } else { path };
+    table == path && message.contains(&format!("`{last}`"))
+}
+
+/// Sets `a.b.c=value` in a TOML table, creating the tables on the way.
+fn apply_override(table: &mut toml::Table, o: &str) -> std::result::Result<(), String> {
+    let (key, value) = o
+        .split_once('=')
+        .ok_or_else(|| "expected key.path=value".to_string())?;
+    let value = toml::from_str::<toml::Table>(&format!("v = {value}"))
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(value.trim().to_string()));
+    let parts: Vec<&str> = key.trim().split('.').collect();
+    let (last, path) = parts.split_last().ok_or_else(|| "empty key".to_string())?;
+    let mut here = table;
+    for p in path {
+        here = here
+            .entry(p.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            .as_table_mut()
+            .ok_or_else(|| format!("`{p}` is not a table"))?;
+    }
+    here.insert(last.to_string(), value);
+    Ok(())
+}
