@@ -218,7 +218,6 @@ fn name_the_key(text: &str, reason: &str) -> String {
     rest.to_string()
 }
 
-/// SplitMix64: a tiny, well-mixed generator, so a random camera is a pure function of
 
 #[cfg(test)]
 mod tests {
