@@ -218,7 +218,6 @@ fn name_the_key(text: &str, reason: &str) -> String {
     rest.to_string()
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

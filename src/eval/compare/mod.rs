@@ -20,34 +20,29 @@
 //! llvmpipe) to remove a cost all modes share alike.
 
 pub mod figures;
+mod measure;
+mod path;
 pub mod report;
+pub mod summary;
 pub mod sweep;
 pub mod temporal;
 
-use crate::app::output::Fixed;
 use crate::app::output::{write_atomic, write_image};
-use crate::app::path::CameraPath;
 use crate::app::progress::Progress;
 use crate::camera::Camera;
 use crate::error::{Error, Result, Role};
-use crate::eval::metrics::{self, ScreenError};
 use crate::gpu::context::{GpuContext, Needs};
-use crate::gpu::frame_io::PassTimes;
-use crate::gpu::uniforms::View;
 use crate::lod::baseline::Baselines;
-use crate::lod::reference::Reference;
-use crate::render::{Frame, Renderer};
+use crate::render::Renderer;
 use crate::scene;
 use crate::scene::{Mode, Scene};
 use crate::sketch::Atlas;
 use crate::stage::CpuStage;
-use report::{
-    DetailUsed, PathMode, PathReport, RatioReport, ReferenceFigures, Replot, Report, Row, Skipped,
-    Stats,
-};
+use measure::{measure, renderer};
+use path::{Out, path_series};
+use report::{DetailUsed, RatioReport, ReferenceFigures, Replot, Report, Row, Skipped};
 use std::path::Path;
 use sweep::Setting;
-use temporal::LodChange;
 
 /// PSNR between the reference at its step and at half of it that counts as converged: finer
 /// than any difference between modes worth reporting (mode images differ from it by 20–45 dB).
@@ -91,110 +86,6 @@ pub struct Outcome {
     pub report: Report,
 }
 
-/// The reference renderer's march step (a fraction of the height above the ground).
-fn march_step(reference: &mut Renderer) -> &mut f32 {
-    &mut reference
-        .lod_mut::<Reference>()
-        .expect("built in reference mode")
-        .step
-}
-
-/// The reference for one camera: its image and positions.
-struct Truth {
-    rgba: Vec<u8>,
-    positions: Vec<[f32; 4]>,
-}
-
-fn truth(r: &mut Renderer, camera: &Camera) -> Result<(Truth, Frame)> {
-    let frame = r.render(camera)?;
-    let positions = r.read_positions(camera)?;
-    Ok((
-        Truth {
-            rgba: frame.rgba.clone(),
-            positions,
-        },
-        frame,
-    ))
-}
-
-fn renderer(ctx: &GpuContext, scene: &Scene, atlas: &Atlas, s: &Setting) -> Result<Renderer> {
-    let scene = s.apply(scene);
-    Renderer::with_context(
-        ctx.clone(),
-        &scene,
-        atlas.clone(),
-        s.mode(),
-        View::Shaded,
-        true,
-    )
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
-/// Times `repeat` frames after a warm-up and measures the last against `truth`.
-fn measure(
-    r: &mut Renderer,
-    s: &Setting,
-    camera: &Camera,
-    truth: &Truth,
-    o: &Options,
-) -> Result<(Row, Vec<u8>)> {
-    r.render(camera)?;
-    // At least one timed frame: `last` below is the one whose image is kept.
-    let mut frames = vec![r.render(camera)?];
-    for _ in 1..o.repeat {
-        frames.push(r.render(camera)?);
-    }
-    let last = &frames[frames.len() - 1];
-    let positions = r.read_positions(camera)?;
-    let width = camera.width;
-    let sse = metrics::screen_space_error(&positions, &truth.positions, width as usize, o.window);
-    let cpu_us = median(frames.iter().map(|f| f.cpu_us).collect());
-    let gpu_ms = median(frames.iter().map(|f| f.gpu.gpu_ms).collect());
-    let passes: Vec<&PassTimes> = frames.iter().map(|f| &f.gpu.passes).collect();
-    let (pre_ms, pre_bytes) = r.precompute().unwrap_or((0.0, 0));
-    let row = Row {
-        mode: s.mode_name().to_string(),
-        setting: s.label(),
-        triangles: last.gpu.triangles,
-        cpu_stage_us: cpu_us,
-        gpu_ms,
-        frame_ms: gpu_ms + cpu_us * 1e-3,
-        psnr_db: metrics::psnr(&last.rgba, &truth.rgba),
-        ssim: metrics::ssim(&truth.rgba, &last.rgba, width).unwrap_or(0.0),
-        flip_mean: metrics::flip_mean(&truth.rgba, &last.rgba, width).unwrap_or(1.0),
-        sse_mean_px: sse.mean_px,
-        sse_p95_px: sse.p95_px,
-        sse_max_px: sse.max_px,
-        precompute_ms: pre_ms,
-        precompute_bytes: pre_bytes,
-        gpu_memory_bytes: r.gpu_bytes(),
-        frames: o.repeat.max(1),
-        pareto_psnr: false,
-        pareto_sse: false,
-        passes_ms: PassTimes::median(&passes),
-    };
-    Ok((row, last.rgba.clone()))
-}
-
-/// A line of `path.csv`: one mode at one frame of the camera path.
-#[derive(serde::Serialize)]
-struct PathRow {
-    frame: usize,
-    time_s: Fixed<4>,
-    mode: &'static str,
-    setting: String,
-    psnr_db: Fixed<3>,
-    sse_mean_px: Fixed<3>,
-    sse_p95_px: Fixed<3>,
-    /// Empty on the first frame, which has no previous level of detail.
-    lod_change_levels: Option<Fixed<4>>,
-    lod_changed_share: Option<Fixed<5>>,
-}
-
 /// Runs the comparison of `scene` (named `name` in titles) and writes its outputs to `out_dir`.
 pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Outcome> {
     let mut scene = scene.clone();
@@ -223,31 +114,15 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
         (2 + settings.len() + path_frames + 1) as f64,
     );
 
-    let mut reference = Renderer::with_context(
-        ctx.clone(),
-        &scene,
-        atlas.clone(),
-        Mode::Reference,
-        View::Shaded,
-        true,
-    )?;
-    let (mut truth0, mut ref_frame) = truth(&mut reference, &camera)?;
-    progress.advance(1.0, "reference");
-    // Converged: halving the step moves the image less than REFERENCE_CONVERGED_DB; else the
-    // finer image becomes the reference and is tested in turn.
-    let mut step = *march_step(&mut reference);
-    let mut halving_db = 0.0;
-    for _ in 0..=MAX_REFERENCE_HALVINGS {
-        *march_step(&mut reference) = 0.5 * step;
-        let (finer, finer_frame) = truth(&mut reference, &camera)?;
-        halving_db = metrics::psnr(&truth0.rgba, &finer.rgba);
-        if halving_db >= REFERENCE_CONVERGED_DB {
-            break;
-        }
-        (step, truth0, ref_frame) = (0.5 * step, finer, finer_frame);
-    }
-    *march_step(&mut reference) = step;
-    progress.advance(1.0, "reference at half the step");
+    let converged = measure::converged_reference(&ctx, &scene, &atlas, &camera)?;
+    progress.advance(2.0, "reference, and at half its step");
+    let measure::Converged {
+        mut reference,
+        truth: truth0,
+        frame: ref_frame,
+        step,
+        halving_db,
+    } = converged;
 
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
@@ -444,115 +319,5 @@ fn ratio_histogram(
         ratio_within_0_5_2: q.ratio_within_0_5_2,
         ratio_within_0_5_1: q.ratio_within_0_5_1,
         histogram: q.histogram,
-    })
-}
-
-/// Per frame along the path: each mode (at the scene's setting) against the reference, and the
-/// error change the motion does not explain. Writes `path.csv` and `path_error.svg`/`.png`.
-/// Where a stage's outputs go, and the title of its figures.
-struct Out<'a> {
-    dir: &'a Path,
-    title: &'a str,
-}
-
-fn path_series(
-    ctx: &GpuContext,
-    scene: &Scene,
-    atlas: &Atlas,
-    reference: &mut Renderer,
-    o: &Options,
-    progress: &mut Progress,
-    out: &Out,
-) -> Result<PathReport> {
-    let (out_dir, title) = (out.dir, out.title);
-    let path = CameraPath::of_scene(scene)?;
-    let cameras = path.cameras(o.path_frames, o.path_fps, scene, atlas)?;
-    let mut modes: Vec<(Setting, Renderer)> = Vec::new();
-    for &m in &o.modes {
-        if let Some(s) = Setting::of_scene(m, scene, atlas) {
-            modes.push((s, renderer(ctx, scene, atlas, &s)?));
-        }
-    }
-    // Per mode: (time, PSNR, LOD change at this frame), and the screen-space errors.
-    let mut series: Vec<figures::ModeSeries> = modes
-        .iter()
-        .map(|(s, _)| (s.mode_name().to_string(), Vec::new()))
-        .collect();
-    let mut sse: Vec<Vec<ScreenError>> = vec![Vec::new(); modes.len()];
-    let mut changes: Vec<Vec<LodChange>> = vec![Vec::new(); modes.len()];
-    let mut csv: Vec<PathRow> = Vec::new();
-    for (f, camera) in cameras.iter().enumerate() {
-        let t = f as f64 / o.path_fps;
-        let (truth, _) = truth(reference, camera)?;
-        for (k, (s, r)) in modes.iter_mut().enumerate() {
-            let held = if f > 0 {
-                Some(r.render_held(camera)?)
-            } else {
-                None
-            };
-            let frame = r.render(camera)?;
-            let change = held.map(|h| temporal::lod_change(&h.rgba, &frame.rgba));
-            let positions = r.read_positions(camera)?;
-            let e = metrics::screen_space_error(
-                &positions,
-                &truth.positions,
-                camera.width as usize,
-                o.window,
-            );
-            let db = metrics::psnr(&frame.rgba, &truth.rgba).min(report::PSNR_CAP_DB);
-            // The first frame has no previous level of detail: its change cells stay empty.
-            csv.push(PathRow {
-                frame: f,
-                time_s: Fixed(t),
-                mode: s.mode_name(),
-                setting: s.label(),
-                psnr_db: Fixed(db),
-                sse_mean_px: Fixed(e.mean_px),
-                sse_p95_px: Fixed(e.p95_px),
-                lod_change_levels: change.map(|c| Fixed(c.mean_levels)),
-                lod_changed_share: change.map(|c| Fixed(c.changed_share)),
-            });
-            series[k].1.push(figures::PathPoint {
-                t_s: t,
-                psnr_db: db,
-                change: change.map(|c| c.mean_levels),
-            });
-            sse[k].push(e);
-            changes[k].extend(change);
-        }
-        progress.advance(1.0, &format!("path frame {}/{}", f + 1, cameras.len()));
-    }
-    write_atomic(
-        &out_dir.join("path.csv"),
-        &crate::app::output::csv_bytes(&csv),
-    )?;
-    figures::path_error(&series, &format!("Along the camera path: {title}"))
-        .write(&out_dir.join("path_error"))?;
-    let per_mode = modes
-        .iter()
-        .enumerate()
-        .map(|(k, (s, _))| {
-            let pts = &series[k].1;
-            PathMode {
-                mode: s.mode_name(),
-                setting: s.label(),
-                psnr_db: Stats::of(pts.iter().map(|p| p.psnr_db).collect()),
-                sse_mean_px: Stats::of(sse[k].iter().map(|e| e.mean_px).collect()),
-                lod_change_levels: Stats::of(changes[k].iter().map(|c| c.mean_levels).collect()),
-                lod_changed_share: Stats::of(changes[k].iter().map(|c| c.changed_share).collect()),
-            }
-        })
-        .collect();
-    let travelled = path.speed_mps * (cameras.len().saturating_sub(1)) as f64 / o.path_fps;
-    Ok(PathReport {
-        frames: cameras.len(),
-        fps: o.path_fps,
-        length_m: path.length_m().min(travelled),
-        source: if scene.path.is_some() {
-            "scene [path]"
-        } else {
-            "default: straight ahead at 150 m/s"
-        },
-        modes: per_mode,
     })
 }
