@@ -1,5 +1,5 @@
 //! The baselines: the terrain function baked once per scene on a regular grid, drawn by
-//! GeoMipMapping (blocks, levels, stitching, geomorphing; `geomipmap.rs`) or whole (brute force).
+//! GeoMipMapping (blocks, levels, stitching, geomorphing; `crate::geomipmap`) or whole (brute force).
 //! A frame is one named pass, the terrain draw.
 //!
 //! The bake is the warp & zoom pass run with Φ the identity grid: the same code, hence the same
