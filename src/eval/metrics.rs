@@ -1,8 +1,18 @@
-//! Image error of a mode against the reference: PSNR over RGB, SSIM (image-compare's mean SSIM
-//! over 8×8 windows per channel), FLIP mean (flip-rs, NVIDIA's LDR-FLIP at 67 pixels per degree:
-//! a 0.7 m wide 4K display seen from 0.7 m), and the screen-space geometric error from position
-//! buffers (DESIGN.md: the distance in pixels between where the mode's surface
-//! and the reference's surface appear).
+//! Image error of a mode against the reference, each metric as its reference implementation
+//! computes it (`tests/metrics.rs` holds them together on committed image pairs; docs/metrics.md
+//! says what each is):
+//! - PSNR over the RGB values of 8-bit sRGB images, peak 255: scikit-image's
+//!   `peak_signal_noise_ratio(data_range=255)`.
+//! - SSIM as Wang, Bovik, Sheikh and Simoncelli (2004) define it, on Rec. 709 luma
+//!   (0.2126 R' + 0.7152 G' + 0.0722 B' of the sRGB values): an 11×11 Gaussian window of σ = 1.5
+//!   px, K1 = 0.01, K2 = 0.03, L = 255, population (co)variances, the mean over the positions
+//!   where the window fits — scikit-image's `structural_similarity(gaussian_weights=True,
+//!   sigma=1.5, use_sample_covariance=False, data_range=255)` on that luma. Computed by the iqa
+//!   crate (`SsimMode::Luma709`).
+//! - FLIP mean (flip-rs, NVIDIA's LDR-FLIP at 67.02 pixels per degree: a 0.7 m wide 4K display
+//!   seen from 0.7 m, FLIP's default).
+//! - The screen-space geometric error from position buffers (DESIGN.md: the distance in pixels
+//!   between where the mode's surface and the reference's surface appear).
 //!
 //! Screen-space error, per pixel x where either image shows ground: if both do, the distance from
 //! x to the reference pixel whose ground position is nearest (horizontally) to the mode's at x,
@@ -38,14 +48,16 @@ fn rgb(rgba: &[u8]) -> Vec<u8> {
         .collect()
 }
 
-/// SSIM of `test` against `reference` (RGBA8, `width` columns): 1 for identical images.
+/// SSIM of `test` against `reference` (RGBA8 sRGB, `width` columns) on luma, as the module doc
+/// defines it: 1 for identical images; `None` for images under 11×11 pixels or of other sizes.
 pub fn ssim(reference: &[u8], test: &[u8], width: u32) -> Option<f64> {
     let height = (reference.len() / 4) as u32 / width.max(1);
-    let a = image::RgbImage::from_raw(width, height, rgb(reference))?;
-    let b = image::RgbImage::from_raw(width, height, rgb(test))?;
-    image_compare::rgb_similarity_structure(&image_compare::Algorithm::MSSIMSimple, &a, &b)
-        .ok()
-        .map(|s| s.score)
+    let a = iqa::Image::rgba8(width, height, reference.to_vec()).ok()?;
+    let b = iqa::Image::rgba8(width, height, test.to_vec()).ok()?;
+    let options = iqa::SsimOptions {
+        mode: iqa::SsimMode::Luma709,
+    };
+    iqa::ssim(&a, &b, options).ok()
 }
 
 /// Mean LDR-FLIP error of `test` against `reference` (RGBA8 sRGB): 0 for identical images.
