@@ -24,8 +24,7 @@
 use crate::app::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder, scene_with_path};
 use crate::app::output::{write_atomic, write_image};
 use crate::error::{Error, Result, Role};
-use crate::eval::plot::raster::RasterCanvas;
-use crate::eval::plot::{Anchor, Canvas, Rgb};
+use crate::eval::plot::{Rgb, draw_on_rgba, font};
 use crate::gpu::context::GpuContext;
 use crate::gpu::uniforms::View;
 use crate::render::{Frame, Renderer};
@@ -165,9 +164,6 @@ impl App {
     /// The frame with the figures written on it.
     fn hud(&self, frame: &Frame, dt: f64) -> Vec<u8> {
         let (w, h) = (frame.width, frame.height);
-        let Some(mut c) = RasterCanvas::from_rgba(w, h, frame.rgba.clone()) else {
-            return frame.rgba.clone();
-        };
         let g = &frame.gpu;
         let passes = if g.passes.0.is_empty() {
             "passes not timed".to_string()
@@ -218,32 +214,28 @@ impl App {
                 FlyCamera::speed(above, false)
             ),
         ];
-        let size = 12.0;
-        for (k, line) in lines.iter().enumerate() {
-            let y = 16.0 + k as f32 * 16.0;
-            c.text(7.0, y + 1.0, line, size, Anchor::Start, false, Rgb::BLACK);
-            c.text(6.0, y, line, size, Anchor::Start, false, Rgb::WHITE);
-        }
         let help = "drag: look · WASD QE: move (Shift ×4) · 1 2 3: mode · V: view · F: freeze · R: record · P: screenshot · Esc";
-        c.text(
-            7.0,
-            h as f32 - 7.0,
-            help,
-            11.0,
-            Anchor::Start,
-            false,
-            Rgb::BLACK,
-        );
-        c.text(
-            6.0,
-            h as f32 - 8.0,
-            help,
-            11.0,
-            Anchor::Start,
-            false,
-            Rgb::WHITE,
-        );
-        c.pixmap.data().to_vec()
+        // Each line white over its black shadow, one pixel down and right.
+        let mut texts: Vec<(&str, f64, i32)> = lines
+            .iter()
+            .enumerate()
+            .map(|(k, line)| (line.as_str(), 12.0, 8 + 16 * k as i32))
+            .collect();
+        texts.push((help, 11.0, h as i32 - 15));
+        let mut rgba = frame.rgba.clone();
+        let drawn = draw_on_rgba(&mut rgba, w, h, |area| {
+            for &(text, size, y) in &texts {
+                area.draw_text(text, &font(size, Rgb::BLACK), (7, y + 1))?;
+                area.draw_text(text, &font(size, Rgb::WHITE), (6, y))?;
+            }
+            Ok(())
+        });
+        // A frame without its figures rather than none (the font is bundled: this does not fail).
+        if drawn.is_ok() {
+            rgba
+        } else {
+            frame.rgba.clone()
+        }
     }
 
     fn present(&mut self, rgba: &[u8]) -> Result<()> {

@@ -3,12 +3,12 @@
 
 use super::report::{PSNR_CAP_DB, Row, TARGET_PSNR_DB, TARGET_SSE_PX};
 use crate::app::output::write_image;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::eval::plot::chart::{Axis, Figure, Panel, Scale, Series, Style};
-use crate::eval::plot::raster::RasterCanvas;
-use crate::eval::plot::{Anchor, Canvas, Rgb};
+use crate::eval::plot::{Rgb, draw_on_rgba, font};
 use crate::scene::Mode;
 use crate::stage::quality::Bin;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::Path;
 
 /// A mode's colour in every figure (rows name their mode as `Mode::name` writes it).
@@ -205,48 +205,28 @@ pub fn strip(
     let label_h = 36;
     let columns = 1 + modes.len() as u32;
     let (w, h) = (columns * width, 2 * (height + label_h));
-    let mut c = RasterCanvas::new(w, h).ok_or(Error::Internal("an image strip of zero size"))?;
-    let blit = |c: &mut RasterCanvas, x0: u32, y0: u32, rgba: &[u8]| {
-        let data = c.pixmap.data_mut();
+    let mut px = vec![255u8; 4 * w as usize * h as usize];
+    let mut blit = |x0: u32, y0: u32, rgba: &[u8]| {
         let row = (width * 4) as usize;
         for y in 0..height {
             let src = (y * width * 4) as usize;
             let dst = (((y0 + y) * w + x0) * 4) as usize;
-            data[dst..dst + row].copy_from_slice(&rgba[src..src + row]);
+            px[dst..dst + row].copy_from_slice(&rgba[src..src + row]);
         }
     };
-    let label = |c: &mut RasterCanvas, column: u32, y: u32, lines: [&str; 2]| {
-        let x = (column * width) as f32 + width as f32 / 2.0;
-        c.text(
-            x,
-            y as f32 + 15.0,
-            lines[0],
-            13.0,
-            Anchor::Middle,
-            false,
-            Rgb::BLACK,
-        );
-        c.text(
-            x,
-            y as f32 + 30.0,
-            lines[1],
-            11.0,
-            Anchor::Middle,
-            false,
-            Rgb::GREY,
-        );
-    };
-    blit(&mut c, 0, label_h, reference);
-    label(&mut c, 0, 0, ["reference", "ray march"]);
-    label(
-        &mut c,
-        0,
-        height + label_h,
-        ["below: difference", "|mode − ref| × 4"],
-    );
+    // Each label: its column, its top, its two lines (name, then setting).
+    let mut labels: Vec<(u32, u32, [&str; 2])> = vec![
+        (0, 0, ["reference", "ray march"]),
+        (
+            0,
+            height + label_h,
+            ["below: difference", "|mode − ref| × 4"],
+        ),
+    ];
+    blit(0, label_h, reference);
     for (k, (name, setting, rgba)) in modes.iter().enumerate() {
         let column = k as u32 + 1;
-        blit(&mut c, column * width, label_h, rgba);
+        blit(column * width, label_h, rgba);
         let diff: Vec<u8> = rgba
             .chunks_exact(4)
             .zip(reference.chunks_exact(4))
@@ -255,8 +235,18 @@ pub fn strip(
                 [255 - d(0), 255 - d(1), 255 - d(2), 255]
             })
             .collect();
-        blit(&mut c, column * width, height + 2 * label_h, &diff);
-        label(&mut c, column, 0, [name, setting]);
+        blit(column * width, height + 2 * label_h, &diff);
+        labels.push((column, 0, [name, setting]));
     }
-    write_image(path, w, h, c.pixmap.data())
+    let centred = Pos::new(HPos::Center, VPos::Top);
+    draw_on_rgba(&mut px, w, h, |area| {
+        for (column, y, lines) in labels {
+            let x = (column * width + width / 2) as i32;
+            let y = y as i32;
+            area.draw_text(lines[0], &font(13.0, Rgb::BLACK).pos(centred), (x, y + 6))?;
+            area.draw_text(lines[1], &font(11.0, Rgb::GREY).pos(centred), (x, y + 23))?;
+        }
+        Ok(())
+    })?;
+    write_image(path, w, h, &px)
 }

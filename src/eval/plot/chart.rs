@@ -1,15 +1,22 @@
 //! Charts: panels side by side, each with x and y axes (linear or log10) and series drawn as
-//! lines, markers or bars, a shared legend under the title.
+//! lines, markers or bars, a shared legend under the title; drawn by plotters (see the module
+//! above) into an SVG and a PNG from one function.
 //!
 //! Rules: an axis's range is the data's, padded by 5 % (log axes in decades), unless given; ticks
 //! are 1-2-5 steps (log axes: 1, 2, 5 × 10^k, or decades when they span more than 3); points
 //! outside an axis's range, and non-finite ones, are left out rather than clamped to its edge.
 
-use super::raster::RasterCanvas;
-use super::svg::SvgCanvas;
-use super::{Anchor, Canvas, Rgb};
+use super::{Rgb, draw_on_rgba, drawing_error, font, fonts};
 use crate::app::output::{write_atomic, write_image};
 use crate::error::{Error, Result};
+use plotters::coord::Shift;
+use plotters::coord::combinators::LogCoord;
+use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
+use plotters::coord::types::RangedCoordf64;
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use std::iter::once;
 use std::path::Path;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -73,32 +80,78 @@ pub struct Figure {
     pub height: u32,
 }
 
-const MARGIN_L: f32 = 70.0;
-const MARGIN_R: f32 = 20.0;
-const TOP: f32 = 78.0;
-const BOTTOM: f32 = 56.0;
+/// The left margin of a panel (tick labels and the y axis's label), its right margin, the band
+/// under it (tick labels and the x axis's label), and the band over the panels (title, legend).
+const MARGIN_L: u32 = 70;
+const MARGIN_R: u32 = 20;
+const BOTTOM: u32 = 50;
+const HEAD: u32 = 58;
 
-struct Map {
+/// An axis as drawn: its range and its labelled ticks. To plotters it is an axis whose mapping
+/// is plotters' own (linear, or its `log_scale`) and whose key points are our ticks.
+#[derive(Clone)]
+struct Frame {
     lo: f64,
     hi: f64,
     log: bool,
-    a: f32,
-    b: f32,
+    ticks: Vec<(f64, String)>,
 }
 
-impl Map {
+impl Frame {
+    fn new(axis: &Axis, (lo, hi): (f64, f64)) -> Frame {
+        Frame {
+            lo,
+            hi,
+            log: axis.scale == Scale::Log10,
+            ticks: labelled_ticks(lo, hi, axis.scale),
+        }
+    }
+
     fn t(&self, v: f64) -> f64 {
         if self.log { v.log10() } else { v }
     }
-    fn px(&self, v: f64) -> Option<f32> {
+
+    /// Whether `v` is drawn: finite, positive on a log axis, and inside the range.
+    fn inside(&self, v: f64) -> bool {
         if !v.is_finite() || (self.log && v <= 0.0) {
-            return None;
+            return false;
         }
         let (lo, hi, t) = (self.t(self.lo), self.t(self.hi), self.t(v));
-        if t < lo - 1e-9 * (hi - lo).abs() || t > hi + 1e-9 * (hi - lo).abs() {
-            return None;
+        let slack = 1e-9 * (hi - lo).abs();
+        t >= lo - slack && t <= hi + slack
+    }
+
+    fn label(&self, v: f64) -> String {
+        self.ticks
+            .iter()
+            .find(|t| t.0 == v)
+            .map_or_else(|| number(v), |t| t.1.clone())
+    }
+}
+
+impl Ranged for Frame {
+    type FormatOption = DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, v: &f64, limit: (i32, i32)) -> i32 {
+        if self.log {
+            LogCoord::from((self.lo..self.hi).log_scale()).map(v, limit)
+        } else {
+            RangedCoordf64::from(self.lo..self.hi).map(v, limit)
         }
-        Some(self.a + (self.b - self.a) * ((t - lo) / (hi - lo)) as f32)
+    }
+
+    /// The ticks, drawn as the grid's lines; no lighter lines between them.
+    fn key_points<H: KeyPointHint>(&self, hint: H) -> Vec<f64> {
+        if hint.weight().allow_light_points() {
+            Vec::new()
+        } else {
+            self.ticks.iter().map(|t| t.0).collect()
+        }
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.lo..self.hi
     }
 }
 
@@ -198,71 +251,97 @@ pub fn number(v: f64) -> String {
 }
 
 impl Figure {
-    pub fn draw(&self, c: &mut dyn Canvas) {
-        c.text(
-            self.width as f32 / 2.0,
-            24.0,
+    /// Draws the figure on `root`, a drawing area of `width` × `height` pixels.
+    pub fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<(), DB> {
+        root.fill(&WHITE)?;
+        let (head, body) = root.split_vertically(HEAD);
+        head.draw_text(
             &self.title,
-            16.0,
-            Anchor::Middle,
-            false,
-            Rgb::BLACK,
-        );
-        self.legend(c);
-        let n = self.panels.len().max(1) as f32;
-        let w = self.width as f32 / n;
-        for (k, p) in self.panels.iter().enumerate() {
-            draw_panel(c, p, k as f32 * w, w, self.height as f32);
+            &font(16.0, Rgb::BLACK).pos(Pos::new(HPos::Center, VPos::Top)),
+            (self.width as i32 / 2, 8),
+        )?;
+        self.legend(&head)?;
+        let panels = body.split_evenly((1, self.panels.len().max(1)));
+        for (p, area) in self.panels.iter().zip(&panels) {
+            draw_panel(area, p)?;
         }
+        Ok(())
     }
 
-    /// One entry per distinct series name, in order of first appearance.
-    fn legend(&self, c: &mut dyn Canvas) {
+    /// One entry per distinct series name, in order of first appearance, centred in a row.
+    fn legend<DB: DrawingBackend>(&self, head: &DrawingArea<DB, Shift>) -> DrawResult<(), DB> {
         let mut seen: Vec<(&str, Rgb, Style)> = Vec::new();
         for s in self.panels.iter().flat_map(|p| &p.series) {
             if !seen.iter().any(|(n, _, _)| *n == s.name) {
                 seen.push((&s.name, s.colour, s.style));
             }
         }
-        let entry_w = 170.0;
-        let total = entry_w * seen.len() as f32;
-        let mut x = (self.width as f32 - total).max(0.0) / 2.0;
-        let y = 50.0;
-        for (name, colour, style) in seen {
+        let text = font(12.0, Rgb::BLACK).pos(Pos::new(HPos::Left, VPos::Center));
+        let mut widths = Vec::with_capacity(seen.len());
+        for (name, _, _) in &seen {
+            widths.push(28 + head.estimate_text_size(name, &text)?.0 as i32 + 30);
+        }
+        let mut x = (self.width as i32 - widths.iter().sum::<i32>()).max(0) / 2;
+        let y = 42;
+        for ((name, colour, style), w) in seen.into_iter().zip(widths) {
+            let c = RGBColor::from(colour);
             match style {
-                Style::Bars(_) => c.rect(x, y - 8.0, 18.0, 10.0, colour),
-                _ => {
-                    c.polyline(
-                        &[(x, y - 4.0), (x + 22.0, y - 4.0)],
-                        colour,
-                        2.0,
-                        style == Style::Front,
-                    );
-                    c.marker(x + 11.0, y - 4.0, 3.5, colour, style != Style::Front);
+                Style::Bars(_) => {
+                    head.draw(&Rectangle::new([(x, y - 5), (x + 18, y + 5)], c.filled()))?
+                }
+                Style::Front => {
+                    head.draw(&DashedPathElement::new(
+                        [(x, y), (x + 22, y)],
+                        6,
+                        4,
+                        c.stroke_width(1),
+                    ))?;
+                    head.draw(&Circle::new((x + 11, y), 5, c.stroke_width(2)))?;
+                }
+                Style::Line | Style::LineMarkers => {
+                    head.draw(&PathElement::new([(x, y), (x + 22, y)], c.stroke_width(2)))?;
+                    if style == Style::LineMarkers {
+                        head.draw(&Circle::new((x + 11, y), 3.5, c.filled()))?;
+                    }
                 }
             }
-            c.text(x + 28.0, y, name, 12.0, Anchor::Start, false, Rgb::BLACK);
-            x += entry_w;
+            head.draw_text(name, &text, (x + 28, y))?;
+            x += w;
         }
+        Ok(())
     }
 
-    pub fn svg(&self) -> String {
-        let mut svg = SvgCanvas::new(self.width, self.height);
-        self.draw(&mut svg);
-        svg.finish()
+    fn check_size(&self) -> Result<()> {
+        if self.width == 0 || self.height == 0 {
+            return Err(Error::Internal("a figure of zero size"));
+        }
+        fonts()
     }
 
-    /// RGBA8 pixels.
+    /// The figure as an SVG document.
+    pub fn svg(&self) -> Result<String> {
+        self.check_size()?;
+        let mut svg = String::new();
+        {
+            let root =
+                SVGBackend::with_string(&mut svg, (self.width, self.height)).into_drawing_area();
+            self.draw(&root).map_err(drawing_error)?;
+            root.present().map_err(drawing_error)?;
+        }
+        Ok(svg)
+    }
+
+    /// RGBA8 pixels (opaque).
     pub fn png_rgba(&self) -> Result<Vec<u8>> {
-        let mut r = RasterCanvas::new(self.width, self.height)
-            .ok_or_else(|| Error::Internal("a figure of zero size"))?;
-        self.draw(&mut r);
-        Ok(r.pixmap.data().to_vec())
+        self.check_size()?;
+        let mut px = vec![255u8; 4 * self.width as usize * self.height as usize];
+        draw_on_rgba(&mut px, self.width, self.height, |root| self.draw(root))?;
+        Ok(px)
     }
 
     /// Writes `<stem>.svg` and `<stem>.png` atomically.
     pub fn write(&self, stem: &Path) -> Result<()> {
-        write_atomic(&stem.with_extension("svg"), self.svg().as_bytes())?;
+        write_atomic(&stem.with_extension("svg"), self.svg()?.as_bytes())?;
         write_image(
             &stem.with_extension("png"),
             self.width,
@@ -272,7 +351,8 @@ impl Figure {
     }
 }
 
-fn draw_panel(c: &mut dyn Canvas, p: &Panel, left: f32, width: f32, height: f32) {
+/// A panel's axes as drawn: ranges fitted to its series (bars' full widths, guides included).
+fn frames(p: &Panel) -> (Frame, Frame) {
     let bars = p.series.iter().any(|s| matches!(s.style, Style::Bars(_)));
     let xs = p.series.iter().flat_map(|s| {
         let half = if let Style::Bars(w) = s.style {
@@ -282,134 +362,104 @@ fn draw_panel(c: &mut dyn Canvas, p: &Panel, left: f32, width: f32, height: f32)
         };
         s.points.iter().flat_map(move |q| [q.0 - half, q.0 + half])
     });
-    let (xlo, xhi) = range(&p.x, xs, false);
+    let x = Frame::new(&p.x, range(&p.x, xs, false));
     let ys = p
         .series
         .iter()
         .flat_map(|s| s.points.iter().map(|q| q.1))
         .chain(p.guides.iter().map(|g| g.0));
-    let (ylo, yhi) = range(&p.y, ys, bars);
-    let (x0, x1) = (left + MARGIN_L, left + width - MARGIN_R);
-    let (y0, y1) = (height - BOTTOM, TOP);
-    let xm = Map {
-        lo: xlo,
-        hi: xhi,
-        log: p.x.scale == Scale::Log10,
-        a: x0,
-        b: x1,
-    };
-    let ym = Map {
-        lo: ylo,
-        hi: yhi,
-        log: p.y.scale == Scale::Log10,
-        a: y0,
-        b: y1,
-    };
-    for (t, label) in labelled_ticks(xlo, xhi, p.x.scale) {
-        if let Some(x) = xm.px(t) {
-            c.polyline(&[(x, y0), (x, y1)], Rgb::LIGHT, 1.0, false);
-            c.text(
-                x,
-                y0 + 16.0,
-                &label,
-                11.0,
-                Anchor::Middle,
-                false,
-                Rgb::BLACK,
-            );
-        }
-    }
-    for (t, label) in labelled_ticks(ylo, yhi, p.y.scale) {
-        if let Some(y) = ym.px(t) {
-            c.polyline(&[(x0, y), (x1, y)], Rgb::LIGHT, 1.0, false);
-            c.text(
-                x0 - 6.0,
-                y + 4.0,
-                &label,
-                11.0,
-                Anchor::End,
-                false,
-                Rgb::BLACK,
-            );
-        }
-    }
-    c.polyline(&[(x0, y1), (x0, y0), (x1, y0)], Rgb::BLACK, 1.2, false);
-    c.text(
-        (x0 + x1) / 2.0,
-        y1 - 8.0,
-        &p.title,
-        13.0,
-        Anchor::Middle,
-        false,
-        Rgb::BLACK,
-    );
-    c.text(
-        (x0 + x1) / 2.0,
-        height - 14.0,
-        &p.x.label,
-        12.0,
-        Anchor::Middle,
-        false,
-        Rgb::BLACK,
-    );
-    c.text(
-        left + 18.0,
-        (y0 + y1) / 2.0,
-        &p.y.label,
-        12.0,
-        Anchor::Middle,
-        true,
-        Rgb::BLACK,
-    );
+    let y = Frame::new(&p.y, range(&p.y, ys, bars));
+    (x, y)
+}
+
+fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> DrawResult<(), DB> {
+    let (xf, yf) = frames(p);
+    let mut chart = ChartBuilder::on(area)
+        .caption(&p.title, font(13.0, Rgb::BLACK))
+        .margin_top(4)
+        .margin_left(4)
+        .margin_right(MARGIN_R)
+        .x_label_area_size(BOTTOM)
+        .y_label_area_size(MARGIN_L)
+        .build_cartesian_2d(xf.clone(), yf.clone())?;
+    let (xl, yl) = (|v: &f64| xf.label(*v), |v: &f64| yf.label(*v));
+    chart
+        .configure_mesh()
+        .bold_line_style(RGBColor::from(Rgb::LIGHT))
+        .light_line_style(TRANSPARENT)
+        .axis_style(BLACK)
+        .label_style(font(11.0, Rgb::BLACK))
+        .axis_desc_style(font(12.0, Rgb::BLACK))
+        .x_desc(&p.x.label)
+        .y_desc(&p.y.label)
+        .x_label_formatter(&xl)
+        .y_label_formatter(&yl)
+        .draw()?;
+    let grey = RGBColor::from(Rgb::GREY);
     for (v, label) in &p.guides {
-        if let Some(y) = ym.px(*v) {
-            c.polyline(&[(x0, y), (x1, y)], Rgb::GREY, 1.0, true);
-            c.text(
-                x1 - 4.0,
-                y - 4.0,
-                label,
-                10.0,
-                Anchor::End,
-                false,
-                Rgb::GREY,
-            );
+        if !yf.inside(*v) {
+            continue;
         }
+        chart.draw_series(once(DashedPathElement::new(
+            [(xf.lo, *v), (xf.hi, *v)],
+            6,
+            4,
+            grey.stroke_width(1),
+        )))?;
+        chart.draw_series(once(
+            EmptyElement::at((xf.hi, *v))
+                + Text::new(
+                    label.clone(),
+                    (-4, -3),
+                    font(10.0, Rgb::GREY).pos(Pos::new(HPos::Right, VPos::Bottom)),
+                ),
+        ))?;
     }
     for s in &p.series {
-        let pts: Vec<(f32, f32)> = s
+        let c = RGBColor::from(s.colour);
+        let pts: Vec<(f64, f64)> = s
             .points
             .iter()
-            .filter_map(|&(x, y)| Some((xm.px(x)?, ym.px(y)?)))
+            .copied()
+            .filter(|&(px, py)| xf.inside(px) && yf.inside(py))
             .collect();
         match s.style {
             Style::Bars(w) => {
-                for &(x, y) in &s.points {
-                    let (Some(a), Some(b), Some(top)) =
-                        (xm.px(x - 0.5 * w), xm.px(x + 0.5 * w), ym.px(y))
-                    else {
-                        continue;
-                    };
-                    c.rect(a + 1.0, top, (b - a - 2.0).max(1.0), y0 - top, s.colour);
-                }
+                let bars = pts
+                    .iter()
+                    .filter(|(px, _)| xf.inside(px - 0.5 * w) && xf.inside(px + 0.5 * w))
+                    .map(|&(px, py)| {
+                        let mut r =
+                            Rectangle::new([(px - 0.5 * w, yf.lo), (px + 0.5 * w, py)], c.filled());
+                        r.set_margin(0, 0, 1, 1);
+                        r
+                    });
+                chart.draw_series(bars)?;
             }
-            Style::Line => c.polyline(&pts, s.colour, 2.0, false),
-            Style::LineMarkers | Style::Front => {
-                let front = s.style == Style::Front;
-                if pts.len() > 1 {
-                    let line = if front { staircase(&pts) } else { pts.clone() };
-                    c.polyline(&line, s.colour, if front { 1.5 } else { 2.0 }, front);
-                }
-                for &(x, y) in &pts {
-                    c.marker(x, y, if front { 6.5 } else { 3.5 }, s.colour, !front);
-                }
+            Style::Line => {
+                chart.draw_series(LineSeries::new(pts, c.stroke_width(2)))?;
+            }
+            Style::LineMarkers => {
+                chart.draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))?;
+                chart.draw_series(pts.iter().map(|&q| Circle::new(q, 3.5, c.filled())))?;
+            }
+            Style::Front => {
+                chart.draw_series(once(DashedPathElement::new(
+                    staircase(&pts),
+                    6,
+                    4,
+                    c.stroke_width(1),
+                )))?;
+                chart.draw_series(pts.iter().map(|&q| Circle::new(q, 6, c.stroke_width(2))))?;
             }
         }
     }
+    Ok(())
 }
 
 /// A front through points in order of x as a staircase: each point's value holds until the
 /// next point (what is attainable at a given cost), then steps.
-fn staircase(pts: &[(f32, f32)]) -> Vec<(f32, f32)> {
+fn staircase(pts: &[(f64, f64)]) -> Vec<(f64, f64)> {
     let mut out = Vec::with_capacity(2 * pts.len());
     for (k, &p) in pts.iter().enumerate() {
         if k > 0 {
@@ -456,43 +506,83 @@ mod tests {
 
     #[test]
     fn points_map_into_the_plot_and_outside_points_are_left_out() {
-        let m = Map {
-            lo: 1.0,
-            hi: 100.0,
-            log: true,
-            a: 0.0,
-            b: 200.0,
-        };
-        assert_eq!(m.px(10.0), Some(100.0));
-        assert_eq!(m.px(0.0), None);
-        assert_eq!(m.px(f64::NAN), None);
-        assert_eq!(m.px(1000.0), None);
+        let axis = Axis::new("x", Scale::Log10);
+        let f = Frame::new(&axis, (1.0, 100.0));
+        let m: plotters::coord::combinators::LogCoord<f64> = (1.0..100.0).log_scale().into();
+        assert_eq!(m.map(&10.0, (0, 200)), 100);
+        assert!(f.inside(10.0) && f.inside(1.0) && f.inside(100.0));
+        assert!(!f.inside(0.0));
+        assert!(!f.inside(f64::NAN));
+        assert!(!f.inside(1000.0));
+    }
+
+    fn figure() -> Figure {
+        Figure {
+            title: "Error against frame time".into(),
+            width: 800,
+            height: 400,
+            panels: vec![
+                Panel {
+                    title: "Image error".into(),
+                    x: Axis::new("frame time (ms)", Scale::Log10),
+                    y: Axis::new("PSNR (dB)", Scale::Linear),
+                    series: vec![
+                        Series {
+                            name: "warped".into(),
+                            colour: Rgb(230, 120, 20),
+                            style: Style::LineMarkers,
+                            points: vec![(10.0, 20.0), (f64::NAN, 25.0), (100.0, 30.0)],
+                        },
+                        Series {
+                            name: "Pareto front".into(),
+                            colour: Rgb(40, 100, 200),
+                            style: Style::Front,
+                            points: vec![(10.0, 20.0), (40.0, 26.0), (100.0, 30.0)],
+                        },
+                    ],
+                    guides: vec![(30.0, "30 dB".into())],
+                },
+                Panel {
+                    title: "Histogram".into(),
+                    x: Axis::new("log2 of the ratio", Scale::Linear),
+                    y: Axis::new("cells (%)", Scale::Linear),
+                    series: vec![Series {
+                        name: "geometry image".into(),
+                        colour: Rgb(40, 160, 70),
+                        style: Style::Bars(0.5),
+                        points: vec![(-0.25, 10.0), (0.25, 40.0), (0.75, 20.0)],
+                    }],
+                    guides: vec![],
+                },
+            ],
+        }
+    }
+
+    /// The SVG's texts as (x, y, text).
+    fn texts(svg: &str) -> Vec<(f64, f64, String)> {
+        svg.split("<text")
+            .skip(1)
+            .map(|t| {
+                let attr = |k: &str| -> f64 {
+                    let at = t.find(&format!(" {k}=\"")).unwrap() + k.len() + 3;
+                    t[at..at + t[at..].find('"').unwrap()].parse().unwrap()
+                };
+                let body = &t[t.find('>').unwrap() + 1..t.find("</text>").unwrap()];
+                (attr("x"), attr("y"), body.trim().to_string())
+            })
+            .collect()
     }
 
     #[test]
     fn svg_and_png_carry_the_same_figure() {
-        let fig = Figure {
-            title: "t".into(),
-            width: 400,
-            height: 300,
-            panels: vec![Panel {
-                title: "p".into(),
-                x: Axis::new("frame time (ms)", Scale::Log10),
-                y: Axis::new("PSNR (dB)", Scale::Linear),
-                series: vec![Series {
-                    name: "warped".into(),
-                    colour: Rgb(230, 120, 20),
-                    style: Style::LineMarkers,
-                    points: vec![(10.0, 20.0), (100.0, 30.0)],
-                }],
-                guides: vec![(30.0, "30 dB".into())],
-            }],
-        };
-        let svg = fig.svg();
+        let fig = figure();
+        let svg = fig.svg().unwrap();
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
         assert!(
-            svg.contains("frame time (ms)") && svg.contains("warped") && svg.contains("#e67814")
+            svg.contains("frame time (ms)") && svg.contains("warped") && svg.contains("#E67814")
         );
         let png = fig.png_rgba().unwrap();
+        assert_eq!(png.len(), 4 * 800 * 400);
         // The series' orange is drawn, and text (dark pixels) is there.
         let orange = png
             .chunks(4)
@@ -503,5 +593,72 @@ mod tests {
             .filter(|p| p[0] < 60 && p[1] < 60 && p[2] < 60)
             .count();
         assert!(orange > 50 && dark > 200, "orange {orange}, dark {dark}");
+    }
+
+    #[test]
+    fn charts_carry_their_labels_legend_and_log_ticks() {
+        let fig = figure();
+        let svg = fig.svg().unwrap();
+        let t = texts(&svg);
+        let has = |s: &str| t.iter().any(|x| x.2 == s);
+        for s in [
+            "Error against frame time",
+            "Image error",
+            "Histogram",
+            "frame time (ms)",
+            "PSNR (dB)",
+            "log2 of the ratio",
+            "cells (%)",
+            "30 dB",
+            "warped",
+            "Pareto front",
+            "geometry image",
+        ] {
+            assert!(has(s), "the SVG lacks {s:?}: {t:?}");
+        }
+        // Each legend name once, under the title, in order of first appearance.
+        let legend: Vec<&(f64, f64, String)> = t
+            .iter()
+            .filter(|x| ["warped", "Pareto front", "geometry image"].contains(&x.2.as_str()))
+            .collect();
+        assert_eq!(legend.len(), 3, "{legend:?}");
+        assert!(
+            legend
+                .windows(2)
+                .all(|w| w[0].0 < w[1].0 && w[0].1 == w[1].1)
+        );
+        assert!(legend[0].1 < HEAD as f64);
+        // The log axis: ticks 10, 20, 50, 100 at log10 spacing, left to right.
+        let row = t.iter().find(|x| x.2 == "100").unwrap().1;
+        let x_of = |s: &str| t.iter().find(|x| x.2 == s && x.1 == row).unwrap().0;
+        let (a, b, c) = (x_of("10"), x_of("20"), x_of("100"));
+        let frac = (b - a) / (c - a);
+        assert!(
+            (frac - 2f64.log10()).abs() < 0.02,
+            "20 sits at {frac} of 10..100"
+        );
+        // The y axis's label reads upwards.
+        assert!(svg.contains("rotate(270"), "no vertical label");
+        // The front is a dashed staircase: many short strokes of its blue.
+        let front = svg.matches("stroke=\"#2864C8\"").count();
+        assert!(front > 10, "{front} strokes of the front");
+
+        // The PNG: the title's text in the band over the panels, dark pixels around its centre.
+        let png = fig.png_rgba().unwrap();
+        let dark = |x0: usize, x1: usize, y0: usize, y1: usize| {
+            (y0..y1)
+                .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+                .filter(|&(x, y)| png[4 * (y * 800 + x)] < 80)
+                .count()
+        };
+        assert!(dark(250, 550, 0, 30) > 150, "no title");
+        assert_eq!(dark(0, 200, 0, 30), 0, "title not centred");
+        // The y axis's label: dark pixels in the left margin, around the panel's middle.
+        assert!(dark(0, 30, 100, 350) > 40, "no y label");
+        assert_eq!(
+            dark(0, 30, 0, 100) + dark(0, 30, 350, 400),
+            0,
+            "y label off centre"
+        );
     }
 }
