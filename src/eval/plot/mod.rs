@@ -18,6 +18,7 @@
 //! ("Im age err or"), so [`bitmap::Bitmap`] wraps plotters' bitmap backend and sets text itself
 //! with ab_glyph, everything else passed through.
 
+pub mod axis;
 pub mod bitmap;
 pub mod chart;
 

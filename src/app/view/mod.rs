@@ -21,10 +21,11 @@
 //! and a GL context on the X display, which llvmpipe under Xvfb provides unreliably. The cost of
 //! the CPU path is one readback per frame (a few ms at 1080p on a discrete GPU).
 
-use crate::app::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder, scene_with_path};
-use crate::app::output::{write_atomic, write_image};
-use crate::error::{Error, Result, Role};
-use crate::eval::plot::{Rgb, draw_on_rgba, font};
+use crate::app::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder};
+use crate::app::hud;
+use crate::error::{Error, Result};
+
+mod files;
 use crate::gpu::context::GpuContext;
 use crate::gpu::uniforms::View;
 use crate::render::{Frame, Renderer};
@@ -33,7 +34,7 @@ use crate::scene::{Mode, Scene};
 use crate::sketch::Atlas;
 use std::collections::HashSet;
 use std::num::NonZeroU32;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 use winit::application::ApplicationHandler;
@@ -53,14 +54,6 @@ pub struct Options {
     pub out_dir: PathBuf,
     /// The first screenshot's file (P, or on quitting after `frames`); later ones go to `out_dir`.
     pub screenshot: Option<PathBuf>,
-}
-
-/// `dir/<name(0)>`, or the first of `dir/<name(n)>`, n = 1, 2, … that does not exist yet.
-fn unused(dir: &Path, name: impl Fn(usize) -> String) -> PathBuf {
-    (0..)
-        .map(|n| dir.join(name(n)))
-        .find(|p| !p.exists())
-        .expect("some number is free")
 }
 
 type Surface = softbuffer::Surface<Arc<Window>, Arc<Window>>;
@@ -163,21 +156,7 @@ impl App {
 
     /// The frame with the figures written on it.
     fn hud(&self, frame: &Frame, dt: f64) -> Vec<u8> {
-        let (w, h) = (frame.width, frame.height);
-        let g = &frame.gpu;
-        let passes = if g.passes.0.is_empty() {
-            "passes not timed".to_string()
-        } else {
-            let each: Vec<String> = g
-                .passes
-                .0
-                .iter()
-                .map(|(n, ms)| format!("{n} {ms:.1}"))
-                .collect();
-            each.join(", ")
-        };
         let ground = ground_under(&self.atlas, self.cam.eye.truncate());
-        let above = self.cam.eye.z - ground.unwrap_or(self.atlas.min_m as f64);
         let mut flags = Vec::new();
         if self.frozen {
             flags.push("LOD frozen".to_string());
@@ -188,54 +167,16 @@ impl App {
         if !self.message.is_empty() {
             flags.push(self.message.clone());
         }
-        let lines = [
-            format!(
-                "{} · {} · {}×{} · {:.1} fps {}",
-                crate::eval::compare::figures::display(self.mode.name()),
-                self.view.name(),
-                w,
-                h,
-                1.0 / dt.max(1e-6),
-                flags.join(" · ")
-            ),
-            format!(
-                "CPU {:.2} ms (sketch map {:.2}, importance {:.2}, warp {:.2}) · GPU {:.1} ms ({})",
-                frame.cpu_us * 1e-3,
-                frame.cpu.sketch_map_us * 1e-3,
-                frame.cpu.importance_us * 1e-3,
-                frame.cpu.warp_us * 1e-3,
-                g.gpu_ms,
-                passes
-            ),
-            format!(
-                "{} triangles · {:.0} m above the ground · {:.0} m/s",
-                g.triangles,
-                above,
-                FlyCamera::speed(above, false)
-            ),
-        ];
-        let help = "drag: look · WASD QE: move (Shift ×4) · 1 2 3: mode · V: view · F: freeze · R: record · P: screenshot · Esc";
-        // Each line white over its black shadow, one pixel down and right.
-        let mut texts: Vec<(&str, f64, i32)> = lines
-            .iter()
-            .enumerate()
-            .map(|(k, line)| (line.as_str(), 12.0, 8 + 16 * k as i32))
-            .collect();
-        texts.push((help, 11.0, h as i32 - 15));
-        let mut rgba = frame.rgba.clone();
-        let drawn = draw_on_rgba(&mut rgba, w, h, |area| {
-            for &(text, size, y) in &texts {
-                area.draw_text(text, &font(size, Rgb::BLACK), (7, y + 1))?;
-                area.draw_text(text, &font(size, Rgb::WHITE), (6, y))?;
-            }
-            Ok(())
-        });
-        // A frame without its figures rather than none (the font is bundled: this does not fail).
-        if drawn.is_ok() {
-            rgba
-        } else {
-            frame.rgba.clone()
-        }
+        hud::draw(
+            frame,
+            &hud::Status {
+                mode: self.mode,
+                view: self.view,
+                dt,
+                above_m: self.cam.eye.z - ground.unwrap_or(self.atlas.min_m as f64),
+                flags,
+            },
+        )
     }
 
     fn present(&mut self, rgba: &[u8]) -> Result<()> {
@@ -256,50 +197,6 @@ impl App {
             *dst = (p[0] as u32) << 16 | (p[1] as u32) << 8 | p[2] as u32;
         }
         buffer.present().map_err(gpu)
-    }
-
-    fn screenshot(&mut self) -> Result<PathBuf> {
-        let path = match &self.o.screenshot {
-            Some(p) if self.shots == 0 => p.clone(),
-            _ => {
-                let stem = self.stem();
-                unused(&self.o.out_dir, |n| format!("{stem}-view-{}.png", n + 1))
-            }
-        };
-        self.shots += 1;
-        write_image(&path, self.size.0, self.size.1, &self.presented)?;
-        Ok(path)
-    }
-
-    fn stem(&self) -> String {
-        self.o
-            .scene_path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "scene".into())
-    }
-
-    fn toggle_recording(&mut self) -> Result<()> {
-        let Some(r) = self.recorder.take() else {
-            self.recorder = Some(PathRecorder::default());
-            self.message = "recording".into();
-            return Ok(());
-        };
-        let Some(path) = r.finish(&self.cam) else {
-            self.message = "nothing recorded: fly, then stop".into();
-            return Ok(());
-        };
-        let text = std::fs::read_to_string(&self.o.scene_path)
-            .map_err(|e| Error::io(Role::Scene, &self.o.scene_path, e))?;
-        let out = scene_with_path(&text, &self.o.scene_path, &path)?;
-        let stem = self.stem();
-        let file = unused(&self.o.out_dir, |n| match n {
-            0 => format!("{stem}-flown.toml"),
-            n => format!("{stem}-flown-{}.toml", n + 1),
-        });
-        write_atomic(&file, out.as_bytes())?;
-        self.message = format!("{} keys written to {}", path.keys.len(), file.display());
-        Ok(())
     }
 
     fn key(&mut self, code: KeyCode, el: &ActiveEventLoop) -> Result<()> {
