@@ -43,6 +43,36 @@ fn modes(rows: &[Row]) -> Vec<&str> {
 /// `error_vs_time`: PSNR and mean screen-space error against frame time, a line per mode
 /// through its settings in order of frame time, each front as rings on a dashed line.
 pub fn error_vs_time(rows: &[Row], title: &str) -> Figure {
+    error_against(
+        rows,
+        title,
+        Axis::new("frame time (ms, CPU stage + GPU passes)", Scale::Log10),
+        &|r| r.frame_ms,
+        true,
+    )
+}
+
+/// `error_vs_triangles`: the same errors against triangles drawn, without fronts (they are
+/// fronts of frame time).
+pub fn error_vs_triangles(rows: &[Row], title: &str) -> Figure {
+    error_against(
+        rows,
+        title,
+        Axis::new("triangles drawn", Scale::Log10),
+        &|r| r.triangles as f64,
+        false,
+    )
+}
+
+/// PSNR and mean screen-space error against `cost`, a line per mode in order of cost, and with
+/// `fronts` the Pareto front of all modes.
+fn error_against(
+    rows: &[Row],
+    title: &str,
+    x: Axis,
+    cost: &dyn Fn(&Row) -> f64,
+    fronts: bool,
+) -> Figure {
     let panel = |name: &str,
                  y: Axis,
                  value: &dyn Fn(&Row) -> f64,
@@ -54,7 +84,7 @@ pub fn error_vs_time(rows: &[Row], title: &str) -> Figure {
                 let mut pts: Vec<(f64, f64)> = rows
                     .iter()
                     .filter(|r| r.mode == m)
-                    .map(|r| (r.frame_ms, value(r)))
+                    .map(|r| (cost(r), value(r)))
                     .collect();
                 pts.sort_by(|a, b| a.0.total_cmp(&b.0));
                 Series {
@@ -65,21 +95,23 @@ pub fn error_vs_time(rows: &[Row], title: &str) -> Figure {
                 }
             })
             .collect();
-        let mut front: Vec<(f64, f64)> = rows
-            .iter()
-            .filter(|r| on_front(r))
-            .map(|r| (r.frame_ms, value(r)))
-            .collect();
-        front.sort_by(|a, b| a.0.total_cmp(&b.0));
-        series.push(Series {
-            name: "Pareto front".into(),
-            colour: Rgb::BLACK,
-            style: Style::Front,
-            points: front,
-        });
+        if fronts {
+            let mut front: Vec<(f64, f64)> = rows
+                .iter()
+                .filter(|r| on_front(r))
+                .map(|r| (cost(r), value(r)))
+                .collect();
+            front.sort_by(|a, b| a.0.total_cmp(&b.0));
+            series.push(Series {
+                name: "Pareto front".into(),
+                colour: Rgb::BLACK,
+                style: Style::Front,
+                points: front,
+            });
+        }
         Panel {
             title: name.to_string(),
-            x: Axis::new("frame time (ms, CPU stage + GPU passes)", Scale::Log10),
+            x: x.clone(),
             y,
             series,
             guides: vec![guide],

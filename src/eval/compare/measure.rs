@@ -88,6 +88,7 @@ pub(super) fn measure(
         mode: s.mode_name().to_string(),
         setting: s.label(),
         triangles: last.gpu.triangles,
+        triangles_per_px: last.gpu.triangles as f64 / (camera.width as f64 * camera.height as f64),
         cpu_stage_us: cpu_us,
         gpu_ms,
         frame_ms: gpu_ms + cpu_us * 1e-3,

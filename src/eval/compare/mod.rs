@@ -11,7 +11,7 @@
 //! device, say) is recorded in `report.json`'s `skipped` and the rest carry on.
 //!
 //! Outputs in the out dir, each written atomically: `report.csv`, `report.json`, `summary.md`,
-//! `error_vs_time.svg`/`.png`, `ratio_histogram.svg`/`.png`, `path.csv`, `path_error.svg`/`.png`,
+//! `error_vs_time.svg`/`.png`, `error_vs_triangles.svg`/`.png`, `ratio_histogram.svg`/`.png`, `path.csv`, `path_error.svg`/`.png`,
 //! `strip.png`, `reference.png`, `reference_positions.npy` (world x, y, z and ground flag per
 //! pixel, f64).
 //!
@@ -282,7 +282,9 @@ fn write_outputs(
         report::summary_markdown(title, summary).as_bytes(),
     )?;
     figures::error_vs_time(rows, &format!("Error against frame time: {title}"))
-        .write(&out_dir.join("error_vs_time"))
+        .write(&out_dir.join("error_vs_time"))?;
+    figures::error_vs_triangles(rows, &format!("Error against triangles: {title}"))
+        .write(&out_dir.join("error_vs_triangles"))
 }
 
 /// The warped mode's density-ratio histogram at the scene's camera.

@@ -22,6 +22,9 @@ pub struct Row {
     pub mode: String,
     pub setting: String,
     pub triangles: u64,
+    /// Triangles drawn per pixel of the image: the hardware-independent cost.
+    #[serde(default)]
+    pub triangles_per_px: f64,
     pub cpu_stage_us: f64,
     pub gpu_ms: f64,
     pub frame_ms: f64,
@@ -43,10 +46,11 @@ pub struct Row {
     pub passes_ms: PassTimes,
 }
 
-pub const CSV_COLUMNS: [&str; 18] = [
+pub const CSV_COLUMNS: [&str; 19] = [
     "mode",
     "setting",
     "triangles",
+    "triangles_per_px",
     "cpu_stage_us",
     "gpu_ms",
     "frame_ms",
@@ -71,6 +75,7 @@ struct CsvRow<'a> {
     mode: &'a str,
     setting: &'a str,
     triangles: u64,
+    triangles_per_px: Fixed<4>,
     cpu_stage_us: Fixed<1>,
     gpu_ms: Fixed<3>,
     frame_ms: Fixed<3>,
@@ -94,6 +99,7 @@ impl Row {
             mode: &self.mode,
             setting: &self.setting,
             triangles: self.triangles,
+            triangles_per_px: Fixed(self.triangles_per_px),
             cpu_stage_us: Fixed(self.cpu_stage_us),
             gpu_ms: Fixed(self.gpu_ms),
             frame_ms: Fixed(self.frame_ms),
@@ -269,6 +275,7 @@ pub(crate) mod tests {
             mode: mode.into(),
             setting: format!("{ms}"),
             triangles: 1,
+            triangles_per_px: 0.5,
             cpu_stage_us: 0.0,
             gpu_ms: ms,
             frame_ms: ms,

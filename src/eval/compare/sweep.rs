@@ -1,7 +1,7 @@
 //! The quality settings `compare` sweeps, one per report row.
 //!
-//! Default sweep: warped over mesh 256², 512², 1024² at `quad_px` 2, and `quad_px` 1 and 4 at
-//! mesh 512²; GeoMipMap over τ 0.5, 1, 2, 4, 8 px at blocks of 17, 33 and 65 vertices; brute force
+//! Default sweep: warped over mesh 64², 96², 128², 192², 256², 384², 512², 1024² at `quad_px` 2
+//! (from GeoMipMap's triangle counts up: 4k to 2M triangles), and `quad_px` 1 and 4 at mesh 512²; GeoMipMap over τ 0.5, 1, 2, 4, 8 px at blocks of 17, 33 and 65 vertices; brute force
 //! over grid spacings d_atlas/2^K for K = 0 up to the finest the device and the vertex budget
 //! allow ([`default_k`]).
 //!
@@ -85,7 +85,7 @@ pub fn default_sweep(modes: &[Mode], atlas: &Atlas) -> Vec<Setting> {
     for &mode in modes {
         match mode {
             Mode::Warped => {
-                for mesh in [256, 512, 1024] {
+                for mesh in [64, 96, 128, 192, 256, 384, 512, 1024] {
                     out.push(Setting::Warped { quad_px: 2.0, mesh });
                 }
                 for quad_px in [1.0, 4.0] {
