@@ -51,13 +51,16 @@ impl NormalsPass {
         })
     }
 
+    /// Records the pass for a `mesh`² geometry image (at most the size it was built for).
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        mesh: u32,
         timestamps: Option<wgpu::ComputePassTimestampWrites>,
     ) {
         let (p, b) = (&self.pipeline, &self.bind_group);
-        dispatch_grid(encoder, "normals", p, b, [self.mesh; 2], timestamps);
+        let m = mesh.min(self.mesh);
+        dispatch_grid(encoder, "normals", p, b, [m; 2], timestamps);
     }
 }
 

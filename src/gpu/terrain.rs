@@ -19,6 +19,8 @@ pub struct TerrainPass {
     bind_group: wgpu::BindGroup,
     index: Buffer,
     index_count: u32,
+    /// The side of the quad mesh the index buffer holds (warped mode; 0 for GeoMipMap).
+    quad_mesh: u32,
     pub colour: Texture,
     colour_view: wgpu::TextureView,
     /// Each pixel's depth as a colour target, when the variant asks for positions.
@@ -159,7 +161,7 @@ impl TerrainPass {
                 let index = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("quad mesh indices"),
                     contents: bytemuck::cast_slice(&indices),
-                    usage: wgpu::BufferUsages::INDEX,
+                    usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
                 });
                 (index, indices.len() as u32)
             }
@@ -195,6 +197,7 @@ impl TerrainPass {
             terrain,
             bind_group,
             index_count,
+            quad_mesh: if variant.geomipmap.is_some() { 0 } else { mesh },
             index,
             colour_view: colour.create_view(&Default::default()),
             depth_view: depth.create_view(&Default::default()),
@@ -223,6 +226,22 @@ impl TerrainPass {
             )
         })?;
         super::frame_io::positions_from_depth(ctx, depth, view_proj)
+    }
+
+    /// The warped variant draws a `mesh`² quad mesh this frame (at most the size it was built
+    /// for); the indices are rewritten only when the side changes.
+    pub fn use_quad_mesh(&mut self, queue: &wgpu::Queue, mesh: u32) {
+        if self.quad_mesh == 0 || mesh == self.quad_mesh {
+            return;
+        }
+        let capacity = self.index.size() / 4;
+        let indices = quad_indices(mesh);
+        if indices.len() as u64 > capacity {
+            return;
+        }
+        queue.write_buffer(&self.index, 0, bytemuck::cast_slice(&indices));
+        self.index_count = indices.len() as u32;
+        self.quad_mesh = mesh;
     }
 
     /// The GeoMipMap variant's indices for this frame.

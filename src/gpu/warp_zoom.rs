@@ -75,13 +75,17 @@ impl WarpZoomPass {
         })
     }
 
+    /// Records the pass for a `mesh`² geometry image (at most the size it was built for; the
+    /// frame's uniforms must say the same `mesh`).
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        mesh: u32,
         timestamps: Option<wgpu::ComputePassTimestampWrites>,
     ) {
         let (p, b) = (&self.pipeline, &self.bind_group);
-        dispatch_grid(encoder, "warp_zoom", p, b, [self.mesh; 2], timestamps);
+        let m = mesh.min(self.mesh);
+        dispatch_grid(encoder, "warp_zoom", p, b, [m; 2], timestamps);
     }
 }
 

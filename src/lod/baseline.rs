@@ -105,8 +105,8 @@ pub fn bake(
         .write_buffer(&warp_zoom.phi, 0, bytemuck::cast_slice(&phi));
     let normals = NormalsPass::new(device, &frame, &warp_zoom.detailed, n as u32)?;
     let mut encoder = device.create_command_encoder(&Default::default());
-    warp_zoom.record(&mut encoder, None);
-    normals.record(&mut encoder, None);
+    warp_zoom.record(&mut encoder, n as u32, None);
+    normals.record(&mut encoder, n as u32, None);
     ctx.queue.submit([encoder.finish()]);
     let detailed = warp_zoom.into_detailed();
     let heights = read_vec4(ctx, &detailed)?.iter().map(|v| v[2]).collect();

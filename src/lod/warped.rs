@@ -21,7 +21,6 @@ const PASSES: [&str; 3] = [WarpZoomPass::NAME, NormalsPass::NAME, TerrainPass::N
 
 pub struct Warped {
     pub stage: CpuStage,
-    mesh: u32,
     warp_zoom: WarpZoomPass,
     normals: NormalsPass,
     terrain: TerrainPass,
@@ -68,7 +67,6 @@ impl Warped {
         let readback = ColourReadback::new(device, width, height);
         Ok(Warped {
             stage,
-            mesh,
             warp_zoom,
             normals,
             terrain,
@@ -103,7 +101,7 @@ impl Lod for Warped {
 
     fn frame_inputs<'a>(&'a self, f: &mut FrameInputs<'a>) {
         f.map = Some(&self.stage.sketch_map);
-        f.mesh = self.mesh;
+        f.mesh = self.stage.mesh;
         f.importance_max = self
             .stage
             .importance
@@ -131,10 +129,12 @@ impl Lod for Warped {
                 let values = &self.stage.importance.importance;
                 queue.write_buffer(buffer, 0, bytemuck::cast_slice(values));
             }
+            let m = self.stage.mesh;
+            self.terrain.use_quad_mesh(queue, m);
             let warp_zoom = t.map(|t| t.compute(WarpZoomPass::NAME));
-            self.warp_zoom.record(encoder, warp_zoom);
+            self.warp_zoom.record(encoder, m, warp_zoom);
             self.normals
-                .record(encoder, t.map(|t| t.compute(NormalsPass::NAME)));
+                .record(encoder, m, t.map(|t| t.compute(NormalsPass::NAME)));
         }
         let terrain = t.map(|t| t.render(TerrainPass::NAME));
         self.terrain.record(encoder, visible, terrain);

@@ -52,6 +52,7 @@ impl Scene {
         let w = &self.warp;
         open_range("warp.quad_px", w.quad_px, 0.0, 1e4)?;
         within("warp.mesh", w.mesh as f64, 2.0, 4096.0)?;
+        within("warp.min_mesh", w.min_mesh as f64, 2.0, 4096.0)?;
         within("warp.size", w.size as f64, 2.0, 4096.0)?;
         within("warp.max_log2_step", w.max_log2_step, 0.0, 64.0)?;
         let g = &self.geomipmap;
@@ -72,6 +73,13 @@ impl Scene {
             1.0 + f64::EPSILON,
         )?;
         let i = &self.importance;
+        open_range("importance.error_px", i.error_px, 0.0, 1e4)?;
+        open_range(
+            "importance.error_flat_share",
+            i.error_flat_share,
+            0.0,
+            1.0 + f64::EPSILON,
+        )?;
         positive("importance.max_per_m", i.max_per_m)?;
         open_range("importance.floor", i.floor, 0.0, 1.0 + f64::EPSILON)?;
         open_range(

@@ -124,7 +124,12 @@ crate::named_enum! {
 #[serde(deny_unknown_fields, default)]
 pub struct WarpSection {
     pub quad_px: f64,
+    /// The largest mesh side; with `budget`, a frame draws what its importance asks for, up to it.
     pub mesh: u32,
+    /// The mesh follows the demanded density (`stage::budget`); `false`: always `mesh`².
+    pub budget: bool,
+    /// The smallest mesh side a budgeted frame draws.
+    pub min_mesh: u32,
     /// Sketch map and warp size (128 in the paper).
     pub size: u32,
     pub method: WarpMethod,
@@ -136,6 +141,8 @@ impl Default for WarpSection {
         WarpSection {
             quad_px: 2.0,
             mesh: 512,
+            budget: true,
+            min_mesh: 32,
             size: 128,
             method: WarpMethod::Guarded,
             max_log2_step: 0.0,
@@ -160,6 +167,13 @@ pub struct ImportanceSection {
     pub floor: f64,
     /// S_b's floor on back-facing slopes.
     pub backface_floor: f64,
+    /// The geometric-error term: flat ground asks for fewer samples than I_v, down to
+    /// `error_flat_share` of it; curved ground keeps I_v.
+    pub error: bool,
+    /// The projected error the term aims at, pixels.
+    pub error_px: f64,
+    /// The least share of I_v the error term leaves on flat ground.
+    pub error_flat_share: f64,
 }
 impl Default for ImportanceSection {
     fn default() -> Self {
@@ -171,6 +185,9 @@ impl Default for ImportanceSection {
             max_map: None,
             floor: 0.1,
             backface_floor: 0.15,
+            error: false,
+            error_px: 0.5,
+            error_flat_share: 0.125,
         }
     }
 }

@@ -12,6 +12,14 @@
 //!   `backface_floor` at n·v = −0.35.
 //! - `I_floor` is `floor` × the least importance of a texel in view, so the invisible rest of the
 //!   region keeps a few cells and the warp's weights stay positive. Nothing in view: uniform 1.
+//! - With the geometric-error term (`importance.error`), before S_f, S_b and I_s:
+//!   `I = min(I_v, max(I_g, β·I_v))`, `I_g = √(κ·f_px / (8·τ_e·d))` — the sample density at
+//!   which linear interpolation misses a surface of curvature κ by τ_e pixels on screen
+//!   (`δ = κ s²/8` at spacing s). κ = the sketch map's largest second difference (|h_xx|, |h_yy|,
+//!   |h_xy|, one-sided at the map's edges) + the detail's curvature at spacing `1/I_v`: the octaves
+//!   that are geometry there (DESIGN.md's split octave with the scene's bias) weighted by
+//!   `0.31·w_k·(2π f_k)²`, 0.31 the noise's RMS; a prefix sum over octaves makes it one log2 and
+//!   a lookup per texel.
 //! - Computed in f32 relative to the region's corner; world-scale values never enter the loop.
 
 use crate::camera::Camera;
@@ -29,6 +37,56 @@ pub struct ImportanceParams {
     pub backface_floor: f64,
     /// How far procedural detail can displace the surface, metres (widens the frustum margin).
     pub reach_m: f64,
+    /// The geometric-error term, when the scene asks for it.
+    pub error: Option<ErrorTerm>,
+}
+
+/// What the geometric-error term needs: its target, its floor and the detail's curvature.
+#[derive(Clone, Debug)]
+pub struct ErrorTerm {
+    /// τ_e: the projected error aimed at, pixels.
+    pub target_px: f64,
+    /// β: the least share of I_v left on flat ground.
+    pub flat_share: f64,
+    /// `prefix[k]`: the detail's curvature (1/m) of octaves 1..=k, all fully geometry.
+    prefix: Vec<f32>,
+    d_atlas: f64,
+    bias: f64,
+}
+
+impl ErrorTerm {
+    pub fn new(detail: &crate::detail::Detail, target_px: f64, flat_share: f64) -> ErrorTerm {
+        let mut prefix = vec![0.0f32];
+        for k in 1..=detail.octaves {
+            let w = std::f64::consts::TAU * detail.frequency(k);
+            let add = crate::detail::NOISE_RMS * detail.weight(k) * w * w;
+            prefix.push(prefix[k as usize - 1] + add as f32);
+        }
+        ErrorTerm {
+            target_px,
+            flat_share,
+            prefix,
+            d_atlas: detail.d_atlas,
+            bias: detail.bias,
+        }
+    }
+
+    /// The detail's curvature (1/m) at sample spacing `1 / samples_per_m`: octave k counts with
+    /// its geometry share `clamp(o − k + 1, 0, 1)`, `o = log2(d_atlas · samples_per_m) − bias`.
+    pub fn detail_curvature(&self, samples_per_m: f32) -> f32 {
+        let last = self.prefix.len() - 1;
+        let o = ((self.d_atlas as f32 * samples_per_m).log2() - self.bias as f32).max(0.0);
+        if !o.is_finite() {
+            return if o > 0.0 { self.prefix[last] } else { 0.0 };
+        }
+        let whole = (o as usize).min(last);
+        let part = if whole < last {
+            (self.prefix[whole + 1] - self.prefix[whole]) * o.fract()
+        } else {
+            0.0
+        };
+        self.prefix[whole] + part
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -42,10 +100,11 @@ pub struct ImportanceMap {
     /// bug lets one through; reported so that a bug shows.
     pub nonfinite: usize,
     column_on_atlas: Vec<f32>,
-    // Row scratch: x of each column, dh/dx, 1/distance to the eye.
+    // Row scratch: x of each column, dh/dx, 1/distance to the eye, the sketch's curvature.
     x: Vec<f32>,
     gx: Vec<f32>,
     inv_dist: Vec<f32>,
+    curvature: Vec<f32>,
 }
 
 impl ImportanceMap {
@@ -59,6 +118,7 @@ impl ImportanceMap {
             x: Vec::new(),
             gx: Vec::new(),
             inv_dist: Vec::new(),
+            curvature: Vec::new(),
         }
     }
 
@@ -111,6 +171,8 @@ impl ImportanceMap {
         }
         self.gx.resize(n, 0.0);
         self.inv_dist.resize(n, 0.0);
+        self.curvature.resize(n, 0.0);
+        let f_px = camera.f_px() as f32;
         self.x.resize(n, 0.0);
         for (i, x) in self.x.iter_mut().enumerate() {
             *x = i as f32 * d0f;
@@ -160,6 +222,17 @@ impl ImportanceMap {
                 } else {
                     uniform_view
                 };
+            }
+            if let Some(e) = &p.error {
+                sketch_curvature([down, row, up], jp - jm, d0f, &mut self.curvature);
+                let k_error = f_px / (8.0 * e.target_px as f32);
+                let flat = e.flat_share as f32;
+                for i in 0..n {
+                    let i_v = out[i];
+                    let kappa = self.curvature[i] + e.detail_curvature(i_v);
+                    let i_g = (kappa * k_error * self.inv_dist[i].min(inv_d_min)).sqrt();
+                    out[i] = i_v.min(i_g.max(flat * i_v));
+                }
             }
             if p.backface {
                 slope_x(row, d0f, &mut self.gx);
@@ -215,6 +288,27 @@ impl ImportanceMap {
         let lo = at(i, j) + (at(i + 1, j) - at(i, j)) * fx;
         let hi = at(i, j + 1) + (at(i + 1, j + 1) - at(i, j + 1)) * fx;
         lo + (hi - lo) * fy
+    }
+}
+
+/// The largest second derivative of the sketch map's heights along a row (1/m): |h_xx|, |h_yy|
+/// and |h_xy| from the rows `down` and `up` `rows_apart` rows apart around it (1 at the map's
+/// edge, where one of them is the row itself and `h_yy` is taken as 0), one-sided at the ends.
+fn sketch_curvature([down, row, up]: [&[f32]; 3], rows_apart: usize, d0: f32, out: &mut [f32]) {
+    let n = row.len();
+    let inv = 1.0 / (d0 * d0);
+    let y_second = if rows_apart == 2 { 1.0 } else { 0.0 };
+    for i in 0..n {
+        let (l, r) = (i.saturating_sub(1), (i + 1).min(n - 1));
+        let hxx = if r - l == 2 {
+            (row[r] - 2.0 * row[i] + row[l]) * inv
+        } else {
+            0.0
+        };
+        let hyy = (up[i] - 2.0 * row[i] + down[i]) * inv * y_second;
+        let span = ((r - l) * rows_apart).max(1) as f32;
+        let hxy = (up[r] - up[l] - down[r] + down[l]) * inv / span;
+        out[i] = hxx.abs().max(hyy.abs()).max(hxy.abs());
     }
 }
 

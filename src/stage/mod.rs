@@ -1,8 +1,10 @@
 //! The CPU stage of a frame: sketch map → importance map → row and column warp → Φ.
 //!
 //! [`CpuStage`] owns every buffer the stage needs, sized once for the scene's `warp.size`, so a
-//! frame allocates nothing; its three parts are timed separately.
+//! frame allocates nothing; its three parts are timed separately (the [`budget`], a sum over the
+//! importance map, counts with the warp).
 
+pub mod budget;
 pub mod figures;
 pub mod importance;
 pub mod quality;
@@ -14,8 +16,9 @@ use crate::detail::Detail;
 use crate::error::Result;
 use crate::scene::Scene;
 use crate::sketch::Atlas;
+use budget::Budget;
 use glam::DVec2;
-use importance::{ImportanceMap, ImportanceParams};
+use importance::{ErrorTerm, ImportanceMap, ImportanceParams};
 use sketch_map::{Resampler, SketchMap, resample};
 use std::time::Instant;
 use warp::Warp;
@@ -39,6 +42,10 @@ pub struct CpuStage {
     pub importance: ImportanceMap,
     pub warp: Warp,
     pub params: ImportanceParams,
+    /// The mesh the importance asks for (`warp.budget`); `None`: always `warp.mesh`.
+    pub budget: Option<Budget>,
+    /// The mesh side the last run chose.
+    pub mesh: u32,
     /// I_s as an atlas-like grid, when the scene gives a map.
     surface_max_atlas: Option<Atlas>,
     surface_max: Vec<f32>,
@@ -71,7 +78,15 @@ impl CpuStage {
                 floor: imp.floor,
                 backface_floor: imp.backface_floor,
                 reach_m: detail.reach_m(),
+                error: imp
+                    .error
+                    .then(|| ErrorTerm::new(detail, imp.error_px, imp.error_flat_share)),
             },
+            budget: scene
+                .warp
+                .budget
+                .then(|| Budget::new(scene.warp.min_mesh, scene.warp.mesh)),
+            mesh: scene.warp.mesh,
             surface_max: if surface_max_atlas.is_some() {
                 vec![0.0; n * n]
             } else {
@@ -111,6 +126,9 @@ impl CpuStage {
         let t2 = Instant::now();
         self.warp
             .run(&self.importance.importance, self.sketch_map.spacing as f32);
+        if let Some(b) = &mut self.budget {
+            self.mesh = b.update(&self.importance.importance, self.sketch_map.spacing);
+        }
         let t3 = Instant::now();
         let us = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e6;
         StageTimes {
