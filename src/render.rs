@@ -128,6 +128,12 @@ impl Renderer {
         })
     }
 
+    /// The next frame is drawn as by a fresh renderer, whatever frames came before (see
+    /// [`Lod::forget`]).
+    pub fn forget(&mut self) {
+        self.lod.forget();
+    }
+
     pub fn atlas(&self) -> &Atlas {
         &self.atlas
     }

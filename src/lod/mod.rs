@@ -86,6 +86,9 @@ pub trait Lod: Any {
     fn precompute(&self) -> Option<(f64, u64)> {
         None
     }
+    /// Forgets what earlier frames leave to the next (the warped mode's budget hysteresis), so the
+    /// next frame is what a fresh renderer would draw: for snapshots of unrelated cameras.
+    fn forget(&mut self) {}
     fn as_any(&self) -> &dyn Any;
     fn as_any_mut(&mut self) -> &mut dyn Any;
 }

@@ -164,6 +164,12 @@ impl Lod for Warped {
         self.stage.sketch_map.visible
     }
 
+    fn forget(&mut self) {
+        if let Some(b) = &mut self.stage.budget {
+            b.forget();
+        }
+    }
+
     fn as_any(&self) -> &dyn Any {
         self
     }

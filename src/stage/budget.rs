@@ -11,7 +11,9 @@
 //!   mesh changes by whole steps rather than every frame.
 //! - Hysteresis: a frame steps down a rung only when its demand fits 90 % of the lower rung, so a
 //!   demand hovering at a rung's edge does not switch the mesh (and resample every vertex) back
-//!   and forth between frames.
+//!   and forth between frames. A snapshot must not depend on the frames before it: `batch`, which
+//!   keeps one renderer across unrelated cameras, calls [`Budget::forget`] (through
+//!   `Renderer::forget`) before each.
 //!
 //! Rejected alternative: every mesh size from min to max. Each change of m moves every vertex of
 //! the zoomed geometry image, which shows as swimming; rungs a fourth of an octave apart cost at
@@ -47,6 +49,11 @@ impl Budget {
             current: None,
             demanded_cells: 0.0,
         }
+    }
+
+    /// The next frame chooses its rung afresh, without hysteresis.
+    pub fn forget(&mut self) {
+        self.current = None;
     }
 
     pub fn rungs(&self) -> &[u32] {
@@ -99,6 +106,13 @@ mod tests {
         let below = b.rungs()[b.rungs().iter().position(|&r| r == m).unwrap() - 1] as f64;
         let at = |mesh: f64| ((mesh - 1.0).powi(2) / 100.0).sqrt() / 2.0;
         assert_eq!(b.update(&[at(below * 0.95) as f32; 100], 2.0), m);
+        // Forgotten, the same demand gets the rung a fresh budget gives it.
+        let mut fresh = Budget::new(16, 1024);
+        let alone = fresh.update(&[at(below * 0.95) as f32; 100], 2.0);
+        assert!(alone < m);
+        b.forget();
+        assert_eq!(b.update(&[at(below * 0.95) as f32; 100], 2.0), alone);
+        b.update(&[5.0; 100], 2.0);
         assert!(b.update(&[at(below * 0.8) as f32; 100], 2.0) < m);
         // Nothing asked: the floor; NaN never passes.
         assert_eq!(b.update(&[0.0; 100], 2.0), 16);

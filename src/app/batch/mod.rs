@@ -162,6 +162,8 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
         }
     };
     let r = cache.renderer(&scene)?;
+    // Each snapshot as if alone: a resumed or sharded run makes the same images.
+    r.forget();
     let frame = r.render(&camera)?;
     let output = out_dir.join(format!("{}.png", item.name));
     write_image(&output, frame.width, frame.height, &frame.rgba)?;
