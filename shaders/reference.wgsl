@@ -9,44 +9,13 @@
 
 #import frame
 @group(0) @binding(0) var<uniform> frame: Frame;
-#import atlas
-#ifdef NOISE
-#import noise
-#endif
+#import surface
 #import shading
 
 @group(0) @binding(2) var<storage, read_write> colour_out: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> position_out: array<vec4<f32>>;
 
 const MAX_STEPS: u32 = 4096u;
-
-// The octaves down to a footprint of `footprint` metres, each weighted by b_k: value (x) and
-// gradient (yz).
-fn octaves(p: vec2<f32>, footprint: f32) -> vec3<f32> {
-    var sum = vec3<f32>(0.0);
-#ifdef NOISE
-    let o_px = log2(frame.atlas.d_atlas / max(footprint, 1e-6));
-    let last = min(frame.detail.octaves, u32(max(ceil(o_px), 0.0)));
-    for (var k = 1u; k <= last; k++) {
-        let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
-        sum += frame.detail.octave[k - 1u].weight * b * octave_local(frame.detail.octave[k - 1u], p);
-    }
-#endif
-    return sum;
-}
-
-// The terrain function at `p` for a footprint of `footprint` metres.
-fn height(p: vec2<f32>, footprint: f32) -> f32 {
-    return atlas_height(p, footprint) + octaves(p, footprint).x;
-}
-
-// Its gradient: the octaves' analytically, the sketch's by central differences of the bicubic.
-fn gradient(p: vec2<f32>, footprint: f32) -> vec2<f32> {
-    let e = max(footprint, 0.05 * frame.atlas.d_atlas);
-    let sx = atlas_height(p + vec2<f32>(e, 0.0), footprint) - atlas_height(p - vec2<f32>(e, 0.0), footprint);
-    let sy = atlas_height(p + vec2<f32>(0.0, e), footprint) - atlas_height(p - vec2<f32>(0.0, e), footprint);
-    return vec2<f32>(sx, sy) / (2.0 * e) + octaves(p, footprint).yz;
-}
 
 // The part of the ray inside the box of the sketch's rectangle and its heights, or t0 > t1.
 fn span(eye: vec3<f32>, dir: vec3<f32>) -> vec2<f32> {
@@ -94,7 +63,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var step = 0u; step < MAX_STEPS && t <= range.y; step++) {
         let p = eye + dir * t;
         let footprint = t * frame.camera.pixel_scale;
-        let above = p.z - height(p.xy, footprint);
+        let above = p.z - surface_height(p.xy, footprint);
         if (above <= 0.0) {
             hit = true;
             break;
@@ -113,7 +82,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var i = 0u; i < 16u; i++) {
         let mid = 0.5 * (lo + hi);
         let p = eye + dir * mid;
-        if (p.z - height(p.xy, mid * frame.camera.pixel_scale) > 0.0) {
+        if (p.z - surface_height(p.xy, mid * frame.camera.pixel_scale) > 0.0) {
             lo = mid;
         } else {
             hi = mid;
@@ -122,7 +91,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let t_hit = 0.5 * (lo + hi);
     let footprint = t_hit * frame.camera.pixel_scale;
     let p = eye + dir * t_hit;
-    let g = gradient(p.xy, footprint);
+    let g = surface_gradient(p.xy, footprint);
     let n = normalize(vec3<f32>(-g, 1.0));
     let to_eye = eye - p;
     let dist = max(length(to_eye), 1e-3);

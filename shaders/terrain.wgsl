@@ -1,6 +1,8 @@
 // The terrain pass: the detailed geometry image drawn as a quad mesh (two triangles per cell,
-// split along (s,t)–(s+1,t+1)), with per-pixel bump detail from the split octave up to the
-// pixel's own octave, procedural surface types, sun and sky light and aerial perspective.
+// split along (s,t)–(s+1,t+1)), shaded with the terrain function's normal at each pixel
+// (PIXEL_NORMALS, shared with the reference) or with the mesh's normals plus per-pixel bump
+// detail from the split octave up to the pixel's own octave (BUMP); procedural surface types, sun
+// and sky light and aerial perspective.
 // Also the sky, drawn first as one full-screen triangle.
 
 #import frame
@@ -15,6 +17,9 @@
 #endif
 #ifdef BUMP
 #import noise
+#endif
+#ifdef PIXEL_NORMALS
+#import surface
 #endif
 #import shading
 
@@ -166,6 +171,11 @@ fn terrain_fs(in: VsOut) -> FragOut {
     }
     let to_eye = frame.camera.eye - in.local;
     let dist = max(length(to_eye), 1e-3);
+#ifdef PIXEL_NORMALS
+    // The terrain function's normal at the pixel's footprint, as the reference shades: the mesh
+    // only places the surface, and a mesh that slides between frames leaves the light alone.
+    let n = normalize(vec3<f32>(-surface_gradient(in.local.xy, dist * frame.camera.pixel_scale), 1.0));
+#else
     var n = normalize(in.normal);
 #ifdef BUMP
     // Bump detail: octaves from the vertex's split octave up to the pixel's own octave; the
@@ -182,6 +192,7 @@ fn terrain_fs(in: VsOut) -> FragOut {
         }
     }
     n = normalize(vec3<f32>(n.xy / max(n.z, 0.05) - grad, 1.0));
+#endif
 #endif
     var colour = lit(in.local, n, to_eye, dist);
     if (frame.camera.view == VIEW_WIREFRAME) {

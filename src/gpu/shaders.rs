@@ -9,11 +9,12 @@
 
 use crate::error::{Error, Result};
 
-const SHARED: [(&str, &str); 4] = [
+const SHARED: [(&str, &str); 5] = [
     ("frame", include_str!("../../shaders/shared/frame.wgsl")),
     ("noise", include_str!("../../shaders/shared/noise.wgsl")),
     ("atlas", include_str!("../../shaders/shared/atlas.wgsl")),
     ("shading", include_str!("../../shaders/shared/shading.wgsl")),
+    ("surface", include_str!("../../shaders/shared/surface.wgsl")),
 ];
 
 /// The passes' WGSL files, by name.
@@ -25,13 +26,14 @@ pub const PASSES: [(&str, &str); 4] = [
 ];
 
 /// Every flag any pass tests, for validating all variants.
-pub const FLAGS: [&str; 6] = [
+pub const FLAGS: [&str; 7] = [
     "DETAIL",
     "BUMP",
     "NOISE",
     "IMPORTANCE_VIEW",
     "GEOMIPMAP",
     "POSITIONS",
+    "PIXEL_NORMALS",
 ];
 
 /// The combined source of pass `name` with `flags` set.

@@ -33,6 +33,8 @@ pub struct TerrainPass {
 pub struct Variant {
     pub noise: bool,
     pub bump: bool,
+    /// Shade with the terrain function's normal per pixel: the atlas buffer it samples.
+    pub pixel_normals: Option<wgpu::Buffer>,
     /// The importance debug view's buffer (n² f32), only when that view is drawn.
     pub importance: Option<wgpu::Buffer>,
     /// GeoMipMap: the per-frame block records and the most indices a frame can draw. The index
@@ -67,8 +69,12 @@ impl TerrainPass {
         if variant.noise {
             flags.push("NOISE");
         }
-        if variant.bump {
+        if variant.bump && variant.pixel_normals.is_none() {
             flags.push("BUMP");
+        }
+        if variant.pixel_normals.is_some() {
+            entries.push(entry(1, S::FRAGMENT, storage(true)));
+            flags.push("PIXEL_NORMALS");
         }
         if variant.importance.is_some() {
             entries.push(entry(5, S::FRAGMENT, storage(true)));
@@ -135,6 +141,9 @@ impl TerrainPass {
         );
 
         let mut bind_entries = vec![bind(0, frame), bind(3, detailed), bind(4, normals)];
+        if let Some(atlas) = &variant.pixel_normals {
+            bind_entries.push(bind(1, atlas));
+        }
         if let Some(buffer) = &variant.importance {
             bind_entries.push(bind(5, buffer));
         }

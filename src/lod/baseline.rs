@@ -165,6 +165,10 @@ impl Baselines {
         let variant = Variant {
             noise,
             bump: noise && scene.detail.bump,
+            pixel_normals: scene
+                .render
+                .pixel_normals
+                .then(|| wgpu::Buffer::clone(s.atlas_buffer)),
             importance: None,
             geomipmap: Some((wgpu::Buffer::clone(&block_buffer), capacity)),
             positions: s.positions,

@@ -18,9 +18,13 @@ use std::any::Any;
 
 /// The passes of a warped frame, in order.
 const PASSES: [&str; 3] = [WarpZoomPass::NAME, NormalsPass::NAME, TerrainPass::NAME];
+/// With pixel normals the mesh's normals are never read: no normals pass.
+const PASSES_PIXEL_NORMALS: [&str; 2] = [WarpZoomPass::NAME, TerrainPass::NAME];
 
 pub struct Warped {
     pub stage: CpuStage,
+    /// The terrain pass shades with the terrain function's normals (`render.pixel_normals`).
+    pixel_normals: bool,
     warp_zoom: WarpZoomPass,
     normals: NormalsPass,
     terrain: TerrainPass,
@@ -49,6 +53,11 @@ impl Warped {
         let variant = Variant {
             noise,
             bump: noise && s.scene.detail.bump,
+            pixel_normals: s
+                .scene
+                .render
+                .pixel_normals
+                .then(|| wgpu::Buffer::clone(s.atlas_buffer)),
             importance: importance.as_ref().map(|b| wgpu::Buffer::clone(b)),
             geomipmap: None,
             positions: s.positions,
@@ -67,6 +76,7 @@ impl Warped {
         let readback = ColourReadback::new(device, width, height);
         Ok(Warped {
             stage,
+            pixel_normals: s.scene.render.pixel_normals,
             warp_zoom,
             normals,
             terrain,
@@ -88,7 +98,11 @@ impl Warped {
 
 impl Lod for Warped {
     fn passes(&self) -> &'static [&'static str] {
-        &PASSES
+        if self.pixel_normals {
+            &PASSES_PIXEL_NORMALS
+        } else {
+            &PASSES
+        }
     }
 
     fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes {
@@ -133,14 +147,21 @@ impl Lod for Warped {
             self.terrain.use_quad_mesh(queue, m);
             let warp_zoom = t.map(|t| t.compute(WarpZoomPass::NAME));
             self.warp_zoom.record(encoder, m, warp_zoom);
-            self.normals
-                .record(encoder, m, t.map(|t| t.compute(NormalsPass::NAME)));
+            if !self.pixel_normals {
+                self.normals
+                    .record(encoder, m, t.map(|t| t.compute(NormalsPass::NAME)));
+            }
         }
         let terrain = t.map(|t| t.render(TerrainPass::NAME));
         self.terrain.record(encoder, visible, terrain);
         self.readback.record(encoder, &self.terrain.colour);
         // A sky-only frame runs the terrain pass alone (for the sky).
-        if visible { &PASSES } else { &PASSES[2..] }
+        let passes = self.passes();
+        if visible {
+            passes
+        } else {
+            &passes[passes.len() - 1..]
+        }
     }
 
     fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>> {

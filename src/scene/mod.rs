@@ -251,10 +251,16 @@ impl Mode {
 #[serde(deny_unknown_fields, default)]
 pub struct RenderSection {
     pub mode: Mode,
+    /// The mesh modes shade with the terrain function's normal at each pixel, as the reference
+    /// does; `false`: the mesh's normals plus bump detail (`detail.bump`).
+    pub pixel_normals: bool,
 }
 impl Default for RenderSection {
     fn default() -> Self {
-        RenderSection { mode: Mode::Warped }
+        RenderSection {
+            mode: Mode::Warped,
+            pixel_normals: false,
+        }
     }
 }
 
