@@ -24,6 +24,13 @@
 //!   high, in log space, before warping: fewer folds to guard, at the cost of spreading cells.
 //! - All buffers are allocated once in [`Warp::new`]; a frame allocates nothing.
 //!
+//! Rejected alternative, measured: two threads (rayon's pool, `join` over halves of the rows, of
+//! the column mappings and of Φ's rows, the row pass written row-major and transposed). On the
+//! jacksboro near view the guarded warp took 511 µs against 459 µs on one thread, the plain warp
+//! 321 against 314 µs; from high up 398 against 389 µs (`benches/cpu_stage.rs`, medians, one
+//! session, 2-core VM): at 128² each half is tens of microseconds, which waking a pool thread
+//! and the transpose eat.
+//!
 //! Rejected alternatives: extra row/column passes over the warped image (the grid is no longer
 //! axis-aligned, and a second pass can fold what the first left intact) and always smoothing the
 //! importance (it lowers the density ratio everywhere to fix folds that occur in a few places).
