@@ -72,6 +72,10 @@ fn compare_reports_every_setting_with_every_column_filled() {
         assert!(num(6) > 0.0 && num(6) >= num(5), "frame time: {line}");
         assert!(num(7) > 10.0 && num(7) < 100.0, "PSNR: {line}");
         assert!(num(10) >= 0.0 && num(10) <= num(12), "screen error: {line}");
+        // The LOD update's change along the path's first steps: brute force, with no level of
+        // detail, is the control at exactly 0.
+        assert!(num(19) >= 0.0, "LOD change: {line}");
+        assert_eq!(num(19) == 0.0, cells[0] == "bruteforce", "LOD change: {line}");
     }
     // Some row of every mode is on a front; the fastest row always is.
     for m in ["warped", "geomipmap", "bruteforce"] {
@@ -101,6 +105,7 @@ fn compare_reports_every_setting_with_every_column_filled() {
     for f in [
         "error_vs_time",
         "error_vs_triangles",
+        "lod_change_vs_psnr",
         "ratio_histogram",
         "path_error",
     ] {

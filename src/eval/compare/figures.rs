@@ -143,6 +143,45 @@ fn error_against(
     }
 }
 
+/// `lod_change_vs_psnr`: each setting's LOD change per frame (over the first steps of the camera
+/// path) against its PSNR, a line per mode in order of PSNR: what each mode's quality costs in
+/// swimming or popping. Brute force, which has no level of detail, scores 0 and is left off the
+/// log axis.
+pub fn lod_change_vs_psnr(rows: &[Row], title: &str) -> Figure {
+    let series = modes(rows)
+        .into_iter()
+        .map(|m| {
+            let mut points: Vec<(f64, f64)> = rows
+                .iter()
+                .filter(|r| r.mode == m)
+                .filter_map(|r| Some((r.psnr_db.min(PSNR_CAP_DB), r.lod_change_levels?)))
+                .collect();
+            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            Series {
+                name: display(m).to_string(),
+                colour: colour(m),
+                style: Style::LineMarkers,
+                points,
+            }
+        })
+        .collect();
+    Figure {
+        title: title.to_string(),
+        width: 700,
+        height: 520,
+        panels: vec![Panel {
+            title: "Change per frame from the LOD update against image error".into(),
+            x: Axis::new("PSNR (dB, higher is better)", Scale::Linear),
+            y: Axis::new(
+                "LOD change per frame (8-bit levels, lower is better)",
+                Scale::Log10,
+            ),
+            series,
+            guides: Vec::new(),
+        }],
+    }
+}
+
 /// The density-ratio histogram of the warped mode's geometry image (the paper's Fig. 6 as bars):
 /// share of visible cells per half-octave bin of obtained / demanded density.
 pub fn ratio_histogram(bins: &[Bin], visible: usize, title: &str) -> Figure {

@@ -104,6 +104,7 @@ pub(super) fn measure(
         frames: o.repeat.max(1),
         pareto_psnr: false,
         pareto_sse: false,
+        lod_change_levels: None,
         passes_ms: PassTimes::median(&passes),
     };
     Ok((row, last.rgba.clone()))
@@ -155,4 +156,23 @@ pub(super) fn converged_reference(
         step,
         halving_db,
     })
+}
+
+/// The mean change per frame that the level-of-detail update alone makes as `r` steps along
+/// `steps` (each drawn with the previous step's LOD, then updated); `None` for fewer than 2.
+pub(super) fn lod_change_along(r: &mut Renderer, steps: &[Camera]) -> Result<Option<f64>> {
+    let Some((first, rest)) = steps.split_first() else {
+        return Ok(None);
+    };
+    if rest.is_empty() {
+        return Ok(None);
+    }
+    r.render(first)?;
+    let mut sum = 0.0;
+    for camera in rest {
+        let held = r.render_held(camera)?;
+        let updated = r.render(camera)?;
+        sum += super::temporal::lod_change(&held.rgba, &updated.rgba).mean_levels;
+    }
+    Ok(Some(sum / rest.len() as f64))
 }

@@ -11,7 +11,7 @@
 //! device, say) is recorded in `report.json`'s `skipped` and the rest carry on.
 //!
 //! Outputs in the out dir, each written atomically: `report.csv`, `report.json`, `summary.md`,
-//! `error_vs_time.svg`/`.png`, `error_vs_triangles.svg`/`.png`, `ratio_histogram.svg`/`.png`, `path.csv`, `path_error.svg`/`.png`,
+//! `error_vs_time.svg`/`.png`, `error_vs_triangles.svg`/`.png`, `lod_change_vs_psnr.svg`/`.png`, `ratio_histogram.svg`/`.png`, `path.csv`, `path_error.svg`/`.png`,
 //! `strip.png`, `reference.png`, `reference_positions.npy` (world x, y, z and ground flag per
 //! pixel, f64).
 //!
@@ -28,6 +28,7 @@ pub mod sweep;
 pub mod temporal;
 
 use crate::app::output::{write_atomic, write_image};
+use crate::app::path::CameraPath;
 use crate::app::progress::Progress;
 use crate::camera::Camera;
 use crate::error::{Error, Result, Role};
@@ -38,7 +39,7 @@ use crate::scene;
 use crate::scene::{Mode, Scene};
 use crate::sketch::Atlas;
 use crate::stage::CpuStage;
-use measure::{measure, renderer};
+use measure::{lod_change_along, measure, renderer};
 use path::{Out, path_series};
 use report::{DetailUsed, RatioReport, ReferenceFigures, Replot, Report, Row, Skipped};
 use std::path::Path;
@@ -47,6 +48,8 @@ use sweep::Setting;
 /// PSNR between the reference at its step and at half of it that counts as converged: finer
 /// than any difference between modes worth reporting (mode images differ from it by 20–45 dB).
 pub const REFERENCE_CONVERGED_DB: f64 = 50.0;
+/// Steps along the camera path over which each setting's LOD change per frame is measured.
+const LOD_STEPS: usize = 3;
 /// How many times the reference's step may be halved to get there.
 const MAX_REFERENCE_HALVINGS: usize = 3;
 
@@ -124,6 +127,13 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
         halving_db,
     } = converged;
 
+    // The first steps of the camera path, for each setting's LOD change per frame.
+    let steps = if path_frames > 0 {
+        let path = CameraPath::of_scene(&scene)?;
+        path.cameras(LOD_STEPS + 1, o.path_fps, &scene, &atlas)?
+    } else {
+        Vec::new()
+    };
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
     let mut images: Vec<(Setting, Vec<u8>)> = Vec::new();
@@ -139,11 +149,15 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
                 if let Some(b) = r.lod_mut::<Baselines>() {
                     b.params.tau = tau;
                 }
-                return measure(r, s, &camera, &truth0, o);
+                let (mut row, rgba) = measure(r, s, &camera, &truth0, o)?;
+                row.lod_change_levels = lod_change_along(r, &steps)?;
+                return Ok((row, rgba));
             }
             gmm = None;
             let mut r = renderer(&ctx, &scene, &atlas, s)?;
-            measure(&mut r, s, &camera, &truth0, o)
+            let (mut row, rgba) = measure(&mut r, s, &camera, &truth0, o)?;
+            row.lod_change_levels = lod_change_along(&mut r, &steps)?;
+            Ok((row, rgba))
         })();
         match result {
             Ok((row, rgba)) => {
@@ -284,7 +298,12 @@ fn write_outputs(
     figures::error_vs_time(rows, &format!("Error against frame time: {title}"))
         .write(&out_dir.join("error_vs_time"))?;
     figures::error_vs_triangles(rows, &format!("Error against triangles: {title}"))
-        .write(&out_dir.join("error_vs_triangles"))
+        .write(&out_dir.join("error_vs_triangles"))?;
+    if rows.iter().any(|r| r.lod_change_levels.is_some()) {
+        figures::lod_change_vs_psnr(rows, &format!("Swimming against image error: {title}"))
+            .write(&out_dir.join("lod_change_vs_psnr"))?;
+    }
+    Ok(())
 }
 
 /// The warped mode's density-ratio histogram at the scene's camera.

@@ -40,13 +40,17 @@ pub struct Row {
     pub frames: u32,
     pub pareto_psnr: bool,
     pub pareto_sse: bool,
+    /// Mean change per frame from the level-of-detail update alone over the first steps of the
+    /// camera path (8-bit levels; `None` without a path).
+    #[serde(default)]
+    pub lod_change_levels: Option<f64>,
     /// Per-pass GPU medians by pass name (JSON only; empty where the adapter has no timestamp
     /// queries). Not read back by `--replot`, which needs none of them.
     #[serde(skip_deserializing)]
     pub passes_ms: PassTimes,
 }
 
-pub const CSV_COLUMNS: [&str; 19] = [
+pub const CSV_COLUMNS: [&str; 20] = [
     "mode",
     "setting",
     "triangles",
@@ -66,6 +70,7 @@ pub const CSV_COLUMNS: [&str; 19] = [
     "frames",
     "pareto_psnr",
     "pareto_sse",
+    "lod_change_levels",
 ];
 
 /// A row of `report.csv`: [`Row`] without the per-pass times, each figure to the decimals it can
@@ -91,6 +96,7 @@ struct CsvRow<'a> {
     frames: u32,
     pareto_psnr: bool,
     pareto_sse: bool,
+    lod_change_levels: Option<Fixed<4>>,
 }
 
 impl Row {
@@ -115,6 +121,7 @@ impl Row {
             frames: self.frames,
             pareto_psnr: self.pareto_psnr,
             pareto_sse: self.pareto_sse,
+            lod_change_levels: self.lod_change_levels.map(Fixed),
         }
     }
 }
@@ -291,6 +298,7 @@ pub(crate) mod tests {
             frames: 1,
             pareto_psnr: false,
             pareto_sse: false,
+            lod_change_levels: Some(0.25),
             passes_ms: PassTimes::default(),
         }
     }
