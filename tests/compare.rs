@@ -75,7 +75,11 @@ fn compare_reports_every_setting_with_every_column_filled() {
         // The LOD update's change along the path's first steps: brute force, with no level of
         // detail, is the control at exactly 0.
         assert!(num(19) >= 0.0, "LOD change: {line}");
-        assert_eq!(num(19) == 0.0, cells[0] == "bruteforce", "LOD change: {line}");
+        assert_eq!(
+            num(19) == 0.0,
+            cells[0] == "bruteforce",
+            "LOD change: {line}"
+        );
     }
     // Some row of every mode is on a front; the fastest row always is.
     for m in ["warped", "geomipmap", "bruteforce"] {
