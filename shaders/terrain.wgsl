@@ -8,7 +8,17 @@
 #import frame
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(3) var<storage, read> detailed: array<vec4<f32>>;
+#ifdef PIXEL_NORMALS
+// Shading reads the terrain function's normal per pixel: no vertex normals are bound.
+fn vertex_normal(i: u32) -> vec3<f32> {
+    return vec3<f32>(0.0, 0.0, 1.0);
+}
+#else
 @group(0) @binding(4) var<storage, read> normals: array<vec4<f32>>;
+fn vertex_normal(i: u32) -> vec3<f32> {
+    return normals[i].xyz;
+}
+#endif
 #ifdef IMPORTANCE_VIEW
 @group(0) @binding(5) var<storage, read> importance: array<f32>;
 #endif
@@ -106,7 +116,7 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     let l2 = vec2<u32>(local % (cells + 1u), local / (cells + 1u));
     let g = b.origin + l2;
     var p = detailed[grid_index(g)];
-    var n = normals[grid_index(g)].xyz;
+    var n = vertex_normal(grid_index(g));
     var level = b.level;
     var start = b.morph.x;
     var end = b.morph.y;
@@ -134,7 +144,7 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
             }
         }
         p.z = mix(p.z, 0.5 * (a.z + c.z), m);
-        let nc = normals[grid_index(g - d)].xyz + normals[grid_index(g + d)].xyz;
+        let nc = vertex_normal(grid_index(g - d)) + vertex_normal(grid_index(g + d));
         n = normalize(mix(n, normalize(nc), m));
     }
     let local_pos = p.xyz + vec3<f32>(frame.mesh.mesh_offset, 0.0);
@@ -153,7 +163,7 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     var out: VsOut;
     out.clip = frame.camera.view_proj * vec4<f32>(p.xyz, 1.0);
     out.local = p.xyz;
-    out.normal = normals[vi].xyz;
+    out.normal = vertex_normal(vi);
     out.split = p.w;
     out.grid = vec2<f32>(f32(vi % frame.mesh.mesh), f32(vi / frame.mesh.mesh));
     return out;

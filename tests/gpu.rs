@@ -87,7 +87,10 @@ fn gpu_warp_and_zoom_matches_its_cpu_twin() {
             }
         }
         // The normals pass against its twin, fed the GPU's own vertices.
-        let normals = warped(&r).read_normals(&r.ctx).unwrap();
+        let normals = warped(&r)
+            .read_normals(&r.ctx)
+            .unwrap()
+            .expect("lit by the mesh's normals");
         let mut worst_n = 0.0f32;
         for j in (0..m).step_by(7) {
             for i in (0..m).step_by(7) {
@@ -279,6 +282,17 @@ fn gpu_memory_is_counted_from_the_allocations() {
         Renderer::new(&bundled("hills", 64, 64), Mode::Warped, View::Importance).unwrap();
     let n = bundled("hills", 64, 64).warp.size as u64;
     assert_eq!(importance.gpu_bytes() - small.gpu_bytes(), n * n * 4);
+    // Lit per pixel, the mesh has no normals: the 64² of them (16 bytes each) are never made,
+    // nor the normals pass's timer slots (two 8-byte queries, 16 bytes each to resolve and read).
+    let mut lit = bundled("hills", 64, 64);
+    lit.render.pixel_normals = true;
+    let lit = Renderer::new(&lit, Mode::Warped, View::Shaded).unwrap();
+    let timer = if small.ctx.timestamps {
+        2 * 8 + 16 + 16
+    } else {
+        0
+    };
+    assert_eq!(small.gpu_bytes() - lit.gpu_bytes(), 64 * 64 * 16 + timer);
 }
 
 /// With pixel normals the light comes from the terrain function, not the mesh: a coarse and a

@@ -29,12 +29,21 @@ pub struct TerrainPass {
     depth_view: wgpu::TextureView,
 }
 
+/// The normals the terrain is lit with.
+pub enum Shading {
+    /// The mesh's vertex normals (this buffer, mesh² vec4), plus bump detail with `bump`.
+    MeshNormals(wgpu::Buffer),
+    /// The terrain function's normal at each pixel, sampled from this atlas buffer (as the
+    /// reference shades); no vertex normals are bound or computed.
+    PixelNormals(wgpu::Buffer),
+}
+
 /// Which variant of the shaders to build.
 pub struct Variant {
     pub noise: bool,
     pub bump: bool,
-    /// Shade with the terrain function's normal per pixel: the atlas buffer it samples.
-    pub pixel_normals: Option<wgpu::Buffer>,
+    /// Where the light's normals come from.
+    pub shading: Shading,
     /// The importance debug view's buffer (n² f32), only when that view is drawn.
     pub importance: Option<wgpu::Buffer>,
     /// GeoMipMap: the per-frame block records and the most indices a frame can draw. The index
@@ -54,7 +63,6 @@ impl TerrainPass {
         device: &Alloc,
         frame: &wgpu::Buffer,
         detailed: &wgpu::Buffer,
-        normals: &wgpu::Buffer,
         mesh: u32,
         width: u32,
         height: u32,
@@ -63,18 +71,22 @@ impl TerrainPass {
         let mut entries = vec![
             entry(0, S::VERTEX_FRAGMENT, uniform()),
             entry(3, S::VERTEX, storage(true)),
-            entry(4, S::VERTEX, storage(true)),
         ];
         let mut flags = Vec::new();
         if variant.noise {
             flags.push("NOISE");
         }
-        if variant.bump && variant.pixel_normals.is_none() {
-            flags.push("BUMP");
-        }
-        if variant.pixel_normals.is_some() {
-            entries.push(entry(1, S::FRAGMENT, storage(true)));
-            flags.push("PIXEL_NORMALS");
+        match variant.shading {
+            Shading::MeshNormals(_) => {
+                entries.push(entry(4, S::VERTEX, storage(true)));
+                if variant.bump {
+                    flags.push("BUMP");
+                }
+            }
+            Shading::PixelNormals(_) => {
+                entries.push(entry(1, S::FRAGMENT, storage(true)));
+                flags.push("PIXEL_NORMALS");
+            }
         }
         if variant.importance.is_some() {
             entries.push(entry(5, S::FRAGMENT, storage(true)));
@@ -140,10 +152,11 @@ impl TerrainPass {
             wgpu::CompareFunction::Greater,
         );
 
-        let mut bind_entries = vec![bind(0, frame), bind(3, detailed), bind(4, normals)];
-        if let Some(atlas) = &variant.pixel_normals {
-            bind_entries.push(bind(1, atlas));
-        }
+        let mut bind_entries = vec![bind(0, frame), bind(3, detailed)];
+        bind_entries.push(match &variant.shading {
+            Shading::MeshNormals(normals) => bind(4, normals),
+            Shading::PixelNormals(atlas) => bind(1, atlas),
+        });
         if let Some(buffer) = &variant.importance {
             bind_entries.push(bind(5, buffer));
         }
@@ -222,13 +235,14 @@ impl TerrainPass {
         self.index_count as u64 / 3
     }
 
-    /// Ground positions of the last frame's pixels (metres from the frame origin, w = 1 on
-    /// ground), recovered from the depth copy; needs `positions` in the variant.
+    /// Ground positions of the last frame's pixels, drawn from `camera` (metres from its frame
+    /// origin, w = 1 on ground), recovered from the depth copy; needs `positions` in the variant.
     pub fn read_positions(
         &self,
         ctx: &super::context::GpuContext,
-        view_proj: glam::DMat4,
+        camera: &crate::camera::Camera,
     ) -> Result<Vec<[f32; 4]>> {
+        let view_proj = super::uniforms::view_proj(camera, super::uniforms::frame_origin(camera));
         let depth = self.depth_copy.as_ref().ok_or_else(|| {
             crate::error::Error::Internal(
                 "positions were not asked for when the renderer was built",

@@ -8,15 +8,14 @@
 
 use super::{CpuTimes, Lod, Shared};
 use crate::camera::Camera;
-use crate::detail::Detail;
 use crate::error::{Error, Result};
 use crate::geomipmap::{BlockGpu, Blocks, Grid, LodParams, Selection, Templates};
-use crate::gpu::alloc::{Alloc, Buffer};
+use crate::gpu::alloc::Buffer;
 use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::{ColourReadback, Timer, read_vec4, uniform_buffer};
 use crate::gpu::normals::NormalsPass;
-use crate::gpu::terrain::{TerrainPass, Variant};
-use crate::gpu::uniforms::{BlockUniforms, FrameInputs, FrameUniforms, view_proj};
+use crate::gpu::terrain::{Shading, TerrainPass, Variant};
+use crate::gpu::uniforms::{BlockUniforms, FrameInputs, FrameUniforms};
 use crate::gpu::warp_zoom::WarpZoomPass;
 use crate::scene::Mode;
 use crate::sketch::Atlas;
@@ -38,28 +37,22 @@ pub fn default_k(atlas: &Atlas) -> u32 {
 pub struct Bake {
     pub grid: Grid,
     pub detailed: Buffer,
-    pub normals: Buffer,
+    /// The grid's normals, unless the terrain is lit per pixel.
+    pub normals: Option<Buffer>,
     pub ms: f64,
 }
 
 impl Bake {
-    /// GPU bytes the baked grid keeps: its positions and normals.
+    /// GPU bytes the baked grid keeps: its positions, and its normals if it has them.
     pub fn bytes(&self) -> u64 {
-        self.detailed.bytes() + self.normals.bytes()
+        self.detailed.bytes() + self.normals.as_ref().map_or(0, |b| b.bytes())
     }
 }
 
 /// Bakes the terrain function over the square enclosing the atlas at spacing d_atlas / 2^k, in
-/// blocks of `cells` cells a side.
-pub fn bake(
-    ctx: &GpuContext,
-    device: &Alloc,
-    atlas: &Atlas,
-    atlas_buffer: &wgpu::Buffer,
-    detail: &Detail,
-    k: u32,
-    cells: usize,
-) -> Result<Bake> {
+/// blocks of `cells` cells a side; its normals too unless the scene lights the terrain per pixel.
+pub fn bake(s: &Shared, k: u32, cells: usize) -> Result<Bake> {
+    let (ctx, device, atlas, detail) = (s.ctx, &s.alloc, s.atlas, s.detail);
     let start = Instant::now();
     let spacing = atlas.d_atlas() / (1u32 << k) as f64;
     let side = (atlas.max_corner() - atlas.origin).max_element();
@@ -88,7 +81,7 @@ pub fn bake(
     let warp_zoom = WarpZoomPass::new(
         device,
         &frame,
-        atlas_buffer,
+        s.atlas_buffer,
         n as u32,
         n as u32,
         detail.octaves > 0,
@@ -103,10 +96,21 @@ pub fn bake(
         .collect();
     ctx.queue
         .write_buffer(&warp_zoom.phi, 0, bytemuck::cast_slice(&phi));
-    let normals = NormalsPass::new(device, &frame, &warp_zoom.detailed, n as u32)?;
+    let normals = if s.scene.render.pixel_normals {
+        None
+    } else {
+        Some(NormalsPass::new(
+            device,
+            &frame,
+            &warp_zoom.detailed,
+            n as u32,
+        )?)
+    };
     let mut encoder = device.create_command_encoder(&Default::default());
     warp_zoom.record(&mut encoder, n as u32, None);
-    normals.record(&mut encoder, n as u32, None);
+    if let Some(pass) = &normals {
+        pass.record(&mut encoder, n as u32, None);
+    }
     ctx.queue.submit([encoder.finish()]);
     let detailed = warp_zoom.into_detailed();
     let heights = read_vec4(ctx, &detailed)?.iter().map(|v| v[2]).collect();
@@ -120,7 +124,7 @@ pub fn bake(
     Ok(Bake {
         grid,
         detailed,
-        normals: normals.into_normals(),
+        normals: normals.map(NormalsPass::into_normals),
         ms: start.elapsed().as_secs_f64() * 1e3,
     })
 }
@@ -146,11 +150,11 @@ impl Baselines {
     /// `kind`: `Mode::Geomipmap` or `Mode::Bruteforce`.
     pub fn new(s: &Shared, kind: Mode) -> Result<Baselines> {
         let start = Instant::now();
-        let (ctx, scene, detail) = (s.ctx, s.scene, s.detail);
+        let (scene, detail) = (s.scene, s.detail);
         let device = &s.alloc;
         let k = scene.geomipmap.k.unwrap_or_else(|| default_k(s.atlas));
         let cells = scene.geomipmap.block as usize - 1;
-        let bake = bake(ctx, device, s.atlas, s.atlas_buffer, detail, k, cells)?;
+        let bake = bake(s, k, cells)?;
         let blocks = Blocks::new(&bake.grid);
         let templates = Templates::new(&bake.grid);
         let per_side = blocks.per_side;
@@ -165,26 +169,18 @@ impl Baselines {
         let variant = Variant {
             noise,
             bump: noise && scene.detail.bump,
-            pixel_normals: scene
-                .render
-                .pixel_normals
-                .then(|| wgpu::Buffer::clone(s.atlas_buffer)),
+            shading: match &bake.normals {
+                Some(normals) => Shading::MeshNormals(wgpu::Buffer::clone(normals)),
+                None => Shading::PixelNormals(wgpu::Buffer::clone(s.atlas_buffer)),
+            },
             importance: None,
             geomipmap: Some((wgpu::Buffer::clone(&block_buffer), capacity)),
             positions: s.positions,
         };
         let n = bake.grid.n as u32;
         let (width, height) = (scene.camera.width, scene.camera.height);
-        let terrain = TerrainPass::new(
-            device,
-            s.frame,
-            &bake.detailed,
-            &bake.normals,
-            n,
-            width,
-            height,
-            &variant,
-        )?;
+        let terrain =
+            TerrainPass::new(device, s.frame, &bake.detailed, n, width, height, &variant)?;
         let readback = ColourReadback::new(device, width, height);
         let mut selection = Selection::default();
         if kind == Mode::Bruteforce {
@@ -269,8 +265,7 @@ impl Lod for Baselines {
     }
 
     fn read_positions(&self, ctx: &GpuContext, camera: &Camera) -> Result<Vec<[f32; 4]>> {
-        let vp = view_proj(camera, camera.eye.truncate());
-        self.terrain.read_positions(ctx, vp)
+        self.terrain.read_positions(ctx, camera)
     }
 
     fn triangles(&self) -> u64 {

@@ -9,8 +9,8 @@ use crate::gpu::alloc::Buffer;
 use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::{ColourReadback, Timer, read_vec4};
 use crate::gpu::normals::NormalsPass;
-use crate::gpu::terrain::{TerrainPass, Variant};
-use crate::gpu::uniforms::{FrameInputs, View, view_proj};
+use crate::gpu::terrain::{Shading, TerrainPass, Variant};
+use crate::gpu::uniforms::{FrameInputs, View};
 use crate::gpu::warp_zoom::WarpZoomPass;
 use crate::sketch::Atlas;
 use crate::stage::CpuStage;
@@ -23,10 +23,9 @@ const PASSES_PIXEL_NORMALS: [&str; 2] = [WarpZoomPass::NAME, TerrainPass::NAME];
 
 pub struct Warped {
     pub stage: CpuStage,
-    /// The terrain pass shades with the terrain function's normals (`render.pixel_normals`).
-    pixel_normals: bool,
     warp_zoom: WarpZoomPass,
-    normals: NormalsPass,
+    /// The mesh's normals, unless the terrain is lit per pixel (`render.pixel_normals`).
+    normals: Option<NormalsPass>,
     terrain: TerrainPass,
     importance: Option<Buffer>,
     readback: ColourReadback,
@@ -40,7 +39,16 @@ impl Warped {
         let stage = CpuStage::new(s.scene, s.detail)?;
         let noise = s.detail.octaves > 0;
         let warp_zoom = WarpZoomPass::new(device, s.frame, s.atlas_buffer, n, mesh, noise)?;
-        let normals = NormalsPass::new(device, s.frame, &warp_zoom.detailed, mesh)?;
+        let normals = if s.scene.render.pixel_normals {
+            None
+        } else {
+            Some(NormalsPass::new(
+                device,
+                s.frame,
+                &warp_zoom.detailed,
+                mesh,
+            )?)
+        };
         // The importance map goes to the GPU only for the view that shows it.
         let importance = (s.view == View::Importance).then(|| {
             device.create_buffer(&wgpu::BufferDescriptor {
@@ -53,21 +61,18 @@ impl Warped {
         let variant = Variant {
             noise,
             bump: noise && s.scene.detail.bump,
-            pixel_normals: s
-                .scene
-                .render
-                .pixel_normals
-                .then(|| wgpu::Buffer::clone(s.atlas_buffer)),
+            shading: match &normals {
+                Some(pass) => Shading::MeshNormals(wgpu::Buffer::clone(&pass.normals)),
+                None => Shading::PixelNormals(wgpu::Buffer::clone(s.atlas_buffer)),
+            },
             importance: importance.as_ref().map(|b| wgpu::Buffer::clone(b)),
             geomipmap: None,
             positions: s.positions,
         };
-        let (detailed, normal_buffer) = (&warp_zoom.detailed, &normals.normals);
         let terrain = TerrainPass::new(
             device,
             s.frame,
-            detailed,
-            normal_buffer,
+            &warp_zoom.detailed,
             mesh,
             width,
             height,
@@ -76,7 +81,6 @@ impl Warped {
         let readback = ColourReadback::new(device, width, height);
         Ok(Warped {
             stage,
-            pixel_normals: s.scene.render.pixel_normals,
             warp_zoom,
             normals,
             terrain,
@@ -90,18 +94,21 @@ impl Warped {
         read_vec4(ctx, &self.warp_zoom.detailed)
     }
 
-    /// The normals of the last frame, read back (for tests).
-    pub fn read_normals(&self, ctx: &GpuContext) -> Result<Vec<[f32; 4]>> {
-        read_vec4(ctx, &self.normals.normals)
+    /// The normals of the last frame, read back (for tests); none when lit per pixel.
+    pub fn read_normals(&self, ctx: &GpuContext) -> Result<Option<Vec<[f32; 4]>>> {
+        self.normals
+            .as_ref()
+            .map(|pass| read_vec4(ctx, &pass.normals))
+            .transpose()
     }
 }
 
 impl Lod for Warped {
     fn passes(&self) -> &'static [&'static str] {
-        if self.pixel_normals {
-            &PASSES_PIXEL_NORMALS
-        } else {
+        if self.normals.is_some() {
             &PASSES
+        } else {
+            &PASSES_PIXEL_NORMALS
         }
     }
 
@@ -116,13 +123,16 @@ impl Lod for Warped {
     fn frame_inputs<'a>(&'a self, f: &mut FrameInputs<'a>) {
         f.map = Some(&self.stage.sketch_map);
         f.mesh = self.stage.mesh;
-        f.importance_max = self
-            .stage
-            .importance
-            .importance
-            .iter()
-            .copied()
-            .fold(0.0, f32::max);
+        // Only the importance view reads its scale.
+        if self.importance.is_some() {
+            f.importance_max = self
+                .stage
+                .importance
+                .importance
+                .iter()
+                .copied()
+                .fold(0.0, f32::max);
+        }
     }
 
     fn record(
@@ -147,9 +157,8 @@ impl Lod for Warped {
             self.terrain.use_quad_mesh(queue, m);
             let warp_zoom = t.map(|t| t.compute(WarpZoomPass::NAME));
             self.warp_zoom.record(encoder, m, warp_zoom);
-            if !self.pixel_normals {
-                self.normals
-                    .record(encoder, m, t.map(|t| t.compute(NormalsPass::NAME)));
+            if let Some(normals) = &self.normals {
+                normals.record(encoder, m, t.map(|t| t.compute(NormalsPass::NAME)));
             }
         }
         let terrain = t.map(|t| t.render(TerrainPass::NAME));
@@ -169,8 +178,7 @@ impl Lod for Warped {
     }
 
     fn read_positions(&self, ctx: &GpuContext, camera: &Camera) -> Result<Vec<[f32; 4]>> {
-        let vp = view_proj(camera, camera.eye.truncate());
-        self.terrain.read_positions(ctx, vp)
+        self.terrain.read_positions(ctx, camera)
     }
 
     fn triangles(&self) -> u64 {

@@ -127,13 +127,19 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
         halving_db,
     } = converged;
 
-    // The first steps of the camera path, for each setting's LOD change per frame.
-    let steps = if path_frames > 0 {
+    // The camera path once: its first steps give each setting's LOD change per frame, all of
+    // it the path series.
+    let flight = if path_frames > 0 {
         let path = CameraPath::of_scene(&scene)?;
-        path.cameras(LOD_STEPS + 1, o.path_fps, &scene, &atlas)?
+        let frames = o.path_frames.max(LOD_STEPS + 1);
+        let cameras = path.cameras(frames, o.path_fps, &scene, &atlas)?;
+        Some((path, cameras))
     } else {
-        Vec::new()
+        None
     };
+    let steps = flight
+        .as_ref()
+        .map_or(&[][..], |(_, c)| &c[..LOD_STEPS + 1]);
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
     let mut images: Vec<(Setting, Vec<u8>)> = Vec::new();
@@ -150,13 +156,13 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
                     b.params.tau = tau;
                 }
                 let (mut row, rgba) = measure(r, s, &camera, &truth0, o)?;
-                row.lod_change_levels = lod_change_along(r, &steps)?;
+                row.lod_change_levels = lod_change_along(r, steps)?;
                 return Ok((row, rgba));
             }
             gmm = None;
             let mut r = renderer(&ctx, &scene, &atlas, s)?;
             let (mut row, rgba) = measure(&mut r, s, &camera, &truth0, o)?;
-            row.lod_change_levels = lod_change_along(&mut r, &steps)?;
+            row.lod_change_levels = lod_change_along(&mut r, steps)?;
             Ok((row, rgba))
         })();
         match result {
@@ -178,10 +184,12 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
 
     let (w, h) = o.size;
     let title = format!("{name}: {w}×{h} px on {}", ctx.adapter_name());
-    let path = if path_frames > 0 {
+    let path = if let Some((path, cameras)) = &flight {
         let out = Out {
             dir: out_dir,
             title: &title,
+            path,
+            cameras: &cameras[..o.path_frames],
         };
         Some(path_series(
             &ctx,

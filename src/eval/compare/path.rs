@@ -9,6 +9,7 @@ use super::{Options, figures};
 use crate::app::output::{Fixed, write_atomic};
 use crate::app::path::CameraPath;
 use crate::app::progress::Progress;
+use crate::camera::Camera;
 use crate::error::Result;
 use crate::eval::metrics::{self, ScreenError};
 use crate::gpu::context::GpuContext;
@@ -32,14 +33,16 @@ struct PathRow {
     lod_changed_share: Option<Fixed<5>>,
 }
 
-/// Per frame along the path: each mode (at the scene's setting) against the reference, and the
-/// error change the motion does not explain. Writes `path.csv` and `path_error.svg`/`.png`.
-/// Where a stage's outputs go, and the title of its figures.
+/// The path flown and its frames' cameras; where the outputs go, and the title of the figures.
 pub(super) struct Out<'a> {
     pub dir: &'a Path,
     pub title: &'a str,
+    pub path: &'a CameraPath,
+    pub cameras: &'a [Camera],
 }
 
+/// Per frame along the path: each mode (at the scene's setting) against the reference, and the
+/// error change the motion does not explain. Writes `path.csv` and `path_error.svg`/`.png`.
 pub(super) fn path_series(
     ctx: &GpuContext,
     scene: &Scene,
@@ -49,9 +52,7 @@ pub(super) fn path_series(
     progress: &mut Progress,
     out: &Out,
 ) -> Result<PathReport> {
-    let (out_dir, title) = (out.dir, out.title);
-    let path = CameraPath::of_scene(scene)?;
-    let cameras = path.cameras(o.path_frames, o.path_fps, scene, atlas)?;
+    let (out_dir, title, path, cameras) = (out.dir, out.title, out.path, out.cameras);
     let mut modes: Vec<(Setting, Renderer)> = Vec::new();
     for &m in &o.modes {
         if let Some(s) = Setting::of_scene(m, scene, atlas) {
