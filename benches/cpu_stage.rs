@@ -1,7 +1,8 @@
 //! The CPU stage at 128²: sketch map, importance and warp, each alone and together, on the bundled
 //! jacksboro scene near the ground (the hardest view for the warp) and from high up.
 //!
-//! `cargo bench --bench cpu_stage`; criterion prints the median of each.
+//! `cargo bench --bench cpu_stage`; criterion prints the median of each. `stage` is a frame that
+//! warps anew, `stage_held` one that keeps the held warp (`warp.hold`, a still camera).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -23,14 +24,26 @@ fn bench_scene(c: &mut Criterion, name: &str) {
     let bounds = (atlas.origin, atlas.max_corner());
 
     let mut g = c.benchmark_group(name);
+    // A frame that warps anew: nothing held from the frame before.
     g.bench_function("stage", |b| {
-        b.iter(|| black_box(stage.run(&atlas, &camera)))
+        b.iter(|| {
+            stage.forget();
+            black_box(stage.run(&atlas, &camera))
+        })
     });
+    // A frame that keeps the held warp (`warp.hold`): the same camera again.
+    if stage.hold.is_some() {
+        stage.run(&atlas, &camera);
+        g.bench_function("stage_held", |b| {
+            b.iter(|| black_box(stage.run(&atlas, &camera)))
+        });
+        assert!(stage.held, "a still camera keeps its warp");
+    }
     g.bench_function("sketch_map", |b| {
         b.iter(|| {
             stage
                 .sketch_map
-                .update(&atlas, &camera, stage.params.reach_m)
+                .update(&atlas, &camera, stage.params.reach_m, false)
         })
     });
     g.bench_function("importance", |b| {

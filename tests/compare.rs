@@ -41,6 +41,9 @@ fn compare_reports_every_setting_with_every_column_filled() {
         "1",
         "--path-frames",
         "3",
+        // A held warp may not change at all over two steps; warped anew each frame, it must.
+        "--set",
+        "warp.hold=false",
     ]);
     assert_eq!(code, 0, "{err}");
     assert!(stdout.contains("frame time to 30 dB"), "{stdout}");

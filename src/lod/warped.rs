@@ -194,9 +194,7 @@ impl Lod for Warped {
     }
 
     fn forget(&mut self) {
-        if let Some(b) = &mut self.stage.budget {
-            b.forget();
-        }
+        self.stage.forget();
     }
 
     fn as_any(&self) -> &dyn Any {

@@ -53,6 +53,7 @@ impl Scene {
         open_range("warp.quad_px", w.quad_px, 0.0, 1e4)?;
         within("warp.mesh", w.mesh as f64, 2.0, 4096.0)?;
         within("warp.min_mesh", w.min_mesh as f64, 2.0, 4096.0)?;
+        open_range("warp.hold_drift", w.hold_drift, 0.0, 64.0)?;
         within("warp.size", w.size as f64, 2.0, 4096.0)?;
         within("warp.max_log2_step", w.max_log2_step, 0.0, 64.0)?;
         let g = &self.geomipmap;

@@ -130,6 +130,10 @@ pub struct WarpSection {
     pub budget: bool,
     /// The smallest mesh side a budgeted frame draws.
     pub min_mesh: u32,
+    /// Frames keep the last warp while their demand stays within `hold_drift` of it (`stage::hold`).
+    pub hold: bool,
+    /// Octaves the demand may drift, on all but 5 % of the texels in view, before a held warp is redone.
+    pub hold_drift: f64,
     /// Sketch map and warp size (128 in the paper).
     pub size: u32,
     pub method: WarpMethod,
@@ -143,6 +147,8 @@ impl Default for WarpSection {
             mesh: 512,
             budget: true,
             min_mesh: 32,
+            hold: true,
+            hold_drift: 0.5,
             size: 128,
             method: WarpMethod::Guarded,
             max_log2_step: 0.0,

@@ -6,6 +6,7 @@
 
 pub mod budget;
 pub mod figures;
+pub mod hold;
 pub mod importance;
 pub mod quality;
 pub mod sketch_map;
@@ -18,6 +19,7 @@ use crate::scene::Scene;
 use crate::sketch::Atlas;
 use budget::Budget;
 use glam::DVec2;
+use hold::Hold;
 use importance::{ErrorTerm, ImportanceMap, ImportanceParams};
 use sketch_map::{Resampler, SketchMap, resample};
 use std::time::Instant;
@@ -44,6 +46,10 @@ pub struct CpuStage {
     pub params: ImportanceParams,
     /// The mesh the importance asks for (`warp.budget`); `None`: always `warp.mesh`.
     pub budget: Option<Budget>,
+    /// Keeps the last warp while it serves (`warp.hold`); `None`: every frame warps anew.
+    pub hold: Option<Hold>,
+    /// Whether the last run kept the held warp.
+    pub held: bool,
     /// The mesh side the last run chose.
     pub mesh: u32,
     /// I_s as an atlas-like grid, when the scene gives a map.
@@ -86,6 +92,8 @@ impl CpuStage {
                 .warp
                 .budget
                 .then(|| Budget::new(scene.warp.min_mesh, scene.warp.mesh)),
+            hold: scene.warp.hold.then(|| Hold::new(scene.warp.hold_drift)),
+            held: false,
             mesh: scene.warp.mesh,
             surface_max: if surface_max_atlas.is_some() {
                 vec![0.0; n * n]
@@ -102,9 +110,12 @@ impl CpuStage {
     pub fn run(&mut self, atlas: &Atlas, camera: &Camera) -> StageTimes {
         let t0 = Instant::now();
         self.last_eye = camera.eye.truncate();
-        self.sketch_map.update(atlas, camera, self.params.reach_m);
+        let holding = self.hold.is_some();
+        let moved = self
+            .sketch_map
+            .update(atlas, camera, self.params.reach_m, holding);
         let n = self.sketch_map.n;
-        if let Some(m) = &self.surface_max_atlas {
+        if let (true, Some(m)) = (moved, &self.surface_max_atlas) {
             let map = &self.sketch_map;
             resample(
                 m,
@@ -124,10 +135,22 @@ impl CpuStage {
         self.importance
             .update(&self.sketch_map, bounds, camera, surface, &self.params);
         let t2 = Instant::now();
-        self.warp
-            .run(&self.importance.importance, self.sketch_map.spacing as f32);
-        if let Some(b) = &mut self.budget {
-            self.mesh = b.update(&self.importance.importance, self.sketch_map.spacing);
+        self.held = match &mut self.hold {
+            Some(h) if !moved && h.serves(&self.importance) => {
+                h.held_frames += 1;
+                true
+            }
+            _ => false,
+        };
+        if !self.held {
+            self.warp
+                .run(&self.importance.importance, self.sketch_map.spacing as f32);
+            if let Some(b) = &mut self.budget {
+                self.mesh = b.update(&self.importance.importance, self.sketch_map.spacing);
+            }
+            if let Some(h) = &mut self.hold {
+                h.made(&self.importance);
+            }
         }
         let t3 = Instant::now();
         let us = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e6;
@@ -135,6 +158,18 @@ impl CpuStage {
             sketch_map_us: us(t0, t1),
             importance_us: us(t1, t2),
             warp_us: us(t2, t3),
+        }
+    }
+
+    /// Drops what earlier frames left (the held warp and region, the budget's rung), so the next
+    /// run depends on its camera alone.
+    pub fn forget(&mut self) {
+        self.sketch_map.forget();
+        if let Some(h) = &mut self.hold {
+            h.forget();
+        }
+        if let Some(b) = &mut self.budget {
+            b.forget();
         }
     }
 

@@ -198,8 +198,13 @@ fn frames(
     let spinner = (w as u64 * h as u64 > BIG_RENDER_PIXELS)
         .then(|| Spinner::new(&format!("rendering {w}×{h} ({} frames)", repeat + 1)));
     r.render(camera)?;
+    // Each timed frame is drawn as a snapshot's is: nothing held from the one before
+    // (`warp.hold` would otherwise time the held frame's shortcut).
     let frames = (0..repeat)
-        .map(|_| r.render(camera))
+        .map(|_| {
+            r.forget();
+            r.render(camera)
+        })
         .collect::<terrain::Result<Vec<_>>>()?;
     if let Some(s) = spinner {
         s.finish();

@@ -143,8 +143,8 @@ fn error_against(
     }
 }
 
-/// `lod_change_vs_psnr`: each setting's LOD change per frame (over the first steps of the camera
-/// path) against its PSNR, a line per mode in order of PSNR: what each mode's quality costs in
+/// `lod_change_vs_psnr`: each setting's LOD change per frame (along the camera path) against its
+/// PSNR, a line per mode in order of PSNR: what each mode's quality costs in
 /// swimming or popping. Brute force, which has no level of detail, scores 0 and is left off the
 /// log axis.
 pub fn lod_change_vs_psnr(rows: &[Row], title: &str) -> Figure {

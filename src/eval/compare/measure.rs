@@ -71,9 +71,11 @@ pub(super) fn measure(
     o: &Options,
 ) -> Result<(Row, Vec<u8>)> {
     r.render(camera)?;
-    // At least one timed frame: `last` below is the one whose image is kept.
-    let mut frames = vec![r.render(camera)?];
-    for _ in 1..o.repeat {
+    // At least one timed frame: `last` below is the one whose image is kept. Each is drawn as by
+    // a fresh renderer, so a still camera times the whole CPU stage, not a held warp.
+    let mut frames = Vec::new();
+    for _ in 0..o.repeat.max(1) {
+        r.forget();
         frames.push(r.render(camera)?);
     }
     let last = &frames[frames.len() - 1];

@@ -48,7 +48,9 @@ use sweep::Setting;
 /// PSNR between the reference at its step and at half of it that counts as converged: finer
 /// than any difference between modes worth reporting (mode images differ from it by 20–45 dB).
 pub const REFERENCE_CONVERGED_DB: f64 = 50.0;
-/// Steps along the camera path over which each setting's LOD change per frame is measured.
+/// The fewest steps along the camera path over which each setting's LOD change per frame is
+/// measured; it takes the whole path (`--path-frames`) when that is longer. A warp held over
+/// several frames (`warp.hold`) changes nothing on most of them, so a few steps say little.
 const LOD_STEPS: usize = 3;
 /// How many times the reference's step may be halved to get there.
 const MAX_REFERENCE_HALVINGS: usize = 3;
@@ -127,8 +129,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
         halving_db,
     } = converged;
 
-    // The camera path once: its first steps give each setting's LOD change per frame, all of
-    // it the path series.
+    // The camera path once: each setting's LOD change per frame along it, and the path series.
     let flight = if path_frames > 0 {
         let path = CameraPath::of_scene(&scene)?;
         let frames = o.path_frames.max(LOD_STEPS + 1);
@@ -137,9 +138,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     } else {
         None
     };
-    let steps = flight
-        .as_ref()
-        .map_or(&[][..], |(_, c)| &c[..LOD_STEPS + 1]);
+    let steps = flight.as_ref().map_or(&[][..], |(_, c)| &c[..]);
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
     let mut images: Vec<(Setting, Vec<u8>)> = Vec::new();

@@ -40,8 +40,8 @@ pub struct Row {
     pub frames: u32,
     pub pareto_psnr: bool,
     pub pareto_sse: bool,
-    /// Mean change per frame from the level-of-detail update alone over the first steps of the
-    /// camera path (8-bit levels; `None` without a path).
+    /// Mean change per frame from the level-of-detail update alone along the camera path (8-bit
+    /// levels; `None` without a path).
     #[serde(default)]
     pub lod_change_levels: Option<f64>,
     /// Per-pass GPU medians by pass name (JSON only; empty where the adapter has no timestamp
