@@ -41,6 +41,8 @@ fn bench_scene(c: &mut Criterion, name: &str) {
     }
     g.bench_function("sketch_map", |b| {
         b.iter(|| {
+            // Forgotten, so that the region is chosen and resampled (an unchanged region is not).
+            stage.sketch_map.forget();
             stage
                 .sketch_map
                 .update(&atlas, &camera, stage.params.reach_m, false)
