@@ -124,8 +124,6 @@ impl ImportanceMap {
 
     /// Fills the map for `camera` over `map`; `surface_max` is I_s per texel when a map gives it.
     /// Allocates nothing after the first frame.
-    // The row loops index five parallel slices by column; zipped iterators would hide that.
-    #[allow(clippy::needless_range_loop)]
     pub fn update(
         &mut self,
         map: &SketchMap,
@@ -133,6 +131,22 @@ impl ImportanceMap {
         camera: &Camera,
         surface_max: Option<&[f32]>,
         p: &ImportanceParams,
+    ) {
+        self.update_rows(map, atlas_bounds, camera, surface_max, p, 1);
+    }
+
+    /// [`ImportanceMap::update`] for every `row_step`-th row only (0, row_step, …); the other
+    /// rows keep what they held. A held warp's drift check (`stage::hold`) samples the map so.
+    // The row loops index five parallel slices by column; zipped iterators would hide that.
+    #[allow(clippy::needless_range_loop)]
+    pub fn update_rows(
+        &mut self,
+        map: &SketchMap,
+        atlas_bounds: (DVec2, DVec2),
+        camera: &Camera,
+        surface_max: Option<&[f32]>,
+        p: &ImportanceParams,
+        row_step: usize,
     ) {
         let n = map.n;
         let d0 = map.spacing;
@@ -182,7 +196,7 @@ impl ImportanceMap {
         let mut min_visible = f32::INFINITY;
         let mut nonfinite = 0;
         let x: &[f32] = &self.x;
-        for j in 0..n {
+        for j in (0..n).step_by(row_step.max(1)) {
             let y = j as f32 * d0f;
             let row_on = if j >= j_first && (j as isize) <= j_last {
                 1.0
@@ -250,16 +264,18 @@ impl ImportanceMap {
             nonfinite += row_bad;
         }
         self.nonfinite = nonfinite;
-        self.apply_floor(min_visible, p.floor as f32);
+        self.apply_floor(min_visible, p.floor as f32, row_step.max(1));
     }
 
-    fn apply_floor(&mut self, min_visible: f32, floor: f32) {
+    fn apply_floor(&mut self, min_visible: f32, floor: f32, row_step: usize) {
+        let n = self.n;
+        let rows = self.importance.chunks_exact_mut(n).step_by(row_step);
         if !min_visible.is_finite() {
-            self.importance.fill(1.0);
+            rows.for_each(|r| r.fill(1.0));
             return;
         }
         let i_floor = (min_visible * floor).max(f32::MIN_POSITIVE);
-        for v in &mut self.importance {
+        for v in rows.flatten() {
             *v = v.max(i_floor);
         }
     }

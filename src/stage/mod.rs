@@ -19,7 +19,7 @@ use crate::scene::Scene;
 use crate::sketch::Atlas;
 use budget::Budget;
 use glam::DVec2;
-use hold::Hold;
+use hold::{Hold, ROW_STEP};
 use importance::{ErrorTerm, ImportanceMap, ImportanceParams};
 use sketch_map::{Resampler, SketchMap, resample};
 use std::time::Instant;
@@ -42,6 +42,8 @@ impl StageTimes {
 pub struct CpuStage {
     pub sketch_map: SketchMap,
     pub importance: ImportanceMap,
+    /// The importance on a sample of rows, for a held warp's drift check.
+    probe: ImportanceMap,
     pub warp: Warp,
     pub params: ImportanceParams,
     /// The mesh the importance asks for (`warp.budget`); `None`: always `warp.mesh`.
@@ -74,6 +76,7 @@ impl CpuStage {
         Ok(CpuStage {
             sketch_map: SketchMap::new(n),
             importance: ImportanceMap::new(n),
+            probe: ImportanceMap::new(n),
             warp: Warp::new(n, scene.warp.method, scene.warp.max_log2_step as f32),
             params: ImportanceParams {
                 quad_px: scene.warp.quad_px,
@@ -132,25 +135,42 @@ impl CpuStage {
             .surface_max_atlas
             .as_ref()
             .map(|_| self.surface_max.as_slice());
-        self.importance
-            .update(&self.sketch_map, bounds, camera, surface, &self.params);
-        let t2 = Instant::now();
+        // A held warp that still serves: only a sample of the importance, no warp.
         self.held = match &mut self.hold {
-            Some(h) if !moved && h.serves(&self.importance) => {
-                h.held_frames += 1;
-                true
+            Some(h) if !moved && h.is_holding() => {
+                self.probe.update_rows(
+                    &self.sketch_map,
+                    bounds,
+                    camera,
+                    surface,
+                    &self.params,
+                    ROW_STEP,
+                );
+                let serves = h.serves(&self.probe);
+                h.held_frames += u32::from(serves);
+                serves
             }
             _ => false,
         };
-        if !self.held {
-            self.warp
-                .run(&self.importance.importance, self.sketch_map.spacing as f32);
-            if let Some(b) = &mut self.budget {
-                self.mesh = b.update(&self.importance.importance, self.sketch_map.spacing);
-            }
-            if let Some(h) = &mut self.hold {
-                h.made(&self.importance);
-            }
+        if self.held {
+            let t2 = Instant::now();
+            let us = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e6;
+            return StageTimes {
+                sketch_map_us: us(t0, t1),
+                importance_us: us(t1, t2),
+                warp_us: 0.0,
+            };
+        }
+        self.importance
+            .update(&self.sketch_map, bounds, camera, surface, &self.params);
+        let t2 = Instant::now();
+        self.warp
+            .run(&self.importance.importance, self.sketch_map.spacing as f32);
+        if let Some(b) = &mut self.budget {
+            self.mesh = b.update(&self.importance.importance, self.sketch_map.spacing);
+        }
+        if let Some(h) = &mut self.hold {
+            h.made(&self.importance);
         }
         let t3 = Instant::now();
         let us = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e6;
