@@ -226,6 +226,12 @@ fn a_killed_batch_resumes_with_nothing_lost_or_listed_twice() {
         "the batch finished before it was killed ({before} lines)"
     );
 
+    // What a kill mid-write leaves (the kill above may or may not have), and a file of someone
+    // else's that resuming must not touch.
+    let torn = out.join(".random-13.png.4194303.tmp");
+    let foreign = out.join(".notes.txt.12.tmp");
+    std::fs::write(&torn, b"half a png").unwrap();
+    std::fs::write(&foreign, b"not ours").unwrap();
     let (code, stdout, err) = terrain(&[
         "batch",
         jobs.to_str().unwrap(),
@@ -235,6 +241,8 @@ fn a_killed_batch_resumes_with_nothing_lost_or_listed_twice() {
     ]);
     assert_eq!(code, 0, "{err}");
     assert!(stdout.contains("already done"), "{stdout}");
+    assert!(!torn.exists() && foreign.exists());
+    std::fs::remove_file(&foreign).unwrap();
     let m = manifest(&out.join("manifest.jsonl"));
     let mut names: Vec<&str> = m.iter().map(|l| l["name"].as_str().unwrap()).collect();
     names.sort();

@@ -14,7 +14,8 @@
 //! - Each snapshot is written atomically, then its line is appended to the manifest
 //!   (`manifest.jsonl`, or `manifest-<i>-of-<n>.jsonl` for a shard) and flushed. `--resume` keeps
 //!   the manifest's complete `ok` lines whose image exists, drops the rest (failed items, a line
-//!   torn by a kill) and renders what is missing, so nothing is lost or listed twice.
+//!   torn by a kill) and renders what is missing, so nothing is lost or listed twice; it also
+//!   removes the temporary files a kill left mid-write for this shard's images.
 //!
 //! Rejected alternative: one process per snapshot (a shell loop over `terrain render`). Every
 //! launch opens the device and compiles the pipelines again; `batch` measures what that costs.
@@ -85,6 +86,31 @@ fn resume_from(manifest: &Path, out_dir: &Path) -> Result<HashSet<String>> {
     }
     write_atomic(manifest, kept.as_bytes())?;
     Ok(done)
+}
+
+/// Removes the temporary files a killed run left while writing this shard's images or manifest
+/// (`.NAME.png.PID.tmp`, see `output::write_atomic`). Only this shard's names: another shard
+/// writing into the same folder may be alive. Best effort: a file that will not go is harmless.
+fn remove_torn_writes(out_dir: &Path, items: &[Item], manifest: &Path) {
+    let Ok(entries) = std::fs::read_dir(out_dir) else {
+        return;
+    };
+    let mut ours: HashSet<String> = items.iter().map(|it| format!("{}.png", it.name)).collect();
+    if let Some(m) = manifest.file_name() {
+        ours.insert(m.to_string_lossy().into_owned());
+    }
+    for e in entries.flatten() {
+        let file = e.file_name().to_string_lossy().into_owned();
+        let target = file
+            .strip_prefix('.')
+            .and_then(|f| f.strip_suffix(".tmp"))
+            .and_then(|f| f.rsplit_once('.'))
+            .filter(|(_, pid)| !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit()))
+            .map(|(target, _)| target);
+        if target.is_some_and(|t| ours.contains(t)) {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
 }
 
 fn plain_name(name: &str) -> bool {
@@ -199,6 +225,9 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
         .into_iter()
         .filter(|it| it.index % o.shard.1 == o.shard.0)
         .collect();
+    if o.resume {
+        remove_torn_writes(out_dir, &items, &manifest);
+    }
     let mut file = std::fs::OpenOptions::new()
         .append(true)
         .open(&manifest)
