@@ -259,9 +259,21 @@ impl ImportanceMap {
                 }
             }
             let i_s_row = surface_max.map(|m| &m[j * n..(j + 1) * n]);
-            let (row_min, row_bad) = finish_row(out, s_f, i_s_row, i_s_const);
-            min_visible = min_visible.min(row_min);
-            nonfinite += row_bad;
+            for i in 0..n {
+                let i_s = i_s_row.map_or(i_s_const, |m| m[i].min(i_s_const));
+                let mut v = (out[i] * s_f[i]).min(i_s);
+                if !(v.is_finite() && v >= 0.0) {
+                    nonfinite += 1;
+                    v = 0.0;
+                }
+                out[i] = v;
+                let candidate = if s_f[i] >= 0.5 && v > 0.0 {
+                    v
+                } else {
+                    f32::INFINITY
+                };
+                min_visible = min_visible.min(candidate);
+            }
         }
         self.nonfinite = nonfinite;
         self.apply_floor(min_visible, p.floor as f32, row_step.max(1));
@@ -293,32 +305,6 @@ impl ImportanceMap {
         let hi = at(i, j + 1) + (at(i + 1, j + 1) - at(i, j + 1)) * fx;
         lo + (hi - lo) * fy
     }
-}
-
-/// The last step of a row: `I = min(I·S_f, I_s)`, a non-finite or negative value replaced by 0.
-/// Returns the least positive importance of a texel in view (`S_f ≥ 0.5`) and the count of values
-/// replaced. Branch-free with eight running minima, so that it vectorises: a scalar `min` chain
-/// over the row does not (f32 `min` is not associative where NaN is concerned).
-fn finish_row(out: &mut [f32], s_f: &[f32], i_s: Option<&[f32]>, i_s_const: f32) -> (f32, usize) {
-    let mut least = [f32::INFINITY; 8];
-    let mut bad = 0u32;
-    for (k, (v, &f)) in out.iter_mut().zip(s_f).enumerate() {
-        let cap = i_s.map_or(i_s_const, |m| m[k].min(i_s_const));
-        let x = (*v * f).min(cap);
-        let ok = x.is_finite() && x >= 0.0;
-        bad += u32::from(!ok);
-        *v = if ok { x } else { 0.0 };
-        let candidate = if f >= 0.5 && *v > 0.0 {
-            *v
-        } else {
-            f32::INFINITY
-        };
-        least[k % 8] = least[k % 8].min(candidate);
-    }
-    (
-        least.iter().fold(f32::INFINITY, |a, &b| a.min(b)),
-        bad as usize,
-    )
 }
 
 /// The largest second derivative of the sketch map's heights along a row (1/m): |h_xx|, |h_yy|

@@ -172,9 +172,9 @@ pub struct Resampler {
 /// levels around the lattice's spacing.
 ///
 /// Each output row first interpolates the two source rows under it over the span of texels its
-/// taps touch (a contiguous loop that vectorises), then takes the taps along x from that. Taking
-/// all four texels per output sample instead cost 107 µs per 128² map against 35 µs
-/// (`benches/cpu_stage.rs`, jacksboro near, medians).
+/// taps touch (a contiguous loop), then takes the taps along x from that. Taking all four texels
+/// per output sample instead cost 108 µs per 128² map against 42 µs (`benches/cpu_stage.rs`,
+/// `sketch_map`, jacksboro near, medians). The row scratch grows to its span once.
 pub fn resample(
     atlas: &Atlas,
     origin: DVec2,
