@@ -31,7 +31,7 @@ use crate::stage::importance::ImportanceMap;
 /// The share of the cells in view whose demand may drift past the tolerance before the warp is redone.
 pub const SHARE: f32 = 0.05;
 
-/// The drift check computes the importance on every fourth row: a held frame then takes 48 µs
+/// The drift check computes the importance on every fourth row: a held frame then takes 40 µs
 /// against 192 µs with the whole map (`benches/cpu_stage.rs`, `stage_held`, jacksboro near), and
 /// the demand varies smoothly from row to row.
 pub const ROW_STEP: usize = 4;
