@@ -31,9 +31,9 @@ use crate::stage::importance::ImportanceMap;
 /// The share of the cells in view whose demand may drift past the tolerance before the warp is redone.
 pub const SHARE: f32 = 0.05;
 
-/// The drift check computes the importance on every fourth row: a held frame then takes 40 µs
-/// against 192 µs with the whole map (`benches/cpu_stage.rs`, `stage_held`, jacksboro near), and
-/// the demand varies smoothly from row to row.
+/// The drift check computes the importance on every fourth row: a held frame then took 48 µs
+/// against 192 µs with the whole map (`benches/cpu_stage.rs`, `stage_held`, jacksboro near; 40 µs
+/// since the rows' AVX2 build), and the demand varies smoothly from row to row.
 pub const ROW_STEP: usize = 4;
 
 #[derive(Clone, Debug)]
