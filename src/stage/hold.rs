@@ -1,30 +1,31 @@
 //! Holding the warp: a frame keeps the last Φ (and its sketch map) while the demand it was made
 //! for still describes the view, instead of warping anew.
 //!
-//! Why: the warped mesh follows the camera, so every vertex slides over the terrain each frame.
-//! The geometric octaves near the mesh's sampling limit decorrelate within one frame's slide (on
-//! the bundled jacksboro flight a vertex moves about ¾ of its spacing per frame at 15 fps), so the
-//! per-frame change of the picture does not grow with how far the mesh moved: warping every
-//! fourth frame changed the picture by 0.23 levels per frame against 1.18 when warping every
-//! frame, at 0.13 dB less PSNR (`terrain compare`, 16 path frames). Holding the warp while it
-//! still fits turns continuous swimming into rare updates, and the held frames skip the warp.
+//! Why: the warped mesh follows the camera, so every vertex slides over the terrain each frame,
+//! and the geometric octaves near the mesh's sampling limit, sampled at new places, change the
+//! picture: on jacksboro's path at 256², a frame drawn with the last warp and with its own differ
+//! by 1.09 levels, by 0.024 with `detail.octaves = 0`. That change hardly grows with how far the
+//! mesh moved: an experiment that warped only every fourth frame changed the picture by 0.23
+//! levels per frame against 1.1–1.2 warping every frame, at 0.13 dB less PSNR (`terrain
+//! compare`, 16 path frames). Holding the warp while it still fits turns continuous swimming into
+//! rare updates, and the held frames skip the warp.
 //!
 //! Rules:
 //! - The sketch map's region is held too (`SketchMap::update` keeps its corner while it still
 //!   encloses the footprint at the same spacing); a frame whose region moved warps anew.
 //! - Otherwise the frame computes its importance over the held region on every [`ROW_STEP`]-th
 //!   row and compares it with the importance the held Φ was made for, over the texels in view
-//!   (`S_f ≥ 0.5` now): where the
-//!   demand changed by more than `warp.hold_drift` octaves on texels that ask for more than
-//!   [`SHARE`] of the cells in view (each texel weighted by I², its cells) — the camera came
-//!   closer, turned, or new ground came into view — it warps anew. Counting texels instead let
-//!   the few near the camera, which ask for most of the cells, drift unseen: jacksboro's flight
-//!   never warped again in 24 frames and lost 0.65 dB.
+//!   (`S_f ≥ 0.5` now). Where the demand changed by more than `warp.hold_drift` octaves on
+//!   texels that ask for more than [`SHARE`] of the cells in view (each texel weighted by I², its
+//!   cells) — the camera came closer, turned, or new ground came into view — it warps anew.
+//!   Counting texels instead let the few near the camera, which ask for most of the cells, drift
+//!   unseen: jacksboro's path never warped again in 24 frames and lost 0.65 dB.
 //! - A snapshot must not depend on the frames before it: [`Hold::forget`] (through
 //!   `Renderer::forget`) drops the held warp, as `batch` does before each job.
 //!
-//! Rejected alternative: blending Φ toward each new warp (exponential smoothing). In steady flight
-//! the blended mesh moves as fast as the camera, only later, so it slides as much per frame.
+//! Not built, by argument rather than measurement: blending Φ toward each new warp (exponential
+//! smoothing). In steady flight the blended mesh moves as fast as the camera, only later, so it
+//! would slide as much per frame.
 
 use crate::stage::importance::ImportanceMap;
 
