@@ -68,8 +68,8 @@ fn a_still_camera_keeps_its_warp_a_closer_or_turned_one_warps_anew() {
     let phi = st.stage.warp.phi.clone();
     assert!(st.run(&base), "the same camera keeps the warp");
     assert_eq!(st.stage.warp.phi, phi);
-    // 7 m ahead (one frame at 100 m/s and 15 fps): the demand barely drifts.
-    let step = moved(&base, DVec3::new(0.0, 7.0, 0.0), 0.0);
+    // 10 m ahead (one frame of the default path, 150 m/s at 15 fps): the demand barely drifts.
+    let step = moved(&base, DVec3::new(0.0, 10.0, 0.0), 0.0);
     assert!(st.run(&step), "a small step keeps the warp");
     assert_eq!(st.stage.warp.phi, phi);
     // 1.5 km ahead: the ground there is near now and asks for more density (the camera, 123 m
