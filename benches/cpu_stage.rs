@@ -10,6 +10,7 @@ use std::path::Path;
 use terrain::scene;
 use terrain::scene::{Scene, WarpMethod};
 use terrain::stage::CpuStage;
+use terrain::stage::importance::Inputs;
 
 fn bench_scene(c: &mut Criterion, name: &str) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -50,9 +51,13 @@ fn bench_scene(c: &mut Criterion, name: &str) {
     });
     g.bench_function("importance", |b| {
         b.iter(|| {
-            stage
-                .importance
-                .update(&stage.sketch_map, bounds, &camera, None, &stage.params)
+            stage.importance.update(&Inputs {
+                map: &stage.sketch_map,
+                atlas_bounds: bounds,
+                camera: &camera,
+                surface_max: None,
+                params: &stage.params,
+            })
         })
     });
     let d0 = stage.sketch_map.spacing as f32;

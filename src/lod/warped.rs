@@ -29,6 +29,8 @@ pub struct Warped {
     terrain: TerrainPass,
     importance: Option<Buffer>,
     readback: ColourReadback,
+    /// Whether the GPU's Φ (and importance) buffers hold the stage's current warp.
+    phi_on_gpu: bool,
 }
 
 impl Warped {
@@ -86,6 +88,7 @@ impl Warped {
             terrain,
             importance,
             readback,
+            phi_on_gpu: false,
         })
     }
 
@@ -114,6 +117,7 @@ impl Lod for Warped {
 
     fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes {
         let stage = self.stage.run(atlas, camera);
+        self.phi_on_gpu &= self.stage.held;
         CpuTimes {
             stage,
             us: stage.total_us(),
@@ -144,14 +148,18 @@ impl Lod for Warped {
         let visible = self.stage.sketch_map.visible;
         if visible {
             let queue = &ctx.queue;
-            queue.write_buffer(
-                &self.warp_zoom.phi,
-                0,
-                bytemuck::cast_slice(&self.stage.warp.phi),
-            );
-            if let Some(buffer) = &self.importance {
-                let values = &self.stage.importance.importance;
-                queue.write_buffer(buffer, 0, bytemuck::cast_slice(values));
+            // A held warp is on the GPU already once a frame has drawn it.
+            if !self.phi_on_gpu {
+                queue.write_buffer(
+                    &self.warp_zoom.phi,
+                    0,
+                    bytemuck::cast_slice(&self.stage.warp.phi),
+                );
+                if let Some(buffer) = &self.importance {
+                    let values = &self.stage.importance.importance;
+                    queue.write_buffer(buffer, 0, bytemuck::cast_slice(values));
+                }
+                self.phi_on_gpu = true;
             }
             let m = self.stage.mesh;
             self.terrain.use_quad_mesh(queue, m);

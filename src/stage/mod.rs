@@ -130,47 +130,39 @@ impl CpuStage {
             );
         }
         let t1 = Instant::now();
-        let bounds = (atlas.origin, atlas.max_corner());
-        let surface = self
-            .surface_max_atlas
-            .as_ref()
-            .map(|_| self.surface_max.as_slice());
+        let inputs = importance::Inputs {
+            map: &self.sketch_map,
+            atlas_bounds: (atlas.origin, atlas.max_corner()),
+            camera,
+            surface_max: self
+                .surface_max_atlas
+                .as_ref()
+                .map(|_| self.surface_max.as_slice()),
+            params: &self.params,
+        };
         // A held warp that still serves: only a sample of the importance, no warp.
         self.held = match &mut self.hold {
             Some(h) if !moved && h.is_holding() => {
-                self.probe.update_rows(
-                    &self.sketch_map,
-                    bounds,
-                    camera,
-                    surface,
-                    &self.params,
-                    ROW_STEP,
-                );
+                self.probe.update_rows(&inputs, ROW_STEP);
                 let serves = h.serves(&self.probe);
                 h.held_frames += u32::from(serves);
                 serves
             }
             _ => false,
         };
-        if self.held {
-            let t2 = Instant::now();
-            let us = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e6;
-            return StageTimes {
-                sketch_map_us: us(t0, t1),
-                importance_us: us(t1, t2),
-                warp_us: 0.0,
-            };
+        if !self.held {
+            self.importance.update(&inputs);
         }
-        self.importance
-            .update(&self.sketch_map, bounds, camera, surface, &self.params);
         let t2 = Instant::now();
-        self.warp
-            .run(&self.importance.importance, self.sketch_map.spacing as f32);
-        if let Some(b) = &mut self.budget {
-            self.mesh = b.update(&self.importance.importance, self.sketch_map.spacing);
-        }
-        if let Some(h) = &mut self.hold {
-            h.made(&self.importance);
+        if !self.held {
+            self.warp
+                .run(&self.importance.importance, self.sketch_map.spacing as f32);
+            if let Some(b) = &mut self.budget {
+                self.mesh = b.update(&self.importance.importance, self.sketch_map.spacing);
+            }
+            if let Some(h) = &mut self.hold {
+                h.made(&self.importance);
+            }
         }
         let t3 = Instant::now();
         let us = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e6;

@@ -21,6 +21,27 @@ pub fn colour(mode: &str) -> Rgb {
     }
 }
 
+/// A line per mode through each of its rows' `point` (rows without one left out), in order of x.
+fn lines_per_mode(rows: &[Row], point: &dyn Fn(&Row) -> Option<(f64, f64)>) -> Vec<Series> {
+    modes(rows)
+        .into_iter()
+        .map(|m| {
+            let mut points: Vec<(f64, f64)> = rows
+                .iter()
+                .filter(|r| r.mode == m)
+                .filter_map(point)
+                .collect();
+            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            Series {
+                name: display(m).to_string(),
+                colour: colour(m),
+                style: Style::LineMarkers,
+                points,
+            }
+        })
+        .collect()
+}
+
 /// A mode's name in figure legends, as the papers write it.
 pub fn display(mode: &str) -> &str {
     match Mode::parse(mode) {
@@ -78,23 +99,7 @@ fn error_against(
                  value: &dyn Fn(&Row) -> f64,
                  on_front: &dyn Fn(&Row) -> bool,
                  guide: (f64, String)| {
-        let mut series: Vec<Series> = modes(rows)
-            .into_iter()
-            .map(|m| {
-                let mut pts: Vec<(f64, f64)> = rows
-                    .iter()
-                    .filter(|r| r.mode == m)
-                    .map(|r| (cost(r), value(r)))
-                    .collect();
-                pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-                Series {
-                    name: display(m).to_string(),
-                    colour: colour(m),
-                    style: Style::LineMarkers,
-                    points: pts,
-                }
-            })
-            .collect();
+        let mut series = lines_per_mode(rows, &|r| Some((cost(r), value(r))));
         if fronts {
             let mut front: Vec<(f64, f64)> = rows
                 .iter()
@@ -148,23 +153,9 @@ fn error_against(
 /// swimming or popping. Brute force, which has no level of detail, scores 0 and is left off the
 /// log axis.
 pub fn lod_change_vs_psnr(rows: &[Row], title: &str) -> Figure {
-    let series = modes(rows)
-        .into_iter()
-        .map(|m| {
-            let mut points: Vec<(f64, f64)> = rows
-                .iter()
-                .filter(|r| r.mode == m)
-                .filter_map(|r| Some((r.psnr_db.min(PSNR_CAP_DB), r.lod_change_levels?)))
-                .collect();
-            points.sort_by(|a, b| a.0.total_cmp(&b.0));
-            Series {
-                name: display(m).to_string(),
-                colour: colour(m),
-                style: Style::LineMarkers,
-                points,
-            }
-        })
-        .collect();
+    let series = lines_per_mode(rows, &|r| {
+        Some((r.psnr_db.min(PSNR_CAP_DB), r.lod_change_levels?))
+    });
     Figure {
         title: title.to_string(),
         width: 700,
