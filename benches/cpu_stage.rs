@@ -10,7 +10,6 @@ use std::path::Path;
 use terrain::scene;
 use terrain::scene::{Scene, WarpMethod};
 use terrain::stage::CpuStage;
-use terrain::stage::importance::Inputs;
 
 fn bench_scene(c: &mut Criterion, name: &str) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -51,13 +50,9 @@ fn bench_scene(c: &mut Criterion, name: &str) {
     });
     g.bench_function("importance", |b| {
         b.iter(|| {
-            stage.importance.update(&Inputs {
-                map: &stage.sketch_map,
-                atlas_bounds: bounds,
-                camera: &camera,
-                surface_max: None,
-                params: &stage.params,
-            })
+            stage
+                .importance
+                .update(&stage.sketch_map, bounds, &camera, None, &stage.params)
         })
     });
     let d0 = stage.sketch_map.spacing as f32;

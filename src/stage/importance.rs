@@ -89,18 +89,6 @@ impl ErrorTerm {
     }
 }
 
-/// What one frame's importance is computed from.
-#[derive(Clone, Copy, Debug)]
-pub struct Inputs<'a> {
-    pub map: &'a SketchMap,
-    /// The atlas's corners (world): texels outside it have `S_f = 0`.
-    pub atlas_bounds: (DVec2, DVec2),
-    pub camera: &'a Camera,
-    /// I_s per texel, when a map gives it.
-    pub surface_max: Option<&'a [f32]>,
-    pub params: &'a ImportanceParams,
-}
-
 #[derive(Clone, Debug)]
 pub struct ImportanceMap {
     pub n: usize,
@@ -134,43 +122,67 @@ impl ImportanceMap {
         }
     }
 
-    /// Fills the map for the inputs' camera over their sketch map. Allocates nothing after the
-    /// first frame.
-    pub fn update(&mut self, inputs: &Inputs) {
-        self.update_rows(inputs, 1);
+    /// Fills the map for `camera` over `map`; `surface_max` is I_s per texel when a map gives it.
+    /// Allocates nothing after the first frame.
+    pub fn update(
+        &mut self,
+        map: &SketchMap,
+        atlas_bounds: (DVec2, DVec2),
+        camera: &Camera,
+        surface_max: Option<&[f32]>,
+        p: &ImportanceParams,
+    ) {
+        self.update_rows(map, atlas_bounds, camera, surface_max, p, 1);
     }
 
     /// [`ImportanceMap::update`] for every `row_step`-th row only (0, row_step, …); the other
     /// rows keep what they held. A held warp's drift check (`stage::hold`) samples the map so.
-    pub fn update_rows(&mut self, inputs: &Inputs, row_step: usize) {
+    pub fn update_rows(
+        &mut self,
+        map: &SketchMap,
+        atlas_bounds: (DVec2, DVec2),
+        camera: &Camera,
+        surface_max: Option<&[f32]>,
+        p: &ImportanceParams,
+        row_step: usize,
+    ) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2, checked just above.
-            unsafe { self.rows_avx2(inputs, row_step) };
+            unsafe { self.rows_avx2(map, atlas_bounds, camera, surface_max, p, row_step) };
             return;
         }
-        self.rows(inputs, row_step);
+        self.rows(map, atlas_bounds, camera, surface_max, p, row_step);
     }
 
     /// [`ImportanceMap::rows`] compiled for AVX2's eight f32 lanes (the build's baseline, SSE2,
     /// has four). The same operations in the same order: the results are bit-identical.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn rows_avx2(&mut self, inputs: &Inputs, row_step: usize) {
-        self.rows(inputs, row_step);
+    unsafe fn rows_avx2(
+        &mut self,
+        map: &SketchMap,
+        atlas_bounds: (DVec2, DVec2),
+        camera: &Camera,
+        surface_max: Option<&[f32]>,
+        p: &ImportanceParams,
+        row_step: usize,
+    ) {
+        self.rows(map, atlas_bounds, camera, surface_max, p, row_step);
     }
 
     // The row loops index five parallel slices by column; zipped iterators would hide that.
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn rows(&mut self, inputs: &Inputs, row_step: usize) {
-        let Inputs {
-            map,
-            atlas_bounds,
-            camera,
-            surface_max,
-            params: p,
-        } = *inputs;
+    fn rows(
+        &mut self,
+        map: &SketchMap,
+        atlas_bounds: (DVec2, DVec2),
+        camera: &Camera,
+        surface_max: Option<&[f32]>,
+        p: &ImportanceParams,
+        row_step: usize,
+    ) {
         let n = map.n;
         let d0 = map.spacing;
         let corner = map.origin.extend(0.0);
@@ -409,16 +421,10 @@ mod tests {
             reach_m: 50.0,
             error: None,
         };
+        let bounds = (atlas.origin, atlas.max_corner());
         let (mut dispatched, mut baseline) = (ImportanceMap::new(128), ImportanceMap::new(128));
-        let inputs = Inputs {
-            map: &map,
-            atlas_bounds: (atlas.origin, atlas.max_corner()),
-            camera: &camera,
-            surface_max: None,
-            params: &p,
-        };
-        dispatched.update(&inputs);
-        baseline.rows(&inputs, 1);
+        dispatched.update(&map, bounds, &camera, None, &p);
+        baseline.rows(&map, bounds, &camera, None, &p, 1);
         let bits = |m: &ImportanceMap| m.importance.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&dispatched), bits(&baseline));
         assert!(

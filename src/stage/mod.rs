@@ -130,20 +130,22 @@ impl CpuStage {
             );
         }
         let t1 = Instant::now();
-        let inputs = importance::Inputs {
-            map: &self.sketch_map,
-            atlas_bounds: (atlas.origin, atlas.max_corner()),
-            camera,
-            surface_max: self
-                .surface_max_atlas
-                .as_ref()
-                .map(|_| self.surface_max.as_slice()),
-            params: &self.params,
-        };
+        let bounds = (atlas.origin, atlas.max_corner());
+        let surface = self
+            .surface_max_atlas
+            .as_ref()
+            .map(|_| self.surface_max.as_slice());
         // A held warp that still serves: only a sample of the importance, no warp.
         self.held = match &mut self.hold {
             Some(h) if !moved && h.is_holding() => {
-                self.probe.update_rows(&inputs, ROW_STEP);
+                self.probe.update_rows(
+                    &self.sketch_map,
+                    bounds,
+                    camera,
+                    surface,
+                    &self.params,
+                    ROW_STEP,
+                );
                 let serves = h.serves(&self.probe);
                 h.held_frames += u32::from(serves);
                 serves
@@ -151,7 +153,8 @@ impl CpuStage {
             _ => false,
         };
         if !self.held {
-            self.importance.update(&inputs);
+            self.importance
+                .update(&self.sketch_map, bounds, camera, surface, &self.params);
         }
         let t2 = Instant::now();
         if !self.held {
