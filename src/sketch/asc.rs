@@ -1,16 +1,22 @@
 //! ESRI ASCII grid: a header of `key value` lines (`ncols`, `nrows`, `xllcorner`|`xllcenter`,
 //! `yllcorner`|`yllcenter`, `cellsize` or `dx` and `dy`, optional `NODATA_value`), then rows north first.
 //!
-//! A grid whose corner and extent fit in longitude/latitude and whose cells are under 0.1 is taken as
-//! geographic (degrees) and converted to metres at its mid latitude; projected grids are in metres.
+//! `xllcorner` names the south-west cell's corner, `xllcenter` its centre (GDAL writes the first,
+//! some national surveys the second). The file says nothing of its coordinate system: see
+//! [`Units::Unknown`](super::georef::Units::Unknown) for how it is told.
 
-use super::{RawGrid, degrees_to_metres};
+use super::RawGrid;
+use super::georef::{Georef, Units};
 use crate::error::{Error, Result, Role};
 use std::path::Path;
 
 pub fn read(path: &Path) -> Result<RawGrid> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
-    let text = std::str::from_utf8(&bytes)
+    parse_bytes(path, &bytes)
+}
+
+pub fn parse_bytes(path: &Path, bytes: &[u8]) -> Result<RawGrid> {
+    let text = std::str::from_utf8(bytes)
         .map_err(|_| Error::sketch(path, "not an ASCII grid (binary content)"))?;
     parse(path, text)
 }
@@ -21,6 +27,9 @@ struct Header {
     nrows: Option<f64>,
     xll: Option<f64>,
     yll: Option<f64>,
+    /// `xllcenter` / `yllcenter` rather than `…corner`.
+    x_centre: bool,
+    y_centre: bool,
     cellsize: Option<f64>,
     dx: Option<f64>,
     dy: Option<f64>,
@@ -50,8 +59,16 @@ fn parse(path: &Path, text: &str) -> Result<RawGrid> {
         let slot = match key.as_str() {
             "ncols" => &mut header.ncols,
             "nrows" => &mut header.nrows,
-            "xllcorner" | "xllcenter" => &mut header.xll,
-            "yllcorner" | "yllcenter" => &mut header.yll,
+            "xllcorner" => &mut header.xll,
+            "yllcorner" => &mut header.yll,
+            "xllcenter" => {
+                header.x_centre = true;
+                &mut header.xll
+            }
+            "yllcenter" => {
+                header.y_centre = true;
+                &mut header.yll
+            }
             "cellsize" => &mut header.cellsize,
             "dx" | "xdim" => &mut header.dx,
             "dy" | "ydim" => &mut header.dy,
@@ -82,18 +99,13 @@ fn parse(path: &Path, text: &str) -> Result<RawGrid> {
     if !(cx > 0.0 && cy > 0.0 && cx.is_finite() && cy.is_finite()) {
         return Err(bad(format!("cell size {cx} × {cy} is not positive")));
     }
-    let xll = header.xll.unwrap_or(0.0);
-    let yll = header.yll.unwrap_or(0.0);
-    let geographic = cx < 0.1
-        && cy < 0.1
-        && xll >= -180.0
-        && xll + cx * w as f64 <= 180.0 + 1e-9
-        && yll >= -90.0
-        && yll + cy * h as f64 <= 90.0 + 1e-9;
-    let (dx, dy) = if geographic {
-        degrees_to_metres(cx, cy, yll + 0.5 * cy * h as f64)
-    } else {
-        (cx, cy)
+    let half = |centre: bool| if centre { 0.0 } else { 0.5 };
+    let georef = Georef {
+        west: header.xll.unwrap_or(0.0) + half(header.x_centre) * cx,
+        south: header.yll.unwrap_or(0.0) + half(header.y_centre) * cy,
+        cell_x: cx,
+        cell_y: cy,
+        units: Units::Unknown,
     };
 
     let mut data = vec![f32::NAN; w * h];
@@ -124,13 +136,7 @@ fn parse(path: &Path, text: &str) -> Result<RawGrid> {
             w * h
         )));
     }
-    Ok(RawGrid {
-        width: w,
-        height: h,
-        dx,
-        dy,
-        data,
-    })
+    Ok(RawGrid::georeferenced(w, h, data, georef))
 }
 
 #[cfg(test)]
@@ -150,6 +156,14 @@ mod tests {
         assert_eq!((g.dx, g.dy), (10.0, 10.0));
         assert!(g.data[0].is_nan()); // south-west came last in the file
         assert_eq!(&g.data[1..], &[4.0, 1.0, 2.0]);
+        assert_eq!(g.georef.map(|r| (r.west, r.south)), Some((5.0, 5.0)));
+    }
+
+    #[test]
+    fn centre_registration_names_the_node_itself() {
+        let g =
+            p("ncols 2\nnrows 2\nxllcenter 100\nyllcenter 200\ncellsize 10\n1 2\n3 4\n").unwrap();
+        assert_eq!(g.georef.map(|r| (r.west, r.south)), Some((100.0, 200.0)));
     }
 
     #[test]

@@ -14,12 +14,18 @@
 
 mod asc;
 pub mod fill;
+pub mod georef;
+mod geotiff;
 mod hgt;
-mod image;
+mod mosaic;
+mod png;
 pub mod synthetic;
 mod xyz;
 
+pub use png::parse_world_file;
+
 use crate::error::{Error, Result};
+use georef::Georef;
 use glam::DVec2;
 use std::path::Path;
 
@@ -62,16 +68,33 @@ pub struct LoadOptions {
 }
 
 /// A grid as a format reader produces it, before filling and the pyramid.
-pub(crate) struct RawGrid {
+#[derive(Clone, Debug)]
+pub struct RawGrid {
     pub width: usize,
     pub height: usize,
     pub dx: f64,
     pub dy: f64,
     /// Row-major, row 0 south. Non-finite values are nodata.
     pub data: Vec<f32>,
+    /// Where the nodes lie in the file's coordinate system, when the file says (mosaics need it).
+    pub georef: Option<Georef>,
 }
 
 impl RawGrid {
+    /// A grid whose spacing follows from its georeference.
+    pub fn georeferenced(width: usize, height: usize, data: Vec<f32>, georef: Georef) -> RawGrid {
+        let georef = georef.resolved(width, height);
+        let (dx, dy) = georef.spacing_m(width, height);
+        RawGrid {
+            width,
+            height,
+            dx,
+            dy,
+            data,
+            georef: Some(georef),
+        }
+    }
+
     /// Checks the size against the limits before a reader allocates.
     pub fn check_size(path: &Path, width: i64, height: i64) -> Result<(usize, usize)> {
         if width < 2 || height < 2 {
@@ -91,18 +114,86 @@ impl RawGrid {
     }
 }
 
-/// Converts a geographic cell size (degrees) to metres at `lat_deg`: (east–west, north–south).
-pub fn degrees_to_metres(cell_x_deg: f64, cell_y_deg: f64, lat_deg: f64) -> (f64, f64) {
-    let m_per_deg = EARTH_RADIUS_M * std::f64::consts::PI / 180.0;
-    let east = cell_x_deg * m_per_deg * lat_deg.to_radians().cos();
-    (east, cell_y_deg * m_per_deg)
+pub use georef::degrees_to_metres;
+
+/// Reads a sketch file, or a glob of tiles, as the grid its format holds: the scene's overrides,
+/// the nodata fill and the pyramid come after ([`Atlas::from_raw`]).
+pub fn read_grid(path: &Path, opts: &LoadOptions) -> Result<RawGrid> {
+    read_at_depth(path, opts, 0)
+}
+
+/// `depth`: how many mosaics enclose this file (a VRT may name VRTs).
+fn read_at_depth(path: &Path, opts: &LoadOptions, depth: usize) -> Result<RawGrid> {
+    if mosaic::is_glob(path) {
+        return mosaic::read_glob(path, |tile| read_at_depth(tile, opts, depth + 1));
+    }
+    let name = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .map(|n| n.to_ascii_lowercase())
+        .unwrap_or_default();
+    if name.ends_with(".hgt.zip") {
+        return hgt::read_zip_file(path, opts.spacing_m.is_some());
+    }
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default();
+    match ext.as_str() {
+        "asc" | "grd" => asc::read(path),
+        "hgt" => hgt::read_file(path, opts.spacing_m.is_some()),
+        "png" => png::read_file(path, opts),
+        "tif" | "tiff" => geotiff::read_file(path),
+        "vrt" => mosaic::read_vrt(path, depth, |src, d| read_at_depth(src, opts, d)),
+        "xyz" | "csv" | "txt" => xyz::read(path),
+        "toml" => Err(Error::sketch(
+            path,
+            format!(
+                "a scene file, not a height map: give it to `terrain render`; a sketch is {FORMATS}"
+            ),
+        )),
+        "" => Err(Error::sketch(
+            path,
+            format!("no extension to tell its format: a sketch is {FORMATS}"),
+        )),
+        other => Err(Error::sketch(
+            path,
+            format!("unknown sketch format `.{other}`: a sketch is {FORMATS}"),
+        )),
+    }
+}
+
+/// Parses a sketch held in memory, the format told by `name`'s extension, as [`read_grid`] would
+/// read the file (a VRT's sources and a PNG's world file are still read from disk, beside
+/// `name`). For the fuzz harness and for callers that hold the bytes already.
+pub fn parse_grid(name: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<RawGrid> {
+    let lower = name.to_string_lossy().to_ascii_lowercase();
+    let spacing_given = opts.spacing_m.is_some();
+    let ext = lower.rsplit('.').next().unwrap_or("");
+    match ext {
+        _ if lower.ends_with(".hgt.zip") => {
+            hgt::parse_zip(name, std::io::Cursor::new(bytes), spacing_given)
+        }
+        "asc" | "grd" => asc::parse_bytes(name, bytes),
+        "hgt" => hgt::parse(name, bytes, spacing_given),
+        "png" => png::parse(name, bytes, opts, None),
+        "tif" | "tiff" => geotiff::read(name, std::io::Cursor::new(bytes)),
+        "vrt" => mosaic::parse_vrt(name, bytes, 0, |src, d| read_at_depth(src, opts, d)),
+        "xyz" | "csv" | "txt" => xyz::parse_bytes(name, bytes),
+        other => Err(Error::sketch(
+            name,
+            format!("unknown sketch format `.{other}`: a sketch is {FORMATS}"),
+        )),
+    }
 }
 
 /// Sketch files above this size show a spinner while they are read (about 2 s for an ASCII grid).
 const LARGE_FILE_BYTES: u64 = 64 << 20;
 
 /// The sketch formats by extension, for messages.
-const FORMATS: &str = ".asc/.grd (ESRI ASCII), .hgt (SRTM), .png, .tif/.tiff, .xyz/.csv/.txt";
+const FORMATS: &str = ".asc/.grd (ESRI ASCII), .hgt/.hgt.zip (SRTM), .png (with a .pgw world file), \
+     .tif/.tiff (GeoTIFF), .vrt (GDAL mosaic), .xyz/.csv/.txt, or a glob of tiles (tiles/*.hgt)";
 
 impl Atlas {
     /// Reads a sketch file, choosing the reader by its extension.
@@ -121,38 +212,7 @@ impl Atlas {
     }
 
     fn load_quietly(path: &Path, opts: &LoadOptions) -> Result<Atlas> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase())
-            .unwrap_or_default();
-        let raw = match ext.as_str() {
-            "asc" | "grd" => asc::read(path)?,
-            "hgt" => hgt::read(path, opts.spacing_m.is_some())?,
-            "png" => image::read_png(path, opts)?,
-            "tif" | "tiff" => image::read_tiff(path)?,
-            "xyz" | "csv" | "txt" => xyz::read(path)?,
-            "toml" => {
-                return Err(Error::sketch(
-                    path,
-                    format!(
-                        "a scene file, not a height map: give it to `terrain render`; a sketch is {FORMATS}"
-                    ),
-                ));
-            }
-            "" => {
-                return Err(Error::sketch(
-                    path,
-                    format!("no extension to tell its format: a sketch is {FORMATS}"),
-                ));
-            }
-            other => {
-                return Err(Error::sketch(
-                    path,
-                    format!("unknown sketch format `.{other}`: a sketch is {FORMATS}"),
-                ));
-            }
-        };
+        let raw = read_grid(path, opts)?;
         Atlas::from_raw(raw, opts).map_err(|e| match e {
             Error::Value { reason, .. } => Error::sketch(path, reason),
             e => e,
@@ -358,6 +418,7 @@ mod tests {
             dx: 10.0,
             dy: 10.0,
             data,
+            georef: None,
         };
         Atlas::from_raw(raw, &LoadOptions::default()).unwrap()
     }
@@ -370,11 +431,5 @@ mod tests {
             let h = a.sample_texel(20.0, 30.0, lod);
             assert!((h - 20.0).abs() < 1e-4, "lod {lod}: {h}");
         }
-    }
-
-    #[test]
-    fn degrees_to_metres_matches_jacksboro() {
-        let (e, n) = degrees_to_metres(0.000833333333, 0.000833333333, 36.59);
-        assert!((e - 74.4).abs() < 0.5 && (n - 92.66).abs() < 0.1, "{e} {n}");
     }
 }

@@ -58,6 +58,7 @@ pub(crate) fn generate(name: &str, size: usize, spacing_m: f64) -> Result<RawGri
         dx: spacing_m,
         dy: spacing_m,
         data,
+        georef: None,
     })
 }
 

@@ -3,12 +3,17 @@
 //! points the grid lacks are nodata.
 
 use super::RawGrid;
+use super::georef::{Georef, Units};
 use crate::error::{Error, Result, Role};
 use std::path::Path;
 
 pub fn read(path: &Path) -> Result<RawGrid> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
-    let text = std::str::from_utf8(&bytes)
+    parse_bytes(path, &bytes)
+}
+
+pub fn parse_bytes(path: &Path, bytes: &[u8]) -> Result<RawGrid> {
+    let text = std::str::from_utf8(bytes)
         .map_err(|_| Error::sketch(path, "not an XYZ text file (binary content)"))?;
     parse(path, text)
 }
@@ -61,13 +66,14 @@ fn parse(path: &Path, text: &str) -> Result<RawGrid> {
         }
         data[k] = p[2] as f32;
     }
-    Ok(RawGrid {
-        width: w,
-        height: h,
-        dx,
-        dy,
-        data,
-    })
+    let georef = Georef {
+        west: x0,
+        south: y0,
+        cell_x: dx,
+        cell_y: dy,
+        units: Units::Unknown,
+    };
+    Ok(RawGrid::georeferenced(w, h, data, georef))
 }
 
 /// The grid along one axis: first value, spacing and count, or why the values are not a grid.

@@ -1,0 +1,150 @@
+//! Where a grid's nodes lie in its file's coordinate system, and what its cells measure on the
+//! ground.
+//!
+//! Rules:
+//! - A [`Georef`] names the south-west *node* (a cell's centre for pixel-is-area files, the sample
+//!   itself for pixel-is-point ones such as SRTM), so tiles of one mosaic line up by subtracting
+//!   positions, whatever registration each file used.
+//! - Geographic grids are converted to metres at the grid's mid latitude (the sketch is flat);
+//!   projected ones in feet by the foot they name (international 0.3048 m, US survey 1200/3937 m).
+//! - A file that does not say its coordinate system (ESRI ASCII, XYZ, a PNG's world file) is taken
+//!   as geographic when its cells are under 0.1 and it lies within longitude and latitude range, as
+//!   GDAL's users expect of an SRTM-style grid; otherwise its units are metres.
+
+use super::EARTH_RADIUS_M;
+
+/// International foot, metres.
+pub const FOOT_M: f64 = 0.3048;
+/// US survey foot, metres.
+pub const US_SURVEY_FOOT_M: f64 = 1200.0 / 3937.0;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Units {
+    Degrees,
+    /// Projected, metres per unit (1 for metres).
+    Linear(f64),
+    /// Not stated by the file: see [`Georef::resolved`].
+    Unknown,
+}
+
+/// The position of a grid's nodes in its file's coordinate system.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Georef {
+    /// The south-west node.
+    pub west: f64,
+    pub south: f64,
+    /// Node spacing along x (east) and y (north), positive, in `units`.
+    pub cell_x: f64,
+    pub cell_y: f64,
+    pub units: Units,
+}
+
+impl Georef {
+    /// From a GDAL geotransform of a pixel-is-area grid (`[x0, dx, 0, y0, 0, −dy]`, corner of the
+    /// north-west cell) `height` rows tall; `None` when rotated or not finite.
+    pub fn from_geotransform(gt: [f64; 6], height: usize, units: Units) -> Option<Georef> {
+        let [x0, dx, rx, y0, ry, dy] = gt;
+        if rx != 0.0 || ry != 0.0 || !(dx > 0.0 && dy < 0.0) || !(x0.is_finite() && y0.is_finite())
+        {
+            return None;
+        }
+        let west = x0 + 0.5 * dx;
+        let north = y0 + 0.5 * dy;
+        Some(Georef {
+            west,
+            south: north + (height as f64 - 1.0) * dy,
+            cell_x: dx,
+            cell_y: -dy,
+            units,
+        })
+    }
+
+    /// The units made definite: `Unknown` is degrees when the grid fits in longitude and latitude
+    /// with cells under 0.1, else metres.
+    pub fn resolved(self, width: usize, height: usize) -> Georef {
+        if self.units != Units::Unknown {
+            return self;
+        }
+        let east = self.west + (width as f64 - 1.0) * self.cell_x;
+        let north = self.south + (height as f64 - 1.0) * self.cell_y;
+        let geographic = self.cell_x < 0.1
+            && self.cell_y < 0.1
+            && self.west >= -180.5
+            && east <= 360.5
+            && self.south >= -90.5
+            && north <= 90.5;
+        Georef {
+            units: if geographic {
+                Units::Degrees
+            } else {
+                Units::Linear(1.0)
+            },
+            ..self
+        }
+    }
+
+    /// Ground spacing in metres (east–west, north–south) of a grid `height` rows tall.
+    pub fn spacing_m(&self, width: usize, height: usize) -> (f64, f64) {
+        match self.resolved(width, height).units {
+            Units::Degrees => {
+                let mid_lat = self.south + 0.5 * (height as f64 - 1.0) * self.cell_y;
+                degrees_to_metres(self.cell_x, self.cell_y, mid_lat)
+            }
+            Units::Linear(m) => (self.cell_x * m, self.cell_y * m),
+            Units::Unknown => unreachable!("resolved"),
+        }
+    }
+}
+
+/// Converts a geographic cell size (degrees) to metres at `lat_deg`: (east–west, north–south).
+pub fn degrees_to_metres(cell_x_deg: f64, cell_y_deg: f64, lat_deg: f64) -> (f64, f64) {
+    let m_per_deg = EARTH_RADIUS_M * std::f64::consts::PI / 180.0;
+    let east = cell_x_deg * m_per_deg * lat_deg.clamp(-90.0, 90.0).to_radians().cos();
+    (east, cell_y_deg * m_per_deg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn degrees_to_metres_matches_jacksboro() {
+        let (e, n) = degrees_to_metres(0.000833333333, 0.000833333333, 36.59);
+        assert!((e - 74.4).abs() < 0.5 && (n - 92.66).abs() < 0.1, "{e} {n}");
+    }
+
+    #[test]
+    fn a_geotransform_names_the_south_west_cell_centre() {
+        let g = Georef::from_geotransform([100.0, 10.0, 0.0, 500.0, 0.0, -20.0], 3, Units::Unknown)
+            .unwrap();
+        assert_eq!(
+            (g.west, g.south, g.cell_x, g.cell_y),
+            (105.0, 450.0, 10.0, 20.0)
+        );
+        assert_eq!(g.resolved(2, 3).units, Units::Linear(1.0));
+        assert!(
+            Georef::from_geotransform([0.0, 1.0, 0.1, 0.0, 0.0, -1.0], 3, Units::Unknown).is_none()
+        );
+    }
+
+    #[test]
+    fn small_cells_within_longitude_and_latitude_are_degrees() {
+        let g = Georef {
+            west: -84.0,
+            south: 36.0,
+            cell_x: 1.0 / 1200.0,
+            cell_y: 1.0 / 1200.0,
+            units: Units::Unknown,
+        };
+        assert_eq!(g.resolved(1201, 1201).units, Units::Degrees);
+        let (e, n) = g.spacing_m(1201, 1201);
+        assert!((n - 92.66).abs() < 0.1 && (e - 74.5).abs() < 0.5, "{e} {n}");
+        let feet = Georef {
+            units: Units::Linear(US_SURVEY_FOOT_M),
+            cell_x: 250.0,
+            cell_y: 250.0,
+            ..g
+        };
+        assert!((feet.spacing_m(3, 3).0 - 76.2).abs() < 0.01);
+    }
+}

@@ -1,0 +1,290 @@
+//! GeoTIFF as GDAL writes it: classic and BigTIFF, either byte order, strips or tiles of any size,
+//! compression none, LZW, DEFLATE, ZSTD or PackBits with predictor 1, 2 or 3, one band of Int8 to
+//! Float64. The first image is read: the full resolution, also of a cloud-optimised GeoTIFF
+//! (whose overviews follow it). `GDAL_NODATA`, pixel-is-area and pixel-is-point, geographic
+//! coordinate systems and projected ones in metres or feet are honoured.
+//!
+//! Rules:
+//! - The size is checked against [`MAX_CELLS`](super::MAX_CELLS) before anything is allocated; the
+//!   grid is filled chunk by chunk (strip or tile), converting each to f32 as it is decoded, so a
+//!   Float64 file never holds a second full-size copy.
+//! - Lossy or unsupported compressions (JPEG, LERC, WebP, JPEG XL, LZMA, CCITT) are refused by
+//!   name before any data is read, with the command that rewrites the file.
+//! - `GDAL_NODATA` (the one ASCII tag read) is read only when its entry claims at most
+//!   [`MAX_NODATA_CHARS`]: a damaged count must not allocate. tiff 0.11.3 also printed a `dbg!`
+//!   line there, and failed LZW tiles narrower than their tile width; both are fixed in
+//!   `vendor/tiff` (`patches/tiff-0.11.3.patch`, written to go upstream).
+//!
+//! Rejected alternative: `Decoder::read_image` and one conversion of the whole buffer (the
+//! previous reader). It holds the decoded samples and a converted copy at once (a 2²⁸-cell
+//! Float64 file: 2 GiB plus 1 GiB) and cannot tell which chunk was damaged.
+
+use super::RawGrid;
+use super::georef::{FOOT_M, Georef, US_SURVEY_FOOT_M, Units};
+use crate::error::{Error, Result, Role};
+use std::io::{Read, Seek};
+use std::path::Path;
+use tiff::decoder::{ChunkType, Decoder, DecodingResult, Limits};
+use tiff::tags::Tag;
+
+/// `GDAL_NODATA` is a number in ASCII; a longer entry is damage.
+const MAX_NODATA_CHARS: u64 = 64;
+
+/// GeoTIFF tags and keys (GeoTIFF 1.1, OGC 19-008r4).
+const GEO_KEY_DIRECTORY: u16 = 34735;
+const GEO_DOUBLE_PARAMS: u16 = 34736;
+const MODEL_TRANSFORMATION: u16 = 34264;
+const GT_MODEL_TYPE: u16 = 1024;
+const GT_RASTER_TYPE: u16 = 1025;
+const PROJ_LINEAR_UNITS: u16 = 3076;
+const PROJ_LINEAR_UNIT_SIZE: u16 = 3077;
+
+pub fn read_file(path: &Path) -> Result<RawGrid> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
+    read(path, std::io::BufReader::new(file))
+}
+
+pub fn read<R: Read + Seek>(path: &Path, reader: R) -> Result<RawGrid> {
+    let bad = |reason: String| Error::sketch(path, reason);
+    let tiff = |what: &'static str| move |e| Error::decode(Role::Sketch, path, what, e);
+    let mut dec = Decoder::new(reader).map_err(tiff("not a readable TIFF"))?;
+    let mut limits = Limits::default();
+    // A chunk may be as large as the largest sketch, in Float64.
+    limits.decoding_buffer_size = super::MAX_CELLS * 8;
+    dec = dec.with_limits(limits);
+    let (w, h) = dec.dimensions().map_err(tiff("TIFF has no dimensions"))?;
+    let (w, h) = RawGrid::check_size(path, w as i64, h as i64)?;
+    refuse_compression(&mut dec).map_err(bad)?;
+    let samples: u16 = dec
+        .find_tag_unsigned(Tag::SamplesPerPixel)
+        .map_err(tiff("TIFF SamplesPerPixel unreadable"))?
+        .unwrap_or(1);
+    if samples != 1 {
+        return Err(bad(format!(
+            "TIFF has {samples} bands; a height map has one (take it with `gdal_translate -b 1`)"
+        )));
+    }
+    let nodata = gdal_nodata(&mut dec);
+    let georef = georef(&mut dec, h).map_err(bad)?;
+    let mut data = vec![f32::NAN; w * h];
+    let (cw, ch) = dec.chunk_dimensions();
+    let (cw, ch) = (cw as usize, ch as usize);
+    let chunks = match dec.get_chunk_type() {
+        ChunkType::Strip => dec.strip_count(),
+        ChunkType::Tile => dec.tile_count(),
+    }
+    .map_err(tiff("TIFF chunk layout unreadable"))?;
+    let across = w.div_ceil(cw.max(1));
+    let expected = across * h.div_ceil(ch.max(1));
+    if cw == 0 || ch == 0 || chunks as usize != expected {
+        return Err(bad(format!(
+            "TIFF has {chunks} chunks of {cw}×{ch} for {w}×{h} cells; {expected} expected"
+        )));
+    }
+    for k in 0..chunks {
+        let (x0, y0) = ((k as usize % across) * cw, (k as usize / across) * ch);
+        let (dw, dh) = dec.chunk_data_dimensions(k);
+        let (dw, dh) = (dw as usize, dh as usize);
+        let values = dec
+            .read_chunk(k)
+            .map_err(|e| Error::decode(Role::Sketch, path, chunk_name(k, &dec), e))?;
+        place(&values, (x0, y0, dw, dh), (w, h), nodata, &mut data).map_err(bad)?;
+    }
+    let georef = georef.map(|g| g.resolved(w, h));
+    let (dx, dy) = georef.map_or((1.0, 1.0), |g| g.spacing_m(w, h));
+    Ok(RawGrid {
+        width: w,
+        height: h,
+        dx,
+        dy,
+        data,
+        georef,
+    })
+}
+
+fn chunk_name<R: Read + Seek>(k: u32, dec: &Decoder<R>) -> &'static str {
+    match dec.get_chunk_type() {
+        ChunkType::Strip => "TIFF strip corrupt or truncated",
+        ChunkType::Tile if k == 0 => "TIFF first tile corrupt or truncated",
+        ChunkType::Tile => "TIFF tile corrupt or truncated",
+    }
+}
+
+/// Refuses the compressions the `tiff` crate cannot read, by name.
+fn refuse_compression<R: Read + Seek>(dec: &mut Decoder<R>) -> std::result::Result<(), String> {
+    let code: u16 = dec
+        .find_tag_unsigned(Tag::Compression)
+        .map_err(|e| format!("TIFF compression tag unreadable: {e}"))?
+        .unwrap_or(1);
+    let name = match code {
+        1 | 5 | 8 | 32946 | 32773 | 50000 => return Ok(()),
+        2..=4 => "CCITT fax",
+        6 | 7 => "JPEG (lossy)",
+        34887 => "LERC",
+        34925 => "LZMA",
+        50001 => "WebP",
+        50002 | 52546 => "JPEG XL",
+        other => return Err(format!("TIFF compression {other} is not a known method")),
+    };
+    Err(format!(
+        "TIFF compression {name} is not read; rewrite it with `gdal_translate -co COMPRESS=DEFLATE IN OUT`"
+    ))
+}
+
+fn gdal_nodata<R: Read + Seek>(dec: &mut Decoder<R>) -> Option<f64> {
+    let ptr = dec.ifd_pointer()?;
+    let dir = dec.read_directory(ptr).ok()?;
+    if dir.get(Tag::GdalNodata)?.count() > MAX_NODATA_CHARS {
+        return None;
+    }
+    let text = dec.get_tag_ascii_string(Tag::GdalNodata).ok()?;
+    let text = text.trim_matches(char::from(0)).trim();
+    // GDAL writes "nan" for a NaN nodata; NaN cells are nodata anyway.
+    text.parse().ok().filter(|v: &f64| v.is_finite())
+}
+
+/// Copies one decoded chunk into the grid (row 0 south), nodata and non-finite values as NaN.
+fn place(
+    values: &DecodingResult,
+    (x0, y0, dw, dh): (usize, usize, usize, usize),
+    (w, h): (usize, usize),
+    nodata: Option<f64>,
+    data: &mut [f32],
+) -> std::result::Result<(), String> {
+    fn copy<T: Copy>(
+        src: &[T],
+        rect: (usize, usize, usize, usize),
+        size: (usize, usize),
+        data: &mut [f32],
+        convert: impl Fn(T) -> f32,
+    ) -> std::result::Result<(), String> {
+        let (x0, y0, dw, dh) = rect;
+        let (w, h) = size;
+        if src.len() < dw * dh || x0 + dw > w || y0 + dh > h {
+            return Err(format!(
+                "TIFF chunk at ({x0}, {y0}) holds {} samples for {dw}×{dh}",
+                src.len()
+            ));
+        }
+        for (r, row) in src.chunks_exact(dw).take(dh).enumerate() {
+            let out = (h - 1 - (y0 + r)) * w + x0;
+            for (d, &v) in data[out..out + dw].iter_mut().zip(row) {
+                *d = convert(v);
+            }
+        }
+        Ok(())
+    }
+    let rect = (x0, y0, dw, dh);
+    let size = (w, h);
+    let cell = |v: f64| -> f32 {
+        let f = v as f32;
+        let missing = nodata.is_some_and(|nd| v == nd || f == nd as f32);
+        if missing || !f.is_finite() {
+            f32::NAN
+        } else {
+            f
+        }
+    };
+    match values {
+        DecodingResult::U8(v) => copy(v, rect, size, data, |x| cell(x.into())),
+        DecodingResult::I8(v) => copy(v, rect, size, data, |x| cell(x.into())),
+        DecodingResult::U16(v) => copy(v, rect, size, data, |x| cell(x.into())),
+        DecodingResult::I16(v) => copy(v, rect, size, data, |x| cell(x.into())),
+        DecodingResult::U32(v) => copy(v, rect, size, data, |x| cell(x.into())),
+        DecodingResult::I32(v) => copy(v, rect, size, data, |x| cell(x.into())),
+        DecodingResult::U64(v) => copy(v, rect, size, data, |x| cell(x as f64)),
+        DecodingResult::I64(v) => copy(v, rect, size, data, |x| cell(x as f64)),
+        DecodingResult::F16(v) => copy(v, rect, size, data, |x| cell(x.to_f64())),
+        DecodingResult::F32(v) => copy(v, rect, size, data, |x| cell(x.into())),
+        DecodingResult::F64(v) => copy(v, rect, size, data, cell),
+    }
+}
+
+/// The grid's georeference from the GeoTIFF tags, if it has one.
+fn georef<R: Read + Seek>(
+    dec: &mut Decoder<R>,
+    height: usize,
+) -> std::result::Result<Option<Georef>, String> {
+    let keys = geo_keys(dec);
+    let key = |id: u16| keys.iter().find(|k| k.0 == id).map(|k| k.1);
+    let units = match key(GT_MODEL_TYPE) {
+        Some(GeoValue::Short(2)) => Units::Degrees,
+        Some(GeoValue::Short(1)) => match key(PROJ_LINEAR_UNITS) {
+            Some(GeoValue::Short(9002)) => Units::Linear(FOOT_M),
+            Some(GeoValue::Short(9003)) => Units::Linear(US_SURVEY_FOOT_M),
+            Some(GeoValue::Short(32767)) => match key(PROJ_LINEAR_UNIT_SIZE) {
+                Some(GeoValue::Double(m)) if m > 0.0 && m.is_finite() => Units::Linear(m),
+                _ => Units::Linear(1.0),
+            },
+            _ => Units::Linear(1.0),
+        },
+        _ => Units::Unknown,
+    };
+    let point = key(GT_RASTER_TYPE) == Some(GeoValue::Short(2));
+    let tag = |dec: &mut Decoder<R>, t: u16| -> Option<Vec<f64>> {
+        dec.get_tag_f64_vec(Tag::Unknown(t)).ok()
+    };
+    let scale = dec.get_tag_f64_vec(Tag::ModelPixelScaleTag).ok();
+    let tie = dec.get_tag_f64_vec(Tag::ModelTiepointTag).ok();
+    let (sx, sy, tx, ty, ti, tj) = match (scale.as_deref(), tie.as_deref()) {
+        (Some([sx, sy, ..]), Some([i, j, _, x, y, ..])) => (*sx, *sy, *x, *y, *i, *j),
+        _ => match tag(dec, MODEL_TRANSFORMATION).as_deref() {
+            Some([a, b, _, d, e, f, _, hh, ..]) => {
+                if *b != 0.0 || *e != 0.0 {
+                    return Err("GeoTIFF grid is rotated; warp it north-up with gdalwarp".into());
+                }
+                (*a, -*f, *d, *hh, 0.0, 0.0)
+            }
+            _ => return Ok(None),
+        },
+    };
+    if !(sx > 0.0 && sy > 0.0 && [sx, sy, tx, ty, ti, tj].iter().all(|v| v.is_finite())) {
+        return Err(format!(
+            "GeoTIFF pixel scale {sx} × {sy} is not positive and finite"
+        ));
+    }
+    // Pixel-is-area ties the cell's corner, pixel-is-point its centre (the node).
+    let half = if point { 0.0 } else { 0.5 };
+    let west = tx + (half - ti) * sx;
+    let north = ty - (half - tj) * sy;
+    Ok(Some(Georef {
+        west,
+        south: north - (height as f64 - 1.0) * sy,
+        cell_x: sx,
+        cell_y: sy,
+        units,
+    }))
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum GeoValue {
+    Short(u16),
+    Double(f64),
+    Other,
+}
+
+/// The GeoKey directory as (key, value) pairs; empty when absent or damaged.
+fn geo_keys<R: Read + Seek>(dec: &mut Decoder<R>) -> Vec<(u16, GeoValue)> {
+    let Ok(dir) = dec.get_tag_u16_vec(Tag::Unknown(GEO_KEY_DIRECTORY)) else {
+        return Vec::new();
+    };
+    let doubles = dec
+        .get_tag_f64_vec(Tag::Unknown(GEO_DOUBLE_PARAMS))
+        .unwrap_or_default();
+    let count = dir.get(3).copied().unwrap_or(0) as usize;
+    dir.get(4..)
+        .unwrap_or(&[])
+        .chunks_exact(4)
+        .take(count)
+        .map(|k| {
+            let value = match k[1] {
+                0 => GeoValue::Short(k[3]),
+                GEO_DOUBLE_PARAMS => doubles
+                    .get(k[3] as usize)
+                    .map_or(GeoValue::Other, |v| GeoValue::Double(*v)),
+                _ => GeoValue::Other,
+            };
+            (k[0], value)
+        })
+        .collect()
+}
