@@ -45,7 +45,7 @@ impl fmt::Display for Role {
 #[non_exhaustive]
 pub enum Error {
     /// The operating system refused a file: missing, unreadable, a full disk.
-    #[error("{role} {path}: {source}")]
+    #[error("{role} {}: {}", Line(&path.display()), Line(source))]
     Io {
         role: Role,
         path: PathBuf,
@@ -53,7 +53,7 @@ pub enum Error {
     },
     /// A file that is truncated, corrupt, inconsistent or, for a scene or jobs file, has a bad
     /// key; `reason` names the key.
-    #[error("{role} {path}: {reason}")]
+    #[error("{role} {}: {}", Line(&path.display()), Line(reason))]
     File {
         role: Role,
         path: PathBuf,
@@ -61,7 +61,7 @@ pub enum Error {
     },
     /// A file whose decoder refused it; `what` says what the file was taken for ("a readable
     /// TIFF"), `source` is the decoder's error (tiff, png, toml).
-    #[error("{role} {path}: {what}: {source}")]
+    #[error("{role} {}: {what}: {}", Line(&path.display()), Line(source))]
     Decode {
         role: Role,
         path: PathBuf,
@@ -69,7 +69,7 @@ pub enum Error {
         source: Box<dyn std::error::Error + Send + Sync>,
     },
     /// A `--set key=value` override that is not a key, or whose value is out of range.
-    #[error("--set {arg}: {reason}")]
+    #[error("--set {}: {}", Line(arg), Line(reason))]
     Override { arg: String, reason: String },
     /// A camera that cannot be built (NaN, eye at its own target, zero-size image).
     #[error("camera: {0}")]
@@ -108,10 +108,10 @@ pub enum Error {
     NoDisplay { cause: String },
     /// A scene value that cannot be used although it parsed (a synthetic sketch's name, a camera
     /// path whose keys coincide); `key` names it as the scene file spells it.
-    #[error("{key}: {reason}")]
+    #[error("{key}: {}", Line(reason))]
     Value { key: &'static str, reason: String },
     /// One job of a batch that cannot run as the jobs file gives it.
-    #[error("job {name:?}: {reason}")]
+    #[error("job {name:?}: {}", Line(reason))]
     Job { name: String, reason: String },
     /// A report, manifest line or scene that serde could not encode.
     #[error("cannot encode the {what}: {source}")]
@@ -128,6 +128,28 @@ pub enum Error {
 }
 
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// Shows a value on one line: control characters (a newline in a file name, in an XML parser's
+/// quote of the file) are written as escapes, so every error is exactly one line.
+struct Line<'a, T: fmt::Display + ?Sized>(&'a T);
+
+impl<T: fmt::Display + ?Sized> fmt::Display for Line<'_, T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        struct Escape<'a, 'b>(&'a mut fmt::Formatter<'b>);
+        impl fmt::Write for Escape<'_, '_> {
+            fn write_str(&mut self, s: &str) -> fmt::Result {
+                for c in s.chars() {
+                    match c {
+                        c if c.is_control() => write!(self.0, "{}", c.escape_default())?,
+                        c => fmt::Write::write_char(self.0, c)?,
+                    }
+                }
+                Ok(())
+            }
+        }
+        fmt::Write::write_fmt(&mut Escape(f), format_args!("{}", self.0))
+    }
+}
 
 impl Error {
     pub fn io(role: Role, path: impl Into<PathBuf>, source: std::io::Error) -> Self {

@@ -5,7 +5,7 @@
 //! coordinate systems and projected ones in metres or feet are honoured.
 //!
 //! Rules:
-//! - The size is checked against [`MAX_CELLS`](super::MAX_CELLS) before anything is allocated; the
+//! - The size is checked against [`max_cells`](super::max_cells) before anything is allocated; the
 //!   grid is filled chunk by chunk (strip or tile), converting each to f32 as it is decoded, so a
 //!   Float64 file never holds a second full-size copy.
 //! - Lossy or unsupported compressions (JPEG, LERC, WebP, JPEG XL, LZMA, CCITT) are refused by
@@ -48,12 +48,15 @@ pub fn read<R: Read + Seek>(path: &Path, reader: R) -> Result<RawGrid> {
     let bad = |reason: String| Error::sketch(path, reason);
     let tiff = |what: &'static str| move |e| Error::decode(Role::Sketch, path, what, e);
     let mut dec = Decoder::new(reader).map_err(tiff("not a readable TIFF"))?;
-    let mut limits = Limits::default();
-    // A chunk may be as large as the largest sketch, in Float64.
-    limits.decoding_buffer_size = super::MAX_CELLS * 8;
-    dec = dec.with_limits(limits);
     let (w, h) = dec.dimensions().map_err(tiff("TIFF has no dimensions"))?;
     let (w, h) = RawGrid::check_size(path, w as i64, h as i64)?;
+    // One decoded chunk, in Float64, is the largest buffer the crate needs; a tag claiming more
+    // is damage and must not allocate.
+    let (cw, ch) = dec.chunk_dimensions();
+    let chunk_cells = (cw.min(w as u32) as usize) * (ch.min(h as u32) as usize);
+    let mut limits = Limits::default();
+    limits.decoding_buffer_size = (chunk_cells * 8).max(1 << 20);
+    dec = dec.with_limits(limits);
     refuse_compression(&mut dec).map_err(bad)?;
     let samples: u16 = dec
         .find_tag_unsigned(Tag::SamplesPerPixel)
@@ -67,7 +70,6 @@ pub fn read<R: Read + Seek>(path: &Path, reader: R) -> Result<RawGrid> {
     let nodata = gdal_nodata(&mut dec);
     let georef = georef(&mut dec, h).map_err(bad)?;
     let mut data = vec![f32::NAN; w * h];
-    let (cw, ch) = dec.chunk_dimensions();
     let (cw, ch) = (cw as usize, ch as usize);
     let chunks = match dec.get_chunk_type() {
         ChunkType::Strip => dec.strip_count(),

@@ -34,6 +34,23 @@ pub const EARTH_RADIUS_M: f64 = 6_371_008.8;
 /// Larger grids are refused rather than allocated: 2^28 cells is 1 GiB of f32 before the pyramid.
 pub const MAX_CELLS: usize = 1 << 28;
 
+/// The cell limit in force: [`MAX_CELLS`] unless [`limit_cells`] lowered it.
+static CELL_LIMIT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(MAX_CELLS);
+
+/// Lowers the largest grid any reader allocates, for the whole process: for a fuzz harness or a
+/// service that must bound its memory below the default (values above [`MAX_CELLS`] are clamped).
+pub fn limit_cells(cells: usize) {
+    CELL_LIMIT.store(
+        cells.min(MAX_CELLS),
+        std::sync::atomic::Ordering::Relaxed,
+    );
+}
+
+/// The largest grid a reader allocates now.
+pub fn max_cells() -> usize {
+    CELL_LIMIT.load(std::sync::atomic::Ordering::Relaxed)
+}
+
 /// One level of the pyramid: a row-major grid of finite heights.
 #[derive(Clone, Debug)]
 pub struct Level {
@@ -104,10 +121,11 @@ impl RawGrid {
             ));
         }
         let cells = (width as u128) * (height as u128);
-        if cells > MAX_CELLS as u128 {
+        let limit = max_cells();
+        if cells > limit as u128 {
             return Err(Error::sketch(
                 path,
-                format!("grid is {width}×{height}, more than the {MAX_CELLS} cells supported"),
+                format!("grid is {width}×{height}, more than the {limit} cells supported"),
             ));
         }
         Ok((width as usize, height as usize))

@@ -68,7 +68,12 @@ pub struct RandomSection {
 impl Jobs {
     pub fn load(path: &Path) -> Result<Jobs> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(Role::JobsFile, path, e))?;
-        let de = toml::Deserializer::parse(&text).map_err(|e| bad(path, e.message()))?;
+        Jobs::parse(path, &text)
+    }
+
+    /// A jobs file's text, `path` naming it in errors and placing its scene.
+    pub fn parse(path: &Path, text: &str) -> Result<Jobs> {
+        let de = toml::Deserializer::parse(text).map_err(|e| bad(path, e.message()))?;
         let file: JobsFile = serde_path_to_error::deserialize(de).map_err(|e| {
             let key = e.path().to_string();
             let message = e.into_inner().message().replace('\n', " ");
@@ -133,8 +138,13 @@ impl Jobs {
         out
     }
 
+    /// How many `[[job]]` tables the file gives.
+    pub fn explicit_jobs(&self) -> usize {
+        self.explicit.len()
+    }
+
     /// The scene of item `k` of the explicit jobs: the base with the job's keys merged in.
-    pub(super) fn job_scene(&self, k: usize) -> std::result::Result<Scene, String> {
+    pub fn job_scene(&self, k: usize) -> std::result::Result<Scene, String> {
         let job = self.explicit[k]
             .as_table()
             .ok_or_else(|| format!("job {k}: expected a table"))?;
