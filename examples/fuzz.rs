@@ -44,7 +44,8 @@ fn main() {
     let print = std::sync::Mutex::new(());
     std::thread::scope(|s| {
         for _ in 0..threads {
-            let (targets, next, failed, print, crash_dir) = (&targets, &next, &failed, &print, &crash_dir);
+            let (targets, next, failed, print, crash_dir) =
+                (&targets, &next, &failed, &print, &crash_dir);
             s.spawn(move || {
                 loop {
                     let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);

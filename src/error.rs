@@ -262,4 +262,13 @@ mod tests {
         let e = Error::sketch("a.asc", "truncated").in_role(Role::ImportanceMap);
         assert_eq!(e.to_string(), "importance map a.asc: truncated");
     }
+
+    #[test]
+    fn control_characters_in_a_path_or_cause_stay_on_one_line() {
+        let e = Error::sketch("tiles\n/a.tif", "expected '>' not '\n' at 1:2\r");
+        assert_eq!(
+            e.to_string(),
+            "sketch tiles\\n/a.tif: expected '>' not '\\n' at 1:2\\r"
+        );
+    }
 }

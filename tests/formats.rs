@@ -319,3 +319,190 @@ fn broken_mosaics_are_refused_in_one_line() {
         }
     }
 }
+
+/// A header claiming 2³¹ cells (65536 × 32768) is refused before anything is allocated: the
+/// program runs under a 1 GiB address-space limit (8 GiB would be needed for the grid) and must
+/// exit 1 with one line naming the cell limit, in every format that states a size.
+#[test]
+fn a_two_billion_cell_header_is_refused_before_allocating() {
+    let dir = common::scratch("formats-huge-headers");
+    let (w, h) = (65536u32, 32768u32);
+    let tiff = {
+        // Little-endian TIFF, one IFD of 9 entries, one strip said to start at byte 8.
+        let mut b = b"II*\0".to_vec();
+        b.extend_from_slice(&8u32.to_le_bytes());
+        let entries: [(u16, u16, u32, u32); 9] = [
+            (256, 4, 1, w),
+            (257, 4, 1, h),
+            (258, 3, 1, 16),
+            (259, 3, 1, 1),
+            (262, 3, 1, 1),
+            (273, 4, 1, 8),
+            (277, 3, 1, 1),
+            (278, 4, 1, h),
+            (279, 4, 1, w * 2),
+        ];
+        b.extend_from_slice(&(entries.len() as u16).to_le_bytes());
+        for (tag, ty, count, value) in entries {
+            b.extend_from_slice(&tag.to_le_bytes());
+            b.extend_from_slice(&ty.to_le_bytes());
+            b.extend_from_slice(&count.to_le_bytes());
+            b.extend_from_slice(&value.to_le_bytes());
+        }
+        b.extend_from_slice(&0u32.to_le_bytes());
+        b
+    };
+    let png = {
+        let mut ihdr = b"IHDR".to_vec();
+        ihdr.extend_from_slice(&w.to_be_bytes());
+        ihdr.extend_from_slice(&h.to_be_bytes());
+        ihdr.extend_from_slice(&[16, 0, 0, 0, 0]);
+        let mut b = b"\x89PNG\r\n\x1a\n".to_vec();
+        b.extend_from_slice(&13u32.to_be_bytes());
+        b.extend_from_slice(&ihdr);
+        b.extend_from_slice(&crc32(&ihdr).to_be_bytes());
+        // A short IDAT (an empty zlib stream) and IEND, so the header is all that is wrong.
+        for (kind, data) in [
+            (&b"IDAT"[..], &b"\x78\x9c\x03\x00\x00\x00\x00\x01"[..]),
+            (b"IEND", b""),
+        ] {
+            let mut chunk = kind.to_vec();
+            chunk.extend_from_slice(data);
+            b.extend_from_slice(&(data.len() as u32).to_be_bytes());
+            b.extend_from_slice(&chunk);
+            b.extend_from_slice(&crc32(&chunk).to_be_bytes());
+        }
+        b
+    };
+    let files: Vec<(&str, Vec<u8>)> = vec![
+        ("huge.tif", tiff),
+        ("huge.png", png),
+        (
+            "huge.asc",
+            format!("ncols {w}\nnrows {h}\ncellsize 1\n1 2 3\n").into_bytes(),
+        ),
+        (
+            "huge.vrt",
+            format!("<VRTDataset rasterXSize=\"{w}\" rasterYSize=\"{h}\"/>").into_bytes(),
+        ),
+        (
+            "huge.xyz",
+            format!("0 0 1\n1 0 1\n0 1 1\n{} {} 1\n", w - 1, h - 1).into_bytes(),
+        ),
+    ];
+    let mut paths: Vec<String> = Vec::new();
+    for (name, bytes) in &files {
+        std::fs::write(dir.join(name), bytes).unwrap();
+        paths.push(dir.join(name).display().to_string());
+    }
+    // Two SRTM tiles 54° and 80° apart: a glob mosaic of 64,801 × 96,001 nodes.
+    for name in ["N00E000.hgt", "N80E054.hgt"] {
+        std::fs::write(dir.join(name), vec![0u8; 1201 * 1201 * 2]).unwrap();
+    }
+    paths.push(dir.join("N*.hgt").display().to_string());
+    let bin = env!("CARGO_BIN_EXE_terrain");
+    for path in paths {
+        let out = std::process::Command::new("sh")
+            .arg("-c")
+            .arg("ulimit -v 1048576 && exec \"$0\" info \"$1\"")
+            .arg(bin)
+            .arg(&path)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{path}: {err}");
+        assert_eq!(err.lines().count(), 1, "{path}: {err}");
+        assert!(err.contains("cells supported"), "{path}: {err}");
+    }
+}
+
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= b as u32;
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
+/// Damaged copies of every fixture (truncated at five points, a byte flipped at five places)
+/// given to `terrain info`: each exits 1 with exactly one line on stderr, or, where the damage
+/// left a readable file (a flipped height), exits 0 with nothing on stderr. Never a panic, never a
+/// second line.
+#[test]
+fn every_damaged_fixture_exits_1_with_one_line_or_still_reads() {
+    let dir = common::scratch("formats-damaged");
+    let bin = env!("CARGO_BIN_EXE_terrain");
+    let mut names: Vec<String> = gdal().keys().cloned().collect();
+    names.push("grid.pgw".into());
+    let (mut refused, mut read, mut tried) = (0, 0, 0);
+    // Truncations that still read: formats without a stated size (XYZ, a PNG whose world file
+    // lost only its last line's digits) lose their end silently, as they do in GDAL.
+    let mut readable_cuts = Vec::new();
+    let mut failures = Vec::new();
+    for name in &names {
+        let bytes = std::fs::read(self::dir().join(name)).unwrap();
+        let n = bytes.len();
+        let mut damaged: Vec<(String, Vec<u8>)> = Vec::new();
+        for k in 0..5 {
+            let cut = n * k / 5 + (k % 2) * 3;
+            damaged.push((format!("cut{cut}"), bytes[..cut.min(n - 1)].to_vec()));
+            let at = (n * (2 * k + 1) / 10 + 7 * k) % n;
+            let mut flipped = bytes.clone();
+            flipped[at] ^= 0xA5;
+            damaged.push((format!("flip{at}"), flipped));
+        }
+        for (what, data) in damaged {
+            let what_name = what.clone();
+            let case = dir.join(what);
+            std::fs::create_dir_all(&case).unwrap();
+            // A world file is damaged beside an intact PNG; a VRT keeps its tiles.
+            let target = if name.ends_with(".pgw") {
+                std::fs::copy(self::dir().join("grid.png"), case.join("grid.png")).unwrap();
+                std::fs::write(case.join("grid.pgw"), &data).unwrap();
+                case.join("grid.png")
+            } else {
+                let p = case.join(name);
+                std::fs::write(&p, &data).unwrap();
+                if name.ends_with(".vrt") {
+                    let _ =
+                        std::os::unix::fs::symlink(self::dir().join("tiles"), case.join("tiles"));
+                }
+                p
+            };
+            let out = std::process::Command::new(bin)
+                .arg("info")
+                .arg(&target)
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            tried += 1;
+            match out.status.code() {
+                Some(1) if err.lines().count() == 1 => refused += 1,
+                Some(0) if err.is_empty() => {
+                    read += 1;
+                    if what_name.starts_with("cut") {
+                        readable_cuts.push(format!("{name} {what_name}"));
+                    }
+                }
+                code => failures.push(format!(
+                    "{name} {}: exit {code:?}, stderr {err:?}",
+                    case.display()
+                )),
+            }
+            std::fs::remove_dir_all(&case).unwrap();
+        }
+    }
+    eprintln!(
+        "{tried} damaged inputs: {refused} refused in one line, {read} still readable, of which \
+         truncations: {readable_cuts:?}"
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    assert!(refused > tried / 2, "only {refused} of {tried} refused");
+}

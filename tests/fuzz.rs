@@ -18,13 +18,19 @@ fn every_target_survives_a_short_mutation_pass() {
         let r = harness::fuzz(&t, execs, 2026, false, &crash_dir);
         // A target that reads nothing or refuses nothing is not exercising its parser.
         if r.read == 0 || r.refused == 0 {
-            failures.push(format!("{}: {} read, {} refused", t.name, r.read, r.refused));
+            failures.push(format!(
+                "{}: {} read, {} refused",
+                t.name, r.read, r.refused
+            ));
         }
         for (msg, path) in &r.crashes {
             failures.push(format!("{}: panic `{msg}` on {}", t.name, path.display()));
         }
         for msg in &r.bad_messages {
-            failures.push(format!("{}: message of more than one line: {msg:?}", t.name));
+            failures.push(format!(
+                "{}: message of more than one line: {msg:?}",
+                t.name
+            ));
         }
     }
     std::panic::set_hook(Box::new(|info| eprintln!("{info}")));

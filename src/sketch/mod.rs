@@ -40,10 +40,7 @@ static CELL_LIMIT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsi
 /// Lowers the largest grid any reader allocates, for the whole process: for a fuzz harness or a
 /// service that must bound its memory below the default (values above [`MAX_CELLS`] are clamped).
 pub fn limit_cells(cells: usize) {
-    CELL_LIMIT.store(
-        cells.min(MAX_CELLS),
-        std::sync::atomic::Ordering::Relaxed,
-    );
+    CELL_LIMIT.store(cells.min(MAX_CELLS), std::sync::atomic::Ordering::Relaxed);
 }
 
 /// The largest grid a reader allocates now.
