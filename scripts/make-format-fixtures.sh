@@ -45,9 +45,11 @@ t -ot Byte -scale 300 1000 60 200 -a_nodata 0 -co PIXELTYPE=SIGNEDBYTE "$tmp/Int
 t -ot UInt16 -scale 300 1000 1000 65000 -a_nodata 0 "$tmp/Int16.tif" "$tmp/UInt16.tif"
 t -ot UInt32 -scale 300 1000 100000 4000000000 -a_nodata 0 "$tmp/Int16.tif" "$tmp/UInt32.tif"
 t -ot Int32 -scale 300 1000 -2000000000 2000000000 -a_nodata -2147483648 "$tmp/Int16.tif" "$tmp/Int32.tif"
+t -ot UInt64 -scale 300 1000 100000 9000000000000 -a_nodata 0 "$tmp/Int16.tif" "$tmp/UInt64.tif"
+t -ot Int64 -scale 300 1000 -9000000000000 9000000000000 -a_nodata -9999 "$tmp/Int16.tif" "$tmp/Int64.tif"
 t -ot Float32 -scale 300 1000 300.25 1000.75 -a_nodata -9999 "$tmp/Int16.tif" "$tmp/Float32.tif"
 t -ot Float64 -scale 300 1000 300.125 1000.5 -a_nodata -9999 "$tmp/Int16.tif" "$tmp/Float64.tif"
-types="Byte Int8 UInt16 Int16 UInt32 Int32 Float32 Float64"
+types="Byte Int8 UInt16 Int16 UInt32 Int32 UInt64 Int64 Float32 Float64"
 
 pred() { case $1 in Float*) echo 3 ;; *) echo 2 ;; esac; }
 signed() { [ "$1" = Int8 ] && echo "-co PIXELTYPE=SIGNEDBYTE" || true; }
@@ -102,7 +104,14 @@ t -of PNG -ot UInt16 -co WORLDFILE=YES "$tmp/UInt16.tif" "$out/grid.png"
 rm -f "$out"/*.aux.xml "$out"/*.prj
 # SRTM 3″: a 1201² tile named for its south-west corner, zipped as USGS ships them.
 t -of SRTMHGT -r bilinear -outsize 1201 1201 -a_ullr -84 37 -83 36 "$tmp/Int16.tif" "$tmp/N36W084.hgt"
-(cd "$tmp" && python3 -c "import zipfile; z = zipfile.ZipFile('N36W084.hgt.zip', 'w', zipfile.ZIP_DEFLATED); z.write('N36W084.hgt'); z.close()")
+# A fixed timestamp, so the zip is the same bytes every time.
+(cd "$tmp" && python3 -c "
+import zipfile
+info = zipfile.ZipInfo('N36W084.hgt', date_time=(2000, 1, 1, 0, 0, 0))
+info.compress_type = zipfile.ZIP_DEFLATED
+with zipfile.ZipFile('N36W084.hgt.zip', 'w') as z:
+    z.writestr(info, open('N36W084.hgt', 'rb').read())
+")
 cp "$tmp/N36W084.hgt.zip" "$out/"
 cp "$tmp/N36W084.hgt" "$tmp/hgt-copy.hgt"
 

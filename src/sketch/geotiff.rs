@@ -290,3 +290,60 @@ fn geo_keys<R: Read + Seek>(dec: &mut Decoder<R>) -> Vec<(u16, GeoValue)> {
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tiff::encoder::{TiffEncoder, colortype::Gray32Float};
+
+    /// A 3 × 2 Float32 TIFF with the given GeoTIFF tags (GDAL writes a ModelTransformation only
+    /// for rotated grids; other writers use it north-up).
+    fn tiff_with(transform: [f64; 16], keys: &[u16]) -> Vec<u8> {
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        let mut enc = TiffEncoder::new(&mut bytes).unwrap();
+        let mut image = enc.new_image::<Gray32Float>(3, 2).unwrap();
+        let dir = image.encoder();
+        dir.write_tag(Tag::Unknown(MODEL_TRANSFORMATION), &transform[..])
+            .unwrap();
+        dir.write_tag(Tag::Unknown(GEO_KEY_DIRECTORY), keys)
+            .unwrap();
+        image
+            .write_data(&[1.0f32, 2.0, 3.0, 4.0, 5.0, 6.0])
+            .unwrap();
+        bytes.into_inner()
+    }
+
+    #[test]
+    fn a_north_up_model_transformation_in_feet_places_the_grid() {
+        // Projected (1024 = 1), pixel-is-area (1025 = 1), international feet (3076 = 9002).
+        let keys = [1, 1, 0, 3, 1024, 0, 1, 1, 1025, 0, 1, 1, 3076, 0, 1, 9002];
+        let t = [
+            10.0, 0.0, 0.0, 1000.0, 0.0, -20.0, 0.0, 5000.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        ];
+        let g = read(
+            Path::new("t.tif"),
+            std::io::Cursor::new(tiff_with(t, &keys)),
+        )
+        .unwrap();
+        let r = g.georef.unwrap();
+        assert_eq!((r.west, r.south), (1005.0, 4970.0));
+        assert_eq!(r.units, Units::Linear(FOOT_M));
+        assert!((g.dx - 3.048).abs() < 1e-12 && (g.dy - 6.096).abs() < 1e-12);
+        // Row 0 is the south: the file's second row.
+        assert_eq!(g.data, vec![4.0, 5.0, 6.0, 1.0, 2.0, 3.0]);
+    }
+
+    #[test]
+    fn a_rotated_grid_is_refused() {
+        let t = [
+            10.0, 1.0, 0.0, 1000.0, 0.5, -20.0, 0.0, 5000.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        ];
+        let err = read(
+            Path::new("t.tif"),
+            std::io::Cursor::new(tiff_with(t, &[1, 1, 0, 0])),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("rotated"), "{err}");
+    }
+}

@@ -69,6 +69,9 @@ pub struct Atlas {
     pub max_m: f32,
     /// `levels[0]` is the atlas itself.
     pub levels: Vec<Level>,
+    /// Where the file put its south-west node, in the file's coordinate system (not the world's:
+    /// the world is `origin`-based metres), when the file says.
+    pub georef: Option<Georef>,
 }
 
 /// What a file does not say about itself, from the scene.
@@ -277,6 +280,7 @@ impl Atlas {
             min_m,
             max_m,
             levels: build_pyramid(base),
+            georef: raw.georef,
         })
     }
 

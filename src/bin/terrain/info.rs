@@ -3,6 +3,7 @@
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
+use terrain::sketch::georef::{Georef, Units};
 use terrain::sketch::{Atlas, LoadOptions};
 
 #[derive(clap::Args)]
@@ -29,6 +30,57 @@ struct Report {
     min_m: f32,
     max_m: f32,
     nodata: usize,
+    /// The file's coordinate system and its south-west node there; null when the file has none.
+    georef: Option<GeorefReport>,
+}
+
+#[derive(Serialize)]
+struct GeorefReport {
+    /// `degrees`, `metres` or `feet`.
+    units: &'static str,
+    /// Metres per unit for `metres` and `feet` (0.3048, or 1200/3937 for the US survey foot).
+    unit_m: Option<f64>,
+    /// The south-west node (a cell's centre, or the sample of a pixel-is-point file).
+    west: f64,
+    south: f64,
+    cell_x: f64,
+    cell_y: f64,
+}
+
+impl GeorefReport {
+    fn new(g: Georef) -> GeorefReport {
+        let (units, unit_m) = match g.units {
+            Units::Degrees => ("degrees", None),
+            Units::Linear(m) if m == 1.0 => ("metres", Some(1.0)),
+            Units::Linear(m) => ("feet", Some(m)),
+            Units::Unknown => ("metres", Some(1.0)),
+        };
+        GeorefReport {
+            units,
+            unit_m,
+            west: g.west,
+            south: g.south,
+            cell_x: g.cell_x,
+            cell_y: g.cell_y,
+        }
+    }
+
+    /// `; south-west node at 84.24667° W 36.62625° N`, or at (x, y) in metres or feet.
+    fn describe(&self) -> String {
+        match self.units {
+            "degrees" => format!(
+                "; south-west node at {:.5}° {} {:.5}° {}",
+                self.west.abs(),
+                if self.west < 0.0 { "W" } else { "E" },
+                self.south.abs(),
+                if self.south < 0.0 { "S" } else { "N" }
+            ),
+            units => format!(
+                "; south-west node at ({:.2}, {:.2}) {units}",
+                self.west, self.south
+            ),
+        }
+    }
 }
 
 pub fn run(a: Args) -> Result<()> {
@@ -47,12 +99,13 @@ pub fn run(a: Args) -> Result<()> {
         min_m: atlas.min_m,
         max_m: atlas.max_m,
         nodata: atlas.nodata,
+        georef: atlas.georef.map(GeorefReport::new),
     };
     if a.json {
         return crate::print_json(&r);
     }
     println!(
-        "{}: {} × {} cells of {:.2} × {:.2} m ({:.1} × {:.1} km), heights {:.1} … {:.1} m, {} nodata filled",
+        "{}: {} × {} cells of {:.2} × {:.2} m ({:.1} × {:.1} km), heights {:.1} … {:.1} m, {} nodata filled{}",
         r.file,
         r.width,
         r.height,
@@ -62,7 +115,11 @@ pub fn run(a: Args) -> Result<()> {
         (r.height - 1) as f64 * r.dy_m / 1000.0,
         r.min_m,
         r.max_m,
-        r.nodata
+        r.nodata,
+        r.georef
+            .as_ref()
+            .map(GeorefReport::describe)
+            .unwrap_or_default()
     );
     Ok(())
 }
