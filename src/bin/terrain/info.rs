@@ -51,7 +51,7 @@ impl GeorefReport {
     fn new(g: Georef) -> GeorefReport {
         let (units, unit_m) = match g.units {
             Units::Degrees => ("degrees", None),
-            Units::Linear(m) if m == 1.0 => ("metres", Some(1.0)),
+            Units::Linear(1.0) => ("metres", Some(1.0)),
             Units::Linear(m) => ("feet", Some(m)),
             Units::Unknown => ("metres", Some(1.0)),
         };
