@@ -192,25 +192,10 @@ fn mend_png_crcs(b: &mut [u8]) {
         let Some(end) = (k + 8).checked_add(len).filter(|&e| e + 4 <= b.len()) else {
             return;
         };
-        let crc = crc32(&b[k + 4..end]);
+        let crc = crc32fast::hash(&b[k + 4..end]);
         b[end..end + 4].copy_from_slice(&crc.to_be_bytes());
         k = end + 4;
     }
-}
-
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &x in bytes {
-        crc ^= x as u32;
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 {
-                (crc >> 1) ^ 0xEDB8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    !crc
 }
 
 fn root_dir() -> PathBuf {

@@ -92,16 +92,7 @@ pub fn read<R: Read + Seek>(path: &Path, reader: R) -> Result<RawGrid> {
             .map_err(|e| Error::decode(Role::Sketch, path, chunk_name(k, &dec), e))?;
         place(&values, (x0, y0, dw, dh), (w, h), nodata, &mut data).map_err(bad)?;
     }
-    let georef = georef.map(|g| g.resolved(w, h));
-    let (dx, dy) = georef.map_or((1.0, 1.0), |g| g.spacing_m(w, h));
-    Ok(RawGrid {
-        width: w,
-        height: h,
-        dx,
-        dy,
-        data,
-        georef,
-    })
+    Ok(RawGrid::new(w, h, data, georef))
 }
 
 fn chunk_name<R: Read + Seek>(k: u32, dec: &Decoder<R>) -> &'static str {

@@ -98,6 +98,22 @@ pub struct RawGrid {
 }
 
 impl RawGrid {
+    /// A grid placed by its georeference when it has one; without, its cells are 1 m until the
+    /// scene's `sketch.spacing_m` says otherwise.
+    pub fn new(width: usize, height: usize, data: Vec<f32>, georef: Option<Georef>) -> RawGrid {
+        match georef {
+            Some(g) => RawGrid::georeferenced(width, height, data, g),
+            None => RawGrid {
+                width,
+                height,
+                dx: 1.0,
+                dy: 1.0,
+                data,
+                georef: None,
+            },
+        }
+    }
+
     /// A grid whose spacing follows from its georeference.
     pub fn georeferenced(width: usize, height: usize, data: Vec<f32>, georef: Georef) -> RawGrid {
         let georef = georef.resolved(width, height);

@@ -301,24 +301,19 @@ pub fn parse_vrt(
         })
         .transpose()
         .map_err(|_| bad("<GeoTransform> is not six numbers".into()))?;
-    match gt {
+    let georef = match gt {
         Some(gt) => {
             let gt: [f64; 6] = gt
                 .try_into()
                 .map_err(|_| bad("<GeoTransform> is not six numbers".into()))?;
-            let georef = Georef::from_geotransform(gt, h, units)
-                .ok_or_else(|| bad("<GeoTransform> is rotated or not north-up".into()))?;
-            Ok(RawGrid::georeferenced(w, h, data, georef))
+            Some(
+                Georef::from_geotransform(gt, h, units)
+                    .ok_or_else(|| bad("<GeoTransform> is rotated or not north-up".into()))?,
+            )
         }
-        None => Ok(RawGrid {
-            width: w,
-            height: h,
-            dx: 1.0,
-            dy: 1.0,
-            data,
-            georef: None,
-        }),
-    }
+        None => None,
+    };
+    Ok(RawGrid::new(w, h, data, georef))
 }
 
 /// The first child element of `node` named `name`.

@@ -121,15 +121,6 @@ pub fn parse(
             };
         }
     }
-    match world.and_then(|gt| Georef::from_geotransform(gt, h, Units::Unknown)) {
-        Some(georef) => Ok(RawGrid::georeferenced(w, h, data, georef)),
-        None => Ok(RawGrid {
-            width: w,
-            height: h,
-            dx: 1.0,
-            dy: 1.0,
-            data,
-            georef: None,
-        }),
-    }
+    let georef = world.and_then(|gt| Georef::from_geotransform(gt, h, Units::Unknown));
+    Ok(RawGrid::new(w, h, data, georef))
 }
