@@ -2,8 +2,9 @@
 //!
 //! Rules:
 //! - Row 0 is the southern edge; texel (i, j) is the grid node at `origin + (i·dx, j·dy)`.
-//! - Every height is finite: nodata and NaN cells are filled from valid neighbours by the loader
-//!   ([`fill`]) and counted in [`Atlas::nodata`], never passed on.
+//! - Every height is finite and within ±[`MAX_HEIGHT_M`]: nodata, NaN and heights beyond it are
+//!   filled from valid neighbours by the loader ([`fill`]) and counted in [`Atlas::nodata`], never
+//!   passed on.
 //! - Level l of the pyramid is a 2×2 box average of level l−1 (sizes halved rounding down, as
 //!   texture mips are), so a level-l texel's centre lies at level-0 coordinate `2^l·i + (2^l − 1)/2`.
 //!   Sampling between levels is trilinear on the CPU, bicubic per level on the GPU.
@@ -33,6 +34,13 @@ use std::path::Path;
 pub const EARTH_RADIUS_M: f64 = 6_371_008.8;
 /// Larger grids are refused rather than allocated: 2^28 cells is 1 GiB of f32 before the pyramid.
 pub const MAX_CELLS: usize = 1 << 28;
+
+/// Heights beyond ±1000 km (after `sketch.height_scale`) are no terrain's (the Earth's relief
+/// spans 20 km), and squared or summed in f32 downstream they would overflow. Up to 1 % of a
+/// sketch's cells beyond it are taken as nodata and filled (a Float64 file damaged into 1e180 m, a
+/// float DEM whose −3.4e38 nodata its header does not declare; GDAL reads them as values); more
+/// are heights in another unit, and the sketch is refused with a hint to set the scale.
+pub const MAX_HEIGHT_M: f64 = 1.0e6;
 
 /// The cell limit in force: [`MAX_CELLS`] unless [`limit_cells`] lowered it.
 static CELL_LIMIT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(MAX_CELLS);
@@ -268,20 +276,43 @@ impl Atlas {
                 ),
             ));
         }
-        let scale = opts.height_scale.unwrap_or(1.0) as f32;
+        let scale = opts.height_scale.unwrap_or(1.0);
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(Error::value(
+                "sketch.height_scale",
+                format!("height scale {scale} is not positive and finite"),
+            ));
+        }
+        let (mut beyond, mut largest) = (0usize, 0.0f64);
+        for h in &mut raw.data {
+            let v = *h as f64 * scale;
+            *h = if v.abs() <= MAX_HEIGHT_M {
+                v as f32
+            } else {
+                if v.is_finite() {
+                    beyond += 1;
+                    largest = largest.max(v.abs());
+                }
+                f32::NAN
+            };
+        }
+        // A few such cells are damage or an undeclared nodata; many are heights in another unit.
+        if beyond * 100 > raw.data.len() {
+            return Err(Error::value(
+                "sketch.height_scale",
+                format!(
+                    "{beyond} of {} heights lie beyond ±1000 km (up to {largest:.3e} m after height_scale {scale}): \
+                     set sketch.height_scale to their unit in metres (0.001 for millimetres)",
+                    raw.data.len()
+                ),
+            ));
+        }
         let nodata = fill::fill_nodata(&mut raw.data, raw.width, raw.height);
         let mut min_m = f32::INFINITY;
         let mut max_m = f32::NEG_INFINITY;
-        for h in &mut raw.data {
-            *h *= scale;
-            if !h.is_finite() {
-                return Err(Error::value(
-                    "sketch.height_scale",
-                    format!("height {h} overflows after height_scale {scale}"),
-                ));
-            }
-            min_m = min_m.min(*h);
-            max_m = max_m.max(*h);
+        for &h in &raw.data {
+            min_m = min_m.min(h);
+            max_m = max_m.max(h);
         }
         let base = Level {
             width: raw.width,
@@ -456,6 +487,35 @@ mod tests {
             georef: None,
         };
         Atlas::from_raw(raw, &LoadOptions::default()).unwrap()
+    }
+
+    #[test]
+    fn heights_beyond_a_thousand_kilometres_are_filled_as_nodata() {
+        let mut data = vec![10.0; 400];
+        data[7] = -3.4e38;
+        data[99] = 1.0e30;
+        data[0] = 20.0;
+        let raw = RawGrid::new(20, 20, data, None);
+        let a = Atlas::from_raw(raw, &LoadOptions::default()).unwrap();
+        assert_eq!(a.nodata, 2);
+        assert!(
+            a.min_m >= 10.0 && a.max_m <= 20.0,
+            "{} {}",
+            a.min_m,
+            a.max_m
+        );
+        // Many such heights are another unit: refused, naming the key that fixes it.
+        let mm = RawGrid::new(2, 2, vec![1.2e6, 1.3e6, 1.1e6, 2.0e6], None);
+        let err = Atlas::from_raw(mm.clone(), &LoadOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with("sketch.height_scale: 4 of 4"), "{err}");
+        let opts = LoadOptions {
+            height_scale: Some(0.001),
+            ..LoadOptions::default()
+        };
+        let a = Atlas::from_raw(mm, &opts).unwrap();
+        assert_eq!((a.nodata, a.min_m, a.max_m), (0, 1100.0, 2000.0));
     }
 
     #[test]

@@ -12,6 +12,9 @@ pub struct Args {
     /// Grid spacing in metres, for formats that carry none (PNG).
     #[arg(long)]
     spacing_m: Option<f64>,
+    /// Metres per unit of the file's heights (0.001 for millimetres), as `sketch.height_scale`.
+    #[arg(long)]
+    height_scale: Option<f64>,
     #[arg(long)]
     json: bool,
 }
@@ -86,6 +89,7 @@ impl GeorefReport {
 pub fn run(a: Args) -> Result<()> {
     let opts = LoadOptions {
         spacing_m: a.spacing_m,
+        height_scale: a.height_scale,
         ..LoadOptions::default()
     };
     let atlas = Atlas::load(&a.file, &opts)?;
