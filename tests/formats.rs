@@ -462,8 +462,17 @@ fn every_damaged_fixture_exits_1_with_one_line_or_still_reads() {
                 }
                 p
             };
+            // The wide-integer fixtures span their type's range: scaled to metres, so that only
+            // the damage can refuse them.
+            let scale = if name.contains("Int64") {
+                "1e-9"
+            } else if name.contains("Int32") {
+                "1e-6"
+            } else {
+                "1"
+            };
             let out = std::process::Command::new(bin)
-                .arg("info")
+                .args(["info", "--height-scale", scale])
                 .arg(&target)
                 .output()
                 .unwrap();
