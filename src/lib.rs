@@ -17,6 +17,7 @@ pub mod error;
 pub mod eval;
 pub mod geomipmap;
 pub mod gpu;
+pub mod light;
 pub mod lod;
 pub mod names;
 pub mod render;

@@ -70,6 +70,7 @@ fn code() -> BTreeMap<String, BTreeSet<String>> {
         "reference".into(),
         keys(serde_introspect::<ReferenceSection>()),
     );
+    m.insert("light".into(), keys(serde_introspect::<LightSection>()));
     m.insert("path".into(), keys(serde_introspect::<PathSection>()));
     m.insert("path.keys".into(), keys(serde_introspect::<PathKey>()));
     m.insert("jobs".into(), keys(serde_introspect::<JobsFile>()));

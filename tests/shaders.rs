@@ -107,7 +107,13 @@ fn uniform_structs_match_the_wgsl_field_by_field() {
             "ShadingUniforms",
             rust_layout!(ShadingUniforms {
                 sun,
-                pad,
+                daylight,
+                sun_colour,
+                haze_per_m,
+                haze_height_m,
+                pad0,
+                pad1,
+                pad2,
                 turbulence
             }),
             size_of::<ShadingUniforms>(),

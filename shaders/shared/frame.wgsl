@@ -37,7 +37,13 @@ struct CameraUniforms {
 // Sunlight and the surface types' variation.
 struct ShadingUniforms {
     sun: vec3<f32>,              // direction to the sun
-    pad: f32,
+    daylight: f32,               // the sky's share of its daylight (0 after dusk)
+    sun_colour: vec3<f32>,       // the sun's light on the ground, linear RGB
+    haze_per_m: f32,             // haze extinction at sea level
+    haze_height_m: f32,          // haze scale height
+    pad0: f32,
+    pad1: f32,
+    pad2: f32,
     turbulence: array<Octave, 2>,
 }
 

@@ -5,15 +5,20 @@
 #endif
 
 const SEA_LEVEL: f32 = 0.0;
-const FOG_DENSITY: f32 = 0.000035;
+// Rayleigh extinction at sea level per metre (red, green, blue) and its scale height: the twin
+// of src/light.rs's RAYLEIGH and RAYLEIGH_SCALE_M.
+const RAYLEIGH: vec3<f32> = vec3<f32>(5.8e-6, 13.5e-6, 33.1e-6);
+const RAYLEIGH_SCALE_M: f32 = 8000.0;
 
 fn sky_colour(dir: vec3<f32>) -> vec3<f32> {
     let up = clamp(dir.z, -0.2, 1.0);
-    let horizon = vec3<f32>(0.72, 0.80, 0.90);
+    // The horizon takes the low sun's colour; the sky dims through twilight.
+    let warm = frame.shading.sun_colour / vec3<f32>(1.1, 1.045, 0.935);
+    let horizon = vec3<f32>(0.72, 0.80, 0.90) * mix(vec3<f32>(1.0), warm, 0.35);
     let zenith = vec3<f32>(0.22, 0.42, 0.78);
-    var c = mix(horizon, zenith, pow(max(up, 0.0), 0.6));
+    var c = mix(horizon, zenith, pow(max(up, 0.0), 0.6)) * (0.04 + 0.96 * frame.shading.daylight);
     let sun = max(dot(dir, frame.shading.sun), 0.0);
-    c += vec3<f32>(1.0, 0.85, 0.6) * (pow(sun, 400.0) * 4.0 + pow(sun, 12.0) * 0.25);
+    c += frame.shading.sun_colour * vec3<f32>(0.91, 0.81, 0.64) * (pow(sun, 400.0) * 4.0 + pow(sun, 12.0) * 0.25);
     return c;
 }
 
@@ -53,14 +58,28 @@ fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32
         return mix(vec3<f32>(0.04, 0.12, 0.20), reflected, fresnel);
     }
     let sun = max(dot(n, frame.shading.sun), 0.0);
-    let sky = 0.35 * (0.6 + 0.4 * n.z);
-    let light = vec3<f32>(1.0, 0.95, 0.85) * sun * 1.1 + vec3<f32>(0.55, 0.65, 0.85) * sky;
+    let sky = 0.35 * (0.6 + 0.4 * n.z) * (0.04 + 0.96 * frame.shading.daylight);
+    let light = frame.shading.sun_colour * sun + vec3<f32>(0.55, 0.65, 0.85) * sky;
     return albedo(local, n) * light;
 }
 
-// Aerial perspective: the air between the eye and the ground scatters toward the horizon sky.
+// The air along a segment from height z0 to z1, `dist` long, whose density falls as
+// exp(−z / scale): ∫ exp(−z(t) / scale) dt, in metres of sea-level air.
+fn air_along(z0: f32, z1: f32, dist: f32, scale: f32) -> f32 {
+    let x = (z1 - z0) / scale;
+    // (1 − e^−x) / x, by its series where x is too small for the quotient.
+    let f = select((1.0 - exp(-x)) / x, 1.0 - 0.5 * x, abs(x) < 1e-3);
+    return dist * exp(-z0 / scale) * f;
+}
+
+// Aerial perspective: the air and haze between the eye and the ground, each thinning
+// exponentially with height, take away the ground's light and scatter in the horizon sky's.
 fn aerial(colour: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32> {
-    let fog = 1.0 - exp(-dist * FOG_DENSITY);
+    let z_eye = frame.camera.eye.z;
+    let z_ground = z_eye - to_eye.z;
+    let tau = RAYLEIGH * air_along(z_eye, z_ground, dist, RAYLEIGH_SCALE_M)
+        + vec3<f32>(frame.shading.haze_per_m * air_along(z_eye, z_ground, dist, frame.shading.haze_height_m));
+    let through = exp(-tau);
     let horizon = normalize(-to_eye) * vec3<f32>(1.0, 1.0, 0.0) + vec3<f32>(0.0, 0.0, 0.02);
-    return mix(colour, sky_colour(horizon), fog);
+    return colour * through + sky_colour(horizon) * (1.0 - through);
 }

@@ -3,10 +3,11 @@
 
 use crate::camera::Camera;
 use crate::detail::{Detail, OctaveFrame};
+use crate::light::Light;
 use crate::sketch::Atlas;
 use crate::stage::sketch_map::SketchMap;
 use bytemuck::{Pod, Zeroable};
-use glam::{DMat4, DVec2, DVec3, DVec4};
+use glam::{DMat4, DVec2, DVec4};
 
 pub const MAX_OCTAVES: usize = 24;
 /// Pyramid levels the GPU sees (a 32768² atlas has 15).
@@ -53,13 +54,23 @@ pub struct CameraUniforms {
     pub pad: u32,
 }
 
-/// Sunlight and the surface types' variation.
+/// Sunlight, the air and the surface types' variation.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct ShadingUniforms {
     /// Direction to the sun.
     pub sun: [f32; 3],
-    pub pad: f32,
+    /// The sky's share of its daylight (0 after dusk).
+    pub daylight: f32,
+    /// The sun's light on the ground, linear RGB.
+    pub sun_colour: [f32; 3],
+    /// Haze extinction at sea level, per metre.
+    pub haze_per_m: f32,
+    /// Haze scale height, metres.
+    pub haze_height_m: f32,
+    pub pad0: f32,
+    pub pad1: f32,
+    pub pad2: f32,
     pub turbulence: [OctaveGpu; 2],
 }
 
@@ -189,6 +200,7 @@ pub struct FrameInputs<'a> {
     pub mesh_origin: Option<DVec2>,
     pub atlas: &'a Atlas,
     pub detail: &'a Detail,
+    pub light: &'a Light,
     pub mesh: u32,
     pub view: View,
     pub importance_max: f32,
@@ -203,7 +215,7 @@ impl FrameUniforms {
         let origin = frame_origin(f.camera);
         FrameUniforms {
             camera: CameraUniforms::new(f.camera, origin, f.view),
-            shading: ShadingUniforms::new(f.detail, origin),
+            shading: ShadingUniforms::new(f.detail, f.light, origin),
             atlas: AtlasUniforms::new(f.atlas, origin),
             detail: DetailUniforms::new(f.detail, origin),
             mesh: MeshUniforms {
@@ -265,17 +277,22 @@ impl CameraUniforms {
 }
 
 impl ShadingUniforms {
-    pub fn new(detail: &Detail, origin: DVec2) -> ShadingUniforms {
+    pub fn new(detail: &Detail, light: &Light, origin: DVec2) -> ShadingUniforms {
         // Two octaves of turbulence, 600 m and 150 m, for the surface types' boundaries.
         let turbulence_seed = crate::detail::hash(detail.seed ^ 0x5eed);
         let turbulence = [600.0, 150.0].map(|wavelength: f64| {
             let rel = origin - detail.lattice_origin_m;
             OctaveFrame::split(rel, 1.6 / wavelength, 1.0, turbulence_seed).into()
         });
-        let sun = DVec3::new(0.41, -0.71, 0.57).normalize();
         ShadingUniforms {
-            sun: sun.as_vec3().to_array(),
-            pad: 0.0,
+            sun: light.sun.as_vec3().to_array(),
+            daylight: light.daylight as f32,
+            sun_colour: light.sun_colour.map(|c| c as f32),
+            haze_per_m: light.haze_per_m as f32,
+            haze_height_m: light.haze_height_m as f32,
+            pad0: 0.0,
+            pad1: 0.0,
+            pad2: 0.0,
             turbulence,
         }
     }

@@ -39,6 +39,17 @@ pub fn load_atlas(scene: &Scene) -> Result<Atlas> {
     }
 }
 
+/// The scene's sun and air.
+pub fn light_of(scene: &Scene) -> crate::light::Light {
+    let l = &scene.light;
+    crate::light::Light::new(
+        l.sun_azimuth_deg,
+        l.sun_elevation_deg,
+        l.haze_visibility_km,
+        l.haze_height_m,
+    )
+}
+
 /// The sketch's height under a world position, if the position is over the sketch.
 pub fn ground_under(atlas: &Atlas, p: DVec2) -> Option<f64> {
     let (lo, hi) = (atlas.origin, atlas.max_corner());

@@ -13,7 +13,7 @@ mod build;
 mod check;
 mod parse;
 
-pub use build::{camera_of, detail_of, ground_under, load_atlas, scene_load_options};
+pub use build::{camera_of, detail_of, ground_under, light_of, load_atlas, scene_load_options};
 pub use parse::Fault;
 
 use serde::{Deserialize, Serialize};
@@ -36,6 +36,8 @@ pub struct Scene {
     pub geomipmap: GeoMipMapSection,
     #[serde(default)]
     pub reference: ReferenceSection,
+    #[serde(default)]
+    pub light: LightSection,
     pub path: Option<PathSection>,
     /// The folder relative paths resolve against; not a key.
     #[serde(skip)]
@@ -235,6 +237,30 @@ pub struct ReferenceSection {
 impl Default for ReferenceSection {
     fn default() -> Self {
         ReferenceSection { step: 0.25 }
+    }
+}
+
+/// The sun and the air (see [`crate::light`]).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LightSection {
+    /// Degrees clockwise from north: 0 north, 90 east.
+    pub sun_azimuth_deg: f64,
+    /// Degrees above the horizon; below 0 the sun has set.
+    pub sun_elevation_deg: f64,
+    /// Meteorological visibility at sea level, km: the haze's density.
+    pub haze_visibility_km: f64,
+    /// Scale height of the haze, metres: how fast it thins with height.
+    pub haze_height_m: f64,
+}
+impl Default for LightSection {
+    fn default() -> Self {
+        LightSection {
+            sun_azimuth_deg: 150.0,
+            sun_elevation_deg: 35.0,
+            haze_visibility_km: 100.0,
+            haze_height_m: 1200.0,
+        }
     }
 }
 
