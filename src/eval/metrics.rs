@@ -13,6 +13,9 @@
 //!   seen from 0.7 m, FLIP's default).
 //! - The screen-space geometric error from position buffers (DESIGN.md: the distance in pixels
 //!   between where the mode's surface and the reference's surface appear).
+//! - The terrain's luminance, mean and standard deviation: linear Rec. 709 luminance
+//!   (0.2126 R + 0.7152 G + 0.0722 B of the sRGB-decoded values) over the pixels that show ground.
+//!   How much contrast the picture keeps: haze that flattens a view from 20 km lowers it.
 //!
 //! Screen-space error, per pixel x where either image shows ground: if both do, the distance from
 //! x to the reference pixel whose ground position is nearest (horizontally) to the mode's at x,
@@ -24,6 +27,32 @@
 //! needs the terrain function on the CPU per pixel and says nothing at silhouettes.
 
 use serde::Serialize;
+
+/// Mean and standard deviation of the linear luminance of an RGBA8 sRGB image over the pixels
+/// where `ground` is true; `None` when no pixel shows ground.
+pub fn terrain_luminance(rgba: &[u8], ground: impl Iterator<Item = bool>) -> Option<(f64, f64)> {
+    let decode = |v: u8| {
+        let c = v as f64 / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let values: Vec<f64> = rgba
+        .chunks_exact(4)
+        .zip(ground)
+        .filter(|(_, g)| *g)
+        .map(|(p, _)| 0.2126 * decode(p[0]) + 0.7152 * decode(p[1]) + 0.0722 * decode(p[2]))
+        .collect();
+    if values.is_empty() {
+        return None;
+    }
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let var = values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n;
+    Some((mean, var.sqrt()))
+}
 
 /// PSNR in dB between two RGBA8 images of one size, over RGB; infinity when identical.
 pub fn psnr(a: &[u8], b: &[u8]) -> f64 {
@@ -155,6 +184,18 @@ fn summarise(mut errors: Vec<f64>) -> ScreenError {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn terrain_luminance_counts_ground_pixels_only() {
+        // Black and white ground, a grey sky pixel left out: mean ½, deviation ½.
+        let rgba = [0, 0, 0, 255, 255, 255, 255, 255, 128, 128, 128, 255];
+        let (mean, std) = terrain_luminance(&rgba, [true, true, false].into_iter()).unwrap();
+        assert!(
+            (mean - 0.5).abs() < 1e-12 && (std - 0.5).abs() < 1e-12,
+            "{mean} {std}"
+        );
+        assert!(terrain_luminance(&rgba, [false; 3].into_iter()).is_none());
+    }
 
     /// A ground plane seen so that pixel (x, y) shows ground point (x·10, y·7), sky above row 4.
     fn plane(w: usize, h: usize, shift: (i64, i64)) -> Vec<[f32; 4]> {

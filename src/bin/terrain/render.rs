@@ -72,6 +72,12 @@ struct Report {
     /// The baselines' figures (absent for the other modes).
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     baseline: Option<Baseline>,
+    /// With `--positions`: the linear luminance of the pixels showing ground, mean and standard
+    /// deviation (`eval::metrics::terrain_luminance`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    terrain_luminance_mean: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    terrain_luminance_std: Option<f64>,
 }
 
 /// The detail used, defaults resolved from the sketch included (docs/scene.md, [detail]).
@@ -116,8 +122,11 @@ pub fn run(a: Args) -> Result<()> {
     // The image and the positions land together or not at all.
     let mut staged = Staged::default();
     staged.add_image(&a.output, last.width, last.height, &last.rgba)?;
+    let mut luminance = None;
     if let Some(p) = &a.positions {
         let world = terrain::render::world_positions(&r.read_positions(&camera)?, &camera);
+        let ground = world.chunks_exact(4).map(|q| q[3] > 0.5);
+        luminance = terrain::eval::metrics::terrain_luminance(&last.rgba, ground);
         let shape = [last.height as usize, last.width as usize, 4];
         staged.add(p, &output::npy_f64(&shape, &world))?;
     }
@@ -167,6 +176,8 @@ pub fn run(a: Args) -> Result<()> {
             precompute_bytes: bytes,
             tau_px: scene.geomipmap.tau,
         }),
+        terrain_luminance_mean: luminance.map(|l| l.0),
+        terrain_luminance_std: luminance.map(|l| l.1),
     };
     if a.json {
         return crate::print_json(&report);
