@@ -60,7 +60,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     var t = range.x;
     var t_prev = range.x;
     var hit = false;
-    for (var step = 0u; step < MAX_STEPS && t <= range.y; step++) {
+    // The last sample is taken at the box's exit itself: a ray leaving through the floor (the
+    // lowest the surface goes) has reached the surface there. Stepping past it instead missed a
+    // plain lying exactly at the sketch's lowest height, seen from above.
+    for (var step = 0u; step < MAX_STEPS && t_prev < range.y; step++) {
+        t = min(t, range.y);
         let p = eye + dir * t;
         let footprint = t * frame.camera.pixel_scale;
         let above = p.z - surface_height(p.xy, footprint);

@@ -305,6 +305,8 @@ fn pixel_normals_shade_with_the_surface_not_the_mesh() {
         s.warp.budget = false;
         s.detail.octaves = Some(0);
         s.render.pixel_normals = pixel_normals;
+        // Shadows fall where each mesh puts the surface, whichever normals light it.
+        s.render.shadows = false;
         render(&s, View::Shaded).1.rgba
     };
     let with_mesh = psnr(&image(16, false), &image(256, false));
@@ -313,4 +315,64 @@ fn pixel_normals_shade_with_the_surface_not_the_mesh() {
         "mesh 16² against 256²: {with_mesh:.1} dB with the mesh's normals, {with_pixel:.1} dB with pixel normals"
     );
     assert!(with_pixel > with_mesh + 1.0, "{with_pixel} vs {with_mesh}");
+}
+
+/// A low sun from the east behind the synthetic cliff (a 400 m step at x = 3840 m) shadows the
+/// plain at its foot, 400 m / tan 10° = 2.3 km of it, in the mesh modes and the reference alike,
+/// and leaves the plain beyond the shadow as it was; `render.shadows = false` lights it all.
+#[test]
+fn a_low_sun_behind_a_cliff_shadows_the_plain_at_its_foot() {
+    let scene = |shadows: bool| {
+        let mut s = common::scene(
+            "[sketch]\nsynthetic = \"cliff\"\n\n[camera]\nposition = [2000.0, 3840.0, 9000.0]\n\
+             look_at = [2000.0, 3841.0, 0.0]\nfov_y_deg = 60.0\nwidth = 128\nheight = 128\n\n\
+             [detail]\noctaves = 0\n\n[light]\nsun_azimuth_deg = 90.0\nsun_elevation_deg = 10.0\n",
+            manifest_dir(),
+        );
+        s.render.shadows = shadows;
+        s
+    };
+    // Mean linear luminance of the pixels whose ground lies between x0 and x1 (metres).
+    let band = |rgba: &[u8], positions: &[f64], x0: f64, x1: f64| {
+        let ground = positions
+            .chunks_exact(4)
+            .map(|q| q[3] > 0.5 && (x0..x1).contains(&q[0]));
+        terrain::eval::metrics::terrain_luminance(rgba, ground)
+            .expect("ground in the band")
+            .0
+    };
+    for mode in [Mode::Warped, Mode::Geomipmap, Mode::Reference] {
+        let shot = |shadows: bool| {
+            let s = scene(shadows);
+            let mut r = Renderer::with_positions(&s, mode, View::Shaded, true).unwrap();
+            let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
+            let frame = r.render(&camera).unwrap();
+            let world =
+                terrain::render::world_positions(&r.read_positions(&camera).unwrap(), &camera);
+            (frame.rgba, world)
+        };
+        let (lit_rgba, lit_pos) = shot(false);
+        let (shaded_rgba, shaded_pos) = shot(true);
+        let foot = (1900.0, 3600.0);
+        let beyond = (300.0, 1300.0);
+        let (foot_lit, foot_shaded) = (
+            band(&lit_rgba, &lit_pos, foot.0, foot.1),
+            band(&shaded_rgba, &shaded_pos, foot.0, foot.1),
+        );
+        let (beyond_lit, beyond_shaded) = (
+            band(&lit_rgba, &lit_pos, beyond.0, beyond.1),
+            band(&shaded_rgba, &shaded_pos, beyond.0, beyond.1),
+        );
+        eprintln!(
+            "{mode:?}: the cliff's foot {foot_lit:.4} lit, {foot_shaded:.4} shadowed; beyond {beyond_lit:.4}, {beyond_shaded:.4}"
+        );
+        assert!(
+            foot_shaded < 0.85 * foot_lit,
+            "{mode:?}: no shadow at the foot"
+        );
+        assert!(
+            (beyond_shaded - beyond_lit).abs() < 0.01 * beyond_lit,
+            "{mode:?}: shadow beyond its reach"
+        );
+    }
 }

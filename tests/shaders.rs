@@ -126,6 +126,7 @@ fn uniform_structs_match_the_wgsl_field_by_field() {
                 inv_spacing,
                 d_atlas,
                 levels,
+                max_m,
                 pad
             }),
             size_of::<AtlasUniforms>(),

@@ -54,7 +54,8 @@ struct AtlasUniforms {
     inv_spacing: vec2<f32>,
     d_atlas: f32,
     levels: u32,                 // mip levels in use
-    pad: vec2<u32>,
+    max_m: f32,                  // the sketch's highest height (a ray above it hits nothing)
+    pad: u32,
 }
 
 // The procedural octaves.

@@ -3,6 +3,9 @@
 #ifdef NOISE
 #import noise
 #endif
+#ifdef SHADOWS
+#import atlas
+#endif
 
 const SEA_LEVEL: f32 = 0.0;
 // Rayleigh extinction at sea level per metre (red, green, blue) and its scale height: the twin
@@ -50,6 +53,53 @@ fn albedo(local: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return mix(c, snow, snowy);
 }
 
+#ifdef SHADOWS
+// Bilinear height on level `l` of the pyramid at level-0 texel coordinates `uv`: the shadow ray
+// takes many samples, each a quarter of the bicubic's loads.
+fn atlas_bilinear(uv: vec2<f32>, l: u32) -> f32 {
+    let s = f32(1u << l);
+    let x = (uv - vec2<f32>((s - 1.0) * 0.5)) / s;
+    let size = vec2<i32>(frame.atlas.level[l].xy);
+    let i = floor(x);
+    let f = x - i;
+    let a = mix(atlas_texel(i32(i.x), i32(i.y), l, size), atlas_texel(i32(i.x) + 1, i32(i.y), l, size), f.x);
+    let b = mix(atlas_texel(i32(i.x), i32(i.y) + 1, l, size), atlas_texel(i32(i.x) + 1, i32(i.y) + 1, l, size), f.x);
+    return mix(a, b, f.y);
+}
+
+const SHADOW_STEPS: i32 = 40;
+
+// How much of the sun the ground at `local` sees past the sketch: a ray marched toward the sun in
+// steps that grow with distance, each sampling the pyramid level whose texels match the step (a
+// cone), soft by the closest miss (the penumbra of a sun of finite size), until it rises above
+// the sketch's highest point. The ray starts two cells
+// out, so the octaves a mesh adds to the sketch do not shadow the point they lift.
+fn sun_visibility(local: vec3<f32>) -> f32 {
+    let sun = frame.shading.sun;
+    if (sun.z <= 0.0) {
+        return 0.0;
+    }
+    let d = frame.atlas.d_atlas;
+    var t = 2.0 * d;
+    var seen = 1.0;
+    for (var i = 0; i < SHADOW_STEPS; i++) {
+        let p = local + sun * t;
+        if (p.z > frame.atlas.max_m) {
+            break;
+        }
+        let uv = (p.xy + frame.atlas.offset) * frame.atlas.inv_spacing;
+        let l = u32(clamp(log2(max(0.25 * t / d, 1.0)), 0.0, f32(frame.atlas.levels - 1u)));
+        let clearance = p.z - atlas_bilinear(uv, l);
+        seen = min(seen, clamp(0.5 + clearance / (0.03 * t), 0.0, 1.0));
+        if (seen <= 0.0) {
+            break;
+        }
+        t += max(0.25 * t, 0.5 * d);
+    }
+    return seen;
+}
+#endif
+
 // The lit colour of ground at `local` with normal `n`, seen from `to_eye` (distance `dist`).
 fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32> {
     if (local.z < SEA_LEVEL) {
@@ -57,7 +107,12 @@ fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32
         let reflected = sky_colour(reflect(-to_eye / dist, vec3<f32>(0.0, 0.0, 1.0)));
         return mix(vec3<f32>(0.04, 0.12, 0.20), reflected, fresnel);
     }
-    let sun = max(dot(n, frame.shading.sun), 0.0);
+    var sun = max(dot(n, frame.shading.sun), 0.0);
+#ifdef SHADOWS
+    if (sun > 0.0) {
+        sun *= sun_visibility(local);
+    }
+#endif
     let sky = 0.35 * (0.6 + 0.4 * n.z) * (0.04 + 0.96 * frame.shading.daylight);
     let light = frame.shading.sun_colour * sun + vec3<f32>(0.55, 0.65, 0.85) * sky;
     return albedo(local, n) * light;

@@ -30,6 +30,7 @@ impl ReferencePass {
         width: u32,
         height: u32,
         noise: bool,
+        shadows: bool,
     ) -> Result<ReferencePass> {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("reference"),
@@ -40,7 +41,14 @@ impl ReferencePass {
                 entry(3, S::COMPUTE, storage(false)),
             ],
         });
-        let flags: &[&str] = if noise { &["NOISE"] } else { &[] };
+        let mut flags = Vec::new();
+        if noise {
+            flags.push("NOISE");
+        }
+        if shadows {
+            flags.push("SHADOWS");
+        }
+        let flags = flags.as_slice();
         let pipeline = compute_pipeline(device, "reference", flags, &layout)?;
         let buffer = |label| {
             device.create_buffer(&wgpu::BufferDescriptor {

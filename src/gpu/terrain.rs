@@ -52,6 +52,8 @@ pub struct Variant {
     /// Also write each pixel's depth, from which its ground position is recovered (for
     /// screen-space error).
     pub positions: bool,
+    /// The sketch's pyramid, when the sketch shadows itself (`render.shadows`).
+    pub shadows: Option<wgpu::Buffer>,
 }
 
 impl TerrainPass {
@@ -86,6 +88,14 @@ impl TerrainPass {
             Shading::PixelNormals(_) => {
                 entries.push(entry(1, S::FRAGMENT, storage(true)));
                 flags.push("PIXEL_NORMALS");
+            }
+        }
+        let pixel_normals = matches!(variant.shading, Shading::PixelNormals(_));
+        if variant.shadows.is_some() {
+            flags.push("SHADOWS");
+            // The shadow ray reads the pyramid; pixel normals have it bound already.
+            if !pixel_normals {
+                entries.push(entry(1, S::FRAGMENT, storage(true)));
             }
         }
         if variant.importance.is_some() {
@@ -157,6 +167,11 @@ impl TerrainPass {
             Shading::MeshNormals(normals) => bind(4, normals),
             Shading::PixelNormals(atlas) => bind(1, atlas),
         });
+        if let Some(atlas) = &variant.shadows
+            && !pixel_normals
+        {
+            bind_entries.push(bind(1, atlas));
+        }
         if let Some(buffer) = &variant.importance {
             bind_entries.push(bind(5, buffer));
         }

@@ -85,7 +85,9 @@ pub struct AtlasUniforms {
     pub inv_spacing: [f32; 2],
     pub d_atlas: f32,
     pub levels: u32,
-    pub pad: [u32; 2],
+    /// The sketch's highest height: a shadow ray above it hits nothing.
+    pub max_m: f32,
+    pub pad: u32,
 }
 
 /// The procedural octaves.
@@ -306,7 +308,8 @@ impl AtlasUniforms {
             inv_spacing: [(1.0 / atlas.dx) as f32, (1.0 / atlas.dy) as f32],
             d_atlas: atlas.d_atlas() as f32,
             levels: atlas.levels.len().min(MAX_LEVELS) as u32,
-            pad: [0; 2],
+            max_m: atlas.max_m,
+            pad: 0,
         }
     }
 }

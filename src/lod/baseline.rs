@@ -176,6 +176,11 @@ impl Baselines {
             importance: None,
             geomipmap: Some((wgpu::Buffer::clone(&block_buffer), capacity)),
             positions: s.positions,
+            shadows: s
+                .scene
+                .render
+                .shadows
+                .then(|| wgpu::Buffer::clone(s.atlas_buffer)),
         };
         let n = bake.grid.n as u32;
         let (width, height) = (scene.camera.width, scene.camera.height);

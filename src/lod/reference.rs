@@ -23,7 +23,15 @@ impl Reference {
     pub fn new(s: &Shared) -> Result<Reference> {
         let (w, h) = (s.scene.camera.width, s.scene.camera.height);
         let noise = s.detail.octaves > 0;
-        let pass = ReferencePass::new(&s.alloc, s.frame, s.atlas_buffer, w, h, noise)?;
+        let pass = ReferencePass::new(
+            &s.alloc,
+            s.frame,
+            s.atlas_buffer,
+            w,
+            h,
+            noise,
+            s.scene.render.shadows,
+        )?;
         Ok(Reference {
             pass,
             step: s.scene.reference.step as f32,

@@ -70,6 +70,11 @@ impl Warped {
             importance: importance.as_ref().map(|b| wgpu::Buffer::clone(b)),
             geomipmap: None,
             positions: s.positions,
+            shadows: s
+                .scene
+                .render
+                .shadows
+                .then(|| wgpu::Buffer::clone(s.atlas_buffer)),
         };
         let terrain = TerrainPass::new(
             device,

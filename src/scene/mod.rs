@@ -286,12 +286,15 @@ pub struct RenderSection {
     /// The mesh modes shade with the terrain function's normal at each pixel, as the reference
     /// does; `false`: the mesh's normals plus bump detail (`detail.bump`).
     pub pixel_normals: bool,
+    /// The sketch shadows itself from the sun; `false` compiles the shadow ray out.
+    pub shadows: bool,
 }
 impl Default for RenderSection {
     fn default() -> Self {
         RenderSection {
             mode: Mode::Warped,
             pixel_normals: false,
+            shadows: true,
         }
     }
 }
