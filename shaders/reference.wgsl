@@ -76,7 +76,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         t += max(above, footprint) * frame.march.step;
     }
     if (!hit) {
-        colour_out[k] = vec4<f32>(sky_colour(dir), 1.0);
+        let outside = beyond(eye, dir);
+        colour_out[k] = vec4<f32>(mix(sky_colour(dir), outside.rgb, outside.w), 1.0);
         position_out[k] = vec4<f32>(0.0);
         return;
     }

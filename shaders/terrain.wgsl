@@ -76,7 +76,9 @@ fn sky_fs(in: SkyOut) -> FragOut {
     }
     let far = frame.camera.inv_view_proj * vec4<f32>(in.ndc, 1e-4, 1.0);
     let dir = normalize(far.xyz / far.w - frame.camera.eye);
-    return frag_out(sky_colour(dir), 0.0);
+    // Depth 0, as the sky: the image metrics measure the mesh, not the world beyond it.
+    let outside = beyond(frame.camera.eye, dir);
+    return frag_out(mix(sky_colour(dir), outside.rgb, outside.w), 0.0);
 }
 
 struct VsOut {

@@ -376,3 +376,39 @@ fn a_low_sun_behind_a_cliff_shadows_the_plain_at_its_foot() {
         );
     }
 }
+
+/// Beyond the sketch the sky pass and the reference draw the same plain (or sea), to the horizon;
+/// its pixels stay sky in the positions, so the image metrics measure the mesh alone; `void`
+/// leaves the sky.
+#[test]
+fn the_world_beyond_the_sketch_is_drawn_alike_and_counted_as_sky() {
+    let corner = |mode: Mode, outside: &str| {
+        let mut s = bundled("hills-high", 64, 64);
+        s.sketch.outside = terrain::scene::Outside::parse(outside).unwrap();
+        let mut r = Renderer::with_positions(&s, mode, View::Shaded, true).unwrap();
+        let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
+        let frame = r.render(&camera).unwrap();
+        let world = terrain::render::world_positions(&r.read_positions(&camera).unwrap(), &camera);
+        // The top-left pixel lies beyond the sketch in this view.
+        assert_eq!(
+            world[3], 0.0,
+            "{mode:?} {outside}: the corner is not sky in the positions"
+        );
+        [frame.rgba[0], frame.rgba[1], frame.rgba[2]]
+    };
+    let void = corner(Mode::Warped, "void");
+    for outside in ["plain", "ocean"] {
+        let mesh = corner(Mode::Warped, outside);
+        let reference = corner(Mode::Reference, outside);
+        assert_ne!(mesh, void, "{outside}: the corner still shows the sky");
+        let most = mesh
+            .iter()
+            .zip(&reference)
+            .map(|(a, b)| a.abs_diff(*b))
+            .max();
+        assert!(
+            most <= Some(2),
+            "{outside}: mesh {mesh:?}, reference {reference:?}"
+        );
+    }
+}

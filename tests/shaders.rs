@@ -111,9 +111,9 @@ fn uniform_structs_match_the_wgsl_field_by_field() {
                 sun_colour,
                 haze_per_m,
                 haze_height_m,
-                pad0,
-                pad1,
-                pad2,
+                outside,
+                plain_m,
+                pad,
                 turbulence
             }),
             size_of::<ShadingUniforms>(),

@@ -41,9 +41,9 @@ struct ShadingUniforms {
     sun_colour: vec3<f32>,       // the sun's light on the ground, linear RGB
     haze_per_m: f32,             // haze extinction at sea level
     haze_height_m: f32,          // haze scale height
-    pad0: f32,
-    pad1: f32,
-    pad2: f32,
+    outside: u32,                // beyond the sketch: 0 nothing, 1 a plain, 2 the sea
+    plain_m: f32,                // the plain's height (the mean of the sketch's edges)
+    pad: f32,
     turbulence: array<Octave, 2>,
 }
 

@@ -69,6 +69,20 @@ fn atlas_bilinear(uv: vec2<f32>, l: u32) -> f32 {
 
 const SHADOW_STEPS: i32 = 40;
 
+// What can cast a shadow at level-0 texel coordinates `uv`: the sketch on its rectangle, the plain
+// or the sea beyond it (whose flat ground casts none), nothing over the void.
+fn shadow_caster(uv: vec2<f32>, l: u32) -> f32 {
+    let size = vec2<f32>(frame.atlas.level[0].xy - 1u);
+    if (all(uv >= vec2<f32>(0.0)) && all(uv <= size)) {
+        return atlas_bilinear(uv, l);
+    }
+    switch frame.shading.outside {
+        case 1u: { return frame.shading.plain_m; }
+        case 2u: { return SEA_LEVEL; }
+        default: { return -1.0e30; }
+    }
+}
+
 // How much of the sun the ground at `local` sees past the sketch: a ray marched toward the sun in
 // steps that grow with distance, each sampling the pyramid level whose texels match the step (a
 // cone), soft by the closest miss (the penumbra of a sun of finite size), until it rises above
@@ -89,7 +103,7 @@ fn sun_visibility(local: vec3<f32>) -> f32 {
         }
         let uv = (p.xy + frame.atlas.offset) * frame.atlas.inv_spacing;
         let l = u32(clamp(log2(max(0.25 * t / d, 1.0)), 0.0, f32(frame.atlas.levels - 1u)));
-        let clearance = p.z - atlas_bilinear(uv, l);
+        let clearance = p.z - shadow_caster(uv, l);
         seen = min(seen, clamp(0.5 + clearance / (0.03 * t), 0.0, 1.0));
         if (seen <= 0.0) {
             break;
@@ -137,4 +151,26 @@ fn aerial(colour: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32> {
     let through = exp(-tau);
     let horizon = normalize(-to_eye) * vec3<f32>(1.0, 1.0, 0.0) + vec3<f32>(0.0, 0.0, 0.02);
     return colour * through + sky_colour(horizon) * (1.0 - through);
+}
+
+// The world beyond the sketch seen along `dir` from `eye`: a plain at the sketch's mean edge
+// height or the sea, to the horizon, lit and hazed like the terrain (and shadowed by it); w is 1
+// where it is seen, 0 for sky, for the sketch's own rectangle and with `sketch.outside = "void"`.
+fn beyond(eye: vec3<f32>, dir: vec3<f32>) -> vec4<f32> {
+    let kind = frame.shading.outside;
+    let level = select(frame.shading.plain_m, SEA_LEVEL, kind == 2u);
+    if (kind == 0u || dir.z >= 0.0 || eye.z <= level) {
+        return vec4<f32>(0.0);
+    }
+    let t = (level - eye.z) / dir.z;
+    let p = eye + dir * t;
+    let lo = -frame.atlas.offset;
+    let hi = lo + vec2<f32>(frame.atlas.level[0].xy - 1u) / frame.atlas.inv_spacing;
+    if (all(p.xy >= lo) && all(p.xy <= hi)) {
+        return vec4<f32>(0.0);
+    }
+    // Just under sea level the shading draws water.
+    let ground = vec3<f32>(p.xy, select(level, SEA_LEVEL - 0.01, kind == 2u));
+    let to_eye = eye - ground;
+    return vec4<f32>(aerial(lit(ground, vec3<f32>(0.0, 0.0, 1.0), to_eye, t), to_eye, t), 1.0);
 }

@@ -4,6 +4,7 @@
 use crate::camera::Camera;
 use crate::detail::{Detail, OctaveFrame};
 use crate::light::Light;
+use crate::scene::Outside;
 use crate::sketch::Atlas;
 use crate::stage::sketch_map::SketchMap;
 use bytemuck::{Pod, Zeroable};
@@ -68,9 +69,11 @@ pub struct ShadingUniforms {
     pub haze_per_m: f32,
     /// Haze scale height, metres.
     pub haze_height_m: f32,
-    pub pad0: f32,
-    pub pad1: f32,
-    pub pad2: f32,
+    /// Beyond the sketch: 0 nothing, 1 a plain at `plain_m`, 2 the sea.
+    pub outside: u32,
+    /// The plain's height: the mean of the sketch's edge heights.
+    pub plain_m: f32,
+    pub pad: f32,
     pub turbulence: [OctaveGpu; 2],
 }
 
@@ -203,6 +206,8 @@ pub struct FrameInputs<'a> {
     pub atlas: &'a Atlas,
     pub detail: &'a Detail,
     pub light: &'a Light,
+    /// What the sky pass draws beyond the sketch.
+    pub outside: Outside,
     pub mesh: u32,
     pub view: View,
     pub importance_max: f32,
@@ -217,7 +222,7 @@ impl FrameUniforms {
         let origin = frame_origin(f.camera);
         FrameUniforms {
             camera: CameraUniforms::new(f.camera, origin, f.view),
-            shading: ShadingUniforms::new(f.detail, f.light, origin),
+            shading: ShadingUniforms::new(f.detail, f.light, f.atlas, f.outside, origin),
             atlas: AtlasUniforms::new(f.atlas, origin),
             detail: DetailUniforms::new(f.detail, origin),
             mesh: MeshUniforms {
@@ -279,7 +284,13 @@ impl CameraUniforms {
 }
 
 impl ShadingUniforms {
-    pub fn new(detail: &Detail, light: &Light, origin: DVec2) -> ShadingUniforms {
+    pub fn new(
+        detail: &Detail,
+        light: &Light,
+        atlas: &Atlas,
+        outside: Outside,
+        origin: DVec2,
+    ) -> ShadingUniforms {
         // Two octaves of turbulence, 600 m and 150 m, for the surface types' boundaries.
         let turbulence_seed = crate::detail::hash(detail.seed ^ 0x5eed);
         let turbulence = [600.0, 150.0].map(|wavelength: f64| {
@@ -292,9 +303,13 @@ impl ShadingUniforms {
             sun_colour: light.sun_colour.map(|c| c as f32),
             haze_per_m: light.haze_per_m as f32,
             haze_height_m: light.haze_height_m as f32,
-            pad0: 0.0,
-            pad1: 0.0,
-            pad2: 0.0,
+            outside: match outside {
+                Outside::Void => 0,
+                Outside::Plain => 1,
+                Outside::Ocean => 2,
+            },
+            plain_m: atlas.edge_mean_m() as f32,
+            pad: 0.0,
             turbulence,
         }
     }

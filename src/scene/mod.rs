@@ -55,6 +55,26 @@ pub struct SketchSection {
     pub size: Option<usize>,
     /// For 8/16-bit PNG sketches: the heights that pixel value 0 and the maximum stand for.
     pub height_range_m: Option<[f64; 2]>,
+    /// The world beyond the sketch's edges.
+    #[serde(default = "default_outside")]
+    pub outside: Outside,
+}
+
+fn default_outside() -> Outside {
+    Outside::Plain
+}
+
+crate::named_enum! {
+    /// What lies beyond the sketch (`sketch.outside`): drawn by the sky pass and the reference
+    /// alike, and never counted as terrain by the image metrics.
+    pub enum Outside ("outside") {
+        /// Nothing: the sketch floats in the sky.
+        Void = "void",
+        /// A plain at the mean height of the sketch's edges, to the horizon.
+        Plain = "plain",
+        /// The sea, at 0 m, to the horizon.
+        Ocean = "ocean",
+    }
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]

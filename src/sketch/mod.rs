@@ -335,6 +335,16 @@ impl Atlas {
         self.levels[0].width
     }
 
+    /// The mean height of the sketch's edge nodes: where a plain beyond it lies.
+    pub fn edge_mean_m(&self) -> f64 {
+        let l = &self.levels[0];
+        let (w, h) = (l.width, l.height);
+        let at = |i: usize, j: usize| l.data[j * w + i] as f64;
+        let rows: f64 = (0..w).map(|i| at(i, 0) + at(i, h - 1)).sum();
+        let cols: f64 = (1..h - 1).map(|j| at(0, j) + at(w - 1, j)).sum();
+        (rows + cols) / (2 * w + 2 * (h - 2)) as f64
+    }
+
     /// The sketch's relief in its two finest bands, metres: the spread of what level 0 adds to
     /// level 1 of the pyramid (wavelengths of 2–4 cells), and of what level 1 adds to level 2
     /// (4–8 cells). The spread is robust, 1.4826 × the median absolute value (the standard
