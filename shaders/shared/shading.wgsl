@@ -1,5 +1,7 @@
 // Surface shading shared by the mesh renderers and the reference ray marcher: sky, surface
-// types, sun and sky light, aerial perspective. Needs `frame`; turbulence needs the noise.
+// types, sun and sky light, the sketch's shadow (SHADOWS), aerial perspective through air that
+// thins with height, and the world beyond the sketch. Needs `frame`; turbulence needs the noise,
+// the shadow the atlas.
 #ifdef NOISE
 #import noise
 #endif
