@@ -19,10 +19,8 @@ const MAX_STEPS: u32 = 4096u;
 
 // The part of the ray inside the box of the sketch's rectangle and its heights, or t0 > t1.
 fn span(eye: vec3<f32>, dir: vec3<f32>) -> vec2<f32> {
-    let lo_xy = -frame.atlas.offset;
-    let hi_xy = lo_xy + vec2<f32>(frame.atlas.level[0].xy - 1u) / frame.atlas.inv_spacing;
-    let lo = vec3<f32>(lo_xy, frame.march.lo);
-    let hi = vec3<f32>(hi_xy, frame.march.hi);
+    let lo = vec3<f32>(sketch_lo(), frame.march.lo);
+    let hi = vec3<f32>(sketch_hi(), frame.march.hi);
     var t0 = 0.0;
     var t1 = 3.0e38;
     for (var a = 0; a < 3; a++) {

@@ -176,9 +176,7 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
 fn terrain_fs(in: VsOut) -> FragOut {
     // The sketch ends at its edge, as the reference's does: the warped region (a square on a
     // quantised lattice) and the baked grid (the square enclosing the sketch) may reach past it.
-    let atlas_texel = (in.local.xy + frame.atlas.offset) * frame.atlas.inv_spacing;
-    let edge = vec2<f32>(frame.atlas.level[0].xy - 1u);
-    if (any(atlas_texel < vec2<f32>(-1e-3)) || any(atlas_texel > edge + 1e-3)) {
+    if (!on_sketch(in.local.xy, 1e-3 * frame.atlas.d_atlas)) {
         discard;
     }
     let to_eye = frame.camera.eye - in.local;

@@ -101,3 +101,18 @@ struct Frame {
     blocks: BlockUniforms,
     march: MarchUniforms,
 }
+
+// The sketch's rectangle in frame coordinates (metres from the frame origin): its south-west and
+// north-east nodes. The reference's march box, the mesh's edge and the world beyond all end there.
+fn sketch_lo() -> vec2<f32> {
+    return -frame.atlas.offset;
+}
+
+fn sketch_hi() -> vec2<f32> {
+    return sketch_lo() + vec2<f32>(frame.atlas.level[0].xy - 1u) / frame.atlas.inv_spacing;
+}
+
+// Whether `local` lies on the sketch's rectangle, within `margin` metres.
+fn on_sketch(local: vec2<f32>, margin: f32) -> bool {
+    return all(local >= sketch_lo() - margin) && all(local <= sketch_hi() + margin);
+}

@@ -56,27 +56,13 @@ fn albedo(local: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 }
 
 #ifdef SHADOWS
-// Bilinear height on level `l` of the pyramid at level-0 texel coordinates `uv`: the shadow ray
-// takes many samples, each a quarter of the bicubic's loads.
-fn atlas_bilinear(uv: vec2<f32>, l: u32) -> f32 {
-    let s = f32(1u << l);
-    let x = (uv - vec2<f32>((s - 1.0) * 0.5)) / s;
-    let size = vec2<i32>(frame.atlas.level[l].xy);
-    let i = floor(x);
-    let f = x - i;
-    let a = mix(atlas_texel(i32(i.x), i32(i.y), l, size), atlas_texel(i32(i.x) + 1, i32(i.y), l, size), f.x);
-    let b = mix(atlas_texel(i32(i.x), i32(i.y) + 1, l, size), atlas_texel(i32(i.x) + 1, i32(i.y) + 1, l, size), f.x);
-    return mix(a, b, f.y);
-}
-
 const SHADOW_STEPS: i32 = 40;
 
-// What can cast a shadow at level-0 texel coordinates `uv`: the sketch on its rectangle, the plain
-// or the sea beyond it (whose flat ground casts none), nothing over the void.
-fn shadow_caster(uv: vec2<f32>, l: u32) -> f32 {
-    let size = vec2<f32>(frame.atlas.level[0].xy - 1u);
-    if (all(uv >= vec2<f32>(0.0)) && all(uv <= size)) {
-        return atlas_bilinear(uv, l);
+// What can cast a shadow at `local`: the sketch (level `l`) on its rectangle, the plain or the
+// sea beyond it (whose flat ground casts none), nothing over the void.
+fn shadow_caster(local: vec2<f32>, l: u32) -> f32 {
+    if (on_sketch(local, 0.0)) {
+        return atlas_bilinear((local + frame.atlas.offset) * frame.atlas.inv_spacing, l);
     }
     switch frame.shading.outside {
         case 1u: { return frame.shading.plain_m; }
@@ -103,9 +89,8 @@ fn sun_visibility(local: vec3<f32>) -> f32 {
         if (p.z > frame.atlas.max_m) {
             break;
         }
-        let uv = (p.xy + frame.atlas.offset) * frame.atlas.inv_spacing;
         let l = u32(clamp(log2(max(0.25 * t / d, 1.0)), 0.0, f32(frame.atlas.levels - 1u)));
-        let clearance = p.z - shadow_caster(uv, l);
+        let clearance = p.z - shadow_caster(p.xy, l);
         seen = min(seen, clamp(0.5 + clearance / (0.03 * t), 0.0, 1.0));
         if (seen <= 0.0) {
             break;
@@ -166,9 +151,7 @@ fn beyond(eye: vec3<f32>, dir: vec3<f32>) -> vec4<f32> {
     }
     let t = (level - eye.z) / dir.z;
     let p = eye + dir * t;
-    let lo = -frame.atlas.offset;
-    let hi = lo + vec2<f32>(frame.atlas.level[0].xy - 1u) / frame.atlas.inv_spacing;
-    if (all(p.xy >= lo) && all(p.xy <= hi)) {
+    if (on_sketch(p.xy, 0.0)) {
         return vec4<f32>(0.0);
     }
     // Just under sea level the shading draws water.

@@ -308,7 +308,7 @@ impl ShadingUniforms {
                 Outside::Plain => 1,
                 Outside::Ocean => 2,
             },
-            plain_m: atlas.edge_mean_m() as f32,
+            plain_m: atlas.edge_mean_m,
             pad: 0.0,
             turbulence,
         }

@@ -91,7 +91,8 @@ impl Georef {
                 degrees_to_metres(self.cell_x, self.cell_y, mid_lat)
             }
             Units::Linear(m) => (self.cell_x * m, self.cell_y * m),
-            Units::Unknown => unreachable!("resolved"),
+            // `resolved` never leaves the units unknown; metres, were it to.
+            Units::Unknown => (self.cell_x, self.cell_y),
         }
     }
 }

@@ -89,16 +89,15 @@ pub fn read<R: Read + Seek>(path: &Path, reader: R) -> Result<RawGrid> {
         let (dw, dh) = (dw as usize, dh as usize);
         let values = dec
             .read_chunk(k)
-            .map_err(|e| Error::decode(Role::Sketch, path, chunk_name(k, &dec), e))?;
+            .map_err(|e| Error::decode(Role::Sketch, path, chunk_name(&dec), e))?;
         place(&values, (x0, y0, dw, dh), (w, h), nodata, &mut data).map_err(bad)?;
     }
     Ok(RawGrid::new(w, h, data, georef))
 }
 
-fn chunk_name<R: Read + Seek>(k: u32, dec: &Decoder<R>) -> &'static str {
+fn chunk_name<R: Read + Seek>(dec: &Decoder<R>) -> &'static str {
     match dec.get_chunk_type() {
         ChunkType::Strip => "TIFF strip corrupt or truncated",
-        ChunkType::Tile if k == 0 => "TIFF first tile corrupt or truncated",
         ChunkType::Tile => "TIFF tile corrupt or truncated",
     }
 }

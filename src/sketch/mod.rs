@@ -75,6 +75,8 @@ pub struct Atlas {
     pub nodata: usize,
     pub min_m: f32,
     pub max_m: f32,
+    /// The mean height of the edge nodes: where a plain beyond the sketch lies.
+    pub edge_mean_m: f32,
     /// `levels[0]` is the atlas itself.
     pub levels: Vec<Level>,
     /// Where the file put its south-west node, in the file's coordinate system (not the world's:
@@ -164,45 +166,62 @@ pub fn read_grid(path: &Path, opts: &LoadOptions) -> Result<RawGrid> {
     read_at_depth(path, opts, 0)
 }
 
+/// A sketch file's format, told by its name: the one place that knows the extensions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Asc,
+    Hgt,
+    HgtZip,
+    Png,
+    Tiff,
+    Vrt,
+    Xyz,
+}
+
+impl Format {
+    fn of(path: &Path) -> Result<Format> {
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .map(|n| n.to_ascii_lowercase())
+            .unwrap_or_default();
+        if name.ends_with(".hgt.zip") {
+            return Ok(Format::HgtZip);
+        }
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .unwrap_or_default();
+        let why = match ext.as_str() {
+            "asc" | "grd" => return Ok(Format::Asc),
+            "hgt" => return Ok(Format::Hgt),
+            "png" => return Ok(Format::Png),
+            "tif" | "tiff" => return Ok(Format::Tiff),
+            "vrt" => return Ok(Format::Vrt),
+            "xyz" | "csv" | "txt" => return Ok(Format::Xyz),
+            "toml" => "a scene file, not a height map: give it to `terrain render`".to_string(),
+            "" => "no extension to tell its format".to_string(),
+            other => format!("unknown sketch format `.{other}`"),
+        };
+        Err(Error::sketch(path, format!("{why}; a sketch is {FORMATS}")))
+    }
+}
+
 /// `depth`: how many mosaics enclose this file (a VRT may name VRTs).
 fn read_at_depth(path: &Path, opts: &LoadOptions, depth: usize) -> Result<RawGrid> {
     if mosaic::is_glob(path) {
         return mosaic::read_glob(path, |tile| read_at_depth(tile, opts, depth + 1));
     }
-    let name = path
-        .file_name()
-        .and_then(|n| n.to_str())
-        .map(|n| n.to_ascii_lowercase())
-        .unwrap_or_default();
-    if name.ends_with(".hgt.zip") {
-        return hgt::read_zip_file(path, opts.spacing_m.is_some());
-    }
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .unwrap_or_default();
-    match ext.as_str() {
-        "asc" | "grd" => asc::read(path),
-        "hgt" => hgt::read_file(path, opts.spacing_m.is_some()),
-        "png" => png::read_file(path, opts),
-        "tif" | "tiff" => geotiff::read_file(path),
-        "vrt" => mosaic::read_vrt(path, depth, |src, d| read_at_depth(src, opts, d)),
-        "xyz" | "csv" | "txt" => xyz::read(path),
-        "toml" => Err(Error::sketch(
-            path,
-            format!(
-                "a scene file, not a height map: give it to `terrain render`; a sketch is {FORMATS}"
-            ),
-        )),
-        "" => Err(Error::sketch(
-            path,
-            format!("no extension to tell its format: a sketch is {FORMATS}"),
-        )),
-        other => Err(Error::sketch(
-            path,
-            format!("unknown sketch format `.{other}`: a sketch is {FORMATS}"),
-        )),
+    let spacing_given = opts.spacing_m.is_some();
+    match Format::of(path)? {
+        Format::Asc => asc::read(path),
+        Format::Hgt => hgt::read_file(path, spacing_given),
+        Format::HgtZip => hgt::read_zip_file(path, spacing_given),
+        Format::Png => png::read_file(path, opts),
+        Format::Tiff => geotiff::read_file(path),
+        Format::Vrt => mosaic::read_vrt(path, depth, |src, d| read_at_depth(src, opts, d)),
+        Format::Xyz => xyz::read(path),
     }
 }
 
@@ -210,23 +229,15 @@ fn read_at_depth(path: &Path, opts: &LoadOptions, depth: usize) -> Result<RawGri
 /// read the file (a VRT's sources and a PNG's world file are still read from disk, beside
 /// `name`). For the fuzz harness and for callers that hold the bytes already.
 pub fn parse_grid(name: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<RawGrid> {
-    let lower = name.to_string_lossy().to_ascii_lowercase();
     let spacing_given = opts.spacing_m.is_some();
-    let ext = lower.rsplit('.').next().unwrap_or("");
-    match ext {
-        _ if lower.ends_with(".hgt.zip") => {
-            hgt::parse_zip(name, std::io::Cursor::new(bytes), spacing_given)
-        }
-        "asc" | "grd" => asc::parse_bytes(name, bytes),
-        "hgt" => hgt::parse(name, bytes, spacing_given),
-        "png" => png::parse(name, bytes, opts, None),
-        "tif" | "tiff" => geotiff::read(name, std::io::Cursor::new(bytes)),
-        "vrt" => mosaic::parse_vrt(name, bytes, 0, |src, d| read_at_depth(src, opts, d)),
-        "xyz" | "csv" | "txt" => xyz::parse_bytes(name, bytes),
-        other => Err(Error::sketch(
-            name,
-            format!("unknown sketch format `.{other}`: a sketch is {FORMATS}"),
-        )),
+    match Format::of(name)? {
+        Format::Asc => asc::parse_bytes(name, bytes),
+        Format::Hgt => hgt::parse(name, bytes, spacing_given),
+        Format::HgtZip => hgt::parse_zip(name, std::io::Cursor::new(bytes), spacing_given),
+        Format::Png => png::parse(name, bytes, opts, None),
+        Format::Tiff => geotiff::read(name, std::io::Cursor::new(bytes)),
+        Format::Vrt => mosaic::parse_vrt(name, bytes, 0, |src, d| read_at_depth(src, opts, d)),
+        Format::Xyz => xyz::parse_bytes(name, bytes),
     }
 }
 
@@ -319,6 +330,7 @@ impl Atlas {
             height: raw.height,
             data: raw.data,
         };
+        let edge_mean_m = base.edge_mean();
         Ok(Atlas {
             dx: raw.dx,
             dy: raw.dy,
@@ -326,6 +338,7 @@ impl Atlas {
             nodata,
             min_m,
             max_m,
+            edge_mean_m,
             levels: build_pyramid(base),
             georef: raw.georef,
         })
@@ -333,16 +346,6 @@ impl Atlas {
 
     pub fn width(&self) -> usize {
         self.levels[0].width
-    }
-
-    /// The mean height of the sketch's edge nodes: where a plain beyond it lies.
-    pub fn edge_mean_m(&self) -> f64 {
-        let l = &self.levels[0];
-        let (w, h) = (l.width, l.height);
-        let at = |i: usize, j: usize| l.data[j * w + i] as f64;
-        let rows: f64 = (0..w).map(|i| at(i, 0) + at(i, h - 1)).sum();
-        let cols: f64 = (1..h - 1).map(|j| at(0, j) + at(w - 1, j)).sum();
-        (rows + cols) / (2 * w + 2 * (h - 2)) as f64
     }
 
     /// The sketch's relief in its two finest bands, metres: the spread of what level 0 adds to
@@ -417,6 +420,15 @@ impl Atlas {
 }
 
 impl Level {
+    /// The mean height of the edge nodes.
+    fn edge_mean(&self) -> f32 {
+        let (w, h) = (self.width, self.height);
+        let at = |i: usize, j: usize| self.data[j * w + i] as f64;
+        let rows: f64 = (0..w).map(|i| at(i, 0) + at(i, h - 1)).sum();
+        let cols: f64 = (1..h - 1).map(|j| at(0, j) + at(w - 1, j)).sum();
+        ((rows + cols) / (2 * w + 2 * (h - 2)) as f64) as f32
+    }
+
     /// Bilinear sample at level-0 texel coordinates (u, v), this being level `l`.
     fn bilinear_at_level(&self, u: f64, v: f64, l: usize) -> f32 {
         let s = (1u64 << l) as f64;

@@ -64,10 +64,10 @@ fn mosaic(pattern: &Path, grids: &[(PathBuf, RawGrid)]) -> Result<RawGrid> {
     let (mut west, mut south) = (f64::INFINITY, f64::INFINITY);
     let (mut east, mut north) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
     let mut offsets = Vec::with_capacity(grids.len());
+    let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
     for tile in grids {
         let (path, g) = tile;
         let r = first_ref(tile)?;
-        let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
         if r.units != base.units || !same(r.cell_x, base.cell_x) || !same(r.cell_y, base.cell_y) {
             return Err(Error::sketch(
                 path,
