@@ -75,7 +75,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     if (!hit) {
         let outside = beyond(eye, dir);
-        colour_out[k] = vec4<f32>(mix(sky_colour(dir), outside.rgb, outside.w), 1.0);
+        colour_out[k] = vec4<f32>(display(mix(sky_colour(eye.z, dir), outside.rgb, outside.w)), 1.0);
         position_out[k] = vec4<f32>(0.0);
         return;
     }
@@ -98,6 +98,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let n = normalize(vec3<f32>(-g, 1.0));
     let to_eye = eye - p;
     let dist = max(length(to_eye), 1e-3);
-    colour_out[k] = vec4<f32>(aerial(lit(p, n, to_eye, dist), to_eye, dist), 1.0);
+    colour_out[k] = vec4<f32>(display(aerial(lit(p, n, to_eye, dist), to_eye, dist)), 1.0);
     position_out[k] = vec4<f32>(p, 1.0);
 }

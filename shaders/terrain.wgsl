@@ -46,7 +46,8 @@ struct FragOut {
 
 fn frag_out(colour: vec3<f32>, depth: f32) -> FragOut {
     var out: FragOut;
-    out.colour = vec4<f32>(colour, 1.0);
+    // The debug views show their colours as they are; the picture goes through the tone map.
+    out.colour = vec4<f32>(select(colour, display(colour), frame.camera.view <= VIEW_WIREFRAME), 1.0);
 #ifdef POSITIONS
     let bits = bitcast<u32>(depth);
     let bytes = vec4<u32>(bits & 255u, (bits >> 8u) & 255u, (bits >> 16u) & 255u, bits >> 24u);
@@ -78,7 +79,7 @@ fn sky_fs(in: SkyOut) -> FragOut {
     let dir = normalize(far.xyz / far.w - frame.camera.eye);
     // Depth 0, as the sky: the image metrics measure the mesh, not the world beyond it.
     let outside = beyond(frame.camera.eye, dir);
-    return frag_out(mix(sky_colour(dir), outside.rgb, outside.w), 0.0);
+    return frag_out(mix(sky_colour(frame.camera.eye.z, dir), outside.rgb, outside.w), 0.0);
 }
 
 struct VsOut {

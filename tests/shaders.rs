@@ -108,12 +108,14 @@ fn uniform_structs_match_the_wgsl_field_by_field() {
             rust_layout!(ShadingUniforms {
                 sun,
                 daylight,
-                sun_colour,
+                sun_top,
+                air_mass,
+                sky_light,
+                exposure,
                 haze_per_m,
                 haze_height_m,
                 outside,
                 plain_m,
-                pad,
                 turbulence
             }),
             size_of::<ShadingUniforms>(),

@@ -34,16 +34,18 @@ struct CameraUniforms {
     pad: u32,
 }
 
-// Sunlight and the surface types' variation.
+// The sun, the air and the surface types' variation (src/light.rs).
 struct ShadingUniforms {
     sun: vec3<f32>,              // direction to the sun
     daylight: f32,               // the sky's share of its daylight (0 after dusk)
-    sun_colour: vec3<f32>,       // the sun's light on the ground, linear RGB
+    sun_top: vec3<f32>,          // the sunlight above the air, linear RGB
+    air_mass: f32,               // the sun's relative air mass
+    sky_light: vec3<f32>,        // the sky's light on level ground at sea level
+    exposure: f32,               // light's factor before the tone map
     haze_per_m: f32,             // haze extinction at sea level
     haze_height_m: f32,          // haze scale height
     outside: u32,                // beyond the sketch: 0 nothing, 1 a plain, 2 the sea
     plain_m: f32,                // the plain's height (the mean of the sketch's edges)
-    pad: f32,
     turbulence: array<Octave, 2>,
 }
 

@@ -1,56 +1,195 @@
-// Surface shading shared by the mesh renderers and the reference ray marcher: sky, surface
-// types, sun and sky light, the sketch's shadow (SHADOWS), aerial perspective through air that
-// thins with height, and the world beyond the sketch. Needs `frame`; turbulence needs the noise,
-// the shadow the atlas.
+// Surface shading shared by the mesh renderers and the reference ray marcher: the sky and the
+// aerial perspective from one single-scattering atmosphere (the twin of src/light.rs), surface
+// types from slope, height, aspect and curvature, sun and sky light, the sketch's shadow
+// (SHADOWS), the world beyond the sketch, exposure and the tone map. Needs `frame` and the atlas;
+// turbulence needs the noise.
+#import atlas
 #ifdef NOISE
 #import noise
 #endif
-#ifdef SHADOWS
-#import atlas
-#endif
 
 const SEA_LEVEL: f32 = 0.0;
-// Rayleigh extinction at sea level per metre (red, green, blue) and its scale height: the twin
-// of src/light.rs's RAYLEIGH and RAYLEIGH_SCALE_M.
+// The atmosphere, twins of src/light.rs's constants of the same names.
 const RAYLEIGH: vec3<f32> = vec3<f32>(5.8e-6, 13.5e-6, 33.1e-6);
 const RAYLEIGH_SCALE_M: f32 = 8000.0;
+const HAZE_ALBEDO: f32 = 0.9;
+const MIE_G: f32 = 0.76;
+const MULTIPLE: f32 = 1.0;
+const STEPS: i32 = 12;
+const TOP_M: f32 = 60000.0;
+const FAR_M: f32 = 400000.0;
 
-fn sky_colour(dir: vec3<f32>) -> vec3<f32> {
-    let up = clamp(dir.z, -0.2, 1.0);
-    // The horizon takes the low sun's colour; the sky dims through twilight.
-    let warm = frame.shading.sun_colour / vec3<f32>(1.1, 1.045, 0.935);
-    let horizon = vec3<f32>(0.72, 0.80, 0.90) * mix(vec3<f32>(1.0), warm, 0.35);
-    let zenith = vec3<f32>(0.22, 0.42, 0.78);
-    var c = mix(horizon, zenith, pow(max(up, 0.0), 0.6)) * (0.04 + 0.96 * frame.shading.daylight);
-    let sun = max(dot(dir, frame.shading.sun), 0.0);
-    c += frame.shading.sun_colour * vec3<f32>(0.91, 0.81, 0.64) * (pow(sun, 400.0) * 4.0 + pow(sun, 12.0) * 0.25);
-    return c;
+fn density(z: f32, scale: f32) -> f32 {
+    return exp(-z / scale);
+}
+
+// The air along a segment from height z0 to z1, `dist` long, whose density falls as
+// exp(−z / scale): ∫ exp(−z(t) / scale) dt, in metres of sea-level air; a difference of two
+// bounded exponentials, so a segment from 100 km up does not overflow.
+fn air_along(z0: f32, z1: f32, dist: f32, scale: f32) -> f32 {
+    let x = (z1 - z0) / scale;
+    let a = density(z0, scale);
+    if (abs(x) < 1e-3) {
+        return dist * a * (1.0 - 0.5 * x);
+    }
+    return dist * (a - density(z1, scale)) / x;
+}
+
+// The sunlight reaching height z: above the air, less the column above z times the air mass.
+fn sun_at(z: f32) -> vec3<f32> {
+    let haze = frame.shading.haze_per_m * frame.shading.haze_height_m * density(z, frame.shading.haze_height_m);
+    let column = RAYLEIGH * RAYLEIGH_SCALE_M * density(z, RAYLEIGH_SCALE_M) + vec3<f32>(haze);
+    return frame.shading.sun_top * exp(-frame.shading.air_mass * column);
+}
+
+// What the air along a ray does: the light it scatters toward the eye, and the share of the
+// light behind it it lets through.
+struct Scatter {
+    inscatter: vec3<f32>,
+    through: vec3<f32>,
+}
+
+// The single-scattering integral over `len` metres from height `eye_z` along `dir`, in STEPS
+// samples spaced quadratically from the eye, plus an isotropic share for higher orders.
+fn scatter(eye_z: f32, dir: vec3<f32>, len: f32) -> Scatter {
+    let hm = frame.shading.haze_height_m;
+    let haze = frame.shading.haze_per_m;
+    let mu = dot(dir, frame.shading.sun);
+    let rayleigh_phase = 3.0 / 16.0 * (1.0 + mu * mu);
+    let g = MIE_G;
+    let mie_phase = 3.0 / 8.0 * (1.0 - g * g) * (1.0 + mu * mu) / ((2.0 + g * g) * pow(1.0 + g * g - 2.0 * g * mu, 1.5));
+    let iso = MULTIPLE * 0.25;
+    var inscatter = vec3<f32>(0.0);
+    for (var i = 0; i < STEPS; i++) {
+        let u = (f32(i) + 0.5) / f32(STEPS);
+        let t = len * u * u;
+        let dt = len * 2.0 * u / f32(STEPS);
+        let z = eye_z + dir.z * t;
+        let scattered = RAYLEIGH * density(z, RAYLEIGH_SCALE_M) * (rayleigh_phase + iso)
+            + vec3<f32>(haze * HAZE_ALBEDO * density(z, hm) * (mie_phase + iso));
+        let tau = RAYLEIGH * air_along(eye_z, z, t, RAYLEIGH_SCALE_M) + vec3<f32>(haze * air_along(eye_z, z, t, hm));
+        inscatter += scattered * exp(-tau) * sun_at(z) * dt;
+    }
+    let z1 = eye_z + dir.z * len;
+    let tau = RAYLEIGH * air_along(eye_z, z1, len, RAYLEIGH_SCALE_M) + vec3<f32>(haze * air_along(eye_z, z1, len, hm));
+    var out: Scatter;
+    out.inscatter = inscatter * frame.shading.daylight;
+    out.through = exp(-tau);
+    return out;
+}
+
+// How far a ray from height `eye_z` along `dir` crosses the sky: to the top of the air going
+// up, to sea level going down, never past the planar horizon.
+fn sky_length(eye_z: f32, dir: vec3<f32>) -> f32 {
+    var to = FAR_M;
+    if (dir.z > 1e-6) {
+        to = max(TOP_M - eye_z, 0.0) / dir.z;
+    } else if (dir.z < -1e-6) {
+        to = max(eye_z, 0.0) / -dir.z;
+    }
+    return min(to, FAR_M);
+}
+
+// The sky seen from height `eye_z` along `dir`, with the sun's disc (0.53°).
+fn sky_colour(eye_z: f32, dir: vec3<f32>) -> vec3<f32> {
+    let len = sky_length(eye_z, dir);
+    let air = scatter(eye_z, dir, len);
+    let disc = smoothstep(0.99995, 0.99998, dot(dir, frame.shading.sun));
+    return air.inscatter + sun_at(eye_z) * air.through * disc * 40.0;
+}
+
+// Aerial perspective: the air between the eye and the ground at `dist` takes away the ground's
+// light and scatters the sun's in.
+fn aerial(colour: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32> {
+    let air = scatter(frame.camera.eye.z, -to_eye / dist, dist);
+    return colour * air.through + air.inscatter;
+}
+
+// Exposure and the tone map (Khronos PBR Neutral: linear through the mid-tones, so the terrain's
+// contrast stays as lit, highlights rolled off to white without shifting hue).
+fn display(c_in: vec3<f32>) -> vec3<f32> {
+    let start = 0.8 - 0.04;
+    let desaturation = 0.15;
+    var c = c_in * frame.shading.exposure;
+    let x = min(c.r, min(c.g, c.b));
+    let offset = select(0.04, x - 6.25 * x * x, x < 0.08);
+    c -= offset;
+    let peak = max(c.r, max(c.g, c.b));
+    if (peak < start) {
+        return c;
+    }
+    let d = 1.0 - start;
+    let new_peak = 1.0 - d * d / (peak + d - start);
+    c *= new_peak / peak;
+    let g = 1.0 - 1.0 / (desaturation * (peak - new_peak) + 1.0);
+    return mix(c, vec3<f32>(new_peak), g);
 }
 
 // Low-frequency turbulence that moves the boundaries between surface types.
-fn turbulence(local: vec2<f32>) -> f32 {
+fn turbulence(local: vec2<f32>) -> vec2<f32> {
 #ifdef NOISE
-    return octave_local(frame.shading.turbulence[0], local).x + 0.5 * octave_local(frame.shading.turbulence[1], local).x;
+    return vec2<f32>(octave_local(frame.shading.turbulence[0], local).x, octave_local(frame.shading.turbulence[1], local).x);
 #else
-    return 0.0;
+    return vec2<f32>(0.0);
 #endif
 }
 
-fn albedo(local: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+// The sketch's form around `local` at the scale e of the pixel's footprint (at least four
+// sketch cells): its gradient (xy) and how much the ground lies below its surroundings e metres
+// around (a gully, > 0) or above them (a ridge, < 0) per metre of e (z), read on the pyramid
+// level whose texels are half of e. The surface types follow this form, not the shading normal:
+// it is the same in every mode, whatever mesh carries the surface, and band-limited to the pixel.
+fn sketch_form(local: vec2<f32>, footprint: f32) -> vec3<f32> {
+    // The plain and the sea beyond the sketch are level.
+    if (!on_sketch(local, 0.0)) {
+        return vec3<f32>(0.0);
+    }
+    let e = max(footprint, 4.0 * frame.atlas.d_atlas);
+    let l = u32(clamp(log2(e / frame.atlas.d_atlas) - 1.0, 0.0, f32(frame.atlas.levels - 1u)));
+    let uv = (local + frame.atlas.offset) * frame.atlas.inv_spacing;
+    let du = e * frame.atlas.inv_spacing;
+    let h = atlas_bilinear(uv, l);
+    let east = atlas_bilinear(uv + vec2<f32>(du.x, 0.0), l);
+    let west = atlas_bilinear(uv - vec2<f32>(du.x, 0.0), l);
+    let north = atlas_bilinear(uv + vec2<f32>(0.0, du.y), l);
+    let south = atlas_bilinear(uv - vec2<f32>(0.0, du.y), l);
+    let gradient = vec2<f32>(east - west, north - south) / (2.0 * e);
+    return vec3<f32>(gradient, (0.25 * (east + west + north + south) - h) / e);
+}
+
+// The surface types: rock on cliffs and sharp ridges, scree below them, soil on steep ground and
+// in gullies, forest in patches on moderate slopes below the tree line (denser in hollows and on
+// slopes facing away from the sun's side of the sky), grass elsewhere, sand at the shore, snow
+// above the snow line (lower facing north) where it can lie. Turbulence at 600 m and 150 m moves
+// every boundary.
+fn albedo(local: vec3<f32>, footprint: f32) -> vec3<f32> {
     let t = turbulence(local.xy);
-    let h = local.z + 40.0 * t;
-    let slope = 1.0 - n.z;
-    let grass = mix(vec3<f32>(0.20, 0.33, 0.10), vec3<f32>(0.33, 0.40, 0.16), 0.5 + 0.5 * t);
-    let soil = vec3<f32>(0.42, 0.34, 0.24);
-    let sand = vec3<f32>(0.70, 0.63, 0.46);
-    let rock = mix(vec3<f32>(0.36, 0.33, 0.30), vec3<f32>(0.50, 0.47, 0.43), 0.5 + 0.5 * t);
-    let snow = vec3<f32>(0.92, 0.93, 0.96);
+    let tt = t.x + 0.5 * t.y;
+    let h = local.z + 40.0 * tt;
+    let form = sketch_form(local.xy, footprint);
+    let steepness = length(form.xy);
+    let slope = 1.0 - inverseSqrt(1.0 + steepness * steepness);
+    let cav = form.z;
+    // Facing north: the ground falls toward the north.
+    let north = -form.y / max(steepness, 1e-3) * smoothstep(0.0, 0.05, slope);
+    let grass = mix(vec3<f32>(0.13, 0.24, 0.06), vec3<f32>(0.30, 0.33, 0.13), clamp(0.5 + 0.7 * t.y - 0.4 * t.x, 0.0, 1.0));
+    let forest = mix(vec3<f32>(0.035, 0.070, 0.030), vec3<f32>(0.06, 0.09, 0.035), 0.5 + 0.5 * t.y);
+    let soil = vec3<f32>(0.30, 0.22, 0.14);
+    let scree = mix(vec3<f32>(0.42, 0.40, 0.36), vec3<f32>(0.52, 0.49, 0.44), 0.5 + 0.5 * t.y);
+    let rock = mix(vec3<f32>(0.22, 0.21, 0.20), vec3<f32>(0.38, 0.35, 0.31), 0.5 + 0.5 * tt);
+    let sand = vec3<f32>(0.62, 0.55, 0.40);
+    let snow = vec3<f32>(0.86, 0.88, 0.93);
     var c = grass;
-    c = mix(c, soil, smoothstep(0.18, 0.30, slope + 0.08 * t));
-    c = mix(c, rock, smoothstep(0.32, 0.45, slope + 0.1 * t));
+    let tree_line = 1600.0 + 200.0 * t.x;
+    let wooded = smoothstep(0.0, 0.25, 0.45 * t.x + 0.35 * t.y + 0.3 * north + 10.0 * cav + 0.02)
+        * (1.0 - smoothstep(0.22, 0.32, slope)) * (1.0 - smoothstep(tree_line - 100.0, tree_line, h));
+    c = mix(c, forest, wooded);
+    c = mix(c, soil, smoothstep(0.16, 0.26, slope + 0.06 * t.y + 2.0 * max(cav, 0.0)) * (1.0 - wooded));
+    let steep = slope + 0.08 * tt - 2.0 * cav;
+    c = mix(c, scree, smoothstep(0.26, 0.36, slope + 0.08 * t.y) * smoothstep(-0.01, 0.02, cav));
+    c = mix(c, rock, smoothstep(0.36, 0.48, steep));
     c = mix(c, sand, 1.0 - smoothstep(SEA_LEVEL + 2.0, SEA_LEVEL + 8.0, h));
-    // Snow settles above the snow line, lower on north-facing slopes, and slides off cliffs.
-    let snow_line = 1800.0 - 250.0 * n.y;
+    let snow_line = 1800.0 - 250.0 * north;
     let snowy = smoothstep(snow_line, snow_line + 150.0, h) * (1.0 - smoothstep(0.45, 0.6, slope));
     return mix(c, snow, snowy);
 }
@@ -101,12 +240,18 @@ fn sun_visibility(local: vec3<f32>) -> f32 {
 }
 #endif
 
-// The lit colour of ground at `local` with normal `n`, seen from `to_eye` (distance `dist`).
+// The lit colour of ground at `local` with normal `n`, seen from `to_eye` (distance `dist`):
+// sunlight at the ground's height, shadowed, and the sky's light by how much of the sky the
+// ground faces. Below sea level, water: its body lit alike, and the sky it reflects (Schlick).
 fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32> {
+    let sun_light = sun_at(max(local.z, SEA_LEVEL));
     if (local.z < SEA_LEVEL) {
-        let fresnel = pow(1.0 - clamp(to_eye.z / dist, 0.0, 1.0), 4.0);
-        let reflected = sky_colour(reflect(-to_eye / dist, vec3<f32>(0.0, 0.0, 1.0)));
-        return mix(vec3<f32>(0.04, 0.12, 0.20), reflected, fresnel);
+        let up = vec3<f32>(0.0, 0.0, 1.0);
+        let cos_v = clamp(to_eye.z / dist, 0.0, 1.0);
+        let fresnel = 0.02 + 0.98 * pow(1.0 - cos_v, 5.0);
+        let reflected = sky_colour(SEA_LEVEL, reflect(-to_eye / dist, up));
+        let body = vec3<f32>(0.015, 0.045, 0.06) * (sun_light * max(frame.shading.sun.z, 0.0) + frame.shading.sky_light);
+        return mix(body, reflected, fresnel);
     }
     var sun = max(dot(n, frame.shading.sun), 0.0);
 #ifdef SHADOWS
@@ -114,30 +259,8 @@ fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32
         sun *= sun_visibility(local);
     }
 #endif
-    let sky = 0.35 * (0.6 + 0.4 * n.z) * (0.04 + 0.96 * frame.shading.daylight);
-    let light = frame.shading.sun_colour * sun + vec3<f32>(0.55, 0.65, 0.85) * sky;
-    return albedo(local, n) * light;
-}
-
-// The air along a segment from height z0 to z1, `dist` long, whose density falls as
-// exp(−z / scale): ∫ exp(−z(t) / scale) dt, in metres of sea-level air.
-fn air_along(z0: f32, z1: f32, dist: f32, scale: f32) -> f32 {
-    let x = (z1 - z0) / scale;
-    // (1 − e^−x) / x, by its series where x is too small for the quotient.
-    let f = select((1.0 - exp(-x)) / x, 1.0 - 0.5 * x, abs(x) < 1e-3);
-    return dist * exp(-z0 / scale) * f;
-}
-
-// Aerial perspective: the air and haze between the eye and the ground, each thinning
-// exponentially with height, take away the ground's light and scatter in the horizon sky's.
-fn aerial(colour: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32> {
-    let z_eye = frame.camera.eye.z;
-    let z_ground = z_eye - to_eye.z;
-    let tau = RAYLEIGH * air_along(z_eye, z_ground, dist, RAYLEIGH_SCALE_M)
-        + vec3<f32>(frame.shading.haze_per_m * air_along(z_eye, z_ground, dist, frame.shading.haze_height_m));
-    let through = exp(-tau);
-    let horizon = normalize(-to_eye) * vec3<f32>(1.0, 1.0, 0.0) + vec3<f32>(0.0, 0.0, 0.02);
-    return colour * through + sky_colour(horizon) * (1.0 - through);
+    let light = sun_light * sun + frame.shading.sky_light * (0.5 + 0.5 * n.z);
+    return albedo(local, dist * frame.camera.pixel_scale) * light;
 }
 
 // The world beyond the sketch seen along `dir` from `eye`: a plain at the sketch's mean edge

@@ -33,9 +33,9 @@ pub struct TerrainPass {
 pub enum Shading {
     /// The mesh's vertex normals (this buffer, mesh² vec4), plus bump detail with `bump`.
     MeshNormals(wgpu::Buffer),
-    /// The terrain function's normal at each pixel, sampled from this atlas buffer (as the
-    /// reference shades); no vertex normals are bound or computed.
-    PixelNormals(wgpu::Buffer),
+    /// The terrain function's normal at each pixel, sampled from the atlas (as the reference
+    /// shades); no vertex normals are bound or computed.
+    PixelNormals,
 }
 
 /// Which variant of the shaders to build.
@@ -52,8 +52,11 @@ pub struct Variant {
     /// Also write each pixel's depth, from which its ground position is recovered (for
     /// screen-space error).
     pub positions: bool,
-    /// The sketch's pyramid, when the sketch shadows itself (`render.shadows`).
-    pub shadows: Option<wgpu::Buffer>,
+    /// The sketch's pyramid: the surface types read its curvature, the shadow ray and pixel
+    /// normals its heights.
+    pub atlas: wgpu::Buffer,
+    /// The sketch shadows itself (`render.shadows`).
+    pub shadows: bool,
 }
 
 impl TerrainPass {
@@ -72,6 +75,7 @@ impl TerrainPass {
     ) -> Result<TerrainPass> {
         let mut entries = vec![
             entry(0, S::VERTEX_FRAGMENT, uniform()),
+            entry(1, S::FRAGMENT, storage(true)),
             entry(3, S::VERTEX, storage(true)),
         ];
         let mut flags = Vec::new();
@@ -85,18 +89,10 @@ impl TerrainPass {
                     flags.push("BUMP");
                 }
             }
-            Shading::PixelNormals(_) => {
-                entries.push(entry(1, S::FRAGMENT, storage(true)));
-                flags.push("PIXEL_NORMALS");
-            }
+            Shading::PixelNormals => flags.push("PIXEL_NORMALS"),
         }
-        let pixel_normals = matches!(variant.shading, Shading::PixelNormals(_));
-        if variant.shadows.is_some() {
+        if variant.shadows {
             flags.push("SHADOWS");
-            // The shadow ray reads the pyramid; pixel normals have it bound already.
-            if !pixel_normals {
-                entries.push(entry(1, S::FRAGMENT, storage(true)));
-            }
         }
         if variant.importance.is_some() {
             entries.push(entry(5, S::FRAGMENT, storage(true)));
@@ -162,15 +158,9 @@ impl TerrainPass {
             wgpu::CompareFunction::Greater,
         );
 
-        let mut bind_entries = vec![bind(0, frame), bind(3, detailed)];
-        bind_entries.push(match &variant.shading {
-            Shading::MeshNormals(normals) => bind(4, normals),
-            Shading::PixelNormals(atlas) => bind(1, atlas),
-        });
-        if let Some(atlas) = &variant.shadows
-            && !pixel_normals
-        {
-            bind_entries.push(bind(1, atlas));
+        let mut bind_entries = vec![bind(0, frame), bind(1, &variant.atlas), bind(3, detailed)];
+        if let Shading::MeshNormals(normals) = &variant.shading {
+            bind_entries.push(bind(4, normals));
         }
         if let Some(buffer) = &variant.importance {
             bind_entries.push(bind(5, buffer));

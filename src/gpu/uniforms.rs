@@ -63,8 +63,14 @@ pub struct ShadingUniforms {
     pub sun: [f32; 3],
     /// The sky's share of its daylight (0 after dusk).
     pub daylight: f32,
-    /// The sun's light on the ground, linear RGB.
-    pub sun_colour: [f32; 3],
+    /// The sunlight above the air, linear RGB.
+    pub sun_top: [f32; 3],
+    /// The sun's relative air mass.
+    pub air_mass: f32,
+    /// The sky's light on level ground at sea level, linear RGB.
+    pub sky_light: [f32; 3],
+    /// Light's factor before the tone map.
+    pub exposure: f32,
     /// Haze extinction at sea level, per metre.
     pub haze_per_m: f32,
     /// Haze scale height, metres.
@@ -73,7 +79,6 @@ pub struct ShadingUniforms {
     pub outside: u32,
     /// The plain's height: the mean of the sketch's edge heights.
     pub plain_m: f32,
-    pub pad: f32,
     pub turbulence: [OctaveGpu; 2],
 }
 
@@ -300,7 +305,10 @@ impl ShadingUniforms {
         ShadingUniforms {
             sun: light.sun.as_vec3().to_array(),
             daylight: light.daylight as f32,
-            sun_colour: light.sun_colour.map(|c| c as f32),
+            sun_top: light.sun_top.map(|c| c as f32),
+            air_mass: light.air_mass as f32,
+            sky_light: light.sky_light.map(|c| c as f32),
+            exposure: light.exposure as f32,
             haze_per_m: light.haze_per_m as f32,
             haze_height_m: light.haze_height_m as f32,
             outside: match outside {
@@ -309,7 +317,6 @@ impl ShadingUniforms {
                 Outside::Ocean => 2,
             },
             plain_m: atlas.edge_mean_m,
-            pad: 0.0,
             turbulence,
         }
     }

@@ -171,16 +171,13 @@ impl Baselines {
             bump: noise && scene.detail.bump,
             shading: match &bake.normals {
                 Some(normals) => Shading::MeshNormals(wgpu::Buffer::clone(normals)),
-                None => Shading::PixelNormals(wgpu::Buffer::clone(s.atlas_buffer)),
+                None => Shading::PixelNormals,
             },
             importance: None,
             geomipmap: Some((wgpu::Buffer::clone(&block_buffer), capacity)),
             positions: s.positions,
-            shadows: s
-                .scene
-                .render
-                .shadows
-                .then(|| wgpu::Buffer::clone(s.atlas_buffer)),
+            atlas: wgpu::Buffer::clone(s.atlas_buffer),
+            shadows: s.scene.render.shadows,
         };
         let n = bake.grid.n as u32;
         let (width, height) = (scene.camera.width, scene.camera.height);

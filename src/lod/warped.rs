@@ -65,16 +65,13 @@ impl Warped {
             bump: noise && s.scene.detail.bump,
             shading: match &normals {
                 Some(pass) => Shading::MeshNormals(wgpu::Buffer::clone(&pass.normals)),
-                None => Shading::PixelNormals(wgpu::Buffer::clone(s.atlas_buffer)),
+                None => Shading::PixelNormals,
             },
             importance: importance.as_ref().map(|b| wgpu::Buffer::clone(b)),
             geomipmap: None,
             positions: s.positions,
-            shadows: s
-                .scene
-                .render
-                .shadows
-                .then(|| wgpu::Buffer::clone(s.atlas_buffer)),
+            atlas: wgpu::Buffer::clone(s.atlas_buffer),
+            shadows: s.scene.render.shadows,
         };
         let terrain = TerrainPass::new(
             device,

@@ -47,6 +47,7 @@ pub fn light_of(scene: &Scene) -> crate::light::Light {
         l.sun_elevation_deg,
         l.haze_visibility_km,
         l.haze_height_m,
+        l.exposure_ev,
     )
 }
 

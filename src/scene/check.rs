@@ -78,6 +78,7 @@ impl Scene {
         within("light.sun_elevation_deg", l.sun_elevation_deg, -90.0, 90.0)?;
         open_range("light.haze_visibility_km", l.haze_visibility_km, 0.0, 1e6)?;
         open_range("light.haze_height_m", l.haze_height_m, 0.0, 1e6)?;
+        within("light.exposure_ev", l.exposure_ev, -16.0, 16.0)?;
         let i = &self.importance;
         open_range("importance.error_px", i.error_px, 0.0, 1e4)?;
         open_range(

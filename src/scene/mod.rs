@@ -272,6 +272,8 @@ pub struct LightSection {
     pub haze_visibility_km: f64,
     /// Scale height of the haze, metres: how fast it thins with height.
     pub haze_height_m: f64,
+    /// Exposure compensation in stops: light is scaled by 2^exposure_ev before the tone map.
+    pub exposure_ev: f64,
 }
 impl Default for LightSection {
     fn default() -> Self {
@@ -280,6 +282,7 @@ impl Default for LightSection {
             sun_elevation_deg: 35.0,
             haze_visibility_km: 100.0,
             haze_height_m: 1200.0,
+            exposure_ev: 0.0,
         }
     }
 }
