@@ -1,7 +1,9 @@
 // The reference: per pixel, a ray marched to the terrain function (the sketch, bicubic at the
 // pixel's footprint, plus every octave k with b_k = clamp(o_px − k + 1, 0, 1) as geometry),
-// shaded as the meshes are, with the normal of that same function. Writes linear colour and the
-// hit position (metres from the frame origin; w = 1 on terrain, 0 on sky) per pixel.
+// shaded as the meshes are, with the normal of that same function. Writes display colour (tone
+// mapped, before sRGB encoding) and the hit position (metres from the frame origin; w = 1 on
+// terrain, 0 on sky) per pixel; with SUPERSAMPLE the colour averages four rays at the 4×
+// multisampling positions, as the mesh modes' multisampled edges are.
 //
 // March: steps of `step factor` × the height above the ground, at least that fraction of the
 // pixel's footprint, then a bisection of the last step. Halving the factor is the convergence
@@ -38,22 +40,19 @@ fn span(eye: vec3<f32>, dir: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(t0, t1);
 }
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let size = frame.camera.image;
-    if (id.x >= size.x || id.y >= size.y) {
-        return;
-    }
-    let ndc = vec2<f32>(
-        (f32(id.x) + 0.5) / f32(size.x) * 2.0 - 1.0,
-        1.0 - (f32(id.y) + 0.5) / f32(size.y) * 2.0,
-    );
+// A ray from the eye through `ndc`: what it sees (display colour, when `shade`) and where it hits
+// the ground (w = 1) or not (w = 0).
+struct Ray {
+    colour: vec3<f32>,
+    hit: vec4<f32>,
+}
+
+fn trace(ndc: vec2<f32>, shade: bool) -> Ray {
     // Reversed-Z: depth 1e-4 is ~500 m out, far enough that f32 rounding of the point does not
     // bend the direction (at 0.5 it lay 0.1 m from the eye, and rays missed by 0.1 px).
     let far = frame.camera.inv_view_proj * vec4<f32>(ndc, 1e-4, 1.0);
     let eye = frame.camera.eye;
     let dir = normalize(far.xyz / far.w - eye);
-    let k = id.y * size.x + id.x;
     let range = span(eye, dir);
     var t = range.x;
     var t_prev = range.x;
@@ -73,11 +72,15 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         t_prev = t;
         t += max(above, footprint) * frame.march.step;
     }
+    var ray: Ray;
+    if (!hit && !shade) {
+        return ray;
+    }
     if (!hit) {
         let outside = beyond(eye, dir);
-        colour_out[k] = vec4<f32>(display(mix(sky_colour(eye.z, dir), outside.rgb, outside.w)), 1.0);
-        position_out[k] = vec4<f32>(0.0);
-        return;
+        ray.colour = display(mix(sky_colour(eye.z, dir), outside.rgb, outside.w));
+        ray.hit = vec4<f32>(0.0);
+        return ray;
     }
     // Bisect the last step to the crossing.
     var lo = t_prev;
@@ -94,10 +97,53 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let t_hit = 0.5 * (lo + hi);
     let footprint = t_hit * frame.camera.pixel_scale;
     let p = eye + dir * t_hit;
+    ray.hit = vec4<f32>(p, 1.0);
+    if (!shade) {
+        return ray;
+    }
     let g = surface_gradient(p.xy, footprint);
     let n = normalize(vec3<f32>(-g, 1.0));
     let to_eye = eye - p;
     let dist = max(length(to_eye), 1e-3);
-    colour_out[k] = vec4<f32>(display(aerial(lit(p, n, to_eye, dist), to_eye, dist)), 1.0);
-    position_out[k] = vec4<f32>(p, 1.0);
+    ray.colour = display(aerial(lit(p, n, to_eye, dist), to_eye, dist));
+    return ray;
+}
+
+fn ndc_of(pixel: vec2<f32>) -> vec2<f32> {
+    let size = vec2<f32>(frame.camera.image);
+    return vec2<f32>(pixel.x / size.x * 2.0 - 1.0, 1.0 - pixel.y / size.y * 2.0);
+}
+
+#ifdef SUPERSAMPLE
+// The standard 4× multisampling positions within a pixel (y down), which the mesh modes'
+// multisampled edges are resolved from: the reference averages its rays alike, in display
+// colour as the hardware resolve does.
+const SAMPLES: array<vec2<f32>, 4> = array<vec2<f32>, 4>(
+    vec2<f32>(0.375, 0.125),
+    vec2<f32>(0.875, 0.375),
+    vec2<f32>(0.125, 0.625),
+    vec2<f32>(0.625, 0.875),
+);
+#endif
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = frame.camera.image;
+    if (id.x >= size.x || id.y >= size.y) {
+        return;
+    }
+    let k = id.y * size.x + id.x;
+    // The position is the pixel centre's, as the mesh modes' depth is.
+#ifdef SUPERSAMPLE
+    position_out[k] = trace(ndc_of(vec2<f32>(id.xy) + 0.5), false).hit;
+    var sum = vec3<f32>(0.0);
+    for (var i = 0; i < 4; i++) {
+        sum += trace(ndc_of(vec2<f32>(id.xy) + SAMPLES[i]), true).colour;
+    }
+    colour_out[k] = vec4<f32>(0.25 * sum, 1.0);
+#else
+    let centre = trace(ndc_of(vec2<f32>(id.xy) + 0.5), true);
+    position_out[k] = centre.hit;
+    colour_out[k] = vec4<f32>(centre.colour, 1.0);
+#endif
 }

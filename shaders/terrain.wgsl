@@ -44,14 +44,19 @@ struct FragOut {
 #endif
 }
 
+// The depth's 32 bits as the four bytes of an 8-bit RGBA target.
+fn depth_bytes(depth: f32) -> vec4<f32> {
+    let bits = bitcast<u32>(depth);
+    let bytes = vec4<u32>(bits & 255u, (bits >> 8u) & 255u, (bits >> 16u) & 255u, bits >> 24u);
+    return vec4<f32>(bytes) / 255.0;
+}
+
 fn frag_out(colour: vec3<f32>, depth: f32) -> FragOut {
     var out: FragOut;
     // The debug views show their colours as they are; the picture goes through the tone map.
     out.colour = vec4<f32>(select(colour, display(colour), frame.camera.view <= VIEW_WIREFRAME), 1.0);
 #ifdef POSITIONS
-    let bits = bitcast<u32>(depth);
-    let bytes = vec4<u32>(bits & 255u, (bits >> 8u) & 255u, (bits >> 16u) & 255u, bits >> 24u);
-    out.depth_bytes = vec4<f32>(bytes) / 255.0;
+    out.depth_bytes = depth_bytes(depth);
 #endif
     return out;
 }
@@ -170,6 +175,19 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     out.split = p.w;
     out.grid = vec2<f32>(f32(vi % frame.mesh.mesh), f32(vi / frame.mesh.mesh));
     return out;
+}
+#endif
+
+#ifdef POSITIONS
+// The depth copy alone, for a multisampled frame: its colour pass leaves positions out (its
+// samples cannot hold four bytes of one depth through a resolve), and this single-sampled pass
+// writes each pixel centre's depth, as a single-sampled frame does.
+@fragment
+fn depth_fs(in: VsOut) -> @location(1) vec4<f32> {
+    if (!on_sketch(in.local.xy, 1e-3 * frame.atlas.d_atlas)) {
+        discard;
+    }
+    return depth_bytes(in.clip.z);
 }
 #endif
 

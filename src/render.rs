@@ -46,6 +46,8 @@ pub struct Renderer {
     /// `sketch.outside`, resolved.
     pub outside: crate::scene::Outside,
     pub mode: Mode,
+    /// Samples per pixel the picture was drawn with (`render.msaa` where the adapter allows).
+    pub samples: u32,
     view: View,
     frame: Buffer,
     _atlas_buffer: Buffer,
@@ -111,13 +113,16 @@ impl Renderer {
             atlas_buffer: &atlas_buffer,
             view,
             positions,
+            samples: ctx.samples(scene.render.msaa),
         };
         let lod: Box<dyn Lod> = match mode {
             Mode::Warped => Box::new(Warped::new(&shared)?),
             Mode::Geomipmap | Mode::Bruteforce => Box::new(Baselines::new(&shared, mode)?),
             Mode::Reference => Box::new(Reference::new(&shared)?),
         };
+        let samples = shared.samples;
         Ok(Renderer {
+            samples,
             timer: Timer::new(&ctx, &alloc, lod.passes()),
             ctx,
             atlas,

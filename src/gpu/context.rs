@@ -13,6 +13,11 @@ pub struct GpuContext {
     /// Whether passes can be timed with timestamp queries.
     pub timestamps: bool,
     pub limits: wgpu::Limits,
+    /// The most samples per pixel the terrain pass's targets allow: 4, or 1 where they cannot
+    /// be multisampled.
+    pub msaa: u32,
+    /// A software rasterizer (llvmpipe, lavapipe, WARP): no hardware to multisample for free.
+    pub software: bool,
 }
 
 /// What the renderer needs of a device, checked before anything is created.
@@ -61,12 +66,21 @@ impl GpuContext {
             trace: wgpu::Trace::Off,
         }))
         .map_err(|e| Error::device(format!("{name}: cannot open the device"), e))?;
+        use super::terrain::{COLOUR, DEPTH, DEPTH_COPY};
+        let x4 = [COLOUR, DEPTH, DEPTH_COPY].iter().all(|&f| {
+            adapter
+                .get_texture_format_features(f)
+                .flags
+                .sample_count_supported(4)
+        });
         Ok(GpuContext {
             device,
             queue,
-            adapter: info,
             timestamps,
             limits,
+            software: info.device_type == wgpu::DeviceType::Cpu,
+            msaa: if x4 { 4 } else { 1 },
+            adapter: info,
         })
     }
 
@@ -74,6 +88,16 @@ impl GpuContext {
     /// over a limit would otherwise be a validation error, which wgpu reports by panicking).
     pub fn check(&self, needs: &Needs) -> Result<()> {
         check(&self.adapter.name, &self.limits, needs)
+    }
+
+    /// Samples per pixel for `msaa` on this device.
+    pub fn samples(&self, msaa: crate::scene::Msaa) -> u32 {
+        use crate::scene::Msaa;
+        match msaa {
+            Msaa::Off => 1,
+            Msaa::Auto if self.software => 1,
+            Msaa::Auto | Msaa::X4 => self.msaa,
+        }
     }
 
     /// "name (backend)", for reports.

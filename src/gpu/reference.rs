@@ -11,12 +11,22 @@ use wgpu::ShaderStages as S;
 pub struct ReferencePass {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
-    /// Linear RGB and 1 per pixel, rows top first.
+    /// Display colour (tone-mapped, before sRGB encoding) and 1 per pixel, rows top first.
     pub colour: Buffer,
     /// Hit position (metres from the frame origin) and 1, or 0 for sky, per pixel.
     pub position: Buffer,
     width: u32,
     height: u32,
+}
+
+/// What the reference's shader is built with.
+pub struct Features {
+    /// The procedural octaves.
+    pub noise: bool,
+    /// The sketch's shadow (`render.shadows`).
+    pub shadows: bool,
+    /// Four rays per pixel at the multisampling pattern's positions, averaged (`render.msaa`).
+    pub supersample: bool,
 }
 
 impl ReferencePass {
@@ -29,8 +39,7 @@ impl ReferencePass {
         atlas: &wgpu::Buffer,
         width: u32,
         height: u32,
-        noise: bool,
-        shadows: bool,
+        features: Features,
     ) -> Result<ReferencePass> {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("reference"),
@@ -42,11 +51,14 @@ impl ReferencePass {
             ],
         });
         let mut flags = Vec::new();
-        if noise {
-            flags.push("NOISE");
-        }
-        if shadows {
-            flags.push("SHADOWS");
+        for (on, flag) in [
+            (features.noise, "NOISE"),
+            (features.shadows, "SHADOWS"),
+            (features.supersample, "SUPERSAMPLE"),
+        ] {
+            if on {
+                flags.push(flag);
+            }
         }
         let flags = flags.as_slice();
         let pipeline = compute_pipeline(device, "reference", flags, &layout)?;

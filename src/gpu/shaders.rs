@@ -26,7 +26,7 @@ pub const PASSES: [(&str, &str); 4] = [
 ];
 
 /// Every flag any pass tests, for validating all variants.
-pub const FLAGS: [&str; 7] = [
+pub const FLAGS: [&str; 9] = [
     "DETAIL",
     "BUMP",
     "NOISE",
@@ -34,6 +34,8 @@ pub const FLAGS: [&str; 7] = [
     "GEOMIPMAP",
     "POSITIONS",
     "PIXEL_NORMALS",
+    "SHADOWS",
+    "SUPERSAMPLE",
 ];
 
 /// The combined source of pass `name` with `flags` set.

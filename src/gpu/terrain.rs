@@ -1,6 +1,8 @@
 //! The terrain pass (`shaders/terrain.wgsl`): the sky as one full-screen triangle, then the
 //! detailed geometry image as an indexed quad mesh read from its storage buffers (no vertex upload).
-//! Reversed-Z depth with an infinite far plane. Owns the colour and depth targets.
+//! Reversed-Z depth with an infinite far plane. Owns the colour and depth targets. Multisampled
+//! (`render.msaa`), it draws into multisampled targets the hardware resolves, and the depth copy
+//! for positions in a second, single-sampled pass of the terrain's depth alone.
 
 use super::alloc::{Alloc, Buffer, Texture};
 use super::{bind, entry, shader_module, storage, uniform};
@@ -11,7 +13,7 @@ pub const COLOUR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 /// Each pixel's depth as four bytes, kept for recovering ground positions (depth textures cannot
 /// be copied, nor float targets rendered, on every adapter).
 pub const DEPTH_COPY: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
-const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 pub struct TerrainPass {
     sky: wgpu::RenderPipeline,
@@ -27,6 +29,16 @@ pub struct TerrainPass {
     pub depth_copy: Option<Texture>,
     depth_copy_view: Option<wgpu::TextureView>,
     depth_view: wgpu::TextureView,
+    /// Multisampled: the colour's samples (resolved into `colour`), and with positions the
+    /// single-sampled depth pass.
+    multisampled: Option<Multisampled>,
+}
+
+struct Multisampled {
+    colour: wgpu::TextureView,
+    /// The depth pass's pipeline and its own single-sampled depth buffer.
+    depth_pass: Option<(wgpu::RenderPipeline, wgpu::TextureView)>,
+    _targets: Vec<Texture>,
 }
 
 /// The normals the terrain is lit with.
@@ -57,6 +69,8 @@ pub struct Variant {
     pub atlas: wgpu::Buffer,
     /// The sketch shadows itself (`render.shadows`).
     pub shadows: bool,
+    /// Samples per pixel: 1, or 4 multisampled (`render.msaa`).
+    pub samples: u32,
 }
 
 impl TerrainPass {
@@ -102,8 +116,9 @@ impl TerrainPass {
             entries.push(entry(6, S::VERTEX, storage(true)));
             flags.push("GEOMIPMAP");
         }
+        let multisampled = variant.samples > 1;
         let mut targets = vec![Some(wgpu::ColorTargetState::from(COLOUR))];
-        if variant.positions {
+        if variant.positions && !multisampled {
             flags.push("POSITIONS");
             targets.push(Some(DEPTH_COPY.into()));
         }
@@ -113,17 +128,29 @@ impl TerrainPass {
             entries: &entries,
         });
         let module = shader_module(device, "terrain", &flags)?;
+        // Multisampled with positions: the same shaders with the depth copy's entry point.
+        let depth_module = if variant.positions && multisampled {
+            flags.push("POSITIONS");
+            Some(shader_module(device, "terrain", &flags)?)
+        } else {
+            None
+        };
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("terrain"),
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = |vs: &str, fs: &str, depth_write: bool, compare: wgpu::CompareFunction| {
+        let pipeline_of = |module: &wgpu::ShaderModule,
+                           (vs, fs): (&str, &str),
+                           targets: &[Option<wgpu::ColorTargetState>],
+                           samples: u32,
+                           depth_write: bool,
+                           compare: wgpu::CompareFunction| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(vs),
+                label: Some(fs),
                 layout: Some(&pipeline_layout),
                 vertex: wgpu::VertexState {
-                    module: &module,
+                    module,
                     entry_point: Some(vs),
                     compilation_options: Default::default(),
                     buffers: &[],
@@ -139,24 +166,32 @@ impl TerrainPass {
                     stencil: Default::default(),
                     bias: Default::default(),
                 }),
-                multisample: Default::default(),
+                multisample: wgpu::MultisampleState {
+                    count: samples,
+                    ..Default::default()
+                },
                 fragment: Some(wgpu::FragmentState {
-                    module: &module,
+                    module,
                     entry_point: Some(fs),
                     compilation_options: Default::default(),
-                    targets: &targets,
+                    targets,
                 }),
                 multiview_mask: None,
                 cache: None,
             })
         };
-        let sky = pipeline("sky_vs", "sky_fs", false, wgpu::CompareFunction::Always);
-        let terrain = pipeline(
-            "terrain_vs",
-            "terrain_fs",
-            true,
+        let (always, greater) = (
+            wgpu::CompareFunction::Always,
             wgpu::CompareFunction::Greater,
         );
+        let n = variant.samples;
+        let sky = pipeline_of(&module, ("sky_vs", "sky_fs"), &targets, n, false, always);
+        let shaded = ("terrain_vs", "terrain_fs");
+        let terrain = pipeline_of(&module, shaded, &targets, n, true, greater);
+        let depth_pipeline = depth_module.map(|m| {
+            let targets = [None, Some(DEPTH_COPY.into())];
+            pipeline_of(&m, ("terrain_vs", "depth_fs"), &targets, 1, true, greater)
+        });
 
         let mut bind_entries = vec![bind(0, frame), bind(1, &variant.atlas), bind(3, detailed)];
         if let Shading::MeshNormals(normals) = &variant.shading {
@@ -193,7 +228,7 @@ impl TerrainPass {
                 (index, indices.len() as u32)
             }
         };
-        let target = |format, usage, label| {
+        let target_of = |format, usage, label, sample_count| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size: wgpu::Extent3d {
@@ -202,22 +237,38 @@ impl TerrainPass {
                     depth_or_array_layers: 1,
                 },
                 mip_level_count: 1,
-                sample_count: 1,
+                sample_count,
                 dimension: wgpu::TextureDimension::D2,
                 format,
                 usage,
                 view_formats: &[],
             })
         };
+        let target = |format, usage, label| target_of(format, usage, label, 1);
         let colour = target(
             COLOUR,
             wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
             "colour",
         );
-        let depth = target(DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT, "depth");
+        let drawn = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        let depth = target_of(DEPTH, drawn, "depth", n);
         let depth_copy = variant.positions.then(|| {
             let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
             target(DEPTH_COPY, usage, "depth copy")
+        });
+        let multisampled = multisampled.then(|| {
+            let colour = target_of(COLOUR, drawn, "colour samples", n);
+            let mut ms = Multisampled {
+                colour: colour.create_view(&Default::default()),
+                depth_pass: None,
+                _targets: vec![colour],
+            };
+            if let Some(pipeline) = depth_pipeline {
+                let depth = target(DEPTH, drawn, "depth copy's depth");
+                ms.depth_pass = Some((pipeline, depth.create_view(&Default::default())));
+                ms._targets.push(depth);
+            }
+            ms
         });
         Ok(TerrainPass {
             sky,
@@ -233,6 +284,7 @@ impl TerrainPass {
                 .map(|t| t.create_view(&Default::default())),
             depth_copy,
             colour,
+            multisampled,
         })
     }
 
@@ -285,32 +337,46 @@ impl TerrainPass {
         draw_terrain: bool,
         timestamps: Option<wgpu::RenderPassTimestampWrites>,
     ) {
-        let attach = |view| {
+        let attach = |view, resolve_target| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
                 depth_slice: None,
-                resolve_target: None,
+                resolve_target,
                 ops: wgpu::Operations {
                     load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
+                    // Samples are resolved at the pass's end and need no keeping.
+                    store: if resolve_target.is_some() {
+                        wgpu::StoreOp::Discard
+                    } else {
+                        wgpu::StoreOp::Store
+                    },
                 },
             })
         };
-        let mut attachments = vec![attach(&self.colour_view)];
-        if let Some(view) = &self.depth_copy_view {
-            attachments.push(attach(view));
-        }
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("terrain"),
-            color_attachments: &attachments,
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &self.depth_view,
+        let attachments = match &self.multisampled {
+            Some(ms) => vec![attach(&ms.colour, Some(&self.colour_view))],
+            None => {
+                let copy = self.depth_copy_view.as_ref().map(|v| attach(v, None));
+                [Some(attach(&self.colour_view, None)), copy]
+                    .into_iter()
+                    .flatten()
+                    .collect()
+            }
+        };
+        let depth = |view| {
+            Some(wgpu::RenderPassDepthStencilAttachment {
+                view,
                 depth_ops: Some(wgpu::Operations {
                     load: wgpu::LoadOp::Clear(0.0),
                     store: wgpu::StoreOp::Discard,
                 }),
                 stencil_ops: None,
-            }),
+            })
+        };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("terrain"),
+            color_attachments: &attachments,
+            depth_stencil_attachment: depth(&self.depth_view),
             timestamp_writes: timestamps,
             occlusion_query_set: None,
             multiview_mask: None,
@@ -320,6 +386,29 @@ impl TerrainPass {
         pass.draw(0..3, 0..1);
         if draw_terrain {
             pass.set_pipeline(&self.terrain);
+            pass.set_index_buffer(self.index.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..self.index_count, 0, 0..1);
+        }
+        drop(pass);
+        let Some(Multisampled {
+            depth_pass: Some((pipeline, depth_view)),
+            ..
+        }) = &self.multisampled
+        else {
+            return;
+        };
+        let copy = self.depth_copy_view.as_ref().map(|v| attach(v, None));
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("terrain depth copy"),
+            color_attachments: &[None, copy.flatten()],
+            depth_stencil_attachment: depth(depth_view),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        if draw_terrain {
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.set_pipeline(pipeline);
             pass.set_index_buffer(self.index.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..self.index_count, 0, 0..1);
         }

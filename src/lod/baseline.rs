@@ -178,6 +178,7 @@ impl Baselines {
             positions: s.positions,
             atlas: wgpu::Buffer::clone(s.atlas_buffer),
             shadows: s.scene.render.shadows,
+            samples: s.samples,
         };
         let n = bake.grid.n as u32;
         let (width, height) = (scene.camera.width, scene.camera.height);

@@ -42,6 +42,9 @@ pub struct Shared<'a> {
     pub view: View,
     /// Also write each pixel's ground position (for screen-space error).
     pub positions: bool,
+    /// Samples per pixel: 4 where `render.msaa` asks and the adapter allows, else 1 (the
+    /// reference supersamples when it is 4).
+    pub samples: u32,
 }
 
 /// The CPU's part of a frame.

@@ -7,7 +7,7 @@ use crate::camera::Camera;
 use crate::error::Result;
 use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::Timer;
-use crate::gpu::reference::ReferencePass;
+use crate::gpu::reference::{Features, ReferencePass};
 use crate::gpu::uniforms::{FrameInputs, View};
 use crate::sketch::Atlas;
 use std::any::Any;
@@ -29,8 +29,11 @@ impl Reference {
             s.atlas_buffer,
             w,
             h,
-            noise,
-            s.scene.render.shadows,
+            Features {
+                noise,
+                shadows: s.scene.render.shadows,
+                supersample: s.samples > 1,
+            },
         )?;
         Ok(Reference {
             pass,

@@ -56,6 +56,8 @@ struct Report {
     view: View,
     width: u32,
     height: u32,
+    /// Samples per pixel: 4 multisampled (the reference: four rays), or 1 (`render.msaa`).
+    samples: u32,
     visible: bool,
     triangles: u64,
     cpu_stage_us: f64,
@@ -149,6 +151,7 @@ pub fn run(a: Args) -> Result<()> {
         view: a.view,
         width: last.width,
         height: last.height,
+        samples: r.samples,
         visible: r.visible(),
         triangles: last.gpu.triangles,
         cpu_stage_us: cpu_us,
