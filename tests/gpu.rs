@@ -500,3 +500,55 @@ fn a_low_sun_leaves_the_lee_of_a_mountain_under_half_the_lit_side() {
         - ratios.iter().cloned().fold(f64::INFINITY, f64::min);
     assert!(spread < 0.05, "the modes disagree: {ratios:?}");
 }
+
+/// Under a 6° sun from the side the procedural detail on a flat sketch shadows itself
+/// (`render.detail_shadows`), by nearly the same share in the warped mode (which carries most
+/// octaves as bump) and the reference (which marches them all as geometry); `false` compiles the
+/// shadow out. Measured on llvmpipe: warped keeps 0.61 of its light, the reference 0.70; the
+/// reference's rays see less of the dips, which are the most shadowed, than a bump-mapped mesh.
+#[test]
+fn the_detail_shadows_itself_alike_in_mesh_and_reference() {
+    let scene = |detail_shadows: bool| {
+        let text = r#"
+            [sketch]
+            synthetic = "flat"
+            [camera]
+            position = [3840.0, 3000.0, 150.0]
+            look_at = [3840.0, 3600.0, 0.0]
+            width = 96
+            height = 96
+            [detail]
+            amplitude_m = 12.0
+            gain = 0.5
+            [light]
+            sun_azimuth_deg = 90.0
+            sun_elevation_deg = 6.0
+        "#;
+        let mut s = Scene::parse(text, manifest_dir()).unwrap();
+        s.render.detail_shadows = detail_shadows;
+        s
+    };
+    let mut shares = Vec::new();
+    for mode in [Mode::Warped, Mode::Reference] {
+        let mean = |detail_shadows: bool| {
+            let s = scene(detail_shadows);
+            let mut r = Renderer::with_positions(&s, mode, View::Shaded, true).unwrap();
+            let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
+            let frame = r.render(&camera).unwrap();
+            let world =
+                terrain::render::world_positions(&r.read_positions(&camera).unwrap(), &camera);
+            let ground = world.chunks_exact(4).map(|q| q[3] > 0.5);
+            terrain::eval::metrics::terrain_luminance(&frame.rgba, ground)
+                .expect("ground in view")
+                .0
+        };
+        let (lit, shadowed) = (mean(false), mean(true));
+        eprintln!("{mode:?}: {lit:.4} without the detail's shadow, {shadowed:.4} with it");
+        assert!(shadowed < 0.9 * lit, "{mode:?}: {lit:.4} -> {shadowed:.4}");
+        shares.push(shadowed / lit);
+    }
+    assert!(
+        (shares[0] - shares[1]).abs() < 0.12,
+        "mesh and reference disagree: {shares:?}"
+    );
+}

@@ -1,11 +1,14 @@
 // Surface shading shared by the mesh renderers and the reference ray marcher: the sky and the
 // aerial perspective from one single-scattering atmosphere (the twin of src/light.rs), surface
 // types from slope, height, aspect and curvature, sun and sky light, the sketch's shadow
-// (SHADOWS), the world beyond the sketch, exposure and the tone map. Needs `frame` and the atlas;
+// (SHADOWS) and the detail's (DETAIL_SHADOWS), the world beyond the sketch, exposure and the tone map. Needs `frame` and the atlas;
 // turbulence needs the noise.
 #import atlas
 #ifdef NOISE
 #import noise
+#endif
+#ifdef DETAIL_SHADOWS
+#import surface
 #endif
 
 const SEA_LEVEL: f32 = 0.0;
@@ -210,21 +213,59 @@ fn shadow_caster(local: vec2<f32>, l: u32) -> f32 {
     }
 }
 
-// How much of the sun the ground at `local` sees past the sketch: a ray marched toward the sun in
-// steps that grow with distance, each sampling the pyramid level whose texels match the step (a
-// cone), soft by the closest miss (the penumbra of a sun of finite size), until it rises above
-// the sketch's highest point. The ray starts two cells
-// out, so the octaves a mesh adds to the sketch do not shadow the point they lift.
-fn sun_visibility(local: vec3<f32>) -> f32 {
+#ifdef DETAIL_SHADOWS
+const NEAR_STEPS: i32 = 5;
+
+// The detail's own shadow (the octaves, whether a mesh carries them as geometry or as bump): the
+// sun ray over the first two sketch cells, marched from the pixel's footprint in steps growing
+// geometrically, against the sketch (bilinear) plus the octaves down to each step's own footprint
+// (a cone: far steps see only the broad octaves). The ray leaves from this same function's height
+// at the pixel, not the mesh's, so every mode casts the same shadow and no mesh shadows itself.
+fn detail_visibility(local: vec2<f32>, footprint: f32) -> f32 {
+    let sun = frame.shading.sun;
+    let d = frame.atlas.d_atlas;
+    let t_end = 2.0 * d;
+    var t = max(2.0 * footprint, 0.01 * d);
+    if (t >= t_end) {
+        return 1.0;
+    }
+    let grow = pow(t_end / t, 1.0 / f32(NEAR_STEPS));
+    let caster = atlas_bilinear((local + frame.atlas.offset) * frame.atlas.inv_spacing, 0u);
+    let z0 = caster + surface_octaves(local, footprint).x;
+    var seen = 1.0;
+    for (var i = 0; i < NEAR_STEPS; i++) {
+        let p = local + sun.xy * t;
+        let under = atlas_bilinear((p + frame.atlas.offset) * frame.atlas.inv_spacing, 0u)
+            + surface_octaves(p, max(footprint, 0.5 * t)).x;
+        seen = min(seen, clamp(0.5 + (z0 + sun.z * t - under) / (0.03 * t), 0.0, 1.0));
+        t *= grow;
+    }
+    return seen;
+}
+#endif
+
+// How much of the sun the ground at `local` sees, its pixel `footprint` metres wide: past the
+// detail (DETAIL_SHADOWS), then past the sketch: a ray marched toward the sun in steps that grow
+// with distance, each sampling the pyramid level whose texels match the step (a cone), soft by
+// the closest miss (the penumbra of a sun of finite size), until it rises above the sketch's
+// highest point. That ray leaves from the sketch's own height under the pixel, two cells out
+// (where the detail's ends): the detail a mesh or the reference adds is the detail's to shadow,
+// so a dip in it is not shadowed by the bare sketch around it, in every mode alike.
+fn sun_visibility(local: vec3<f32>, footprint: f32) -> f32 {
     let sun = frame.shading.sun;
     if (sun.z <= 0.0) {
         return 0.0;
     }
     let d = frame.atlas.d_atlas;
+    let start = vec3<f32>(local.xy, shadow_caster(local.xy, 0u));
     var t = 2.0 * d;
+#ifdef DETAIL_SHADOWS
+    var seen = detail_visibility(local.xy, footprint);
+#else
     var seen = 1.0;
+#endif
     for (var i = 0; i < SHADOW_STEPS; i++) {
-        let p = local + sun * t;
+        let p = start + sun * t;
         if (p.z > frame.atlas.max_m) {
             break;
         }
@@ -256,7 +297,7 @@ fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32
     var sun = max(dot(n, frame.shading.sun), 0.0);
 #ifdef SHADOWS
     if (sun > 0.0) {
-        sun *= sun_visibility(local);
+        sun *= sun_visibility(local, dist * frame.camera.pixel_scale);
     }
 #endif
     let light = sun_light * sun + frame.shading.sky_light * (0.5 + 0.5 * n.z);

@@ -25,6 +25,8 @@ pub struct Features {
     pub noise: bool,
     /// The sketch's shadow (`render.shadows`).
     pub shadows: bool,
+    /// The detail's shadow (`render.detail_shadows`).
+    pub detail_shadows: bool,
     /// Four rays per pixel at the multisampling pattern's positions, averaged (`render.msaa`).
     pub supersample: bool,
 }
@@ -54,6 +56,10 @@ impl ReferencePass {
         for (on, flag) in [
             (features.noise, "NOISE"),
             (features.shadows, "SHADOWS"),
+            (
+                features.shadows && features.detail_shadows && features.noise,
+                "DETAIL_SHADOWS",
+            ),
             (features.supersample, "SUPERSAMPLE"),
         ] {
             if on {

@@ -26,7 +26,7 @@ pub const PASSES: [(&str, &str); 4] = [
 ];
 
 /// Every flag any pass tests, for validating all variants.
-pub const FLAGS: [&str; 9] = [
+pub const FLAGS: [&str; 10] = [
     "DETAIL",
     "BUMP",
     "NOISE",
@@ -35,6 +35,7 @@ pub const FLAGS: [&str; 9] = [
     "POSITIONS",
     "PIXEL_NORMALS",
     "SHADOWS",
+    "DETAIL_SHADOWS",
     "SUPERSAMPLE",
 ];
 

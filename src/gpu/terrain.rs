@@ -69,6 +69,8 @@ pub struct Variant {
     pub atlas: wgpu::Buffer,
     /// The sketch shadows itself (`render.shadows`).
     pub shadows: bool,
+    /// The detail shadows itself too (`render.detail_shadows`, with shadows and noise).
+    pub detail_shadows: bool,
     /// Samples per pixel: 1, or 4 multisampled (`render.msaa`).
     pub samples: u32,
 }
@@ -107,6 +109,9 @@ impl TerrainPass {
         }
         if variant.shadows {
             flags.push("SHADOWS");
+            if variant.detail_shadows && variant.noise {
+                flags.push("DETAIL_SHADOWS");
+            }
         }
         if variant.importance.is_some() {
             entries.push(entry(5, S::FRAGMENT, storage(true)));

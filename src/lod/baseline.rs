@@ -178,6 +178,7 @@ impl Baselines {
             positions: s.positions,
             atlas: wgpu::Buffer::clone(s.atlas_buffer),
             shadows: s.scene.render.shadows,
+            detail_shadows: s.scene.render.detail_shadows,
             samples: s.samples,
         };
         let n = bake.grid.n as u32;

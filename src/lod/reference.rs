@@ -32,6 +32,7 @@ impl Reference {
             Features {
                 noise,
                 shadows: s.scene.render.shadows,
+                detail_shadows: s.scene.render.detail_shadows,
                 supersample: s.samples > 1,
             },
         )?;

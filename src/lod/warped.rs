@@ -72,6 +72,7 @@ impl Warped {
             positions: s.positions,
             atlas: wgpu::Buffer::clone(s.atlas_buffer),
             shadows: s.scene.render.shadows,
+            detail_shadows: s.scene.render.detail_shadows,
             samples: s.samples,
         };
         let terrain = TerrainPass::new(

@@ -311,6 +311,8 @@ pub struct RenderSection {
     pub pixel_normals: bool,
     /// The sketch shadows itself from the sun; `false` compiles the shadow ray out.
     pub shadows: bool,
+    /// With `shadows`, the procedural detail shadows itself too.
+    pub detail_shadows: bool,
     /// Anti-aliasing: the mesh modes multisampled and the reference supersampled alike.
     pub msaa: Msaa,
 }
@@ -320,6 +322,7 @@ impl Default for RenderSection {
             mode: Mode::Warped,
             pixel_normals: false,
             shadows: true,
+            detail_shadows: true,
             msaa: Msaa::Auto,
         }
     }
