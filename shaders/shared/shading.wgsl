@@ -217,26 +217,28 @@ fn shadow_caster(local: vec2<f32>, l: u32) -> f32 {
 const NEAR_STEPS: i32 = 5;
 
 // The detail's own shadow (the octaves, whether a mesh carries them as geometry or as bump): the
-// sun ray over the first two sketch cells, marched from the pixel's footprint in steps growing
-// geometrically, against the sketch (bilinear) plus the octaves down to each step's own footprint
-// (a cone: far steps see only the broad octaves). The ray leaves from this same function's height
-// at the pixel, not the mesh's, so every mode casts the same shadow and no mesh shadows itself.
+// sun ray over the first two sketch cells, marched from twice the pixel's footprint in steps
+// growing geometrically, against the sketch (bilinear) plus the octaves down to twice each step's
+// own footprint (a cone: far steps see only the broad octaves; a shadow finer than two pixels is
+// not drawn). The ray leaves from this same function's height at the pixel, not the mesh's, so
+// every mode casts the same shadow and no mesh shadows itself.
 fn detail_visibility(local: vec2<f32>, footprint: f32) -> f32 {
     let sun = frame.shading.sun;
     let d = frame.atlas.d_atlas;
     let t_end = 2.0 * d;
-    var t = max(2.0 * footprint, 0.01 * d);
+    let fine = 2.0 * footprint;
+    var t = max(fine, 0.01 * d);
     if (t >= t_end) {
         return 1.0;
     }
     let grow = pow(t_end / t, 1.0 / f32(NEAR_STEPS));
     let caster = atlas_bilinear((local + frame.atlas.offset) * frame.atlas.inv_spacing, 0u);
-    let z0 = caster + surface_octaves(local, footprint).x;
+    let z0 = caster + surface_octaves(local, fine).x;
     var seen = 1.0;
     for (var i = 0; i < NEAR_STEPS; i++) {
         let p = local + sun.xy * t;
         let under = atlas_bilinear((p + frame.atlas.offset) * frame.atlas.inv_spacing, 0u)
-            + surface_octaves(p, max(footprint, 0.5 * t)).x;
+            + surface_octaves(p, max(fine, 0.5 * t)).x;
         seen = min(seen, clamp(0.5 + (z0 + sun.z * t - under) / (0.03 * t), 0.0, 1.0));
         t *= grow;
     }
@@ -259,11 +261,7 @@ fn sun_visibility(local: vec3<f32>, footprint: f32) -> f32 {
     let d = frame.atlas.d_atlas;
     let start = vec3<f32>(local.xy, shadow_caster(local.xy, 0u));
     var t = 2.0 * d;
-#ifdef DETAIL_SHADOWS
-    var seen = detail_visibility(local.xy, footprint);
-#else
     var seen = 1.0;
-#endif
     for (var i = 0; i < SHADOW_STEPS; i++) {
         let p = start + sun * t;
         if (p.z > frame.atlas.max_m) {
@@ -277,6 +275,12 @@ fn sun_visibility(local: vec3<f32>, footprint: f32) -> f32 {
         }
         t += max(0.25 * t, 0.5 * d);
     }
+#ifdef DETAIL_SHADOWS
+    // The detail's march, the costlier, only where the sketch leaves some sun.
+    if (seen > 0.0) {
+        seen = min(seen, detail_visibility(local.xy, footprint));
+    }
+#endif
     return seen;
 }
 #endif
