@@ -128,10 +128,14 @@ fn display(c_in: vec3<f32>) -> vec3<f32> {
     return mix(c, vec3<f32>(new_peak), g);
 }
 
-// Low-frequency turbulence that moves the boundaries between surface types.
-fn turbulence(local: vec2<f32>) -> vec2<f32> {
+// Low-frequency turbulence that moves the boundaries between surface types, each octave faded
+// out as its lattice cells shrink from four to two pixels `footprint` wide, as a texture's mip
+// would: a boundary finer than the pixel would alias, and differently in every mode.
+fn turbulence(local: vec2<f32>, footprint: f32) -> vec2<f32> {
 #ifdef NOISE
-    return vec2<f32>(octave_local(frame.shading.turbulence[0], local).x, octave_local(frame.shading.turbulence[1], local).x);
+    let o = frame.shading.turbulence;
+    let fade = vec2<f32>(1.0) - smoothstep(vec2<f32>(0.25), vec2<f32>(0.5), footprint * vec2<f32>(o[0].scale, o[1].scale));
+    return fade * vec2<f32>(octave_local(o[0], local).x, octave_local(o[1], local).x);
 #else
     return vec2<f32>(0.0);
 #endif
@@ -166,7 +170,7 @@ fn sketch_form(local: vec2<f32>, footprint: f32) -> vec3<f32> {
 // above the snow line (lower facing north) where it can lie. Turbulence at 600 m and 150 m moves
 // every boundary.
 fn albedo(local: vec3<f32>, footprint: f32) -> vec3<f32> {
-    let t = turbulence(local.xy);
+    let t = turbulence(local.xy, footprint);
     let tt = t.x + 0.5 * t.y;
     let h = local.z + 40.0 * tt;
     let form = sketch_form(local.xy, footprint);
