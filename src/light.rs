@@ -198,6 +198,24 @@ impl Light {
     }
 }
 
+/// Exposure and the tone map (Khronos PBR Neutral), the twin of `display` in
+/// `shaders/shared/shading.wgsl`: light in, display-referred linear RGB (before sRGB encoding) out.
+pub fn display(light: [f64; 3], exposure: f64) -> [f64; 3] {
+    let (start, desaturation) = (0.8 - 0.04, 0.15);
+    let mut c = light.map(|v| v * exposure);
+    let x = c[0].min(c[1]).min(c[2]);
+    let offset = if x < 0.08 { x - 6.25 * x * x } else { 0.04 };
+    c = c.map(|v| v - offset);
+    let peak = c[0].max(c[1]).max(c[2]);
+    if peak < start {
+        return c;
+    }
+    let d = 1.0 - start;
+    let new_peak = 1.0 - d * d / (peak + d - start);
+    let g = 1.0 - 1.0 / (desaturation * (peak - new_peak) + 1.0);
+    c.map(|v| v * new_peak / peak * (1.0 - g) + new_peak * g)
+}
+
 /// Rec. 709 luminance of a linear RGB colour.
 pub fn luminance(c: [f64; 3]) -> f64 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
@@ -363,6 +381,18 @@ mod tests {
         assert!((brighter.exposure / l.exposure - 2.0).abs() < 1e-12);
         // Thicker haze dims the sun, and the meter opens up for it.
         assert!(Light::new(150.0, 35.0, 10.0, 1200.0, 0.0).exposure > l.exposure);
+    }
+
+    #[test]
+    fn the_tone_map_is_linear_through_the_mid_tones_and_rolls_off_to_white() {
+        let mid = display([0.3, 0.2, 0.1], 1.0);
+        for (m, want) in mid.iter().zip([0.26, 0.16, 0.06]) {
+            assert!((m - want).abs() < 1e-12, "{mid:?}");
+        }
+        let bright = display([40.0, 40.0, 40.0], 1.0);
+        assert!(bright.iter().all(|c| *c > 0.99 && *c <= 1.0), "{bright:?}");
+        let lo = display([0.0; 3], 1.0);
+        assert_eq!(lo, [0.0; 3]);
     }
 
     #[test]

@@ -552,3 +552,52 @@ fn the_detail_shadows_itself_alike_in_mesh_and_reference() {
         "mesh and reference disagree: {shares:?}"
     );
 }
+
+/// The sky the terrain pass draws is its CPU twin's (`terrain::light`): the single-scattering
+/// integral along the pixel's ray, exposed and tone-mapped, within 2 of 255 levels once sRGB
+/// encoded, for a high sun, a low one and one below the horizon.
+#[test]
+fn the_sky_matches_its_cpu_twin() {
+    for elevation in [35.0, 4.0, -3.0] {
+        let text = format!(
+            r#"
+            [sketch]
+            synthetic = "flat"
+            outside = "void"
+            [camera]
+            position = [3840.0, 3840.0, 300.0]
+            look_at = [3840.0, 4840.0, 1300.0]
+            width = 33
+            height = 33
+            [light]
+            sun_azimuth_deg = 160.0
+            sun_elevation_deg = {elevation}
+        "#
+        );
+        let s = Scene::parse(&text, manifest_dir()).unwrap();
+        let mut r = Renderer::new(&s, Mode::Warped, View::Shaded).unwrap();
+        let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
+        let frame = r.render(&camera).unwrap();
+        // The centre pixel looks along the camera's axis, 45° up to the north.
+        let k = (16 * 33 + 16) * 4;
+        let gpu = &frame.rgba[k..k + 3];
+        let light = terrain::scene::light_of(&s);
+        let dir = glam::DVec3::new(0.0, 1.0, 1.0).normalize();
+        let srgb = |c: f64| {
+            let c = c.clamp(0.0, 1.0);
+            let v = if c <= 0.0031308 {
+                12.92 * c
+            } else {
+                1.055 * c.powf(1.0 / 2.4) - 0.055
+            };
+            (v * 255.0).round()
+        };
+        let cpu = terrain::light::display(light.sky(300.0, dir), light.exposure).map(srgb);
+        for (g, c) in gpu.iter().zip(cpu) {
+            assert!(
+                (*g as f64 - c).abs() <= 2.0,
+                "sun at {elevation}°: GPU {gpu:?}, CPU {cpu:?}"
+            );
+        }
+    }
+}

@@ -322,7 +322,7 @@ impl Default for RenderSection {
             mode: Mode::Warped,
             pixel_normals: false,
             shadows: true,
-            detail_shadows: true,
+            detail_shadows: false,
             msaa: Msaa::Auto,
         }
     }
