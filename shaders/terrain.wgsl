@@ -112,6 +112,22 @@ fn grid_index(g: vec2<u32>) -> u32 {
     return g.y * frame.mesh.mesh + g.x;
 }
 
+// The normal of the surface a block of grid step `s` draws at vertex `g`: central differences
+// over the vertices `s` steps away (clamped at the grid's edge). The baked grid's own normal at
+// `g` is the finest level's; a coarse block that took it would point-sample a normal field far
+// finer than its cells, and its shading would alias from afar.
+fn level_normal(g: vec2<u32>, s: u32) -> vec3<f32> {
+    if (s == 1u) {
+        return vertex_normal(grid_index(g));
+    }
+    let hi = vec2<u32>(frame.mesh.mesh - 1u);
+    let east = detailed[grid_index(min(g + vec2<u32>(s, 0u), hi))].xyz;
+    let west = detailed[grid_index(g - min(vec2<u32>(s, 0u), g))].xyz;
+    let north = detailed[grid_index(min(g + vec2<u32>(0u, s), hi))].xyz;
+    let south = detailed[grid_index(g - min(vec2<u32>(0u, s), g))].xyz;
+    return normalize(cross(east - west, north - south));
+}
+
 // Index = block slot << bits | (j·(cells+1) + i), cells and bits from frame.blocks. Vertices that
 // the next level drops move toward the midpoint of their two neighbours on it (Wagner's
 // geomorph); edge vertices follow the level and morph range of the coarser block of their edge,
@@ -124,7 +140,6 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     let l2 = vec2<u32>(local % (cells + 1u), local / (cells + 1u));
     let g = b.origin + l2;
     var p = detailed[grid_index(g)];
-    var n = vertex_normal(grid_index(g));
     var level = b.level;
     var start = b.morph.x;
     var end = b.morph.y;
@@ -137,6 +152,7 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     }
     let s = 1u << level;
     let s2 = 2u << level;
+    var n = level_normal(g, s);
     if (level + 1u < frame.blocks.levels && (g.x % s2 != 0u || g.y % s2 != 0u)) {
         let d = vec2<u32>(select(0u, s, g.x % s2 != 0u), select(0u, s, g.y % s2 != 0u));
         let a = detailed[grid_index(g - d)];
@@ -152,8 +168,7 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
             }
         }
         p.z = mix(p.z, 0.5 * (a.z + c.z), m);
-        let nc = vertex_normal(grid_index(g - d)) + vertex_normal(grid_index(g + d));
-        n = normalize(mix(n, normalize(nc), m));
+        n = normalize(mix(n, level_normal(g, s2), m));
     }
     let local_pos = p.xyz + vec3<f32>(frame.mesh.mesh_offset, 0.0);
     var out: VsOut;
