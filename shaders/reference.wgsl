@@ -72,6 +72,12 @@ fn trace(ndc: vec2<f32>, shade: bool) -> Ray {
         t_prev = t;
         t += max(above, footprint) * frame.march.step;
     }
+    // A ray entering the box through a side wall already under the surface comes from beyond the
+    // sketch, under the plain or the water there: it met that first, as the mesh modes' sky pass
+    // draws it.
+    if (hit && range.x > 0.0 && t == range.x && beyond(eye, dir).w > 0.0) {
+        hit = false;
+    }
     var ray: Ray;
     if (!hit && !shade) {
         return ray;

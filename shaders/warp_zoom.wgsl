@@ -55,5 +55,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         z += frame.detail.octave[k - 1u].weight * g * octave_local(frame.detail.octave[k - 1u], p).x;
     }
 #endif
-    detailed[id.y * frame.mesh.mesh + id.x] = vec4<f32>(p, z, o);
+    // Under the water the surface is the water's, flat.
+    detailed[id.y * frame.mesh.mesh + id.x] = vec4<f32>(p, max(z, frame.atlas.water_m), o);
 }

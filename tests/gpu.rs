@@ -617,3 +617,73 @@ fn geomipmap_from_afar_shades_like_the_reference() {
     eprintln!("gaussian-high at 96²: GeoMipMap {db:.1} dB against the reference");
     assert!(db > 40.0, "{db:.1} dB");
 }
+
+/// `sketch.water_level_m` floods the ground below it with flat water, in the terrain function
+/// itself: no mesh vertex lies below it, the reference's rays stop on it, and both shade it as
+/// water alike.
+#[test]
+fn water_floods_the_ground_below_its_level_alike_in_mesh_and_reference() {
+    let text = r#"
+        [sketch]
+        synthetic = "gaussian"
+        water_level_m = 600.0
+        [camera]
+        position = [3840.0, -1500.0, 2200.0]
+        look_at = [3840.0, 3840.0, 400.0]
+        width = 80
+        height = 80
+        [detail]
+        amplitude_m = 8.0
+        gain = 0.45
+    "#;
+    let s = Scene::parse(text, manifest_dir()).unwrap();
+    let shot = |mode: Mode| {
+        let mut r = Renderer::with_positions(&s, mode, View::Shaded, true).unwrap();
+        let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
+        let frame = r.render(&camera).unwrap();
+        let world = terrain::render::world_positions(&r.read_positions(&camera).unwrap(), &camera);
+        (r, frame.rgba, world)
+    };
+    let (r, mesh_rgba, mesh_pos) = shot(Mode::Warped);
+    // The vertices of this frame's mesh (the buffer is sized for the largest).
+    let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
+    let mesh = r.uniforms(&camera).mesh.mesh as usize;
+    let lowest = warped(&r).read_detailed(&r.ctx).unwrap()[..mesh * mesh]
+        .iter()
+        .map(|v| v[2])
+        .fold(f32::INFINITY, f32::min);
+    assert!(lowest >= 600.0, "a vertex at {lowest} m, under the water");
+    drop(r);
+    let (_, ref_rgba, ref_pos) = shot(Mode::Reference);
+    let water = |pos: &[f64]| {
+        pos.chunks_exact(4)
+            .map(|q| q[3] > 0.5 && q[2] < 600.05)
+            .collect::<Vec<bool>>()
+    };
+    // The reference's positions say where the water is: the mesh's, recovered from its depth,
+    // are metres off at a few kilometres, so both images are read on the reference's pixels.
+    let ref_water = water(&ref_pos);
+    assert!(
+        mesh_pos.chunks_exact(4).any(|q| q[3] > 0.5),
+        "the mesh drew nothing"
+    );
+    let share = ref_water.iter().filter(|w| **w).count() as f64 / ref_water.len() as f64;
+    assert!(
+        share > 0.2,
+        "{share:.2} of the reference's pixels on the water"
+    );
+    let deepest = ref_pos
+        .chunks_exact(4)
+        .filter(|q| q[3] > 0.5)
+        .map(|q| q[2])
+        .fold(f64::INFINITY, f64::min);
+    assert!(deepest > 599.9, "the reference's ray reached {deepest} m");
+    let mean = |rgba: &[u8], on: &[bool]| {
+        terrain::eval::metrics::terrain_luminance(rgba, on.iter().copied())
+            .expect("water in view")
+            .0
+    };
+    let (m, r) = (mean(&mesh_rgba, &ref_water), mean(&ref_rgba, &ref_water));
+    eprintln!("water: {share:.2} of the view; luminance mesh {m:.4}, reference {r:.4}");
+    assert!((m - r).abs() < 0.1 * r, "mesh {m:.4}, reference {r:.4}");
+}

@@ -129,7 +129,7 @@ fn uniform_structs_match_the_wgsl_field_by_field() {
                 d_atlas,
                 levels,
                 max_m,
-                pad
+                water_m
             }),
             size_of::<AtlasUniforms>(),
         ),

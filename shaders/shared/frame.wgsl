@@ -57,7 +57,7 @@ struct AtlasUniforms {
     d_atlas: f32,
     levels: u32,                 // mip levels in use
     max_m: f32,                  // the sketch's highest height (a ray above it hits nothing)
-    pad: u32,
+    water_m: f32,                // the water's surface: the terrain function is never below it
 }
 
 // The procedural octaves.

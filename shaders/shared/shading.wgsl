@@ -11,7 +11,13 @@
 #import surface
 #endif
 
-const SEA_LEVEL: f32 = 0.0;
+// Ground within this of the water's surface is water (the reference's bisection lands within it).
+const ON_WATER_M: f32 = 0.01;
+
+// Whether ground at height `z` is the water's surface.
+fn on_water(z: f32) -> bool {
+    return z <= frame.atlas.water_m + ON_WATER_M;
+}
 // The atmosphere, twins of src/light.rs's constants of the same names.
 const RAYLEIGH: vec3<f32> = vec3<f32>(5.8e-6, 13.5e-6, 33.1e-6);
 const RAYLEIGH_SCALE_M: f32 = 8000.0;
@@ -195,7 +201,7 @@ fn albedo(local: vec3<f32>, footprint: f32) -> vec3<f32> {
     let steep = slope + 0.08 * tt - 2.0 * cav;
     c = mix(c, scree, smoothstep(0.26, 0.36, slope + 0.08 * t.y) * smoothstep(-0.01, 0.02, cav));
     c = mix(c, rock, smoothstep(0.36, 0.48, steep));
-    c = mix(c, sand, 1.0 - smoothstep(SEA_LEVEL + 2.0, SEA_LEVEL + 8.0, h));
+    c = mix(c, sand, 1.0 - smoothstep(frame.atlas.water_m + 2.0, frame.atlas.water_m + 8.0, h));
     let snow_line = 1800.0 - 250.0 * north;
     let snowy = smoothstep(snow_line, snow_line + 150.0, h) * (1.0 - smoothstep(0.45, 0.6, slope));
     return mix(c, snow, snowy);
@@ -204,15 +210,16 @@ fn albedo(local: vec3<f32>, footprint: f32) -> vec3<f32> {
 #ifdef SHADOWS
 const SHADOW_STEPS: i32 = 40;
 
-// What can cast a shadow at `local`: the sketch (level `l`) on its rectangle, the plain or the
-// sea beyond it (whose flat ground casts none), nothing over the void.
+// What can cast a shadow at `local`: the sketch (level `l`, or the water over it) on its
+// rectangle, the plain or the sea beyond it (whose flat ground casts none), nothing over the void.
 fn shadow_caster(local: vec2<f32>, l: u32) -> f32 {
     if (on_sketch(local, 0.0)) {
-        return atlas_bilinear((local + frame.atlas.offset) * frame.atlas.inv_spacing, l);
+        let ground = atlas_bilinear((local + frame.atlas.offset) * frame.atlas.inv_spacing, l);
+        return max(ground, frame.atlas.water_m);
     }
     switch frame.shading.outside {
         case 1u: { return frame.shading.plain_m; }
-        case 2u: { return SEA_LEVEL; }
+        case 2u: { return frame.atlas.water_m; }
         default: { return -1.0e30; }
     }
 }
@@ -237,12 +244,13 @@ fn detail_visibility(local: vec2<f32>, footprint: f32) -> f32 {
     }
     let grow = pow(t_end / t, 1.0 / f32(NEAR_STEPS));
     let caster = atlas_bilinear((local + frame.atlas.offset) * frame.atlas.inv_spacing, 0u);
-    let z0 = caster + surface_octaves(local, fine).x;
+    let z0 = max(caster + surface_octaves(local, fine).x, frame.atlas.water_m);
     var seen = 1.0;
     for (var i = 0; i < NEAR_STEPS; i++) {
         let p = local + sun.xy * t;
-        let under = atlas_bilinear((p + frame.atlas.offset) * frame.atlas.inv_spacing, 0u)
+        let ground = atlas_bilinear((p + frame.atlas.offset) * frame.atlas.inv_spacing, 0u)
             + surface_octaves(p, max(fine, 0.5 * t)).x;
+        let under = max(ground, frame.atlas.water_m);
         seen = min(seen, clamp(0.5 + (z0 + sun.z * t - under) / (0.03 * t), 0.0, 1.0));
         t *= grow;
     }
@@ -291,14 +299,15 @@ fn sun_visibility(local: vec3<f32>, footprint: f32) -> f32 {
 
 // The lit colour of ground at `local` with normal `n`, seen from `to_eye` (distance `dist`):
 // sunlight at the ground's height, shadowed, and the sky's light by how much of the sky the
-// ground faces. Below sea level, water: its body lit alike, and the sky it reflects (Schlick).
+// ground faces. On the water's surface (`sketch.water_level_m`), water: its body lit alike, and
+// the sky it reflects (Schlick).
 fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32> {
-    let sun_light = sun_at(max(local.z, SEA_LEVEL));
-    if (local.z < SEA_LEVEL) {
+    let sun_light = sun_at(local.z);
+    if (on_water(local.z)) {
         let up = vec3<f32>(0.0, 0.0, 1.0);
         let cos_v = clamp(to_eye.z / dist, 0.0, 1.0);
         let fresnel = 0.02 + 0.98 * pow(1.0 - cos_v, 5.0);
-        let reflected = sky_colour(SEA_LEVEL, reflect(-to_eye / dist, up));
+        let reflected = sky_colour(local.z, reflect(-to_eye / dist, up));
         let body = vec3<f32>(0.015, 0.045, 0.06) * (sun_light * max(frame.shading.sun.z, 0.0) + frame.shading.sky_light);
         return mix(body, reflected, fresnel);
     }
@@ -317,7 +326,8 @@ fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32
 // where it is seen, 0 for sky, for the sketch's own rectangle and with `sketch.outside = "void"`.
 fn beyond(eye: vec3<f32>, dir: vec3<f32>) -> vec4<f32> {
     let kind = frame.shading.outside;
-    let level = select(frame.shading.plain_m, SEA_LEVEL, kind == 2u);
+    // A plain below the water's surface is under water.
+    let level = select(max(frame.shading.plain_m, frame.atlas.water_m), frame.atlas.water_m, kind == 2u);
     if (kind == 0u || dir.z >= 0.0 || eye.z <= level) {
         return vec4<f32>(0.0);
     }
@@ -326,8 +336,8 @@ fn beyond(eye: vec3<f32>, dir: vec3<f32>) -> vec4<f32> {
     if (on_sketch(p.xy, 0.0)) {
         return vec4<f32>(0.0);
     }
-    // Just under sea level the shading draws water.
-    let ground = vec3<f32>(p.xy, select(level, SEA_LEVEL - 0.01, kind == 2u));
+    // At the water's height the shading draws water.
+    let ground = vec3<f32>(p.xy, level);
     let to_eye = eye - ground;
     return vec4<f32>(aerial(lit(ground, vec3<f32>(0.0, 0.0, 1.0), to_eye, t), to_eye, t), 1.0);
 }

@@ -23,13 +23,17 @@ fn surface_octaves(p: vec2<f32>, footprint: f32) -> vec3<f32> {
     return sum;
 }
 
-// The terrain function at `p`.
+// The terrain function at `p`: the ground, or the water's flat surface over it.
 fn surface_height(p: vec2<f32>, footprint: f32) -> f32 {
-    return atlas_height(p, footprint) + surface_octaves(p, footprint).x;
+    return max(atlas_height(p, footprint) + surface_octaves(p, footprint).x, frame.atlas.water_m);
 }
 
-// Its gradient: the octaves' analytically, the sketch's by central differences of the bicubic.
+// Its gradient: the octaves' analytically, the sketch's by central differences of the bicubic;
+// level on the water.
 fn surface_gradient(p: vec2<f32>, footprint: f32) -> vec2<f32> {
+    if (surface_height(p, footprint) <= frame.atlas.water_m) {
+        return vec2<f32>(0.0);
+    }
     let e = max(footprint, 0.05 * frame.atlas.d_atlas);
     let sx = atlas_height(p + vec2<f32>(e, 0.0), footprint) - atlas_height(p - vec2<f32>(e, 0.0), footprint);
     let sy = atlas_height(p + vec2<f32>(0.0, e), footprint) - atlas_height(p - vec2<f32>(0.0, e), footprint);

@@ -95,7 +95,8 @@ pub struct AtlasUniforms {
     pub levels: u32,
     /// The sketch's highest height: a shadow ray above it hits nothing.
     pub max_m: f32,
-    pub pad: u32,
+    /// The water's surface: the terrain function is never below it.
+    pub water_m: f32,
 }
 
 /// The procedural octaves.
@@ -245,7 +246,7 @@ impl FrameUniforms {
             blocks: f.block,
             march: MarchUniforms {
                 lo: (f.atlas.min_m as f64 - f.detail.reach_m()) as f32,
-                hi: (f.atlas.max_m as f64 + f.detail.reach_m()) as f32,
+                hi: (f.atlas.max_m as f64 + f.detail.reach_m()).max(f.atlas.water_m as f64) as f32,
                 step: f.step_factor,
                 pad: 0.0,
             },
@@ -330,8 +331,8 @@ impl AtlasUniforms {
             inv_spacing: [(1.0 / atlas.dx) as f32, (1.0 / atlas.dy) as f32],
             d_atlas: atlas.d_atlas() as f32,
             levels: atlas.levels.len().min(MAX_LEVELS) as u32,
-            max_m: atlas.max_m,
-            pad: 0,
+            max_m: atlas.max_m.max(atlas.water_m),
+            water_m: atlas.water_m,
         }
     }
 }

@@ -192,7 +192,7 @@ pub fn vertex_cpu(
             z += oct.weight * g * octave_local(oct, p);
         }
     }
-    [p.x, p.y, z, o]
+    [p.x, p.y, z.max(f.atlas.water_m), o]
 }
 
 impl WarpZoomPass {

@@ -21,6 +21,12 @@ pub fn scene_load_options(scene: &Scene) -> LoadOptions {
 
 /// The scene's sketch atlas, from its file or synthetic generator.
 pub fn load_atlas(scene: &Scene) -> Result<Atlas> {
+    let mut atlas = load_sketch(scene)?;
+    atlas.water_m = scene.sketch.water_level_m as f32;
+    Ok(atlas)
+}
+
+fn load_sketch(scene: &Scene) -> Result<Atlas> {
     let opts = scene_load_options(scene);
     match (&scene.sketch.path, &scene.sketch.synthetic) {
         (Some(p), _) => Atlas::load(&scene.resolve(p), &opts),

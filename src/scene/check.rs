@@ -79,6 +79,7 @@ impl Scene {
         open_range("light.haze_visibility_km", l.haze_visibility_km, 0.0, 1e6)?;
         open_range("light.haze_height_m", l.haze_height_m, 0.0, 1e6)?;
         within("light.exposure_ev", l.exposure_ev, -16.0, 16.0)?;
+        within("sketch.water_level_m", self.sketch.water_level_m, -1e6, 1e6)?;
         let i = &self.importance;
         open_range("importance.error_px", i.error_px, 0.0, 1e4)?;
         open_range(

@@ -58,6 +58,9 @@ pub struct SketchSection {
     /// The world beyond the sketch's edges.
     #[serde(default = "default_outside")]
     pub outside: Outside,
+    /// Ground below this height lies under flat water.
+    #[serde(default)]
+    pub water_level_m: f64,
 }
 
 fn default_outside() -> Outside {

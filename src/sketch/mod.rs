@@ -77,6 +77,8 @@ pub struct Atlas {
     pub max_m: f32,
     /// The mean height of the edge nodes: where a plain beyond the sketch lies.
     pub edge_mean_m: f32,
+    /// The water's surface: ground below it lies under flat water (`sketch.water_level_m`).
+    pub water_m: f32,
     /// `levels[0]` is the atlas itself.
     pub levels: Vec<Level>,
     /// Where the file put its south-west node, in the file's coordinate system (not the world's:
@@ -339,6 +341,7 @@ impl Atlas {
             min_m,
             max_m,
             edge_mean_m,
+            water_m: 0.0,
             levels: build_pyramid(base),
             georef: raw.georef,
         })
