@@ -41,6 +41,16 @@ fn render(scene: &Scene, view: View) -> (Renderer, terrain::render::Frame) {
     (r, frame)
 }
 
+/// A frame of `scene` in `mode` with its pixels' world positions (x, y, z, 1 on ground / 0 on
+/// sky, f64, row-major), and the renderer that drew it.
+fn render_with_positions(scene: &Scene, mode: Mode) -> (Renderer, Vec<u8>, Vec<f64>) {
+    let mut r = Renderer::with_positions(scene, mode, View::Shaded, true).expect("renderer");
+    let camera = terrain::scene::camera_of(scene, &r.atlas).unwrap();
+    let frame = r.render(&camera).expect("frame");
+    let world = terrain::render::world_positions(&r.read_positions(&camera).unwrap(), &camera);
+    (r, frame.rgba, world)
+}
+
 #[test]
 fn gpu_warp_and_zoom_matches_its_cpu_twin() {
     for (name, budget) in [
@@ -343,13 +353,8 @@ fn a_low_sun_behind_a_cliff_shadows_the_plain_at_its_foot() {
     };
     for mode in [Mode::Warped, Mode::Geomipmap, Mode::Reference] {
         let shot = |shadows: bool| {
-            let s = scene(shadows);
-            let mut r = Renderer::with_positions(&s, mode, View::Shaded, true).unwrap();
-            let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
-            let frame = r.render(&camera).unwrap();
-            let world =
-                terrain::render::world_positions(&r.read_positions(&camera).unwrap(), &camera);
-            (frame.rgba, world)
+            let (_, rgba, world) = render_with_positions(&scene(shadows), mode);
+            (rgba, world)
         };
         let (lit_rgba, lit_pos) = shot(false);
         let (shaded_rgba, shaded_pos) = shot(true);
@@ -385,16 +390,13 @@ fn the_world_beyond_the_sketch_is_drawn_alike_and_counted_as_sky() {
     let corner = |mode: Mode, outside: &str| {
         let mut s = bundled("hills-high", 64, 64);
         s.sketch.outside = terrain::scene::Outside::parse(outside).unwrap();
-        let mut r = Renderer::with_positions(&s, mode, View::Shaded, true).unwrap();
-        let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
-        let frame = r.render(&camera).unwrap();
-        let world = terrain::render::world_positions(&r.read_positions(&camera).unwrap(), &camera);
+        let (_, rgba, world) = render_with_positions(&s, mode);
         // The top-left pixel lies beyond the sketch in this view.
         assert_eq!(
             world[3], 0.0,
             "{mode:?} {outside}: the corner is not sky in the positions"
         );
-        [frame.rgba[0], frame.rgba[1], frame.rgba[2]]
+        [rgba[0], rgba[1], rgba[2]]
     };
     let void = corner(Mode::Warped, "void");
     for outside in ["plain", "ocean"] {
@@ -474,17 +476,14 @@ fn a_low_sun_leaves_the_lee_of_a_mountain_under_half_the_lit_side() {
     let s = Scene::parse(text, manifest_dir()).unwrap();
     let mut ratios = Vec::new();
     for mode in [Mode::Warped, Mode::Geomipmap, Mode::Reference] {
-        let mut r = Renderer::with_positions(&s, mode, View::Shaded, true).unwrap();
-        let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
-        let frame = r.render(&camera).unwrap();
-        let world = terrain::render::world_positions(&r.read_positions(&camera).unwrap(), &camera);
+        let (_, rgba, world) = render_with_positions(&s, mode);
         // The flanks: more than 300 m either side of the summit, above 200 m.
         let flank = |west: bool| {
             let ground = world.chunks_exact(4).map(move |q| {
                 let side = if west { q[0] < 3540.0 } else { q[0] > 4140.0 };
                 q[3] > 0.5 && q[2] > 200.0 && side
             });
-            terrain::eval::metrics::terrain_luminance(&frame.rgba, ground)
+            terrain::eval::metrics::terrain_luminance(&rgba, ground)
                 .expect("the flank in view")
                 .0
         };
@@ -531,14 +530,9 @@ fn the_detail_shadows_itself_alike_in_mesh_and_reference() {
     let mut shares = Vec::new();
     for mode in [Mode::Warped, Mode::Reference] {
         let mean = |detail_shadows: bool| {
-            let s = scene(detail_shadows);
-            let mut r = Renderer::with_positions(&s, mode, View::Shaded, true).unwrap();
-            let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
-            let frame = r.render(&camera).unwrap();
-            let world =
-                terrain::render::world_positions(&r.read_positions(&camera).unwrap(), &camera);
+            let (_, rgba, world) = render_with_positions(&scene(detail_shadows), mode);
             let ground = world.chunks_exact(4).map(|q| q[3] > 0.5);
-            terrain::eval::metrics::terrain_luminance(&frame.rgba, ground)
+            terrain::eval::metrics::terrain_luminance(&rgba, ground)
                 .expect("ground in view")
                 .0
         };
@@ -637,14 +631,7 @@ fn water_floods_the_ground_below_its_level_alike_in_mesh_and_reference() {
         gain = 0.45
     "#;
     let s = Scene::parse(text, manifest_dir()).unwrap();
-    let shot = |mode: Mode| {
-        let mut r = Renderer::with_positions(&s, mode, View::Shaded, true).unwrap();
-        let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
-        let frame = r.render(&camera).unwrap();
-        let world = terrain::render::world_positions(&r.read_positions(&camera).unwrap(), &camera);
-        (r, frame.rgba, world)
-    };
-    let (r, mesh_rgba, mesh_pos) = shot(Mode::Warped);
+    let (r, mesh_rgba, mesh_pos) = render_with_positions(&s, Mode::Warped);
     // The vertices of this frame's mesh (the buffer is sized for the largest).
     let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
     let mesh = r.uniforms(&camera).mesh.mesh as usize;
@@ -654,7 +641,7 @@ fn water_floods_the_ground_below_its_level_alike_in_mesh_and_reference() {
         .fold(f32::INFINITY, f32::min);
     assert!(lowest >= 600.0, "a vertex at {lowest} m, under the water");
     drop(r);
-    let (_, ref_rgba, ref_pos) = shot(Mode::Reference);
+    let (_, ref_rgba, ref_pos) = render_with_positions(&s, Mode::Reference);
     let water = |pos: &[f64]| {
         pos.chunks_exact(4)
             .map(|q| q[3] > 0.5 && q[2] < 600.05)
