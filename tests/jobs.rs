@@ -328,7 +328,7 @@ fn bad_jobs_fail_alone_with_their_cause() {
         cause("missing-sketch", 0)
     );
     assert!(
-        cause("underground", 0).contains("below the ground"),
+        cause("underground", 0).contains("below the surface"),
         "{}",
         cause("underground", 0)
     );

@@ -57,7 +57,8 @@ pub fn light_of(scene: &Scene) -> crate::light::Light {
     )
 }
 
-/// The sketch's height under a world position, if the position is over the sketch.
+/// The surface's height under a world position, the sketch's or the water's over it, if the
+/// position is over the sketch.
 pub fn ground_under(atlas: &Atlas, p: DVec2) -> Option<f64> {
     let (lo, hi) = (atlas.origin, atlas.max_corner());
     if p.x < lo.x || p.y < lo.y || p.x > hi.x || p.y > hi.y {
@@ -65,7 +66,7 @@ pub fn ground_under(atlas: &Atlas, p: DVec2) -> Option<f64> {
     }
     let u = (p.x - atlas.origin.x) / atlas.dx;
     let v = (p.y - atlas.origin.y) / atlas.dy;
-    Some(atlas.sample_texel(u, v, 0.0) as f64)
+    Some((atlas.sample_texel(u, v, 0.0) as f64).max(atlas.water_m as f64))
 }
 
 /// The scene's detail parameters over `atlas`; unset octaves and amplitude follow the sketch
@@ -102,7 +103,7 @@ pub fn camera_of(scene: &Scene, atlas: &Atlas) -> Result<Camera> {
         && eye.z < ground
     {
         return Err(Error::Camera(format!(
-            "camera.position is {:.1} m below the ground ({ground:.1} m at {:.1}, {:.1})",
+            "camera.position is {:.1} m below the surface (ground or water: {ground:.1} m at {:.1}, {:.1})",
             ground - eye.z,
             eye.x,
             eye.y
