@@ -1,8 +1,8 @@
 // Surface shading shared by the mesh renderers and the reference ray marcher: the sky and the
 // aerial perspective from one single-scattering atmosphere (the twin of src/light.rs), surface
-// types from slope, height, aspect and curvature, sun and sky light, the sketch's shadow
-// (SHADOWS) and the detail's (DETAIL_SHADOWS), the world beyond the sketch, exposure and the tone map. Needs `frame` and the atlas;
-// turbulence needs the noise.
+// types from slope, height, aspect and curvature, water, sun and sky light, the sketch's shadow
+// (SHADOWS) and the detail's (DETAIL_SHADOWS), the world beyond the sketch, exposure and the
+// tone map. Needs `frame` and the atlas; turbulence needs the noise.
 #import atlas
 #ifdef NOISE
 #import noise
@@ -99,7 +99,8 @@ fn sky_length(eye_z: f32, dir: vec3<f32>) -> f32 {
     return min(to, FAR_M);
 }
 
-// The sky seen from height `eye_z` along `dir`, with the sun's disc (0.53°).
+// The sky seen from height `eye_z` along `dir`, with the sun's disc (about half a degree wide,
+// 40 times the sunlight's radiance: bright enough that the tone map clips it to white).
 fn sky_colour(eye_z: f32, dir: vec3<f32>) -> vec3<f32> {
     let len = sky_length(eye_z, dir);
     let air = scatter(eye_z, dir, len);
@@ -311,14 +312,15 @@ fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32
         let body = vec3<f32>(0.015, 0.045, 0.06) * (sun_light * max(frame.shading.sun.z, 0.0) + frame.shading.sky_light);
         return mix(body, reflected, fresnel);
     }
+    let footprint = dist * frame.camera.pixel_scale;
     var sun = max(dot(n, frame.shading.sun), 0.0);
 #ifdef SHADOWS
     if (sun > 0.0) {
-        sun *= sun_visibility(local, dist * frame.camera.pixel_scale);
+        sun *= sun_visibility(local, footprint);
     }
 #endif
     let light = sun_light * sun + frame.shading.sky_light * (0.5 + 0.5 * n.z);
-    return albedo(local, dist * frame.camera.pixel_scale) * light;
+    return albedo(local, footprint) * light;
 }
 
 // The world beyond the sketch seen along `dir` from `eye`: a plain at the sketch's mean edge
