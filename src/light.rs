@@ -258,6 +258,25 @@ pub fn sky_length(eye_z: f64, dir: DVec3) -> f64 {
     to.min(FAR_M)
 }
 
+/// The sun's azimuth (0 north, 90 east) and elevation, degrees, at `latitude_deg` on day
+/// `day_of_year` at local solar time `solar_time_h` (12 at solar noon): the declination by
+/// Cooper's formula, the hour angle 15° an hour from noon; no equation of time (the time is the
+/// sun's own) and no refraction.
+pub fn sun_position(latitude_deg: f64, day_of_year: u32, solar_time_h: f64) -> (f64, f64) {
+    let phi = latitude_deg.to_radians();
+    let delta = (23.44f64.to_radians())
+        * (std::f64::consts::TAU * (284.0 + day_of_year as f64) / 365.0).sin();
+    let h = (15.0 * (solar_time_h - 12.0)).to_radians();
+    let sin_el = phi.sin() * delta.sin() + phi.cos() * delta.cos() * h.cos();
+    let elevation = sin_el.clamp(-1.0, 1.0).asin();
+    let azimuth =
+        h.sin().atan2(h.cos() * phi.sin() - delta.tan() * phi.cos()) + std::f64::consts::PI;
+    (
+        azimuth.to_degrees().rem_euclid(360.0),
+        elevation.to_degrees(),
+    )
+}
+
 /// Kasten and Young's relative air mass at `elevation_deg` (1 at the zenith, 38 at the horizon).
 pub fn air_mass(elevation_deg: f64) -> f64 {
     let h = elevation_deg.max(0.0);
@@ -393,6 +412,29 @@ mod tests {
         assert!(bright.iter().all(|c| *c > 0.99 && *c <= 1.0), "{bright:?}");
         let lo = display([0.0; 3], 1.0);
         assert_eq!(lo, [0.0; 3]);
+    }
+
+    #[test]
+    fn the_sun_by_the_clock_rises_east_culminates_south_and_sets_west() {
+        // 45° N at the June solstice: noon at 90 − 45 + 23.44°, due south.
+        let (az, el) = sun_position(45.0, 172, 12.0);
+        assert!(
+            (el - 68.44).abs() < 0.05 && (az - 180.0).abs() < 1e-9,
+            "{az} {el}"
+        );
+        // The equinox at the equator: overhead at noon, rising due east at 6.
+        let (_, el) = sun_position(0.0, 80, 12.0);
+        assert!(el > 89.0, "{el}");
+        let (az, el) = sun_position(0.0, 80, 6.0);
+        assert!((az - 90.0).abs() < 1.0 && el.abs() < 1.0, "{az} {el}");
+        let (az, _) = sun_position(45.0, 172, 17.0);
+        assert!((225.0..315.0).contains(&az), "afternoon sun at {az}");
+        // Midnight at a pole in its winter: below the horizon, finite.
+        let (az, el) = sun_position(90.0, 355, 0.0);
+        assert!(el < 0.0 && az.is_finite());
+        // South of the sun's latitude, noon is due north.
+        let (az, _) = sun_position(-33.9, 172, 12.0);
+        assert!(az.abs() < 1e-9 || (az - 360.0).abs() < 1e-9, "{az}");
     }
 
     #[test]

@@ -48,9 +48,10 @@ fn load_sketch(scene: &Scene) -> Result<Atlas> {
 /// The scene's sun and air.
 pub fn light_of(scene: &Scene) -> crate::light::Light {
     let l = &scene.light;
+    let (azimuth_deg, elevation_deg) = l.sun_deg();
     crate::light::Light::new(
-        l.sun_azimuth_deg,
-        l.sun_elevation_deg,
+        azimuth_deg,
+        elevation_deg,
         l.haze_visibility_km,
         l.haze_height_m,
         l.exposure_ev,

@@ -74,8 +74,50 @@ impl Scene {
             1.0 + f64::EPSILON,
         )?;
         let l = &self.light;
-        finite_all("light.sun_azimuth_deg", &[l.sun_azimuth_deg])?;
-        within("light.sun_elevation_deg", l.sun_elevation_deg, -90.0, 90.0)?;
+        if let Some(az) = l.sun_azimuth_deg {
+            finite_all("light.sun_azimuth_deg", &[az])?;
+        }
+        if let Some(el) = l.sun_elevation_deg {
+            within("light.sun_elevation_deg", el, -90.0, 90.0)?;
+        }
+        let by_time = [
+            l.latitude_deg.is_some(),
+            l.day_of_year.is_some(),
+            l.solar_time_h.is_some(),
+        ];
+        if by_time.iter().any(|&b| b) {
+            if !by_time.iter().all(|&b| b) {
+                return Err(
+                    "light: the sun from the time needs latitude_deg, day_of_year and \
+                    solar_time_h together"
+                        .into(),
+                );
+            }
+            if l.sun_azimuth_deg.is_some() || l.sun_elevation_deg.is_some() {
+                return Err("light: give the sun's position (sun_azimuth_deg, \
+                    sun_elevation_deg) or its time (latitude_deg, day_of_year, solar_time_h), \
+                    not both"
+                    .into());
+            }
+            within(
+                "light.latitude_deg",
+                l.latitude_deg.unwrap_or(0.0),
+                -90.0,
+                90.0,
+            )?;
+            within(
+                "light.day_of_year",
+                l.day_of_year.unwrap_or(1) as f64,
+                1.0,
+                366.0,
+            )?;
+            within(
+                "light.solar_time_h",
+                l.solar_time_h.unwrap_or(0.0),
+                0.0,
+                24.0,
+            )?;
+        }
         open_range("light.haze_visibility_km", l.haze_visibility_km, 0.0, 1e6)?;
         open_range("light.haze_height_m", l.haze_height_m, 0.0, 1e6)?;
         within("light.exposure_ev", l.exposure_ev, -16.0, 16.0)?;

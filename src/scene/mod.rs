@@ -267,10 +267,15 @@ impl Default for ReferenceSection {
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LightSection {
-    /// Degrees clockwise from north: 0 north, 90 east.
-    pub sun_azimuth_deg: f64,
-    /// Degrees above the horizon; below 0 the sun has set.
-    pub sun_elevation_deg: f64,
+    /// Degrees clockwise from north: 0 north, 90 east (150 unless the time is given).
+    pub sun_azimuth_deg: Option<f64>,
+    /// Degrees above the horizon; below 0 the sun has set (35 unless the time is given).
+    pub sun_elevation_deg: Option<f64>,
+    /// The sun from the time instead: the place's latitude, the day of the year (1–366) and
+    /// the local solar time in hours (12 at solar noon).
+    pub latitude_deg: Option<f64>,
+    pub day_of_year: Option<u32>,
+    pub solar_time_h: Option<f64>,
     /// Meteorological visibility at sea level, km: the haze's density.
     pub haze_visibility_km: f64,
     /// Scale height of the haze, metres: how fast it thins with height.
@@ -281,11 +286,28 @@ pub struct LightSection {
 impl Default for LightSection {
     fn default() -> Self {
         LightSection {
-            sun_azimuth_deg: 150.0,
-            sun_elevation_deg: 35.0,
+            sun_azimuth_deg: None,
+            sun_elevation_deg: None,
+            latitude_deg: None,
+            day_of_year: None,
+            solar_time_h: None,
             haze_visibility_km: 100.0,
             haze_height_m: 1200.0,
             exposure_ev: 0.0,
+        }
+    }
+}
+
+impl LightSection {
+    /// The sun's azimuth and elevation, degrees: from the time where it is given (checked whole
+    /// by `Scene::check`), else the keys, else 150° and 35°.
+    pub fn sun_deg(&self) -> (f64, f64) {
+        match (self.latitude_deg, self.day_of_year, self.solar_time_h) {
+            (Some(lat), Some(day), Some(time)) => crate::light::sun_position(lat, day, time),
+            _ => (
+                self.sun_azimuth_deg.unwrap_or(150.0),
+                self.sun_elevation_deg.unwrap_or(35.0),
+            ),
         }
     }
 }
@@ -413,6 +435,38 @@ mod tests {
                 .contains("camera.fov_y_deg")
         );
         assert!(err("[path]\nkeys = [{ position = [0.0, 0.0, 1.0] }]\n").contains("path.keys"));
+        assert!(err("[render]\nmsaa = \"8x\"\n").contains("8x"));
+        assert!(err("[light]\nexposure_ev = 40.0\n").contains("light.exposure_ev"));
+        let flooded = MIN.replace("gaussian\"\n", "gaussian\"\nwater_level_m = inf\n");
+        let e = Scene::parse(&flooded, PathBuf::new())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("sketch.water_level_m"), "{e}");
+    }
+
+    #[test]
+    fn the_sun_comes_from_its_position_or_from_the_time_not_both() {
+        let light = |extra: &str| Scene::parse(&format!("{MIN}[light]\n{extra}"), PathBuf::new());
+        let by_default = light("").unwrap().light.sun_deg();
+        assert_eq!(by_default, (150.0, 35.0));
+        let noon = light("latitude_deg = 45.0\nday_of_year = 172\nsolar_time_h = 12.0\n")
+            .unwrap()
+            .light
+            .sun_deg();
+        assert!(
+            (noon.0 - 180.0).abs() < 1e-9 && (noon.1 - 68.44).abs() < 0.05,
+            "{noon:?}"
+        );
+        let part = light("latitude_deg = 45.0\nsolar_time_h = 12.0\n").unwrap_err();
+        assert!(part.to_string().contains("day_of_year"), "{part}");
+        let both = light(
+            "sun_elevation_deg = 5.0\nlatitude_deg = 45.0\nday_of_year = 1\nsolar_time_h = 9.0\n",
+        )
+        .unwrap_err();
+        assert!(both.to_string().contains("not both"), "{both}");
+        let late =
+            light("latitude_deg = 45.0\nday_of_year = 1\nsolar_time_h = 25.0\n").unwrap_err();
+        assert!(late.to_string().contains("light.solar_time_h"), "{late}");
     }
 
     #[test]
