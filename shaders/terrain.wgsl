@@ -87,12 +87,34 @@ fn sky_fs(in: SkyOut) -> FragOut {
     return frag_out(mix(sky_colour(frame.camera.eye.z, dir), outside.rgb, outside.w), 0.0);
 }
 
+// The aerial perspective travels with the vertex (`inscatter`, `through`): the air between the
+// eye and the ground varies smoothly over a triangle, and a vertex is evaluated once where a
+// pixel is shaded once for every triangle that covers it (1.5 of jacksboro's 4.1 ms terrain pass
+// at 512² on an H100 when each pixel integrated it).
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) local: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) split: f32,
     @location(3) grid: vec2<f32>,
+    @location(4) inscatter: vec3<f32>,
+    @location(5) through: vec3<f32>,
+}
+
+// A vertex at `p` (frame metres) with its clip position and the air between it and the eye.
+fn vertex_out(p: vec3<f32>, n: vec3<f32>, split: f32, grid: vec2<f32>) -> VsOut {
+    let to_eye = frame.camera.eye - p;
+    let dist = max(length(to_eye), 1e-3);
+    let air = scatter(frame.camera.eye.z, -to_eye / dist, dist);
+    var out: VsOut;
+    out.clip = frame.camera.view_proj * vec4<f32>(p, 1.0);
+    out.local = p;
+    out.normal = n;
+    out.split = split;
+    out.grid = grid;
+    out.inscatter = air.inscatter;
+    out.through = air.through;
+    return out;
 }
 
 #ifdef GEOMIPMAP
@@ -171,25 +193,14 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
         n = normalize(mix(n, level_normal(g, s2), m));
     }
     let local_pos = p.xyz + vec3<f32>(frame.mesh.mesh_offset, 0.0);
-    var out: VsOut;
-    out.clip = frame.camera.view_proj * vec4<f32>(local_pos, 1.0);
-    out.local = local_pos;
-    out.normal = n;
-    out.split = p.w;
-    out.grid = vec2<f32>(g);
-    return out;
+    return vertex_out(local_pos, n, p.w, vec2<f32>(g));
 }
 #else
 @vertex
 fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     let p = detailed[vi];
-    var out: VsOut;
-    out.clip = frame.camera.view_proj * vec4<f32>(p.xyz, 1.0);
-    out.local = p.xyz;
-    out.normal = vertex_normal(vi);
-    out.split = p.w;
-    out.grid = vec2<f32>(f32(vi % frame.mesh.mesh), f32(vi / frame.mesh.mesh));
-    return out;
+    let grid = vec2<f32>(f32(vi % frame.mesh.mesh), f32(vi / frame.mesh.mesh));
+    return vertex_out(p.xyz, vertex_normal(vi), p.w, grid);
 }
 #endif
 
@@ -258,5 +269,5 @@ fn terrain_fs(in: VsOut) -> FragOut {
     let t = clamp(log2(v / frame.mesh.importance_max) / 12.0 + 1.0, 0.0, 1.0);
     colour = mix(vec3<f32>(0.27, 0.0, 0.33), vec3<f32>(0.99, 0.9, 0.14), t);
 #endif
-    return frag_out(aerial(colour, to_eye, dist), in.clip.z);
+    return frag_out(colour * in.through + in.inscatter, in.clip.z);
 }
