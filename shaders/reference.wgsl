@@ -75,7 +75,12 @@ fn trace(ndc: vec2<f32>, shade: bool) -> Ray {
     // A ray entering the box through a side wall already under the surface comes from beyond the
     // sketch, under the plain or the water there: it met that first, as the mesh modes' sky pass
     // draws it.
-    if (hit && range.x > 0.0 && t == range.x && beyond(eye, dir).w > 0.0) {
+    let entered_under = hit && range.x > 0.0 && t == range.x;
+    var outside = vec4<f32>(0.0);
+    if ((!hit && shade) || entered_under) {
+        outside = beyond(eye, dir);
+    }
+    if (entered_under && outside.w > 0.0) {
         hit = false;
     }
     var ray: Ray;
@@ -83,7 +88,6 @@ fn trace(ndc: vec2<f32>, shade: bool) -> Ray {
         return ray;
     }
     if (!hit) {
-        let outside = beyond(eye, dir);
         ray.colour = display(mix(sky_colour(eye.z, dir), outside.rgb, outside.w));
         ray.hit = vec4<f32>(0.0);
         return ray;

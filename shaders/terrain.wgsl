@@ -141,6 +141,10 @@ fn grid_index(g: vec2<u32>) -> u32 {
 // `g` is the finest level's; a coarse block that took it would point-sample a normal field far
 // finer than its cells, and its shading would alias from afar.
 fn level_normal(g: vec2<u32>, s: u32) -> vec3<f32> {
+#ifdef PIXEL_NORMALS
+    // Shading takes the terrain function's normal per pixel; the mesh's is not read.
+    return vertex_normal(0u);
+#else
     if (s == 1u) {
         return vertex_normal(grid_index(g));
     }
@@ -150,6 +154,7 @@ fn level_normal(g: vec2<u32>, s: u32) -> vec3<f32> {
     let north = detailed[grid_index(min(g + vec2<u32>(0u, s), hi))].xyz;
     let south = detailed[grid_index(g - min(vec2<u32>(0u, s), g))].xyz;
     return normalize(cross(east - west, north - south));
+#endif
 }
 
 // Index = block slot << bits | (j·(cells+1) + i), cells and bits from frame.blocks. Vertices that

@@ -165,9 +165,8 @@ impl Light {
                 inscatter[c] += scattered * (-tau).exp() * sun[c] * dt;
             }
         }
-        let (air_t, haze_t) = (air_along(eye_z, eye_z + dir.z * len, len, hr), {
-            air_along(eye_z, eye_z + dir.z * len, len, hm)
-        });
+        let z1 = eye_z + dir.z * len;
+        let (air_t, haze_t) = (air_along(eye_z, z1, len, hr), air_along(eye_z, z1, len, hm));
         let through = [0, 1, 2].map(|c| (-(RAYLEIGH[c] * air_t + self.haze_per_m * haze_t)).exp());
         (inscatter.map(|v| v * self.daylight), through)
     }
