@@ -28,9 +28,7 @@ fn vertex_normal(i: u32) -> vec3<f32> {
 #ifdef BUMP
 #import noise
 #endif
-#ifdef PIXEL_NORMALS
 #import surface
-#endif
 #import shading
 
 // The colour, and with POSITIONS each pixel's depth (for recovering its ground position on the
@@ -101,10 +99,12 @@ struct VsOut {
     @location(3) grid: vec2<f32>,
     @location(4) inscatter: vec3<f32>,
     @location(5) through: vec3<f32>,
+    @location(6) spacing: f32,
 }
 
-// A vertex at `p` (frame metres) with its clip position and the air between it and the eye.
-fn vertex_out(p: vec3<f32>, n: vec3<f32>, split: f32, grid: vec2<f32>) -> VsOut {
+// A vertex at `p` (frame metres) with its clip position and the air between it and the eye;
+// `spacing` is the distance at which the mesh samples the sketch there (metres).
+fn vertex_out(p: vec3<f32>, n: vec3<f32>, split: f32, grid: vec2<f32>, spacing: f32) -> VsOut {
     let to_eye = frame.camera.eye - p;
     let dist = max(length(to_eye), 1e-3);
     let air = scatter(frame.camera.eye.z, -to_eye / dist, dist);
@@ -116,7 +116,14 @@ fn vertex_out(p: vec3<f32>, n: vec3<f32>, split: f32, grid: vec2<f32>) -> VsOut 
     out.grid = grid;
     out.inscatter = air.inscatter;
     out.through = air.through;
+    out.spacing = spacing;
     return out;
+}
+
+// The spacing at which the geometry image sampled the sketch, from its split octave
+// (o = log2(d_atlas / spacing) − bias in warp_zoom.wgsl).
+fn mesh_spacing(split: f32) -> f32 {
+    return frame.atlas.d_atlas * exp2(-(split + frame.detail.bias));
 }
 
 #ifdef GEOMIPMAP
@@ -182,6 +189,7 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     let s = 1u << level;
     let s2 = 2u << level;
     var n = level_normal(g, s);
+    var morph = 0.0;
     if (level + 1u < frame.blocks.levels && (g.x % s2 != 0u || g.y % s2 != 0u)) {
         let d = vec2<u32>(select(0u, s, g.x % s2 != 0u), select(0u, s, g.y % s2 != 0u));
         let a = detailed[grid_index(g - d)];
@@ -198,16 +206,17 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
         }
         p.z = mix(p.z, 0.5 * (a.z + c.z), m);
         n = normalize(mix(n, level_normal(g, s2), m));
+        morph = m;
     }
     let local_pos = p.xyz + vec3<f32>(frame.mesh.mesh_offset, 0.0);
-    return vertex_out(local_pos, n, p.w, vec2<f32>(g));
+    return vertex_out(local_pos, n, p.w, vec2<f32>(g), mesh_spacing(p.w) * f32(s) * (1.0 + morph));
 }
 #else
 @vertex
 fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     let p = detailed[vi];
     let grid = vec2<f32>(f32(vi % frame.mesh.mesh), f32(vi / frame.mesh.mesh));
-    return vertex_out(p.xyz, vertex_normal(vi), p.w, grid);
+    return vertex_out(p.xyz, vertex_normal(vi), p.w, grid, mesh_spacing(p.w));
 }
 #endif
 
@@ -224,25 +233,42 @@ fn depth_fs(in: VsOut) -> @location(1) vec4<f32> {
 }
 #endif
 
-@fragment
-fn terrain_fs(in: VsOut) -> FragOut {
-    // The sketch ends at its edge, as the reference's does: the warped region (a square on a
-    // quantised lattice) and the baked grid (the square enclosing the sketch) may reach past it.
-    if (!on_sketch(in.local.xy, 1e-3 * frame.atlas.d_atlas)) {
-        discard;
-    }
-    let to_eye = frame.camera.eye - in.local;
-    let dist = max(length(to_eye), 1e-3);
+// The normal the pixel is shaded with. With PIXEL_NORMALS: the terrain function's at the pixel's
+// footprint, as the reference shades; the mesh only places the surface, and a mesh that slides
+// between frames leaves the light alone. Otherwise the mesh's own normal plus bump detail where
+// the mesh samples the sketch at its own cells or finer, and the terrain function's normal where
+// it samples the sketch at twice its cells or coarser (views from high up, far ground,
+// GeoMipMap's coarse levels), blended between. There the mesh's facets point-sample the
+// sketch's pyramid and miss its relief between the mesh's spacing and the pixel's footprint.
+// Measured on jacksboro-high at 256² against the reference: warped 38.2 dB with the facets, 46.7
+// with the facets plus that band of the sketch's gradient, 48.0 with the terrain function's
+// normal; GeoMipMap 33.7, 41.0, 42.2. It costs what PIXEL_NORMALS costs, on those pixels only:
+// the terrain pass at 512² on llvmpipe 7–36 % slower on jacksboro-high, 0–18 % on jacksboro.
+fn shading_normal(in: VsOut, footprint: f32) -> vec3<f32> {
 #ifdef PIXEL_NORMALS
-    // The terrain function's normal at the pixel's footprint, as the reference shades: the mesh
-    // only places the surface, and a mesh that slides between frames leaves the light alone.
-    let n = normalize(vec3<f32>(-surface_gradient(in.local.xy, dist * frame.camera.pixel_scale), 1.0));
+    return normalize(vec3<f32>(-surface_gradient(in.local.xy, footprint), 1.0));
 #else
-    var n = normalize(in.normal);
+    let coarse = select(clamp(log2(in.spacing / frame.atlas.d_atlas), 0.0, 1.0), 0.0, on_water(in.local.z));
+    if (coarse >= 1.0) {
+        return normalize(vec3<f32>(-land_gradient(in.local.xy, footprint), 1.0));
+    }
+    let n = mesh_normal(in, footprint);
+    if (coarse <= 0.0) {
+        return n;
+    }
+    return normalize(mix(n, normalize(vec3<f32>(-land_gradient(in.local.xy, footprint), 1.0)), coarse));
+#endif
+}
+
+#ifdef PIXEL_NORMALS
+#else
+// The mesh's interpolated normal, with BUMP the octaves from the vertex's split octave up to the
+// pixel's own octave added as bump detail; the geometry already holds g_k of each, octaves past
+// the pixel octave are never evaluated.
+fn mesh_normal(in: VsOut, footprint: f32) -> vec3<f32> {
+    let n = normalize(in.normal);
 #ifdef BUMP
-    // Bump detail: octaves from the vertex's split octave up to the pixel's own octave; the
-    // geometry already holds g_k of each, octaves past the pixel octave are never evaluated.
-    let o_px = log2(frame.atlas.d_atlas / max(dist * frame.camera.pixel_scale, 1e-6));
+    let o_px = log2(frame.atlas.d_atlas / max(footprint, 1e-6));
     let last = min(frame.detail.octaves, u32(max(ceil(o_px), 0.0)));
     var grad = vec2<f32>(0.0);
     for (var k = 1u; k <= last; k++) {
@@ -253,9 +279,23 @@ fn terrain_fs(in: VsOut) -> FragOut {
             grad += frame.detail.octave[k - 1u].weight * share * octave_local(frame.detail.octave[k - 1u], in.local.xy).yz;
         }
     }
-    n = normalize(vec3<f32>(n.xy / max(n.z, 0.05) - grad, 1.0));
+    return normalize(vec3<f32>(n.xy / max(n.z, 0.05) - grad, 1.0));
+#else
+    return n;
 #endif
+}
 #endif
+
+@fragment
+fn terrain_fs(in: VsOut) -> FragOut {
+    // The sketch ends at its edge, as the reference's does: the warped region (a square on a
+    // quantised lattice) and the baked grid (the square enclosing the sketch) may reach past it.
+    if (!on_sketch(in.local.xy, 1e-3 * frame.atlas.d_atlas)) {
+        discard;
+    }
+    let to_eye = frame.camera.eye - in.local;
+    let dist = max(length(to_eye), 1e-3);
+    let n = shading_normal(in, dist * frame.camera.pixel_scale);
     var colour = lit(in.local, n, to_eye, dist);
     if (frame.camera.view == VIEW_WIREFRAME) {
         // Wireframe: the quad mesh's grid lines over the shaded terrain.

@@ -28,14 +28,16 @@ fn surface_height(p: vec2<f32>, footprint: f32) -> f32 {
     return max(atlas_height(p, footprint) + surface_octaves(p, footprint).x, frame.atlas.water_m);
 }
 
-// Its gradient: the octaves' analytically, the sketch's by central differences of the bicubic;
-// level on the water.
+// Its gradient; level on the water.
 fn surface_gradient(p: vec2<f32>, footprint: f32) -> vec2<f32> {
     if (surface_height(p, footprint) <= frame.atlas.water_m) {
         return vec2<f32>(0.0);
     }
-    let e = max(footprint, 0.05 * frame.atlas.d_atlas);
-    let sx = atlas_height(p + vec2<f32>(e, 0.0), footprint) - atlas_height(p - vec2<f32>(e, 0.0), footprint);
-    let sy = atlas_height(p + vec2<f32>(0.0, e), footprint) - atlas_height(p - vec2<f32>(0.0, e), footprint);
-    return vec2<f32>(sx, sy) / (2.0 * e) + surface_octaves(p, footprint).yz;
+    return land_gradient(p, footprint);
+}
+
+// The ground's gradient (no water): the octaves' analytically, the sketch's by central
+// differences of the bicubic.
+fn land_gradient(p: vec2<f32>, footprint: f32) -> vec2<f32> {
+    return sketch_gradient(p, footprint) + surface_octaves(p, footprint).yz;
 }
