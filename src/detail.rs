@@ -78,7 +78,7 @@ impl Detail {
     fn lattice_scale(&self, k: u32) -> f64 {
         self.frequency(k) * LATTICE_PER_CYCLE
     }
-    fn octave_seed(&self, k: u32) -> u32 {
+    pub fn octave_seed(&self, k: u32) -> u32 {
         hash(self.seed ^ hash(k))
     }
 

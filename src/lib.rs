@@ -20,6 +20,7 @@ pub mod gpu;
 pub mod light;
 pub mod lod;
 pub mod names;
+pub mod planet;
 pub mod render;
 pub mod scene;
 pub mod sketch;
