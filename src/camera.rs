@@ -18,9 +18,27 @@ pub struct Camera {
     pub width: u32,
     pub height: u32,
     pub far: f64,
+    /// The near plane, metres. With reversed-Z and an infinite far plane depth precision does
+    /// not suffer from a small one on an adapter with a 0..1 clip range; where the driver maps
+    /// depth through −1..1 (wgpu's GL backend on llvmpipe) `0.5 + 0.5·near/w` rounds to 0.5 for
+    /// `w` beyond about 10⁶ near planes, so a planet's camera moves it out with its height.
+    pub near: f64,
+    /// A planet's camera: where it stands. Its `eye` and directions are then in the nadir's
+    /// tangent frame (x east, y north, z up), from the sphere's point under it.
+    pub geo: Option<Geo>,
+}
+
+/// Where a planet's camera stands: the latitude and longitude of its nadir (radians, f64).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Geo {
+    pub lat: f64,
+    pub lon: f64,
 }
 
 /// A plane `n·p + d ≥ 0` inside; `n` is a unit vector, so the left side is a distance in metres.
+/// The near plane of a planar camera, metres.
+pub const NEAR_M: f64 = 0.05;
+
 #[derive(Clone, Copy, Debug)]
 pub struct Plane {
     pub n: DVec3,
@@ -80,6 +98,8 @@ impl Camera {
             width,
             height,
             far,
+            near: NEAR_M,
+            geo: None,
         })
     }
 

@@ -115,7 +115,25 @@ impl Renderer {
             positions,
             samples: ctx.samples(scene.render.msaa),
         };
+        let planet = scene.planet().is_some();
+        if planet != (mode == Mode::Clipmaps) && mode != Mode::Reference {
+            return Err(crate::Error::value(
+                "render.mode",
+                if planet {
+                    format!("a planet scene draws with clipmaps, not {mode}")
+                } else {
+                    "clipmaps draws planet scenes (a [planet] section or sketch.synthetic = \"planet\")".to_string()
+                },
+            ));
+        }
+        if planet && mode == Mode::Reference {
+            return Err(crate::Error::value(
+                "render.mode",
+                "the reference does not ray-march planets yet: render with clipmaps",
+            ));
+        }
         let lod: Box<dyn Lod> = match mode {
+            Mode::Clipmaps => Box::new(crate::lod::clipmaps::Clipmaps::new(&shared)?),
             Mode::Warped => Box::new(Warped::new(&shared)?),
             Mode::Geomipmap | Mode::Bruteforce => Box::new(Baselines::new(&shared, mode)?),
             Mode::Reference => Box::new(Reference::new(&shared)?),

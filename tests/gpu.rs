@@ -173,10 +173,9 @@ fn a_scene_moved_4000_km_renders_the_same() {
     let mut far = near.clone();
     let off = 4_000_000.0;
     far.sketch.origin_m = Some([off, off]);
-    for v in [&mut far.camera.position, &mut far.camera.look_at] {
-        v[0] += off;
-        v[1] += off;
-    }
+    let shift = glam::DVec3::new(off, off, 0.0);
+    let (eye, target) = (far.camera.eye(), far.camera.target());
+    far.camera.aim(eye + shift, target + shift);
     let (_, a) = render(&near, View::Shaded);
     let (_, b) = render(&far, View::Shaded);
     let db = psnr(&a.rgba, &b.rgba);

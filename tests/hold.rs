@@ -22,16 +22,15 @@ fn jacksboro() -> Scene {
 /// The scene's camera moved by `by` metres and aimed `turn_deg` to the right.
 fn moved(scene: &Scene, by: DVec3, turn_deg: f64) -> Scene {
     let mut s = scene.clone();
-    let eye = DVec3::from_array(s.camera.position) + by;
-    let ahead = DVec3::from_array(s.camera.look_at) - DVec3::from_array(s.camera.position);
+    let eye = s.camera.eye() + by;
+    let ahead = s.camera.target() - s.camera.eye();
     let (sin, cos) = (-turn_deg.to_radians()).sin_cos();
     let turned = DVec3::new(
         ahead.x * cos - ahead.y * sin,
         ahead.x * sin + ahead.y * cos,
         ahead.z,
     );
-    s.camera.position = eye.to_array();
-    s.camera.look_at = (eye + turned).to_array();
+    s.camera.aim(eye, eye + turned);
     s
 }
 

@@ -71,6 +71,7 @@ fn code() -> BTreeMap<String, BTreeSet<String>> {
         keys(serde_introspect::<ReferenceSection>()),
     );
     m.insert("light".into(), keys(serde_introspect::<LightSection>()));
+    m.insert("planet".into(), keys(serde_introspect::<PlanetSection>()));
     m.insert("path".into(), keys(serde_introspect::<PathSection>()));
     m.insert("path.keys".into(), keys(serde_introspect::<PathKey>()));
     m.insert("jobs".into(), keys(serde_introspect::<JobsFile>()));
@@ -128,6 +129,12 @@ fn documented_literal_defaults_are_the_codes() {
     )
     .unwrap();
     let scene = toml::Value::try_from(&scene).unwrap();
+    let planet = Scene::parse(
+        "[sketch]\nsynthetic = \"planet\"\n[planet]\n[camera]\nlat_deg = 0.0\nlon_deg = 0.0\naltitude_m = 10.0\n",
+        Default::default(),
+    )
+    .unwrap();
+    let planet = toml::Value::try_from(&planet).unwrap();
     let jobs: JobsFile = toml::from_str("scene = \"s.toml\"\n[random]\ncount = 1\n").unwrap();
     let jobs = toml::Value::try_from(&jobs).unwrap();
     let mut checked = 0;
@@ -147,6 +154,8 @@ fn documented_literal_defaults_are_the_codes() {
                 .unwrap();
             let root = if table.starts_with("jobs") {
                 &jobs
+            } else if table == "planet" {
+                &planet
             } else {
                 &scene
             };

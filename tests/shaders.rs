@@ -191,6 +191,66 @@ fn uniform_structs_match_the_wgsl_field_by_field() {
 }
 
 #[test]
+fn the_planet_block_matches_the_wgsl_field_by_field() {
+    use std::mem::size_of;
+    use terrain::gpu::clipmaps::*;
+    let module = validate("clipmaps", &["NOISE"]);
+    let structs = [
+        (
+            "Planet",
+            rust_layout!(PlanetUniforms {
+                east,
+                radius,
+                north,
+                eye_m,
+                up,
+                sin_lat,
+                sun,
+                cos_lat,
+                texel_origin,
+                texel_frac,
+                texels_per_rad,
+                phi_steps,
+                rings_per_level,
+                first_vertex,
+                vertex_count,
+                nadir,
+                inner_ring,
+                levels,
+                octaves,
+                min_spacing,
+                bias,
+                water_m,
+                pad0,
+                pad1,
+                pad2,
+                octave
+            }),
+            size_of::<PlanetUniforms>(),
+        ),
+        (
+            "SphereOctave",
+            rust_layout!(SphereOctaveUniforms {
+                lattice,
+                seed,
+                phase,
+                scale,
+                weight,
+                pad0,
+                pad1,
+                pad2
+            }),
+            size_of::<SphereOctaveUniforms>(),
+        ),
+    ];
+    for (name, rust, size) in structs {
+        let (wgsl, wgsl_size) = wgsl_layout(&module, name);
+        assert_eq!(rust, wgsl, "{name}: (field, offset, size) in Rust and WGSL");
+        assert_eq!(size as u32, wgsl_size, "{name}: size");
+    }
+}
+
+#[test]
 fn view_constants_in_wgsl_are_the_rust_enum() {
     use terrain::gpu::uniforms::View;
     let module = validate("terrain", &[]);

@@ -73,8 +73,14 @@ impl CameraPath {
         if let Some(p) = &scene.path {
             return CameraPath::new(p);
         }
-        let eye = DVec3::from(scene.camera.position);
-        let look = DVec3::from(scene.camera.look_at);
+        if scene.planet().is_some() {
+            return Err(Error::value(
+                "path",
+                "camera paths over a planet are not built yet: render single views",
+            ));
+        }
+        let eye = scene.camera.eye();
+        let look = scene.camera.target();
         let speed = 150.0;
         let heading = (look - eye).truncate().try_normalize().unwrap_or(DVec2::Y);
         let step = (heading * speed * 10.0).extend(0.0);
@@ -194,8 +200,7 @@ impl CameraPath {
             eye.z = eye.z.max(ground + CLEARANCE_M);
         }
         let mut base = scene.clone();
-        base.camera.position = eye.to_array();
-        base.camera.look_at = (eye + self.direction(s) * 100.0).to_array();
+        base.camera.aim(eye, eye + self.direction(s) * 100.0);
         crate::scene::camera_of(&base, atlas)
     }
 

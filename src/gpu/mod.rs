@@ -3,9 +3,11 @@
 //! name in `shaders/`. [`renderer::Renderer`] runs them as a flat list.
 
 pub mod alloc;
+pub mod clipmaps;
 pub mod context;
 pub mod frame_io;
 pub mod normals;
+pub mod planet;
 pub mod reference;
 pub mod shaders;
 pub mod terrain;

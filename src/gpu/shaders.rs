@@ -9,20 +9,23 @@
 
 use crate::error::{Error, Result};
 
-const SHARED: [(&str, &str); 5] = [
+const SHARED: [(&str, &str); 6] = [
     ("frame", include_str!("../../shaders/shared/frame.wgsl")),
     ("noise", include_str!("../../shaders/shared/noise.wgsl")),
     ("atlas", include_str!("../../shaders/shared/atlas.wgsl")),
     ("shading", include_str!("../../shaders/shared/shading.wgsl")),
     ("surface", include_str!("../../shaders/shared/surface.wgsl")),
+    ("sphere", include_str!("../../shaders/shared/sphere.wgsl")),
 ];
 
 /// The passes' WGSL files, by name.
-pub const PASSES: [(&str, &str); 4] = [
+pub const PASSES: [(&str, &str); 6] = [
     ("warp_zoom", include_str!("../../shaders/warp_zoom.wgsl")),
     ("normals", include_str!("../../shaders/normals.wgsl")),
     ("terrain", include_str!("../../shaders/terrain.wgsl")),
     ("reference", include_str!("../../shaders/reference.wgsl")),
+    ("clipmaps", include_str!("../../shaders/clipmaps.wgsl")),
+    ("planet", include_str!("../../shaders/planet.wgsl")),
 ];
 
 /// Every flag any pass tests, for validating all variants.

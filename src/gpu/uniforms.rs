@@ -13,8 +13,6 @@ use glam::{DMat4, DVec2, DVec4};
 pub const MAX_OCTAVES: usize = 24;
 /// Pyramid levels the GPU sees (a 32768² atlas has 15).
 pub const MAX_LEVELS: usize = 16;
-/// Nearest depth: with reversed-Z and an infinite far plane, depth precision does not suffer.
-const NEAR_M: f64 = 0.05;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -198,7 +196,7 @@ pub fn view_proj(camera: &Camera, origin: DVec2) -> DMat4 {
         DVec4::new(fy / camera.aspect(), 0.0, 0.0, 0.0),
         DVec4::new(0.0, fy, 0.0, 0.0),
         DVec4::new(0.0, 0.0, 0.0, -1.0),
-        DVec4::new(0.0, 0.0, NEAR_M, 0.0),
+        DVec4::new(0.0, 0.0, camera.near, 0.0),
     );
     proj * view
 }

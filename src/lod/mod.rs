@@ -12,6 +12,7 @@
 //! trait object costs one indirect call per method per frame, nothing beside a GPU frame.
 
 pub mod baseline;
+pub mod clipmaps;
 pub mod reference;
 pub mod warped;
 

@@ -41,10 +41,10 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 pub const EARTH_RADIUS_M: f64 = 6_371_000.0;
 
 /// A planet: its radius and its global sketch.
-pub struct Planet {
+pub struct Planet<'a> {
     pub radius: f64,
     /// The global sketch: equirectangular, width twice its height, row 0 south.
-    pub sketch: Atlas,
+    pub sketch: &'a Atlas,
 }
 
 /// The unit vector at latitude `lat`, longitude `lon` (radians).
@@ -124,7 +124,7 @@ pub fn map_offset_exact(lat1: f64, a: f64, b: f64) -> DVec2 {
     DVec2::new(lat2 - lat1, lon2)
 }
 
-impl Planet {
+impl Planet<'_> {
     /// The sketch's cell at the equator, metres: d_atlas of the detail's octaves.
     pub fn d_atlas(&self) -> f64 {
         TAU * self.radius / self.sketch.width() as f64
@@ -265,17 +265,18 @@ mod tests {
         (a + PI).rem_euclid(TAU) - PI
     }
 
-    fn planet() -> Planet {
-        Planet {
-            radius: EARTH_RADIUS_M,
-            sketch: synthetic::planet_sketch(256, EARTH_RADIUS_M, 7),
-        }
+    fn sketch() -> Atlas {
+        synthetic::planet_sketch(256, EARTH_RADIUS_M, 7)
     }
 
     /// No seam at the date line or across a pole: the sketch's bicubic is continuous there.
     #[test]
     fn the_sketch_has_no_seam_at_the_date_line_or_the_poles() {
-        let p = planet();
+        let sketch = sketch();
+        let p = Planet {
+            radius: EARTH_RADIUS_M,
+            sketch: &sketch,
+        };
         let e = 1e-9;
         for lat in [-1.0, 0.0, 0.4, 1.3] {
             let a = p.sketch_height(lat, PI - e, 0.0);

@@ -10,9 +10,9 @@ use crate::sketch::{Atlas, LoadOptions, RawGrid};
 use glam::DVec3;
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
-/// The default width of the synthetic planet's sketch (height: half of it): 19.5 km cells on the
-/// Earth.
-pub const DEFAULT_WIDTH: usize = 2048;
+/// The default width of the synthetic planet's sketch (height: half of it): 39 km cells on the
+/// Earth, the procedural octaves carrying every finer wavelength.
+pub const DEFAULT_WIDTH: usize = 1024;
 
 /// Fractal sum of `octaves` octaves of the sphere's noise at `p` (a unit vector), the first
 /// `base` lattice cells per unit, each octave twice the frequency and `gain` the weight.
@@ -54,14 +54,22 @@ pub fn planet_height(p: DVec3, seed: u32) -> f64 {
 pub fn planet_sketch(width: usize, radius: f64, seed: u32) -> Atlas {
     let width = width.max(8) & !1;
     let height = width / 2;
-    let mut data = Vec::with_capacity(width * height);
-    for j in 0..height {
-        let lat = (j as f64 + 0.5) / height as f64 * PI - FRAC_PI_2;
-        for i in 0..width {
-            let lon = (i as f64 + 0.5) / width as f64 * TAU - PI;
-            data.push(planet_height(unit(lat, lon), seed) as f32);
+    let mut data = vec![0.0f32; width * height];
+    // Rows in as many bands as there are cores: a 1024 × 512 sketch takes 2.6 s on one core.
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let band = height.div_ceil(threads) * width;
+    std::thread::scope(|scope| {
+        for (b, rows) in data.chunks_mut(band).enumerate() {
+            scope.spawn(move || {
+                for (k, h) in rows.iter_mut().enumerate() {
+                    let (i, j) = ((b * band + k) % width, (b * band + k) / width);
+                    let lat = (j as f64 + 0.5) / height as f64 * PI - FRAC_PI_2;
+                    let lon = (i as f64 + 0.5) / width as f64 * TAU - PI;
+                    *h = planet_height(unit(lat, lon), seed) as f32;
+                }
+            });
         }
-    }
+    });
     let cell = TAU * radius / width as f64;
     let mut raw = RawGrid::new(width, height, data, None);
     raw.dx = cell;

@@ -28,6 +28,9 @@ pub fn load_atlas(scene: &Scene) -> Result<Atlas> {
 
 fn load_sketch(scene: &Scene) -> Result<Atlas> {
     let opts = scene_load_options(scene);
+    if let Some(planet) = scene.planet() {
+        return load_global(scene, planet.radius_m);
+    }
     match (&scene.sketch.path, &scene.sketch.synthetic) {
         (Some(p), _) => Atlas::load(&scene.resolve(p), &opts),
         (None, Some(name)) => Atlas::synthetic(
@@ -43,6 +46,46 @@ fn load_sketch(scene: &Scene) -> Result<Atlas> {
             "the scene has no sketch (give `path` or `synthetic`)",
         )),
     }
+}
+
+/// A planet's global sketch: the synthetic planet, or a file whose georeference spans longitude
+/// −180…180 and latitude −90…90 in degrees (cells, or nodes at the cells' centres).
+fn load_global(scene: &Scene, radius: f64) -> Result<Atlas> {
+    let s = &scene.sketch;
+    let width = s.size.unwrap_or(crate::planet::synthetic::DEFAULT_WIDTH);
+    let Some(path) = &s.path else {
+        return Ok(crate::planet::synthetic::planet_sketch(
+            width,
+            radius,
+            scene.detail.seed,
+        ));
+    };
+    let path = scene.resolve(path);
+    let mut atlas = Atlas::load(&path, &scene_load_options(scene))?;
+    let global = |g: &crate::sketch::georef::Georef| {
+        let (w, h) = (atlas.width() as f64, atlas.height() as f64);
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-6 * 360.0;
+        matches!(g.units, crate::sketch::georef::Units::Degrees)
+            && close(g.cell_x * w, 360.0)
+            && close(g.cell_y * h, 180.0)
+            && close(g.west - 0.5 * g.cell_x, -180.0)
+            && close(g.south - 0.5 * g.cell_y, -90.0)
+    };
+    match &atlas.georef {
+        Some(g) if global(g) && atlas.width() % 2 == 0 => {}
+        _ => {
+            return Err(Error::sketch(
+                &path,
+                "a planet's sketch must be a global grid: geographic degrees spanning longitude \
+                 −180…180 and latitude −90…90 by cells (an even number of columns)",
+            ));
+        }
+    }
+    // Metres per cell at the equator: the detail's d_atlas.
+    let cell = std::f64::consts::TAU * radius / atlas.width() as f64;
+    atlas.dx = cell;
+    atlas.dy = cell;
+    Ok(atlas)
 }
 
 /// The scene's sun and air.
@@ -98,8 +141,11 @@ pub fn detail_of(scene: &Scene, atlas: &Atlas) -> Detail {
 /// The scene's camera; the far distance defaults to the sketch's farthest corner. A camera below
 /// the sketch's surface is an error: every view from there shows the underside of the ground.
 pub fn camera_of(scene: &Scene, atlas: &Atlas) -> Result<Camera> {
+    if let Some(planet) = scene.planet() {
+        return planet_camera(scene, atlas, planet.radius_m);
+    }
     let c = &scene.camera;
-    let eye = DVec3::from(c.position);
+    let eye = c.eye();
     if let Some(ground) = ground_under(atlas, eye.truncate())
         && eye.z < ground
     {
@@ -119,12 +165,36 @@ pub fn camera_of(scene: &Scene, atlas: &Atlas) -> Result<Camera> {
             .flat_map(|c| z.map(|z| (c.extend(z) - eye).length()))
             .fold(1.0, f64::max)
     });
-    Camera::new(
-        eye,
-        DVec3::from(c.look_at),
-        c.fov_y_deg,
-        c.width,
-        c.height,
-        far,
-    )
+    Camera::new(eye, c.target(), c.fov_y_deg, c.width, c.height, far)
+}
+
+/// A planet's camera: `altitude_m` above the ground at its nadir (the terrain function with
+/// every octave), looking along `heading_deg` and `pitch_deg`; its eye in the nadir's tangent
+/// frame, from the sphere of the planet's radius. The far distance reaches past the horizon to
+/// the highest ground beyond it.
+fn planet_camera(scene: &Scene, atlas: &Atlas, radius: f64) -> Result<Camera> {
+    let c = &scene.camera;
+    let (lat, lon) = (
+        c.lat_deg.unwrap_or(0.0).to_radians(),
+        c.lon_deg.unwrap_or(0.0).to_radians(),
+    );
+    let detail = detail_of(scene, atlas);
+    let planet = crate::planet::Planet {
+        radius,
+        sketch: atlas,
+    };
+    let ground = planet
+        .ground(&detail, lat, lon, 0.01)
+        .max(atlas.water_m as f64);
+    let eye = DVec3::new(0.0, 0.0, ground + c.altitude_m.unwrap_or(1.0));
+    let (h, p) = (c.heading_deg.to_radians(), c.pitch_deg.to_radians());
+    let forward = DVec3::new(h.sin() * p.cos(), h.cos() * p.cos(), p.sin());
+    let high = atlas.max_m as f64 + detail.reach_m();
+    let reach = |z: f64| ((radius + z).powi(2) - radius * radius).max(0.0).sqrt();
+    let far = c.far_m.unwrap_or(reach(eye.z) + reach(high)).max(1.0);
+    let mut camera = Camera::new(eye, eye + forward, c.fov_y_deg, c.width, c.height, far)?;
+    camera.geo = Some(crate::camera::Geo { lat, lon });
+    // Nothing lies nearer than the eye's height over the highest ground.
+    camera.near = (0.5 * (eye.z - high)).max(crate::camera::NEAR_M);
+    Ok(camera)
 }

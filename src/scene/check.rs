@@ -8,9 +8,12 @@ impl Scene {
         match (&s.path, &s.synthetic) {
             (Some(_), Some(_)) => return Err("sketch: give `path` or `synthetic`, not both".into()),
             (None, None) => return Err("sketch: give `path` or `synthetic`".into()),
-            (None, Some(name)) if !crate::sketch::synthetic::NAMES.contains(&name.as_str()) => {
+            (None, Some(name))
+                if name != "planet"
+                    && !crate::sketch::synthetic::NAMES.contains(&name.as_str()) =>
+            {
                 return Err(format!(
-                    "sketch.synthetic = \"{name}\": one of {}",
+                    "sketch.synthetic = \"{name}\": one of {}, planet",
                     crate::sketch::synthetic::NAMES.join(", ")
                 ));
             }
@@ -22,7 +25,12 @@ impl Scene {
         positive("sketch.spacing_m", s.spacing_m)?;
         positive("sketch.height_scale", s.height_scale)?;
         if let Some(size) = s.size {
-            within("sketch.size", size as f64, 2.0, 4097.0)?;
+            let most = if self.planet().is_some() {
+                65536.0
+            } else {
+                4097.0
+            };
+            within("sketch.size", size as f64, 2.0, most)?;
         }
         if let Some(o) = s.origin_m {
             finite_all("sketch.origin_m", &o)?;
@@ -31,10 +39,60 @@ impl Scene {
             finite_all("sketch.height_range_m", &r)?;
         }
         let c = &self.camera;
-        finite_all("camera.position", &c.position)?;
-        finite_all("camera.look_at", &c.look_at)?;
-        if c.position == c.look_at {
-            return Err("camera.look_at equals camera.position: no view direction".into());
+        let planar = [c.position.is_some(), c.look_at.is_some()];
+        let geo = [
+            c.lat_deg.is_some(),
+            c.lon_deg.is_some(),
+            c.altitude_m.is_some(),
+        ];
+        if let Some(p) = self.planet() {
+            if planar.iter().any(|&b| b) {
+                return Err(
+                    "camera: a planet's camera is placed by lat_deg, lon_deg and \
+                    altitude_m (with heading_deg, pitch_deg), not position and look_at"
+                        .into(),
+                );
+            }
+            if !geo.iter().all(|&b| b) {
+                return Err(
+                    "camera: a planet's camera needs lat_deg, lon_deg and altitude_m".into(),
+                );
+            }
+            within("camera.lat_deg", c.lat_deg.unwrap_or(0.0), -90.0, 90.0)?;
+            finite_all("camera.lon_deg", &[c.lon_deg.unwrap_or(0.0)])?;
+            within("camera.altitude_m", c.altitude_m.unwrap_or(1.0), 0.01, 1e9)?;
+            finite_all("camera.heading_deg", &[c.heading_deg])?;
+            within("camera.pitch_deg", c.pitch_deg, -90.0, 90.0)?;
+            within("planet.radius_m", p.radius_m, 1000.0, 1e9)?;
+            within("planet.phi_steps", p.phi_steps as f64, 8.0, 8192.0)?;
+            within(
+                "planet.rings_per_level",
+                p.rings_per_level as f64,
+                1.0,
+                256.0,
+            )?;
+            if s.path.is_none() && s.synthetic.as_deref() != Some("planet") {
+                return Err(
+                    "sketch: a planet needs `synthetic = \"planet\"` or a global sketch file"
+                        .into(),
+                );
+            }
+        } else {
+            if geo.iter().any(|&b| b) {
+                return Err(
+                    "camera: lat_deg, lon_deg and altitude_m place a planet's camera; \
+                    add a [planet] section, or give position and look_at"
+                        .into(),
+                );
+            }
+            let (Some(position), Some(look_at)) = (c.position, c.look_at) else {
+                return Err("camera: give position and look_at".into());
+            };
+            finite_all("camera.position", &position)?;
+            finite_all("camera.look_at", &look_at)?;
+            if position == look_at {
+                return Err("camera.look_at equals camera.position: no view direction".into());
+            }
         }
         open_range("camera.fov_y_deg", c.fov_y_deg, 0.0, 180.0)?;
         within("camera.width", c.width as f64, 1.0, 16384.0)?;

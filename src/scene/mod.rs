@@ -39,6 +39,9 @@ pub struct Scene {
     #[serde(default)]
     pub light: LightSection,
     pub path: Option<PathSection>,
+    /// A planet: the sketch is global and wraps a sphere (`sketch.synthetic = "planet"` implies
+    /// one with the defaults).
+    pub planet: Option<PlanetSection>,
     /// The folder relative paths resolve against; not a key.
     #[serde(skip)]
     pub base_dir: PathBuf,
@@ -83,8 +86,20 @@ crate::named_enum! {
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraSection {
-    pub position: [f64; 3],
-    pub look_at: [f64; 3],
+    /// A planar scene's eye and target (world metres); a planet's camera uses the keys below.
+    pub position: Option<[f64; 3]>,
+    pub look_at: Option<[f64; 3]>,
+    /// A planet's camera: the nadir's latitude and longitude, degrees.
+    pub lat_deg: Option<f64>,
+    pub lon_deg: Option<f64>,
+    /// Height above the ground (the terrain function at the nadir), metres.
+    pub altitude_m: Option<f64>,
+    /// View direction: 0 north, 90 east.
+    #[serde(default)]
+    pub heading_deg: f64,
+    /// View direction: 0 level, −90 straight down.
+    #[serde(default)]
+    pub pitch_deg: f64,
     #[serde(default = "default_fov")]
     pub fov_y_deg: f64,
     #[serde(default = "default_size")]
@@ -94,6 +109,22 @@ pub struct CameraSection {
     /// Far distance in metres; by default the farthest corner of the sketch.
     pub far_m: Option<f64>,
 }
+impl CameraSection {
+    /// A planar scene's eye (`Scene::check` makes sure it has one).
+    pub fn eye(&self) -> glam::DVec3 {
+        glam::DVec3::from(self.position.unwrap_or_default())
+    }
+    /// A planar scene's target.
+    pub fn target(&self) -> glam::DVec3 {
+        glam::DVec3::from(self.look_at.unwrap_or_default())
+    }
+    /// Sets a planar scene's eye and target.
+    pub fn aim(&mut self, eye: glam::DVec3, target: glam::DVec3) {
+        self.position = Some(eye.to_array());
+        self.look_at = Some(target.to_array());
+    }
+}
+
 fn default_fov() -> f64 {
     60.0
 }
@@ -319,6 +350,8 @@ crate::named_enum! {
         Geomipmap = "geomipmap",
         Bruteforce = "bruteforce",
         Reference = "reference",
+        /// Spherical clipmaps (seed 003): planet scenes only.
+        Clipmaps = "clipmaps",
     }
 }
 
@@ -362,6 +395,39 @@ crate::named_enum! {
         Auto = "auto",
         Off = "off",
         X4 = "4x",
+    }
+}
+
+/// A planet and its spherical clipmaps (seed 003).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlanetSection {
+    pub radius_m: f64,
+    /// Bearing steps of every clipmap ring (the paper's n).
+    pub phi_steps: u32,
+    /// Rings per clipmap level (the paper's m).
+    pub rings_per_level: u32,
+}
+impl Default for PlanetSection {
+    fn default() -> Self {
+        PlanetSection {
+            radius_m: crate::planet::EARTH_RADIUS_M,
+            phi_steps: 512,
+            rings_per_level: 20,
+        }
+    }
+}
+
+impl Scene {
+    /// The planet, when the scene is one.
+    pub fn planet(&self) -> Option<PlanetSection> {
+        match &self.planet {
+            Some(p) => Some(p.clone()),
+            None if self.sketch.synthetic.as_deref() == Some("planet") => {
+                Some(PlanetSection::default())
+            }
+            None => None,
+        }
     }
 }
 

@@ -131,8 +131,7 @@ struct Cache {
 
 fn scene_key(scene: &Scene) -> String {
     let mut s = scene.clone();
-    s.camera.position = [0.0; 3];
-    s.camera.look_at = [0.0; 3];
+    s.camera.aim(glam::DVec3::ZERO, glam::DVec3::ZERO);
     format!("{s:?}")
 }
 

@@ -49,12 +49,12 @@ pub fn random_camera(
     let aim = aim.clamp(lo, hi);
     let target = aim.extend(ground_under(atlas, aim).unwrap_or(z));
     let mut s = scene.clone();
-    s.camera.position = eye.to_array();
-    s.camera.look_at = if (target - eye).truncate().length() < 1.0 {
-        (target - DVec3::Y).to_array()
+    let target = if (target - eye).truncate().length() < 1.0 {
+        target - DVec3::Y
     } else {
-        target.to_array()
+        target
     };
+    s.camera.aim(eye, target);
     scene::camera_of(&s, atlas)
 }
 

@@ -74,7 +74,7 @@ impl Setting {
             Mode::Bruteforce => Setting::BruteForce {
                 k: scene.geomipmap.k.unwrap_or_else(|| default_k(atlas)),
             },
-            Mode::Reference => return None,
+            Mode::Reference | Mode::Clipmaps => return None,
         })
     }
 }
@@ -104,7 +104,7 @@ pub fn default_sweep(modes: &[Mode], atlas: &Atlas) -> Vec<Setting> {
                     out.push(Setting::BruteForce { k });
                 }
             }
-            Mode::Reference => {}
+            Mode::Reference | Mode::Clipmaps => {}
         }
     }
     out

@@ -1,0 +1,47 @@
+// Spherical clipmaps (seed 003): each ring vertex of the static hemisphere drawn this frame, and
+// the nadir, carried to the terrain. Its map coordinates come from its offset and the nadir
+// (eq. 1–4, in the precise form of sphere.wgsl's `map_offset`), its height from the global
+// sketch at the pyramid level of its spacing (trilinear: continuous across rings and levels, so
+// none pops) plus the octaves up to its split octave. Output per vertex: (x, y, z, split
+// octave), metres in the nadir's tangent frame from the sphere's point under the camera.
+// Rust twin: src/gpu/clipmaps.rs (`vertex_cpu`).
+
+#import frame
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(2) var<uniform> planet: Planet;
+#import sphere
+
+@group(0) @binding(3) var<storage, read> hemisphere: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read_write> vertices: array<vec4<f32>>;
+
+// The distance to the vertex's farthest neighbour on a ring of angle `a`: across the rings
+// (a·(2^(1/m) − 1)) or along the ring (sin a · 2π/n), metres on the sphere.
+fn ring_spacing(a: f32) -> f32 {
+    let across = a * (exp2(1.0 / f32(planet.rings_per_level)) - 1.0);
+    let along = sin(a) * 6.2831855 / f32(planet.phi_steps);
+    return max(planet.radius * max(across, along), planet.min_spacing);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x > planet.vertex_count) {
+        return;
+    }
+    // The last invocation computes the nadir.
+    let i = select(planet.first_vertex + id.x, planet.nadir, id.x == planet.vertex_count);
+    let v = hemisphere[i];
+    let spacing = ring_spacing(v.w);
+    var h = planet_sketch(planet_texel_of(v), spacing);
+    let o = log2(frame.atlas.d_atlas / spacing) - planet.bias;
+#ifdef NOISE
+    let rel = sphere_rel(v);
+    let last = min(planet.octaves, u32(max(ceil(o), 0.0)));
+    for (var k = 1u; k <= last; k++) {
+        let g = clamp(o - f32(k) + 1.0, 0.0, 1.0);
+        h += planet.octave[k - 1u].weight * g * octave_rel(planet.octave[k - 1u], rel).x;
+    }
+#endif
+    h = max(h, planet.water_m);
+    let rh = planet.radius + h;
+    vertices[i] = vec4<f32>(rh * v.x, rh * v.y, h - rh * v.z, o);
+}

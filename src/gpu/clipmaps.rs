@@ -1,0 +1,314 @@
+//! Spherical clipmaps (`shaders/clipmaps.wgsl`): the static hemisphere's drawn rings carried to
+//! the terrain each frame. [`PlanetUniforms`] is the WGSL `Planet` block (shared with
+//! `shaders/planet.wgsl`); [`vertex_cpu`] is the pass's CPU twin, which the tests hold the GPU
+//! to and the f64 terrain function ([`crate::planet::Planet::ground`]) holds in turn.
+
+use super::alloc::{Alloc, Buffer};
+use super::{bind, compute_pipeline, entry, storage, uniform};
+use crate::camera::Geo;
+use crate::detail::Detail;
+use crate::error::Result;
+use crate::planet::noise::{SphereOctave, gradient_noise3, lattice_scale};
+use crate::planet::rings::{Rings, Span};
+use crate::planet::{Planet, Tangent};
+use crate::sketch::Atlas;
+use bytemuck::{Pod, Zeroable};
+use glam::{DVec3, IVec2, Vec2, Vec3, Vec4};
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use wgpu::ShaderStages as S;
+
+/// One octave of the sphere's noise for one frame (WGSL `SphereOctave`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct SphereOctaveUniforms {
+    pub lattice: [i32; 3],
+    pub seed: u32,
+    pub phase: [f32; 3],
+    pub scale: f32,
+    pub weight: f32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
+}
+
+/// The planet's part of a frame (WGSL `Planet`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct PlanetUniforms {
+    pub east: [f32; 3],
+    pub radius: f32,
+    pub north: [f32; 3],
+    pub eye_m: f32,
+    pub up: [f32; 3],
+    pub sin_lat: f32,
+    pub sun: [f32; 3],
+    pub cos_lat: f32,
+    pub texel_origin: [i32; 2],
+    pub texel_frac: [f32; 2],
+    pub texels_per_rad: [f32; 2],
+    pub phi_steps: u32,
+    pub rings_per_level: u32,
+    pub first_vertex: u32,
+    pub vertex_count: u32,
+    pub nadir: u32,
+    pub inner_ring: u32,
+    pub levels: u32,
+    pub octaves: u32,
+    pub min_spacing: f32,
+    pub bias: f32,
+    pub water_m: f32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
+    pub octave: [SphereOctaveUniforms; 24],
+}
+
+impl PlanetUniforms {
+    /// The block for a camera at `geo` drawing `span` of `rings`, the sun toward `sun` (the
+    /// nadir's east, north, up).
+    pub fn new(
+        planet: &Planet,
+        detail: &Detail,
+        geo: &Geo,
+        eye_m: f64,
+        rings: &Rings,
+        span: Span,
+        sun: DVec3,
+    ) -> PlanetUniforms {
+        let t = Tangent::at(geo.lat, geo.lon);
+        let texel = planet.texel(geo.lat, geo.lon);
+        // Longitude's texel wraps: keep the nadir's whole texel within the sketch's width.
+        let w = planet.sketch.width() as f64;
+        let whole = texel.floor();
+        let origin = IVec2::new(whole.x.rem_euclid(w) as i32, whole.y as i32);
+        let range = rings.vertex_range(span);
+        let m = rings.rings_per_level;
+        let inner_ring = (span.last_level + 1) * m;
+        let a = crate::planet::rings::ring_angle(inner_ring, m);
+        let spacing = planet.radius
+            * (a * ((1.0 / m as f64).exp2() - 1.0)).max(a.sin() * TAU / rings.phi_steps as f64);
+        let mut octave = [SphereOctaveUniforms::default(); 24];
+        let anchor = t.up * planet.radius;
+        for (k, o) in (1..=detail.octaves).zip(octave.iter_mut()) {
+            let s = SphereOctave::split(
+                anchor,
+                lattice_scale(detail.d_atlas, k),
+                detail.weight(k),
+                detail.octave_seed(k),
+            );
+            *o = SphereOctaveUniforms {
+                lattice: s.lattice.to_array(),
+                seed: s.seed,
+                phase: s.phase.to_array(),
+                scale: s.scale,
+                weight: s.weight,
+                ..Default::default()
+            };
+        }
+        PlanetUniforms {
+            east: t.east.as_vec3().to_array(),
+            radius: planet.radius as f32,
+            north: t.north.as_vec3().to_array(),
+            eye_m: eye_m as f32,
+            up: t.up.as_vec3().to_array(),
+            sin_lat: geo.lat.sin() as f32,
+            sun: sun.normalize().as_vec3().to_array(),
+            cos_lat: geo.lat.cos() as f32,
+            texel_origin: origin.to_array(),
+            texel_frac: (texel - whole).as_vec2().to_array(),
+            texels_per_rad: [
+                (w / TAU) as f32,
+                (planet.sketch.height() as f64 / PI) as f32,
+            ],
+            phi_steps: rings.phi_steps,
+            rings_per_level: m,
+            first_vertex: range.start,
+            vertex_count: range.end - range.start,
+            nadir: rings.nadir(),
+            inner_ring,
+            levels: planet.usable_levels() as u32,
+            octaves: detail.octaves.min(24),
+            min_spacing: spacing as f32,
+            bias: detail.bias as f32,
+            water_m: planet.sketch.water_m,
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
+            octave,
+        }
+    }
+}
+
+pub struct ClipmapsPass {
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    /// The static hemisphere, per vertex (sin θ̃ sin φ̃, sin θ̃ cos φ̃, 1 − cos θ̃, θ̃).
+    pub hemisphere: Buffer,
+    /// The frame's vertices: (x, y, z, split octave) in the nadir's tangent frame.
+    pub vertices: Buffer,
+}
+
+impl ClipmapsPass {
+    /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
+    pub const NAME: &'static str = "clipmaps";
+
+    pub fn new(
+        device: &Alloc,
+        frame: &wgpu::Buffer,
+        atlas: &wgpu::Buffer,
+        planet: &wgpu::Buffer,
+        rings: &Rings,
+        noise: bool,
+    ) -> Result<ClipmapsPass> {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("clipmaps"),
+            entries: &[
+                entry(0, S::COMPUTE, uniform()),
+                entry(1, S::COMPUTE, storage(true)),
+                entry(2, S::COMPUTE, uniform()),
+                entry(3, S::COMPUTE, storage(true)),
+                entry(4, S::COMPUTE, storage(false)),
+            ],
+        });
+        let flags: &[&str] = if noise { &["NOISE"] } else { &[] };
+        let pipeline = compute_pipeline(device, "clipmaps", flags, &layout)?;
+        let points: Vec<[f32; 4]> = rings.vertices.iter().map(|v| v.to_array()).collect();
+        let hemisphere = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("hemisphere"),
+            contents: bytemuck::cast_slice(&points),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let vertices = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("clipmap vertices"),
+            size: rings.vertices.len() as u64 * 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("clipmaps"),
+            layout: &layout,
+            entries: &[
+                bind(0, frame),
+                bind(1, atlas),
+                bind(2, planet),
+                bind(3, &hemisphere),
+                bind(4, &vertices),
+            ],
+        });
+        Ok(ClipmapsPass {
+            pipeline,
+            bind_group,
+            hemisphere,
+            vertices,
+        })
+    }
+
+    /// Records the pass for `count` ring vertices and the nadir.
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        count: u32,
+        timestamps: Option<wgpu::ComputePassTimestampWrites>,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(Self::NAME),
+            timestamp_writes: timestamps,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.dispatch_workgroups((count + 1).div_ceil(64), 1, 1);
+    }
+}
+
+/// `map_offset` and `planet_texel_of` in the shader: the hemisphere point's level-0 texel
+/// relative to the nadir's whole texel.
+fn texel_of(u: &PlanetUniforms, v: Vec4) -> Vec2 {
+    let d = crate::planet::map_offset(u.sin_lat, u.cos_lat, v);
+    Vec2::from(u.texel_frac) + Vec2::new(d.y, d.x) * Vec2::from(u.texels_per_rad)
+}
+
+fn catmull_rom(f: f32) -> [f32; 4] {
+    let (f2, f3) = (f * f, f * f * f);
+    [
+        -0.5 * f3 + f2 - 0.5 * f,
+        1.5 * f3 - 2.5 * f2 + 1.0,
+        -1.5 * f3 + 2.0 * f2 + 0.5 * f,
+        0.5 * f3 - 0.5 * f2,
+    ]
+}
+
+/// `planet_level` in the shader.
+fn planet_level(planet: &Planet, u: &PlanetUniforms, t: Vec2, l: usize) -> f32 {
+    let s = (1u32 << l) as f32;
+    let origin = IVec2::from(u.texel_origin);
+    let mask = IVec2::splat((1 << l) - 1);
+    let base = origin >> IVec2::splat(l as i32);
+    let x = ((origin & mask).as_vec2() + t - Vec2::splat((s - 1.0) * 0.5)) / s;
+    let c = x.floor();
+    let f = x - c;
+    let i = base + c.as_ivec2();
+    let (wx, wy) = (catmull_rom(f.x), catmull_rom(f.y));
+    let mut h = 0.0;
+    for (r, wyr) in wy.iter().enumerate() {
+        let j = i.y - 1 + r as i32;
+        let row: f32 = (0..4)
+            .map(|c| wx[c] * planet.texel_value((i.x - 1 + c as i32) as i64, j as i64, l))
+            .sum();
+        h += wyr * row;
+    }
+    h
+}
+
+/// `ring_spacing` in the shader.
+fn ring_spacing(u: &PlanetUniforms, a: f32) -> f32 {
+    let across = a * ((1.0 / u.rings_per_level as f32).exp2() - 1.0);
+    let along = a.sin() * std::f32::consts::TAU / u.phi_steps as f32;
+    (u.radius * across.max(along)).max(u.min_spacing)
+}
+
+/// The clipmaps pass's vertex for hemisphere point `v` (CPU twin of `clipmaps.wgsl`'s `main`).
+pub fn vertex_cpu(planet: &Planet, atlas_d: f32, u: &PlanetUniforms, v: Vec4) -> Vec4 {
+    let spacing = ring_spacing(u, v.w);
+    let t = texel_of(u, v);
+    let lod = (spacing.max(1e-6) / atlas_d)
+        .log2()
+        .clamp(0.0, (u.levels - 1) as f32);
+    let l0 = lod as usize;
+    let a = planet_level(planet, u, t, l0);
+    let f = lod - l0 as f32;
+    let mut h = if f <= 0.0 || l0 + 1 >= u.levels as usize {
+        a
+    } else {
+        a + (planet_level(planet, u, t, l0 + 1) - a) * f
+    };
+    let o = (atlas_d / spacing).log2() - u.bias;
+    let rel =
+        u.radius * (v.x * Vec3::from(u.east) + v.y * Vec3::from(u.north) - v.z * Vec3::from(u.up));
+    let last = u.octaves.min(o.ceil().max(0.0) as u32);
+    for k in 1..=last {
+        let oc = &u.octave[k as usize - 1];
+        let g = (o - k as f32 + 1.0).clamp(0.0, 1.0);
+        let q = rel * oc.scale + Vec3::from(oc.phase);
+        let c = q.floor();
+        let (n, _) = gradient_noise3(glam::IVec3::from(oc.lattice) + c.as_ivec3(), q - c, oc.seed);
+        h += oc.weight * g * n;
+    }
+    h = h.max(u.water_m);
+    let rh = u.radius + h;
+    Vec4::new(rh * v.x, rh * v.y, h - rh * v.z, o)
+}
+
+/// The geographic position of hemisphere point (angle `a`, bearing `b`) seen from `geo`
+/// (radians), in f64: where [`vertex_cpu`]'s point should lie.
+pub fn lat_lon_of(geo: &Geo, a: f64, b: f64) -> (f64, f64) {
+    let t = Tangent::at(geo.lat, geo.lon);
+    let (sa, ca) = a.sin_cos();
+    let u = t.up * ca + (t.north * b.cos() + t.east * b.sin()) * sa;
+    let (lat, lon) = crate::planet::lat_lon(u);
+    (lat.clamp(-FRAC_PI_2, FRAC_PI_2), lon)
+}
+
+/// Whether the atlas is a planet's global sketch as the clipmaps sample it.
+pub fn sketch_is_global(atlas: &Atlas) -> bool {
+    atlas.width() == 2 * atlas.height()
+}

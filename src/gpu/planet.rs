@@ -1,0 +1,185 @@
+//! The planet pass (`shaders/planet.wgsl`): the sky or space as one full-screen triangle, then the
+//! clipmap rings drawn from the clipmaps pass's vertices (vertex pulling, one static index
+//! buffer: the drawn levels' quads and the fill's fan are two ranges of it). Reversed-Z depth
+//! with an infinite far plane, so a view holds ground from a metre to 20,000 km away without
+//! z-fighting. Owns the colour and depth targets.
+
+use super::alloc::{Alloc, Buffer, Texture};
+use super::terrain::{COLOUR, DEPTH};
+use super::{bind, entry, shader_module, storage, uniform};
+use crate::error::Result;
+use crate::planet::rings::{Rings, Span};
+use wgpu::ShaderStages as S;
+
+pub struct PlanetPass {
+    sky: wgpu::RenderPipeline,
+    planet: wgpu::RenderPipeline,
+    bind_group: wgpu::BindGroup,
+    index: Buffer,
+    pub colour: Texture,
+    colour_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+    _depth: Texture,
+}
+
+impl PlanetPass {
+    /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
+    pub const NAME: &'static str = "planet";
+
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        device: &Alloc,
+        frame: &wgpu::Buffer,
+        atlas: &wgpu::Buffer,
+        planet: &wgpu::Buffer,
+        hemisphere: &wgpu::Buffer,
+        vertices: &wgpu::Buffer,
+        rings: &Rings,
+        (width, height): (u32, u32),
+        flags: &[&str],
+    ) -> Result<PlanetPass> {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("planet"),
+            entries: &[
+                entry(0, S::VERTEX_FRAGMENT, uniform()),
+                entry(1, S::VERTEX_FRAGMENT, storage(true)),
+                entry(2, S::VERTEX_FRAGMENT, uniform()),
+                entry(3, S::VERTEX, storage(true)),
+                entry(4, S::VERTEX, storage(true)),
+            ],
+        });
+        let module = shader_module(device, Self::NAME, flags)?;
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("planet"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline_of = |(vs, fs): (&str, &str), depth_write: bool, compare| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(fs),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(vs),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH,
+                    depth_write_enabled: Some(depth_write),
+                    depth_compare: Some(compare),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets: &[Some(COLOUR.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let sky = pipeline_of(("sky_vs", "sky_fs"), false, wgpu::CompareFunction::Always);
+        let planet_pipeline = pipeline_of(
+            ("planet_vs", "planet_fs"),
+            true,
+            wgpu::CompareFunction::Greater,
+        );
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("planet"),
+            layout: &layout,
+            entries: &[
+                bind(0, frame),
+                bind(1, atlas),
+                bind(2, planet),
+                bind(3, hemisphere),
+                bind(4, vertices),
+            ],
+        });
+        let index = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("clipmap indices"),
+            contents: bytemuck::cast_slice(&rings.indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        let target = |format, usage, label| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let colour = target(
+            COLOUR,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            "colour",
+        );
+        let depth = target(DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT, "depth");
+        Ok(PlanetPass {
+            sky,
+            planet: planet_pipeline,
+            bind_group,
+            index,
+            colour_view: colour.create_view(&Default::default()),
+            depth_view: depth.create_view(&Default::default()),
+            colour,
+            _depth: depth,
+        })
+    }
+
+    /// Records the sky and the rings of `span` with their fill.
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        rings: &Rings,
+        span: Span,
+        timestamps: Option<wgpu::RenderPassTimestampWrites>,
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(Self::NAME),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &self.colour_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(0.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timestamps,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.set_pipeline(&self.sky);
+        pass.draw(0..3, 0..1);
+        pass.set_pipeline(&self.planet);
+        pass.set_index_buffer(self.index.slice(..), wgpu::IndexFormat::Uint32);
+        for range in rings.draw_ranges(span) {
+            pass.draw_indexed(range, 0, 0..1);
+        }
+    }
+}

@@ -1,0 +1,219 @@
+//! Spherical clipmaps (seed 003, Clasen & Hege): a planet drawn from the static hemisphere of
+//! rings around the camera's nadir. A frame: choose the levels the view needs (§4.5), fill the
+//! planet's uniforms, then two named passes: `clipmaps` carries the drawn rings' vertices to the
+//! terrain, `planet` draws the sky and them.
+//!
+//! Rules: the hemisphere is built once per renderer and never uploaded again; the sun stands
+//! still in the world (where the scene's camera sees it at `light.sun_azimuth_deg` and
+//! `light.sun_elevation_deg`), so a flight across the planet meets the terminator; a frame's
+//! positions are metres in the nadir's tangent frame, never a planet-sized f32.
+
+use super::{CpuTimes, Lod, Shared};
+use crate::camera::{Camera, Geo};
+use crate::detail::Detail;
+use crate::error::{Error, Result};
+use crate::gpu::alloc::Buffer;
+use crate::gpu::clipmaps::{ClipmapsPass, PlanetUniforms};
+use crate::gpu::context::GpuContext;
+use crate::gpu::frame_io::{ColourReadback, Timer};
+use crate::gpu::planet::PlanetPass;
+use crate::gpu::uniforms::FrameInputs;
+use crate::planet::rings::{Rings, Span, visible_span};
+use crate::planet::{Planet, Tangent};
+use crate::sketch::Atlas;
+use glam::DVec3;
+use std::any::Any;
+use std::time::Instant;
+
+const PASSES: [&str; 2] = [ClipmapsPass::NAME, PlanetPass::NAME];
+
+pub struct Clipmaps {
+    pub rings: Rings,
+    radius: f64,
+    detail: Detail,
+    /// Toward the sun, world axes.
+    sun_world: DVec3,
+    planet_uniforms: Buffer,
+    clipmaps: ClipmapsPass,
+    pass: PlanetPass,
+    readback: ColourReadback,
+    /// The last frame's levels and uniforms.
+    pub span: Span,
+    pub uniforms: Option<PlanetUniforms>,
+}
+
+impl Clipmaps {
+    pub fn new(s: &Shared) -> Result<Clipmaps> {
+        let p = s.scene.planet().ok_or(Error::value(
+            "render.mode",
+            "clipmaps draws planet scenes (add [planet])",
+        ))?;
+        let rings = Rings::new(p.phi_steps, p.rings_per_level);
+        let device = &s.alloc;
+        let planet_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("planet uniforms"),
+            size: std::mem::size_of::<PlanetUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let noise = s.detail.octaves > 0;
+        let clipmaps = ClipmapsPass::new(
+            device,
+            s.frame,
+            s.atlas_buffer,
+            &planet_uniforms,
+            &rings,
+            noise,
+        )?;
+        let mut flags = Vec::new();
+        if noise {
+            flags.push("NOISE");
+            if s.scene.detail.bump {
+                flags.push("BUMP");
+            }
+        }
+        let size = (s.scene.camera.width, s.scene.camera.height);
+        let pass = PlanetPass::new(
+            device,
+            s.frame,
+            s.atlas_buffer,
+            &planet_uniforms,
+            &clipmaps.hemisphere,
+            &clipmaps.vertices,
+            &rings,
+            size,
+            &flags,
+        )?;
+        let c = &s.scene.camera;
+        let (lat, lon) = (
+            c.lat_deg.unwrap_or(0.0).to_radians(),
+            c.lon_deg.unwrap_or(0.0).to_radians(),
+        );
+        let (az, el) = s.scene.light.sun_deg();
+        let (az, el) = (az.to_radians(), el.to_radians());
+        let local = DVec3::new(el.cos() * az.sin(), el.cos() * az.cos(), el.sin());
+        Ok(Clipmaps {
+            rings,
+            radius: p.radius_m,
+            detail: s.detail.clone(),
+            sun_world: Tangent::at(lat, lon).world(local),
+            planet_uniforms,
+            clipmaps,
+            pass,
+            readback: ColourReadback::new(device, size.0, size.1),
+            span: Span {
+                first_level: 0,
+                last_level: 0,
+            },
+            uniforms: None,
+        })
+    }
+
+    /// The planet's vertices of the last frame, read back (for tests).
+    pub fn read_vertices(&self, ctx: &GpuContext) -> Result<Vec<[f32; 4]>> {
+        crate::gpu::frame_io::read_vec4(ctx, &self.clipmaps.vertices)
+    }
+}
+
+/// The levels and uniforms for `camera` over `atlas` (the planet's global sketch).
+pub fn plan(
+    atlas: &Atlas,
+    radius: f64,
+    detail: &Detail,
+    rings: &Rings,
+    sun_world: DVec3,
+    camera: &Camera,
+    geo: &Geo,
+) -> (Span, PlanetUniforms) {
+    let planet = Planet {
+        radius,
+        sketch: atlas,
+    };
+    let eye_m = camera.eye.z;
+    let ground = planet.ground(detail, geo.lat, geo.lon, 0.01);
+    // The lowest surface is the sea's where the sketch dips below it.
+    let low = (atlas.min_m as f64 - detail.reach_m()).max(atlas.water_m as f64);
+    let high = atlas.max_m as f64 + detail.reach_m();
+    let pixel_rad = camera.fov_y / camera.height as f64;
+    let span = visible_span(radius, eye_m - low, high - low, eye_m - ground, pixel_rad);
+    let sun = Tangent::at(geo.lat, geo.lon).local(sun_world);
+    let u = PlanetUniforms::new(&planet, detail, geo, eye_m, rings, span, sun);
+    (span, u)
+}
+
+impl Lod for Clipmaps {
+    fn passes(&self) -> &'static [&'static str] {
+        &PASSES
+    }
+
+    fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes {
+        let start = Instant::now();
+        if let Some(geo) = &camera.geo {
+            let (span, u) = plan(
+                atlas,
+                self.radius,
+                &self.detail,
+                &self.rings,
+                self.sun_world,
+                camera,
+                geo,
+            );
+            self.span = span;
+            self.uniforms = Some(u);
+        } else {
+            self.uniforms = None;
+        }
+        CpuTimes {
+            us: start.elapsed().as_secs_f64() * 1e6,
+            ..Default::default()
+        }
+    }
+
+    fn frame_inputs<'a>(&'a self, _inputs: &mut FrameInputs<'a>) {}
+
+    fn record(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        t: Option<&Timer>,
+    ) -> &'static [&'static str] {
+        let Some(u) = &self.uniforms else {
+            return &[];
+        };
+        ctx.queue
+            .write_buffer(&self.planet_uniforms, 0, bytemuck::bytes_of(u));
+        let compute = t.map(|t| t.compute(ClipmapsPass::NAME));
+        self.clipmaps.record(encoder, u.vertex_count, compute);
+        let render = t.map(|t| t.render(PlanetPass::NAME));
+        self.pass.record(encoder, &self.rings, self.span, render);
+        self.readback.record(encoder, &self.pass.colour);
+        &PASSES
+    }
+
+    fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
+        self.readback.read(ctx)
+    }
+
+    fn read_positions(&self, _ctx: &GpuContext, _camera: &Camera) -> Result<Vec<[f32; 4]>> {
+        Err(Error::value(
+            "render.mode",
+            "clipmaps: pixel positions (for screen-space error) are not built yet",
+        ))
+    }
+
+    fn triangles(&self) -> u64 {
+        self.rings.triangles(self.span)
+    }
+
+    fn visible(&self) -> bool {
+        self.uniforms.is_some()
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn Any {
+        self
+    }
+}

@@ -1,0 +1,243 @@
+//! Planets in clipmaps mode on the machine's adapter (llvmpipe without a GPU): the clipmaps pass
+//! against its CPU twin and the f64 terrain function at the Earth's radius, over a pole and on
+//! the date line; pictures from orbit, from 10 km and from 2 m; determinism; refusals.
+
+mod common;
+use common::*;
+use terrain::gpu::clipmaps::{lat_lon_of, vertex_cpu};
+use terrain::gpu::uniforms::View;
+use terrain::lod::clipmaps::Clipmaps;
+use terrain::planet::noise::{lattice_scale, octave_at};
+use terrain::planet::{Planet, unit};
+use terrain::render::Renderer;
+use terrain::scene::{Mode, Scene};
+
+fn planet_scene(lat: f64, lon: f64, altitude: f64, pitch: f64, size: u32) -> Scene {
+    scene(
+        &format!(
+            "[sketch]\nsynthetic = \"planet\"\nsize = 256\n[planet]\nphi_steps = 128\nrings_per_level = 8\n\
+             [camera]\nlat_deg = {lat}\nlon_deg = {lon}\naltitude_m = {altitude}\npitch_deg = {pitch}\n\
+             heading_deg = 30.0\nwidth = {size}\nheight = {size}\n"
+        ),
+        manifest_dir(),
+    )
+}
+
+fn render(s: &Scene) -> (Renderer, terrain::render::Frame) {
+    let mut r = Renderer::new(s, Mode::Clipmaps, View::Shaded).expect("renderer");
+    let camera = terrain::scene::camera_of(s, &r.atlas).expect("camera");
+    let frame = r.render(&camera).expect("frame");
+    (r, frame)
+}
+
+/// The GPU's vertices equal the CPU twin's, and the twin's heights equal the f64 terrain
+/// function at the vertices' latitude and longitude (the sketch at the vertex's spacing plus its
+/// geometric octaves), at the Earth's radius: from orbit, at mid latitudes, a few metres from a
+/// pole, on the date line. The detail's octaves alone (the frame less the same frame without
+/// them, so the sketch's part cancels) agree to 1e-4 of the amplitude; whole heights to 5e-4,
+/// the sketch's part differing by the last bit of the GPU's and the CPU's atan2 at vertices a
+/// radian away, which a texel's relief turns into centimetres.
+#[test]
+fn the_clipmaps_pass_agrees_with_its_twin_and_the_terrain_function() {
+    for (lat, lon, altitude) in [
+        (31.0, 12.0, 2e7),
+        (31.0, 12.0, 10_000.0),
+        (89.9999, -40.0, 2.0),
+        (-12.0, 180.0, 500.0),
+    ] {
+        let s = planet_scene(lat, lon, altitude, -30.0, 64);
+        let (r, _) = render(&s);
+        let lod = r.lod::<Clipmaps>().expect("clipmaps");
+        let u = lod.uniforms.expect("a planet frame");
+        let gpu = lod.read_vertices(r.ctx()).expect("vertices");
+        let planet = Planet {
+            radius: u.radius as f64,
+            sketch: &r.atlas,
+        };
+        let geo = terrain::camera::Geo {
+            lat: lat.to_radians(),
+            lon: lon.to_radians(),
+        };
+        let amplitude = r.detail.amplitude_m as f32;
+        let (mut worst_twin, mut worst_exact) = (0.0f32, 0.0f64);
+        let range = lod.rings.vertex_range(lod.span);
+        let step = ((range.end - range.start) / 997).max(1) as usize;
+        for i in (range.start..range.end)
+            .step_by(step)
+            .chain([lod.rings.nadir()])
+        {
+            let v = lod.rings.vertices[i as usize];
+            let g = glam::Vec4::from(gpu[i as usize]);
+            let c = vertex_cpu(&planet, r.atlas.d_atlas() as f32, &u, v);
+            // Heights (from z, the sphere's drop taken out in f64) and the split octave; x and y
+            // are the same products of the radius in both.
+            let height =
+                |p: glam::Vec4| (p.z as f64 + planet.radius * v.z as f64) / (1.0 - v.z as f64);
+            worst_twin = worst_twin
+                .max(((height(g) - height(c)).abs() / amplitude as f64) as f32)
+                .max((g.w - c.w).abs() / 1e3);
+            // The f64 terrain function at the vertex's place, with the same octave shares.
+            let phi = if v.w > 0.0 {
+                v.x.atan2(v.y) as f64
+            } else {
+                0.0
+            };
+            let (vlat, vlon) = lat_lon_of(&geo, v.w as f64, phi);
+            let spacing = {
+                let a = v.w;
+                let across = a * ((1.0 / u.rings_per_level as f32).exp2() - 1.0);
+                let along = a.sin() * std::f32::consts::TAU / u.phi_steps as f32;
+                (u.radius * across.max(along)).max(u.min_spacing) as f64
+            };
+            let mut h = planet.sketch_height(vlat, vlon, spacing);
+            let o = c.w as f64;
+            let p = unit(vlat, vlon) * planet.radius;
+            for k in 1..=r.detail.last_octave(o as f32) {
+                let share = (o - k as f64 + 1.0).clamp(0.0, 1.0);
+                let (n, _) = octave_at(
+                    lattice_scale(r.detail.d_atlas, k),
+                    r.detail.octave_seed(k),
+                    p,
+                );
+                h += r.detail.weight(k) * share * n as f64;
+            }
+            let h = h.max(r.atlas.water_m as f64);
+            let rh = planet.radius + h;
+            let want_z = h - rh * v.z as f64;
+            // f32 keeps the offset to the vertex to its relative precision: up to 2e-7 of its
+            // distance sideways, which a slope of 1 turns into as much height.
+            let allowed = 0.02 + 2e-7 * planet.radius * v.w as f64;
+            worst_exact = worst_exact.max((c.z as f64 - want_z).abs() / allowed);
+        }
+        eprintln!(
+            "at {lat}°, {lon}°, {altitude} m: GPU vs twin {worst_twin:.2e} of the amplitude, twin vs f64 {worst_exact:.3} of the allowance"
+        );
+        assert!(worst_twin < 5e-4, "{lat} {lon}: {worst_twin}");
+        assert!(
+            worst_exact < 1.0,
+            "{lat} {lon}: {worst_exact} of the allowance"
+        );
+    }
+}
+
+fn pixels(frame: &terrain::render::Frame) -> impl Iterator<Item = [u8; 3]> + '_ {
+    frame.rgba.chunks(4).map(|p| [p[0], p[1], p[2]])
+}
+
+/// From orbit the planet is a disc: ground in the middle, black space in the corners, and a
+/// bright limb of air between. From 10 km and from 2 m the ground fills the lower half and the
+/// sky the upper.
+#[test]
+fn planet_views_from_orbit_10_km_and_2_m() {
+    let orbit = render(&planet_scene(30.0, 10.0, 2e7, -90.0, 96)).1;
+    let at = |f: &terrain::render::Frame, x: u32, y: u32| {
+        let i = ((y * f.width + x) * 4) as usize;
+        [f.rgba[i], f.rgba[i + 1], f.rgba[i + 2]]
+    };
+    assert_eq!(at(&orbit, 0, 0), [0, 0, 0], "space in the corner");
+    let centre = at(&orbit, 48, 48);
+    assert!(
+        centre.iter().map(|&c| c as u32).sum::<u32>() > 60,
+        "the disc's centre is lit: {centre:?}"
+    );
+    // The disc of a planet 20,000 km away under a 60° field: radius atan(R / (R + h)) / 30°.
+    let r = (6371.0f64 / 26371.0).asin().to_degrees() / 30.0 * 48.0;
+    let inside = at(&orbit, 48 + (0.8 * r) as u32, 48);
+    let outside = at(&orbit, 48 + (1.15 * r) as u32, 48);
+    assert!(
+        inside.iter().any(|&c| c > 20) && outside.iter().all(|&c| c < 20),
+        "{inside:?} {outside:?}"
+    );
+    for altitude in [10_000.0, 2.0] {
+        let f = render(&planet_scene(30.0, 10.0, altitude, 0.0, 64)).1;
+        let sky = at(&f, 32, 2);
+        let ground = at(&f, 32, 61);
+        assert!(
+            sky[2] > sky[0] && sky[2] > 80,
+            "{altitude} m: the sky is blue: {sky:?}"
+        );
+        assert_ne!(sky, ground, "{altitude} m");
+    }
+}
+
+/// The coverage view (ground white, sky black) shows no gap: looking straight down from 2 m and
+/// from 10 km, over the north pole and on the date line, every pixel is ground; looking straight
+/// up, none is.
+#[test]
+fn the_rings_leave_no_crack_anywhere() {
+    for (lat, lon, altitude, pitch) in [
+        (30.0, 10.0, 2.0, -90.0),
+        (30.0, 10.0, 10_000.0, -90.0),
+        (90.0, 0.0, 5.0, -90.0),
+        (89.99, 77.0, 300.0, -90.0),
+        (-5.0, 180.0, 50.0, -90.0),
+        (-5.0, -179.9999, 3.0, -90.0),
+    ] {
+        let mut s = planet_scene(lat, lon, altitude, pitch, 64);
+        s.camera.fov_y_deg = 90.0;
+        let mut r = Renderer::new(&s, Mode::Clipmaps, View::Coverage).expect("renderer");
+        let camera = terrain::scene::camera_of(&s, &r.atlas).expect("camera");
+        let f = r.render(&camera).expect("frame");
+        let holes = pixels(&f).filter(|p| p[0] < 128).count();
+        assert_eq!(
+            holes, 0,
+            "{lat}°, {lon}°, {altitude} m: {holes} pixels without ground"
+        );
+    }
+    let mut up = planet_scene(30.0, 10.0, 2.0, 90.0, 64);
+    up.camera.fov_y_deg = 90.0;
+    let mut r = Renderer::new(&up, Mode::Clipmaps, View::Coverage).expect("renderer");
+    let camera = terrain::scene::camera_of(&up, &r.atlas).expect("camera");
+    let f = r.render(&camera).expect("frame");
+    assert_eq!(
+        pixels(&f).filter(|p| p[0] > 128).count(),
+        0,
+        "ground seen straight up"
+    );
+}
+
+/// A still camera 2 m above the ground renders the same bytes twice, from a fresh renderer and
+/// from the same one.
+#[test]
+fn a_still_camera_renders_the_same_bytes() {
+    let s = planet_scene(46.5, 9.8, 2.0, -10.0, 64);
+    let (mut r, a) = render(&s);
+    let camera = terrain::scene::camera_of(&s, &r.atlas).expect("camera");
+    let b = r.render(&camera).expect("frame");
+    let c = render(&s).1;
+    assert!(a.rgba == b.rgba && a.rgba == c.rgba);
+}
+
+/// A camera inside the planet, a planar mode on a planet, and clipmaps on a planar sketch are
+/// refused in one line naming the key.
+#[test]
+fn impossible_planet_scenes_are_refused() {
+    let under = Scene::parse(
+        "[sketch]\nsynthetic = \"planet\"\n[camera]\nlat_deg = 0.0\nlon_deg = 0.0\naltitude_m = -5.0\n",
+        manifest_dir(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        under.contains("camera.altitude_m") && !under.contains('\n'),
+        "{under}"
+    );
+    let s = planet_scene(0.0, 0.0, 100.0, 0.0, 16);
+    let warped = Renderer::new(&s, Mode::Warped, View::Shaded)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        warped.contains("render.mode") && warped.contains("clipmaps"),
+        "{warped}"
+    );
+    let planar = scene(
+        "[sketch]\nsynthetic = \"hills\"\n[camera]\nposition = [0.0, 0.0, 900.0]\nlook_at = [100.0, 100.0, 0.0]\n",
+        manifest_dir(),
+    );
+    let clip = Renderer::new(&planar, Mode::Clipmaps, View::Shaded)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(clip.contains("planet"), "{clip}");
+}
