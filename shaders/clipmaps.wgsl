@@ -14,14 +14,6 @@
 @group(0) @binding(3) var<storage, read> hemisphere: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> vertices: array<vec4<f32>>;
 
-// The distance to the vertex's farthest neighbour on a ring of angle `a`: across the rings
-// (a·(2^(1/m) − 1)) or along the ring (sin a · 2π/n), metres on the sphere.
-fn ring_spacing(a: f32) -> f32 {
-    let across = a * (exp2(1.0 / f32(planet.rings_per_level)) - 1.0);
-    let along = sin(a) * 6.2831855 / f32(planet.phi_steps);
-    return max(planet.radius * max(across, along), planet.min_spacing);
-}
-
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (id.x > planet.vertex_count) {

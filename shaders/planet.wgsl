@@ -51,6 +51,7 @@ struct VsOut {
     @location(5) through: vec3<f32>,
     @location(6) grid: vec2<f32>,
     @location(7) height: f32,
+    @location(8) sketch_height: f32,
 }
 
 fn at(i: u32) -> vec3<f32> {
@@ -110,7 +111,21 @@ fn planet_vs(@builtin(vertex_index) i: u32) -> VsOut {
     // fragment's interpolated position it would be the chord's, which from orbit sags kilometres
     // below the sphere between a coarse ring's vertices.
     out.height = (p.z + planet.radius * v.z) / (1.0 - v.z);
+    // The sketch's part of it, so the fragment can trade it for the sketch at its own footprint
+    // and keep the octaves the mesh carries.
+    out.sketch_height = planet_sketch(planet_texel_of(v), ring_spacing(v.w));
     return out;
+}
+
+// The hemisphere point (sin a·sin b, sin a·cos b, 1 − cos a, a) under the point `rel` (metres
+// in the tangent frame from the nadir, near the sphere): its direction from the centre, with
+// 1 − cos a from sin² a so that near the nadir it keeps its digits.
+fn hemisphere_of(rel: vec3<f32>) -> vec4<f32> {
+    let q = rel / planet.radius + vec3<f32>(0.0, 0.0, 1.0);
+    let d = q / length(q);
+    let s2 = dot(d.xy, d.xy);
+    let vers = s2 / (1.0 + sqrt(max(1.0 - s2, 0.0)));
+    return vec4<f32>(d.x, d.y, vers, asin(min(sqrt(s2), 1.0)));
 }
 
 // The surfaces of a planet by height, slope and latitude: sea, beach, grass and forest below
@@ -122,7 +137,8 @@ fn planet_albedo(h: f32, slope: f32, polar: f32) -> vec3<f32> {
     let rock = vec3<f32>(0.30, 0.28, 0.26);
     let sand = vec3<f32>(0.62, 0.55, 0.40);
     let snow = vec3<f32>(0.86, 0.88, 0.93);
-    var c = mix(forest, grass, smoothstep(300.0, 1500.0, h));
+    // Lowland grass with forest on moderate slopes, thinning with height.
+    var c = mix(grass, forest, smoothstep(0.03, 0.12, slope) * (1.0 - smoothstep(800.0, 1800.0, h)) * (1.0 - smoothstep(0.25, 0.35, slope)));
     c = mix(c, dry, smoothstep(1500.0, 2600.0, h));
     c = mix(c, rock, smoothstep(0.25, 0.45, slope));
     c = mix(c, sand, 1.0 - smoothstep(planet.water_m + 2.0, planet.water_m + 12.0, h));
@@ -135,10 +151,16 @@ fn planet_fs(in: VsOut) -> @location(0) vec4<f32> {
     let r = planet.radius;
     let from_centre = in.local + vec3<f32>(0.0, 0.0, r);
     let up = normalize(from_centre);
-    let h = in.height;
     let to_eye = frame.camera.eye - in.local;
     let dist = max(length(to_eye), 1e-3);
     let footprint = dist * frame.camera.pixel_scale;
+    // The surface's height at the pixel, from the sketch at the pixel's footprint: coasts, snow
+    // lines and surface types follow the terrain function, not the mesh's interpolated vertex
+    // heights, which from orbit run in steps of a few pixels. Where the mesh is finer than the
+    // sketch's own cells the two agree.
+    // (A vertex on the sea has lost its octaves to the water's level: none are kept there.)
+    let octaves = select(in.height - in.sketch_height, 0.0, in.height <= planet.water_m + ON_WATER_M);
+    let h = max(planet_sketch(planet_texel_of(hemisphere_of(in.rel)), footprint) + octaves, planet.water_m);
     var n = normalize(in.normal);
 #ifdef BUMP
 #ifdef NOISE

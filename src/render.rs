@@ -113,7 +113,12 @@ impl Renderer {
             atlas_buffer: &atlas_buffer,
             view,
             positions,
-            samples: ctx.samples(scene.render.msaa),
+            // The planet pass is not multisampled yet.
+            samples: if mode == Mode::Clipmaps {
+                1
+            } else {
+                ctx.samples(scene.render.msaa)
+            },
         };
         let planet = scene.planet().is_some();
         if planet != (mode == Mode::Clipmaps) && mode != Mode::Reference {

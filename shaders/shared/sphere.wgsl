@@ -119,6 +119,14 @@ fn planet_sketch(t: vec2<f32>, footprint: f32) -> f32 {
     return a + (planet_level(t, l0 + 1u) - a) * f;
 }
 
+// The distance to the vertex's farthest neighbour on a ring of angle `a`: across the rings
+// (a·(2^(1/m) − 1)) or along the ring (sin a · 2π/n), metres on the sphere.
+fn ring_spacing(a: f32) -> f32 {
+    let across = a * (exp2(1.0 / f32(planet.rings_per_level)) - 1.0);
+    let along = sin(a) * 6.2831855 / f32(planet.phi_steps);
+    return max(planet.radius * max(across, along), planet.min_spacing);
+}
+
 // Level-0 texel of the hemisphere point `v`, relative to the nadir's whole texel.
 fn planet_texel_of(v: vec4<f32>) -> vec2<f32> {
     let d = map_offset(v);

@@ -70,14 +70,14 @@ impl CameraPath {
     /// The scene's path, or without one a default pass: the scene's camera flown straight ahead
     /// (its horizontal view direction) for 10 s at the default speed, keeping its view direction.
     pub fn of_scene(scene: &Scene) -> Result<CameraPath> {
-        if let Some(p) = &scene.path {
-            return CameraPath::new(p);
-        }
         if scene.planet().is_some() {
             return Err(Error::value(
                 "path",
                 "camera paths over a planet are not built yet: render single views",
             ));
+        }
+        if let Some(p) = &scene.path {
+            return CameraPath::new(p);
         }
         let eye = scene.camera.eye();
         let look = scene.camera.target();

@@ -104,6 +104,10 @@ impl Scene {
                 None => Fault::Text(reason),
             }
         })?;
+        // A planet draws with clipmaps: the default mode, warped, cannot draw one.
+        if scene.planet().is_some() && scene.render.mode == super::Mode::Warped {
+            scene.render.mode = super::Mode::Clipmaps;
+        }
         Ok(scene)
     }
 }

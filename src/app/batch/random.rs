@@ -32,6 +32,12 @@ pub fn random_camera(
     seed: u64,
     i: usize,
 ) -> Result<Camera> {
+    if scene.planet().is_some() {
+        return Err(crate::Error::value(
+            "random",
+            "random cameras over a planet are not built yet: give the jobs their cameras",
+        ));
+    }
     let mut rng = SplitMix(seed ^ (i as u64).wrapping_mul(0xd1b5_4a32_d192_ed03));
     for _ in 0..3 {
         rng.next();

@@ -32,6 +32,11 @@ pub struct Args {
 #[cfg(feature = "view")]
 pub fn run(a: Args) -> Result<()> {
     let scene = terrain::scene::Scene::load_with(&a.scene, &a.set)?;
+    if scene.planet().is_some() {
+        anyhow::bail!(
+            "view: flying over a planet is not built yet (render single views with --mode clipmaps)"
+        );
+    }
     let mode = match a.mode {
         Some(m) => m,
         None if scene.render.mode == Mode::Reference => Mode::Warped,
