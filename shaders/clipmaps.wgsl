@@ -2,8 +2,10 @@
 // the nadir, carried to the terrain. Its map coordinates come from its offset and the nadir
 // (eq. 1–4, in the precise form of sphere.wgsl's `map_offset`), its height from the global
 // sketch at the pyramid level of its spacing (trilinear: continuous across rings and levels, so
-// none pops) plus the octaves up to its split octave. Output per vertex: (x, y, z, split
-// octave), metres in the nadir's tangent frame from the sphere's point under the camera.
+// none pops) plus the octaves up to its split octave. Output per vertex: (x, y, z, its
+// height before the sea covers it), metres in the nadir's tangent frame from the sphere's point
+// under the camera. (The split octave follows from the ring alone; the planet pass works it out
+// again, and keeps the unclamped height, which tells a lake from the geometry's rounding.)
 // Rust twin: src/gpu/clipmaps.rs (`vertex_cpu`).
 
 #import frame
@@ -33,7 +35,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         h += planet.octave[k - 1u].weight * g * octave_rel(planet.octave[k - 1u], rel).x;
     }
 #endif
-    h = max(h, planet.water_m);
-    let rh = planet.radius + h;
-    vertices[i] = vec4<f32>(rh * v.x, rh * v.y, h - rh * v.z, o);
+    let ground = max(h, planet.water_m);
+    let rh = planet.radius + ground;
+    vertices[i] = vec4<f32>(rh * v.x, rh * v.y, ground - rh * v.z, h);
 }

@@ -103,47 +103,18 @@ fn planet_vs(@builtin(vertex_index) i: u32) -> VsOut {
     out.normal = normal;
     let v = hemisphere[i];
     out.rel = planet.radius * vec3<f32>(v.x, v.y, -v.z);
-    out.split = p.w;
+    out.split = log2(frame.atlas.d_atlas / ring_spacing(v.w)) - planet.bias;
     out.inscatter = air.inscatter;
     out.through = air.through;
     out.grid = grid;
-    // The height above the sphere, per vertex: z = h − (R + h)·(1 − cos θ̃) undone. From the
-    // fragment's interpolated position it would be the chord's, which from orbit sags kilometres
-    // below the sphere between a coarse ring's vertices.
-    out.height = (p.z + planet.radius * v.z) / (1.0 - v.z);
+    // The ground's height before the sea covers it, per vertex (from the fragment's
+    // interpolated position it would be the chord's, which from orbit sags kilometres below the
+    // sphere between a coarse ring's vertices).
+    out.height = p.w;
     // The sketch's part of it, so the fragment can trade it for the sketch at its own footprint
     // and keep the octaves the mesh carries.
     out.sketch_height = planet_sketch(planet_texel_of(v), ring_spacing(v.w));
     return out;
-}
-
-// The hemisphere point (sin a·sin b, sin a·cos b, 1 − cos a, a) under the point `rel` (metres
-// in the tangent frame from the nadir, near the sphere): its direction from the centre, with
-// 1 − cos a from sin² a so that near the nadir it keeps its digits.
-fn hemisphere_of(rel: vec3<f32>) -> vec4<f32> {
-    let q = rel / planet.radius + vec3<f32>(0.0, 0.0, 1.0);
-    let d = q / length(q);
-    let s2 = dot(d.xy, d.xy);
-    let vers = s2 / (1.0 + sqrt(max(1.0 - s2, 0.0)));
-    return vec4<f32>(d.x, d.y, vers, asin(min(sqrt(s2), 1.0)));
-}
-
-// The surfaces of a planet by height, slope and latitude: sea, beach, grass and forest below
-// the tree line, rock on steep ground, snow high up (lower toward the poles).
-fn planet_albedo(h: f32, slope: f32, polar: f32) -> vec3<f32> {
-    let grass = vec3<f32>(0.16, 0.25, 0.08);
-    let forest = vec3<f32>(0.05, 0.09, 0.04);
-    let dry = vec3<f32>(0.36, 0.30, 0.20);
-    let rock = vec3<f32>(0.30, 0.28, 0.26);
-    let sand = vec3<f32>(0.62, 0.55, 0.40);
-    let snow = vec3<f32>(0.86, 0.88, 0.93);
-    // Lowland grass with forest on moderate slopes, thinning with height.
-    var c = mix(grass, forest, smoothstep(0.03, 0.12, slope) * (1.0 - smoothstep(800.0, 1800.0, h)) * (1.0 - smoothstep(0.25, 0.35, slope)));
-    c = mix(c, dry, smoothstep(1500.0, 2600.0, h));
-    c = mix(c, rock, smoothstep(0.25, 0.45, slope));
-    c = mix(c, sand, 1.0 - smoothstep(planet.water_m + 2.0, planet.water_m + 12.0, h));
-    let snow_line = 4200.0 * (1.0 - polar) + 200.0;
-    return mix(c, snow, smoothstep(snow_line, snow_line + 400.0, h) * (1.0 - smoothstep(0.5, 0.7, slope)));
 }
 
 @fragment
@@ -158,9 +129,8 @@ fn planet_fs(in: VsOut) -> @location(0) vec4<f32> {
     // lines and surface types follow the terrain function, not the mesh's interpolated vertex
     // heights, which from orbit run in steps of a few pixels. Where the mesh is finer than the
     // sketch's own cells the two agree.
-    // (A vertex on the sea has lost its octaves to the water's level: none are kept there.)
-    let octaves = select(in.height - in.sketch_height, 0.0, in.height <= planet.water_m + ON_WATER_M);
-    let h = max(planet_sketch(planet_texel_of(hemisphere_of(in.rel)), footprint) + octaves, planet.water_m);
+    let octaves = in.height - in.sketch_height;
+    var h = planet_sketch(planet_texel_of(hemisphere_of(in.rel)), footprint) + octaves;
     var n = normalize(in.normal);
 #ifdef BUMP
 #ifdef NOISE
@@ -173,7 +143,11 @@ fn planet_fs(in: VsOut) -> @location(0) vec4<f32> {
         let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
         let share = (1.0 - g) * b;
         if (share > 0.0) {
-            grad += planet.octave[k - 1u].weight * share * octave_rel(planet.octave[k - 1u], rel).yzw;
+            let o = planet.octave[k - 1u].weight * share * octave_rel(planet.octave[k - 1u], rel);
+            // The bump's octaves count in the pixel's height too, as the reference's surface
+            // holds them: a small lake the mesh cannot carry still shows as water.
+            h += o.x;
+            grad += o.yzw;
         }
     }
     // The gradient in the tangent frame, less its part along the vertical.
@@ -181,25 +155,8 @@ fn planet_fs(in: VsOut) -> @location(0) vec4<f32> {
     n = normalize(n - (gt - dot(gt, up) * up));
 #endif
 #endif
-    let mu_s = dot(up, planet.sun);
-    var colour: vec3<f32>;
-    if (h <= planet.water_m + ON_WATER_M) {
-        let cos_v = clamp(dot(to_eye / dist, up), 0.0, 1.0);
-        let fresnel = 0.02 + 0.98 * pow(1.0 - cos_v, 5.0);
-        let reflected = planet_sky(in.local, reflect(-to_eye / dist, up));
-        let sky = frame.shading.sky_light * smoothstep(-0.1, 0.17, mu_s);
-        let body = vec3<f32>(0.015, 0.045, 0.06) * (planet_sun(h, mu_s) * max(mu_s, 0.0) + sky);
-        colour = mix(body, reflected, fresnel);
-    } else {
-        let slope = 1.0 - clamp(dot(n, up), 0.0, 1.0);
-        // The sine of the point's latitude: its up's world z (east has none).
-        let polar = abs(dot(up.yz, vec2<f32>(planet.cos_lat, planet.sin_lat)));
-        let albedo = planet_albedo(h, slope, smoothstep(0.8, 0.98, polar));
-        let sun = max(dot(n, planet.sun), 0.0);
-        // The sky's light dims from 10° above the local horizon to 6° below it, as in the plane.
-        let sky = frame.shading.sky_light * smoothstep(-0.1, 0.17, mu_s) * (0.5 + 0.5 * dot(n, up));
-        colour = albedo * (planet_sun(h, mu_s) * sun + sky);
-    }
+    h = max(h, planet.water_m);
+    var colour = planet_lit(in.local, n, h, to_eye, dist);
     if (frame.camera.view == VIEW_WIREFRAME) {
         let d = abs(fract(in.grid + 0.5) - 0.5) / max(fwidth(in.grid), vec2<f32>(1e-6));
         colour = mix(vec3<f32>(0.05, 0.05, 0.08), colour, clamp(min(d.x, d.y), 0.0, 1.0));

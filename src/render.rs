@@ -131,12 +131,6 @@ impl Renderer {
                 },
             ));
         }
-        if planet && mode == Mode::Reference {
-            return Err(crate::Error::value(
-                "render.mode",
-                "the reference does not ray-march planets yet: render with clipmaps",
-            ));
-        }
         let lod: Box<dyn Lod> = match mode {
             Mode::Clipmaps => Box::new(crate::lod::clipmaps::Clipmaps::new(&shared)?),
             Mode::Warped => Box::new(Warped::new(&shared)?),

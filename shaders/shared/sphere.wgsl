@@ -269,3 +269,80 @@ fn planet_sky(eye: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
     }
     return colour;
 }
+
+// The hemisphere point (sin a·sin b, sin a·cos b, 1 − cos a, a) under the point `rel` (metres
+// in the tangent frame from the nadir, near the sphere): its direction from the centre, with
+// 1 − cos a from sin² a so that near the nadir it keeps its digits.
+fn hemisphere_of(rel: vec3<f32>) -> vec4<f32> {
+    let q = rel / planet.radius + vec3<f32>(0.0, 0.0, 1.0);
+    let d = q / length(q);
+    let s2 = dot(d.xy, d.xy);
+    let vers = s2 / (1.0 + sqrt(max(1.0 - s2, 0.0)));
+    return vec4<f32>(d.x, d.y, vers, asin(min(sqrt(s2), 1.0)));
+}
+
+// The surfaces of a planet by height, slope and latitude: sea, beach, grass and forest below
+// the tree line, rock on steep ground, snow high up (lower toward the poles).
+fn planet_albedo(h: f32, slope: f32, polar: f32) -> vec3<f32> {
+    let grass = vec3<f32>(0.16, 0.25, 0.08);
+    let forest = vec3<f32>(0.05, 0.09, 0.04);
+    let dry = vec3<f32>(0.36, 0.30, 0.20);
+    let rock = vec3<f32>(0.30, 0.28, 0.26);
+    let sand = vec3<f32>(0.62, 0.55, 0.40);
+    let snow = vec3<f32>(0.86, 0.88, 0.93);
+    // Lowland grass with forest on moderate slopes, thinning with height.
+    var c = mix(grass, forest, smoothstep(0.03, 0.12, slope) * (1.0 - smoothstep(800.0, 1800.0, h)) * (1.0 - smoothstep(0.25, 0.35, slope)));
+    c = mix(c, dry, smoothstep(1500.0, 2600.0, h));
+    c = mix(c, rock, smoothstep(0.25, 0.45, slope));
+    c = mix(c, sand, 1.0 - smoothstep(planet.water_m + 2.0, planet.water_m + 12.0, h));
+    let snow_line = 4200.0 * (1.0 - polar) + 200.0;
+    return mix(c, snow, smoothstep(snow_line, snow_line + 400.0, h) * (1.0 - smoothstep(0.5, 0.7, slope)));
+}
+
+// The light a point `p` of the ground at height `h` with normal `n` (tangent frame) sends toward
+// the eye `dist` away along `to_eye`, before the air between: the sun as it stands at the point
+// (so across the terminator it sets), the sky's light, the sea as a dark body reflecting the sky.
+fn planet_lit(p: vec3<f32>, n: vec3<f32>, h: f32, to_eye: vec3<f32>, dist: f32) -> vec3<f32> {
+    let up = normalize(p + vec3<f32>(0.0, 0.0, planet.radius));
+    let mu_s = dot(up, planet.sun);
+    if (h <= planet.water_m + ON_WATER_M) {
+        let cos_v = clamp(dot(to_eye / dist, up), 0.0, 1.0);
+        let fresnel = 0.02 + 0.98 * pow(1.0 - cos_v, 5.0);
+        let reflected = planet_sky(p, reflect(-to_eye / dist, up));
+        let sky = frame.shading.sky_light * smoothstep(-0.1, 0.17, mu_s);
+        let body = vec3<f32>(0.015, 0.045, 0.06) * (planet_sun(h, mu_s) * max(mu_s, 0.0) + sky);
+        return mix(body, reflected, fresnel);
+    }
+    let slope = 1.0 - clamp(dot(n, up), 0.0, 1.0);
+    // The sine of the point's latitude: its up's world z (east has none).
+    let polar = abs(dot(up.yz, vec2<f32>(planet.cos_lat, planet.sin_lat)));
+    let albedo = planet_albedo(h, slope, smoothstep(0.8, 0.98, polar));
+    let sun = max(dot(n, planet.sun), 0.0);
+    // The sky's light dims from 10° above the local horizon to 6° below it, as in the plane.
+    let sky = frame.shading.sky_light * smoothstep(-0.1, 0.17, mu_s) * (0.5 + 0.5 * dot(n, up));
+    return albedo * (planet_sun(h, mu_s) * sun + sky);
+}
+
+// The terrain function at the hemisphere point `v` for a footprint of `footprint` metres: the
+// sketch at the footprint's level plus every octave k with its pixel share b_k, never below the
+// sea (the reference's surface).
+fn planet_ground(v: vec4<f32>, footprint: f32) -> f32 {
+    var h = planet_sketch(planet_texel_of(v), footprint);
+#ifdef NOISE
+    let o_px = log2(frame.atlas.d_atlas / max(footprint, 1e-6));
+    let last = min(planet.octaves, u32(max(ceil(o_px), 0.0)));
+    let rel = sphere_rel(v);
+    for (var k = 1u; k <= last; k++) {
+        let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
+        h += planet.octave[k - 1u].weight * b * octave_rel(planet.octave[k - 1u], rel).x;
+    }
+#endif
+    return max(h, planet.water_m);
+}
+
+// A point's height above the sphere, |p − centre| − R without the difference of two large
+// numbers (p in the tangent frame, the centre R below its origin).
+fn planet_altitude(p: vec3<f32>) -> f32 {
+    let r = planet.radius;
+    return (dot(p.xy, p.xy) + p.z * (p.z + 2.0 * r)) / (length(p + vec3<f32>(0.0, 0.0, r)) + r);
+}

@@ -144,7 +144,8 @@ pub struct ClipmapsPass {
     bind_group: wgpu::BindGroup,
     /// The static hemisphere, per vertex (sin θ̃ sin φ̃, sin θ̃ cos φ̃, 1 − cos θ̃, θ̃).
     pub hemisphere: Buffer,
-    /// The frame's vertices: (x, y, z, split octave) in the nadir's tangent frame.
+    /// The frame's vertices: (x, y, z) in the nadir's tangent frame and the height before the
+    /// sea covers it.
     pub vertices: Buffer,
 }
 
@@ -293,9 +294,9 @@ pub fn vertex_cpu(planet: &Planet, atlas_d: f32, u: &PlanetUniforms, v: Vec4) ->
         let (n, _) = gradient_noise3(glam::IVec3::from(oc.lattice) + c.as_ivec3(), q - c, oc.seed);
         h += oc.weight * g * n;
     }
-    h = h.max(u.water_m);
-    let rh = u.radius + h;
-    Vec4::new(rh * v.x, rh * v.y, h - rh * v.z, o)
+    let ground = h.max(u.water_m);
+    let rh = u.radius + ground;
+    Vec4::new(rh * v.x, rh * v.y, ground - rh * v.z, h)
 }
 
 /// The geographic position of hemisphere point (angle `a`, bearing `b`) seen from `geo`

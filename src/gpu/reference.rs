@@ -29,6 +29,8 @@ pub struct Features {
     pub detail_shadows: bool,
     /// Four rays per pixel at the multisampling pattern's positions, averaged (`render.msaa`).
     pub supersample: bool,
+    /// A planet: its uniform block (`shaders/planet_reference.wgsl` marches the sphere).
+    pub planet: Option<wgpu::Buffer>,
 }
 
 impl ReferencePass {
@@ -43,14 +45,18 @@ impl ReferencePass {
         height: u32,
         features: Features,
     ) -> Result<ReferencePass> {
+        let mut entries = vec![
+            entry(0, S::COMPUTE, uniform()),
+            entry(1, S::COMPUTE, storage(true)),
+            entry(2, S::COMPUTE, storage(false)),
+            entry(3, S::COMPUTE, storage(false)),
+        ];
+        if features.planet.is_some() {
+            entries.push(entry(4, S::COMPUTE, uniform()));
+        }
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("reference"),
-            entries: &[
-                entry(0, S::COMPUTE, uniform()),
-                entry(1, S::COMPUTE, storage(true)),
-                entry(2, S::COMPUTE, storage(false)),
-                entry(3, S::COMPUTE, storage(false)),
-            ],
+            entries: &entries,
         });
         let mut flags = Vec::new();
         for (on, flag) in [
@@ -67,7 +73,11 @@ impl ReferencePass {
             }
         }
         let flags = flags.as_slice();
-        let pipeline = compute_pipeline(device, "reference", flags, &layout)?;
+        let shader = match features.planet {
+            Some(_) => "planet_reference",
+            None => "reference",
+        };
+        let pipeline = compute_pipeline(device, shader, flags, &layout)?;
         let buffer = |label| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -77,15 +87,19 @@ impl ReferencePass {
             })
         };
         let (colour, position) = (buffer("reference colour"), buffer("reference position"));
+        let mut binds = vec![
+            bind(0, frame),
+            bind(1, atlas),
+            bind(2, &colour),
+            bind(3, &position),
+        ];
+        if let Some(planet) = &features.planet {
+            binds.push(bind(4, planet));
+        }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("reference"),
             layout: &layout,
-            entries: &[
-                bind(0, frame),
-                bind(1, atlas),
-                bind(2, &colour),
-                bind(3, &position),
-            ],
+            entries: &binds,
         });
         Ok(ReferencePass {
             pipeline,

@@ -19,13 +19,17 @@ const SHARED: [(&str, &str); 6] = [
 ];
 
 /// The passes' WGSL files, by name.
-pub const PASSES: [(&str, &str); 6] = [
+pub const PASSES: [(&str, &str); 7] = [
     ("warp_zoom", include_str!("../../shaders/warp_zoom.wgsl")),
     ("normals", include_str!("../../shaders/normals.wgsl")),
     ("terrain", include_str!("../../shaders/terrain.wgsl")),
     ("reference", include_str!("../../shaders/reference.wgsl")),
     ("clipmaps", include_str!("../../shaders/clipmaps.wgsl")),
     ("planet", include_str!("../../shaders/planet.wgsl")),
+    (
+        "planet_reference",
+        include_str!("../../shaders/planet_reference.wgsl"),
+    ),
 ];
 
 /// Every flag any pass tests, for validating all variants.

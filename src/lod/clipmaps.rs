@@ -84,19 +84,11 @@ impl Clipmaps {
             size,
             &flags,
         )?;
-        let c = &s.scene.camera;
-        let (lat, lon) = (
-            c.lat_deg.unwrap_or(0.0).to_radians(),
-            c.lon_deg.unwrap_or(0.0).to_radians(),
-        );
-        let (az, el) = s.scene.light.sun_deg();
-        let (az, el) = (az.to_radians(), el.to_radians());
-        let local = DVec3::new(el.cos() * az.sin(), el.cos() * az.cos(), el.sin());
         Ok(Clipmaps {
             rings,
             radius: p.radius_m,
             detail: s.detail.clone(),
-            sun_world: Tangent::at(lat, lon).world(local),
+            sun_world: sun_world(s.scene),
             planet_uniforms,
             clipmaps,
             pass,
@@ -113,6 +105,20 @@ impl Clipmaps {
     pub fn read_vertices(&self, ctx: &GpuContext) -> Result<Vec<[f32; 4]>> {
         crate::gpu::frame_io::read_vec4(ctx, &self.clipmaps.vertices)
     }
+}
+
+/// Toward the sun in world axes: where the scene's camera sees it at `light.sun_azimuth_deg`
+/// and `light.sun_elevation_deg` (or the time's), fixed for the whole planet.
+pub fn sun_world(scene: &crate::scene::Scene) -> DVec3 {
+    let c = &scene.camera;
+    let (lat, lon) = (
+        c.lat_deg.unwrap_or(0.0).to_radians(),
+        c.lon_deg.unwrap_or(0.0).to_radians(),
+    );
+    let (az, el) = scene.light.sun_deg();
+    let (az, el) = (az.to_radians(), el.to_radians());
+    let local = DVec3::new(el.cos() * az.sin(), el.cos() * az.cos(), el.sin());
+    Tangent::at(lat, lon).world(local)
 }
 
 /// The levels and uniforms for `camera` over `atlas` (the planet's global sketch).

@@ -17,12 +17,38 @@ pub struct Reference {
     /// March step as a fraction of the height above the ground (`reference.step`); `compare`
     /// halves it to test convergence.
     pub step: f32,
+    /// On a planet: what its uniform block is made from, and the block.
+    planet: Option<PlanetMarch>,
+}
+
+/// The planet's part of the reference: the sphere, its detail, the sun, the uniform block (a
+/// small hemisphere only to fill the block's ring fields, which the march does not read).
+struct PlanetMarch {
+    radius: f64,
+    detail: crate::detail::Detail,
+    sun_world: glam::DVec3,
+    rings: crate::planet::rings::Rings,
+    buffer: crate::gpu::alloc::Buffer,
+    uniforms: Option<crate::gpu::clipmaps::PlanetUniforms>,
 }
 
 impl Reference {
     pub fn new(s: &Shared) -> Result<Reference> {
         let (w, h) = (s.scene.camera.width, s.scene.camera.height);
         let noise = s.detail.octaves > 0;
+        let planet = s.scene.planet().map(|p| PlanetMarch {
+            radius: p.radius_m,
+            detail: s.detail.clone(),
+            sun_world: crate::lod::clipmaps::sun_world(s.scene),
+            rings: crate::planet::rings::Rings::new(8, 1),
+            buffer: s.alloc.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("planet uniforms"),
+                size: std::mem::size_of::<crate::gpu::clipmaps::PlanetUniforms>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            uniforms: None,
+        });
         let pass = ReferencePass::new(
             &s.alloc,
             s.frame,
@@ -33,12 +59,14 @@ impl Reference {
                 noise,
                 shadows: s.scene.render.shadows,
                 detail_shadows: s.scene.render.detail_shadows,
-                supersample: s.samples > 1,
+                supersample: s.samples > 1 && planet.is_none(),
+                planet: planet.as_ref().map(|p| wgpu::Buffer::clone(&p.buffer)),
             },
         )?;
         Ok(Reference {
             pass,
             step: s.scene.reference.step as f32,
+            planet,
         })
     }
 }
@@ -48,7 +76,19 @@ impl Lod for Reference {
         &[ReferencePass::NAME]
     }
 
-    fn prepare(&mut self, _: &Atlas, _: &Camera) -> CpuTimes {
+    fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes {
+        if let (Some(p), Some(geo)) = (&mut self.planet, &camera.geo) {
+            let (_, u) = crate::lod::clipmaps::plan(
+                atlas,
+                p.radius,
+                &p.detail,
+                &p.rings,
+                p.sun_world,
+                camera,
+                geo,
+            );
+            p.uniforms = Some(u);
+        }
         CpuTimes::default()
     }
 
@@ -59,10 +99,18 @@ impl Lod for Reference {
 
     fn record(
         &mut self,
-        _: &GpuContext,
+        ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         t: Option<&Timer>,
     ) -> &'static [&'static str] {
+        if let Some(PlanetMarch {
+            buffer,
+            uniforms: Some(u),
+            ..
+        }) = &self.planet
+        {
+            ctx.queue.write_buffer(buffer, 0, bytemuck::bytes_of(u));
+        }
         self.pass
             .record(encoder, t.map(|t| t.compute(ReferencePass::NAME)));
         &[ReferencePass::NAME]
