@@ -12,8 +12,23 @@
 @group(0) @binding(4) var<storage, read> vertices: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> hemisphere: array<vec4<f32>>;
 
-fn frag_out(colour: vec3<f32>) -> vec4<f32> {
-    return vec4<f32>(select(colour, display(colour), frame.camera.view <= VIEW_WIREFRAME), 1.0);
+// The colour, and with POSITIONS each pixel's depth as four bytes (0 on sky), as the terrain
+// pass writes it, for recovering its ground position on the CPU.
+struct FragOut {
+    @location(0) colour: vec4<f32>,
+#ifdef POSITIONS
+    @location(1) depth_bytes: vec4<f32>,
+#endif
+}
+
+fn frag_out(colour: vec3<f32>, depth: f32) -> FragOut {
+    var out: FragOut;
+    out.colour = vec4<f32>(select(colour, display(colour), frame.camera.view <= VIEW_WIREFRAME), 1.0);
+#ifdef POSITIONS
+    let bits = bitcast<u32>(depth);
+    out.depth_bytes = vec4<f32>(vec4<u32>(bits & 255u, (bits >> 8u) & 255u, (bits >> 16u) & 255u, bits >> 24u)) / 255.0;
+#endif
+    return out;
 }
 
 struct SkyOut {
@@ -31,14 +46,14 @@ fn sky_vs(@builtin(vertex_index) vi: u32) -> SkyOut {
 }
 
 @fragment
-fn sky_fs(in: SkyOut) -> @location(0) vec4<f32> {
+fn sky_fs(in: SkyOut) -> FragOut {
     if (frame.camera.view == VIEW_COVERAGE) {
-        return frag_out(vec3<f32>(0.0));
+        return frag_out(vec3<f32>(0.0), 0.0);
     }
     // The point at infinity under the pixel (depth 0 with reversed Z): a direction, with none
     // of the eye's translation, which from orbit is 2e7 m and would cost an f32 its metres.
     let dir = normalize((frame.camera.inv_view_proj * vec4<f32>(in.ndc, 0.0, 1.0)).xyz);
-    return frag_out(planet_sky(frame.camera.eye, dir));
+    return frag_out(planet_sky(frame.camera.eye, dir), 0.0);
 }
 
 struct VsOut {
@@ -118,7 +133,7 @@ fn planet_vs(@builtin(vertex_index) i: u32) -> VsOut {
 }
 
 @fragment
-fn planet_fs(in: VsOut) -> @location(0) vec4<f32> {
+fn planet_fs(in: VsOut) -> FragOut {
     let r = planet.radius;
     let from_centre = in.local + vec3<f32>(0.0, 0.0, r);
     let up = normalize(from_centre);
@@ -166,7 +181,7 @@ fn planet_fs(in: VsOut) -> @location(0) vec4<f32> {
     } else if (frame.camera.view == VIEW_NORMALS) {
         colour = n * 0.5 + 0.5;
     } else if (frame.camera.view == VIEW_COVERAGE) {
-        return frag_out(vec3<f32>(1.0));
+        return frag_out(vec3<f32>(1.0), in.clip.z);
     }
-    return frag_out(colour * in.through + in.inscatter);
+    return frag_out(colour * in.through + in.inscatter, in.clip.z);
 }

@@ -5,7 +5,7 @@
 //! z-fighting. Owns the colour and depth targets.
 
 use super::alloc::{Alloc, Buffer, Texture};
-use super::terrain::{COLOUR, DEPTH};
+use super::terrain::{COLOUR, DEPTH, DEPTH_COPY};
 use super::{bind, entry, shader_module, storage, uniform};
 use crate::error::Result;
 use crate::planet::rings::{Rings, Span};
@@ -20,6 +20,8 @@ pub struct PlanetPass {
     colour_view: wgpu::TextureView,
     depth_view: wgpu::TextureView,
     _depth: Texture,
+    /// Each pixel's depth as a colour target, when positions are asked for.
+    depth_copy: Option<(Texture, wgpu::TextureView)>,
 }
 
 impl PlanetPass {
@@ -37,7 +39,14 @@ impl PlanetPass {
         rings: &Rings,
         (width, height): (u32, u32),
         flags: &[&str],
+        positions: bool,
     ) -> Result<PlanetPass> {
+        let mut flags = flags.to_vec();
+        let mut targets = vec![Some(wgpu::ColorTargetState::from(COLOUR))];
+        if positions {
+            flags.push("POSITIONS");
+            targets.push(Some(DEPTH_COPY.into()));
+        }
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("planet"),
             entries: &[
@@ -48,7 +57,7 @@ impl PlanetPass {
                 entry(4, S::VERTEX, storage(true)),
             ],
         });
-        let module = shader_module(device, Self::NAME, flags)?;
+        let module = shader_module(device, Self::NAME, &flags)?;
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("planet"),
             bind_group_layouts: &[Some(&layout)],
@@ -80,7 +89,7 @@ impl PlanetPass {
                     module: &module,
                     entry_point: Some(fs),
                     compilation_options: Default::default(),
-                    targets: &[Some(COLOUR.into())],
+                    targets: &targets,
                 }),
                 multiview_mask: None,
                 cache: None,
@@ -130,6 +139,12 @@ impl PlanetPass {
             "colour",
         );
         let depth = target(DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT, "depth");
+        let depth_copy = positions.then(|| {
+            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+            let t = target(DEPTH_COPY, usage, "depth copy");
+            let view = t.create_view(&Default::default());
+            (t, view)
+        });
         Ok(PlanetPass {
             sky,
             planet: planet_pipeline,
@@ -139,7 +154,25 @@ impl PlanetPass {
             depth_view: depth.create_view(&Default::default()),
             colour,
             _depth: depth,
+            depth_copy,
         })
+    }
+
+    /// Ground positions of the last frame's pixels, drawn from `camera` (metres in its nadir's
+    /// tangent frame, w = 1 on ground), from the depth copy.
+    pub fn read_positions(
+        &self,
+        ctx: &super::context::GpuContext,
+        camera: &crate::camera::Camera,
+    ) -> Result<Vec<[f32; 4]>> {
+        let (depth, _) = self
+            .depth_copy
+            .as_ref()
+            .ok_or(crate::error::Error::Internal(
+                "positions were not asked for when the renderer was built",
+            ))?;
+        let view_proj = super::uniforms::view_proj(camera, super::uniforms::frame_origin(camera));
+        super::frame_io::positions_from_depth(ctx, depth, view_proj)
     }
 
     /// Records the sky and the rings of `span` with their fill.
@@ -150,17 +183,25 @@ impl PlanetPass {
         span: Span,
         timestamps: Option<wgpu::RenderPassTimestampWrites>,
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(Self::NAME),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &self.colour_view,
+        let attach = |view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
                     load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
                     store: wgpu::StoreOp::Store,
                 },
-            })],
+            })
+        };
+        let copy = self.depth_copy.as_ref().map(|(_, view)| attach(view));
+        let attachments: Vec<_> = [Some(attach(&self.colour_view)), copy]
+            .into_iter()
+            .flatten()
+            .collect();
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(Self::NAME),
+            color_attachments: &attachments,
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &self.depth_view,
                 depth_ops: Some(wgpu::Operations {

@@ -83,6 +83,7 @@ impl Clipmaps {
             &rings,
             size,
             &flags,
+            s.positions,
         )?;
         Ok(Clipmaps {
             rings,
@@ -200,11 +201,8 @@ impl Lod for Clipmaps {
         self.readback.read(ctx)
     }
 
-    fn read_positions(&self, _ctx: &GpuContext, _camera: &Camera) -> Result<Vec<[f32; 4]>> {
-        Err(Error::value(
-            "render.mode",
-            "clipmaps: pixel positions (for screen-space error) are not built yet",
-        ))
+    fn read_positions(&self, ctx: &GpuContext, camera: &Camera) -> Result<Vec<[f32; 4]>> {
+        self.pass.read_positions(ctx, camera)
     }
 
     fn triangles(&self) -> u64 {
