@@ -195,8 +195,10 @@ fn view_keys_switch_mode_record_the_path_and_quit() {
     let recorded = terrain::scene::Scene::load(&flown).expect("the recorded scene loads");
     let path = recorded.path.expect("a [path]");
     let (first, last) = (
-        path.keys[0].position,
-        path.keys[path.keys.len() - 1].position,
+        path.keys[0].position.expect("a planar key"),
+        path.keys[path.keys.len() - 1]
+            .position
+            .expect("a planar key"),
     );
     assert!(
         path.keys.len() >= 2 && last[1] - first[1] > 10.0,

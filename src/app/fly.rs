@@ -13,7 +13,7 @@
 
 use crate::app::animation::{self, Apng};
 use crate::app::output::{Fixed, write_atomic, write_image};
-use crate::app::path::CameraPath;
+use crate::app::path::{CameraPath, PlanetFlight};
 use crate::app::progress::Progress;
 use crate::error::{Error, Result, Role};
 use crate::gpu::frame_io::PassTimes;
@@ -131,8 +131,7 @@ fn spread(duration: f64, n: usize) -> Vec<f64> {
 
 /// The times along `path` of the frames to render, and why they are not `fps` frames a second
 /// of travel when they are not.
-pub fn frame_times(path: &CameraPath, o: &Options) -> (Vec<f64>, Option<String>) {
-    let duration = path.duration_s();
+pub fn frame_times(duration: f64, o: &Options) -> (Vec<f64>, Option<String>) {
     match o.frames {
         Some(n) => (spread(duration, n.min(MAX_FRAMES)), None),
         None => {
@@ -157,12 +156,24 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
     let mut r = Renderer::new(scene, o.mode, o.view)?;
     let atlas = r.atlas().clone();
-    let path = CameraPath::of_scene(scene)?;
-    let (times, frames_note) = frame_times(&path, o);
-    let cameras = times
-        .iter()
-        .map(|&t| path.camera(t, scene, &atlas))
-        .collect::<Result<Vec<_>>>()?;
+    // A planet's flight runs in equal time from key to key; a sketch's path at constant speed.
+    let (times, frames_note, cameras) = if scene.planet().is_some() {
+        let flight = PlanetFlight::of_scene(scene)?;
+        let (times, note) = frame_times(flight.duration_s, o);
+        let cameras = times
+            .iter()
+            .map(|&t| flight.camera(t, scene, &atlas))
+            .collect::<Result<Vec<_>>>()?;
+        (times, note, cameras)
+    } else {
+        let path = CameraPath::of_scene(scene)?;
+        let (times, note) = frame_times(path.duration_s(), o);
+        let cameras = times
+            .iter()
+            .map(|&t| path.camera(t, scene, &atlas))
+            .collect::<Result<Vec<_>>>()?;
+        (times, note, cameras)
+    };
     let (w, h) = (scene.camera.width, scene.camera.height);
     let mp4 = o.mp4 && animation::ffmpeg_available();
     let apng_path = out_dir.join("animation.png");

@@ -125,10 +125,10 @@ impl PathRecorder {
             || (moved > 0.0
                 && (self.since_key_s >= Self::EVERY_S || self.since_key_m >= Self::EVERY_M));
         if due {
-            self.keys.push(PathKey {
-                position: cam.eye.to_array(),
-                look_at: Some((cam.eye + cam.forward() * 1000.0).to_array()),
-            });
+            self.keys.push(PathKey::at(
+                cam.eye.to_array(),
+                Some((cam.eye + cam.forward() * 1000.0).to_array()),
+            ));
             self.since_key_s = 0.0;
             self.since_key_m = 0.0;
         }
@@ -138,15 +138,16 @@ impl PathRecorder {
     /// The path flown, or None when it has fewer than two distinct keys.
     pub fn finish(&self, cam: &FlyCamera) -> Option<PathSection> {
         let mut keys = self.keys.clone();
-        if keys.last().map(|k| k.position) != Some(cam.eye.to_array()) {
-            keys.push(PathKey {
-                position: cam.eye.to_array(),
-                look_at: Some((cam.eye + cam.forward() * 1000.0).to_array()),
-            });
+        if keys.last().and_then(|k| k.position) != Some(cam.eye.to_array()) {
+            keys.push(PathKey::at(
+                cam.eye.to_array(),
+                Some((cam.eye + cam.forward() * 1000.0).to_array()),
+            ));
         }
         keys.dedup_by(|a, b| a.position == b.position);
         (keys.len() >= 2 && self.distance_m > 0.0).then(|| PathSection {
             speed_mps: (self.distance_m / self.seconds.max(1e-3)).max(1.0),
+            duration_s: None,
             keys,
         })
     }

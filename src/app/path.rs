@@ -86,15 +86,10 @@ impl CameraPath {
         let step = (heading * speed * 10.0).extend(0.0);
         CameraPath::new(&PathSection {
             speed_mps: speed,
+            duration_s: None,
             keys: vec![
-                PathKey {
-                    position: eye.to_array(),
-                    look_at: Some(look.to_array()),
-                },
-                PathKey {
-                    position: (eye + step).to_array(),
-                    look_at: Some((look + step).to_array()),
-                },
+                PathKey::at(eye.to_array(), Some(look.to_array())),
+                PathKey::at((eye + step).to_array(), Some((look + step).to_array())),
             ],
         })
     }
@@ -113,7 +108,8 @@ impl CameraPath {
 
     fn key(&self, i: isize) -> DVec3 {
         let n = self.keys.len() as isize;
-        let at = |k: isize| DVec3::from(self.keys[k as usize].position);
+        // `Scene::check` gives every key of a planar path its position.
+        let at = |k: isize| DVec3::from(self.keys[k as usize].position.unwrap_or_default());
         match i {
             i if i < 0 => 2.0 * at(0) - at(1),
             i if i >= n => 2.0 * at(n - 1) - at(n - 2),
@@ -218,20 +214,143 @@ impl CameraPath {
     }
 }
 
+/// A flight over a planet (`[path]` keys with `lat_deg`, `lon_deg`, `altitude_m`, `heading_deg`,
+/// `pitch_deg`): each key to the next in equal time, `path.duration_s` (60 s by default) in all.
+/// Between two keys the nadir moves along the great circle, the altitude geometrically (a
+/// descent from orbit to the ground spends as long on each factor of height), heading the short
+/// way round and pitch linearly, each eased in and out by a smoothstep, so the camera rests at
+/// every key. Constant speed, as the planar path keeps it, means nothing across seven orders of
+/// magnitude of height.
+pub struct PlanetFlight {
+    keys: Vec<PathKey>,
+    pub duration_s: f64,
+}
+
+/// A planet flight's default duration, seconds.
+pub const PLANET_FLIGHT_S: f64 = 60.0;
+
+impl PlanetFlight {
+    pub fn of_scene(scene: &Scene) -> Result<PlanetFlight> {
+        let p = scene.path.as_ref().ok_or(Error::value(
+            "path",
+            "a flight over a planet needs a [path] with keys (lat_deg, lon_deg, altitude_m, \
+             heading_deg, pitch_deg)",
+        ))?;
+        Ok(PlanetFlight {
+            keys: p.keys.clone(),
+            duration_s: p.duration_s.unwrap_or(PLANET_FLIGHT_S),
+        })
+    }
+
+    /// The camera keys' values at time `t_s`: latitude, longitude (degrees), altitude (metres),
+    /// heading and pitch (degrees).
+    pub fn at(&self, t_s: f64) -> [f64; 5] {
+        let segments = (self.keys.len() - 1) as f64;
+        let x = (t_s / self.duration_s).clamp(0.0, 1.0) * segments;
+        let seg = (x.floor() as usize).min(self.keys.len() - 2);
+        let u = x - seg as f64;
+        let w = u * u * (3.0 - 2.0 * u);
+        let (a, b) = (&self.keys[seg], &self.keys[seg + 1]);
+        let get = |k: &PathKey| {
+            (
+                k.lat_deg.unwrap_or(0.0).to_radians(),
+                k.lon_deg.unwrap_or(0.0).to_radians(),
+                k.altitude_m.unwrap_or(1.0),
+                k.heading_deg.unwrap_or(0.0),
+                k.pitch_deg.unwrap_or(0.0),
+            )
+        };
+        let (la, oa, ha, da, pa) = get(a);
+        let (lb, ob, hb, db, pb) = get(b);
+        // The great circle between the two nadirs.
+        let (ua, ub) = (crate::planet::unit(la, oa), crate::planet::unit(lb, ob));
+        let angle = ua.angle_between(ub);
+        let dir = if angle < 1e-12 {
+            ua
+        } else {
+            (ua * ((1.0 - w) * angle).sin() + ub * (w * angle).sin()) / angle.sin()
+        };
+        let (lat, lon) = crate::planet::lat_lon(dir);
+        let altitude = (ha.ln() + (hb.ln() - ha.ln()) * w).exp();
+        let turn = (db - da + 540.0).rem_euclid(360.0) - 180.0;
+        [
+            lat.to_degrees(),
+            lon.to_degrees(),
+            altitude,
+            da + turn * w,
+            pa + (pb - pa) * w,
+        ]
+    }
+
+    /// The camera at time `t_s`, with the scene camera's lens and image.
+    pub fn camera(&self, t_s: f64, scene: &Scene, atlas: &Atlas) -> Result<Camera> {
+        let [lat, lon, altitude, heading, pitch] = self.at(t_s);
+        let mut s = scene.clone();
+        let c = &mut s.camera;
+        c.lat_deg = Some(lat);
+        c.lon_deg = Some(lon);
+        c.altitude_m = Some(altitude);
+        c.heading_deg = heading;
+        c.pitch_deg = pitch;
+        crate::scene::camera_of(&s, atlas)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// A planet's flight rests at each key, spends equal time from key to key, and halves the
+    /// geometric mean of two altitudes at the middle of their segment.
+    #[test]
+    fn a_planet_flight_passes_its_keys_and_descends_geometrically() {
+        let key = |lat: f64, lon: f64, alt: f64, heading: f64| PathKey {
+            position: None,
+            look_at: None,
+            lat_deg: Some(lat),
+            lon_deg: Some(lon),
+            altitude_m: Some(alt),
+            heading_deg: Some(heading),
+            pitch_deg: Some(-30.0),
+        };
+        let flight = PlanetFlight {
+            keys: vec![
+                key(10.0, 170.0, 2e7, 350.0),
+                key(12.0, -170.0, 2e3, 10.0),
+                key(12.0, -169.0, 2.0, 10.0),
+            ],
+            duration_s: 20.0,
+        };
+        let start = flight.at(0.0);
+        assert!(
+            (start[0] - 10.0).abs() < 1e-9
+                && (start[1] - 170.0).abs() < 1e-9
+                && (start[2] - 2e7).abs() < 1e-3
+        );
+        let mid = flight.at(5.0);
+        assert!(
+            (mid[2] - (2e7f64 * 2e3).sqrt()).abs() < 1e-6 * mid[2],
+            "{}",
+            mid[2]
+        );
+        // Across the date line, not around the world; heading through north, not south.
+        assert!(mid[1].abs() > 170.0, "{}", mid[1]);
+        assert!(
+            mid[3].rem_euclid(360.0) < 1.0 || mid[3].rem_euclid(360.0) > 359.0,
+            "{}",
+            mid[3]
+        );
+        let key1 = flight.at(10.0);
+        assert!((key1[2] - 2e3).abs() < 1e-6 && (key1[0] - 12.0).abs() < 1e-9);
+        let end = flight.at(20.0);
+        assert!((end[2] - 2.0).abs() < 1e-9 && (end[1] + 169.0).abs() < 1e-9);
+    }
+
     fn section(points: &[[f64; 3]]) -> PathSection {
         PathSection {
             speed_mps: 100.0,
-            keys: points
-                .iter()
-                .map(|&p| PathKey {
-                    position: p,
-                    look_at: None,
-                })
-                .collect(),
+            duration_s: None,
+            keys: points.iter().map(|&p| PathKey::at(p, None)).collect(),
         }
     }
 

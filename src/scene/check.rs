@@ -204,8 +204,64 @@ impl Scene {
                     p.keys.len()
                 ));
             }
+            let planet = self.planet().is_some();
+            if let Some(d) = p.duration_s {
+                open_range("path.duration_s", d, 0.0, 1e9)?;
+            }
             for (k, key) in p.keys.iter().enumerate() {
-                finite_all(&format!("path.keys[{k}].position"), &key.position)?;
+                let geo = [key.lat_deg, key.lon_deg, key.altitude_m];
+                if planet {
+                    if key.position.is_some()
+                        || key.look_at.is_some()
+                        || geo.iter().any(|g| g.is_none())
+                    {
+                        return Err(format!(
+                            "path.keys[{k}]: a planet's key gives lat_deg, lon_deg and \
+                             altitude_m (with heading_deg, pitch_deg), not position and look_at"
+                        ));
+                    }
+                    within(
+                        &format!("path.keys[{k}].lat_deg"),
+                        key.lat_deg.unwrap_or(0.0),
+                        -90.0,
+                        90.0,
+                    )?;
+                    finite_all(
+                        &format!("path.keys[{k}].lon_deg"),
+                        &[key.lon_deg.unwrap_or(0.0)],
+                    )?;
+                    within(
+                        &format!("path.keys[{k}].altitude_m"),
+                        key.altitude_m.unwrap_or(1.0),
+                        0.01,
+                        1e9,
+                    )?;
+                    finite_all(
+                        &format!("path.keys[{k}].heading_deg"),
+                        &[key.heading_deg.unwrap_or(0.0)],
+                    )?;
+                    within(
+                        &format!("path.keys[{k}].pitch_deg"),
+                        key.pitch_deg.unwrap_or(0.0),
+                        -90.0,
+                        90.0,
+                    )?;
+                    continue;
+                }
+                let Some(position) = key.position else {
+                    return Err(format!(
+                        "path.keys[{k}]: give position (lat_deg, lon_deg and altitude_m place a planet's keys)"
+                    ));
+                };
+                if geo.iter().any(|g| g.is_some())
+                    || key.heading_deg.is_some()
+                    || key.pitch_deg.is_some()
+                {
+                    return Err(format!(
+                        "path.keys[{k}]: lat_deg, lon_deg, altitude_m, heading_deg and pitch_deg are a planet's keys"
+                    ));
+                }
+                finite_all(&format!("path.keys[{k}].position"), &position)?;
                 if let Some(l) = key.look_at {
                     finite_all(&format!("path.keys[{k}].look_at"), &l)?;
                 }

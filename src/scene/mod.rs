@@ -436,6 +436,8 @@ impl Scene {
 pub struct PathSection {
     #[serde(default = "default_speed")]
     pub speed_mps: f64,
+    /// A planet's flight: how long it takes, seconds (each key to the next in equal time).
+    pub duration_s: Option<f64>,
     pub keys: Vec<PathKey>,
 }
 fn default_speed() -> f64 {
@@ -445,8 +447,30 @@ fn default_speed() -> f64 {
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PathKey {
-    pub position: [f64; 3],
+    /// A point of a planar path (required there), world metres.
+    pub position: Option<[f64; 3]>,
     pub look_at: Option<[f64; 3]>,
+    /// A planet's key: where the camera stands and looks, as the camera's keys of the same names.
+    pub lat_deg: Option<f64>,
+    pub lon_deg: Option<f64>,
+    pub altitude_m: Option<f64>,
+    pub heading_deg: Option<f64>,
+    pub pitch_deg: Option<f64>,
+}
+
+impl PathKey {
+    /// A planar key at `position`.
+    pub fn at(position: [f64; 3], look_at: Option<[f64; 3]>) -> PathKey {
+        PathKey {
+            position: Some(position),
+            look_at,
+            lat_deg: None,
+            lon_deg: None,
+            altitude_m: None,
+            heading_deg: None,
+            pitch_deg: None,
+        }
+    }
 }
 
 impl Scene {
