@@ -101,6 +101,7 @@ impl Renderer {
             device: &ctx.device,
             ledger: &ledger,
         };
+        let planet = scene.planet().is_some();
         let frame = uniform_buffer(&alloc);
         let atlas_buffer = upload_atlas(&alloc, &atlas);
         let shared = Shared {
@@ -113,14 +114,13 @@ impl Renderer {
             atlas_buffer: &atlas_buffer,
             view,
             positions,
-            // The planet pass is not multisampled yet.
-            samples: if mode == Mode::Clipmaps {
+            // Planets are not multisampled (nor supersampled) yet.
+            samples: if planet {
                 1
             } else {
                 ctx.samples(scene.render.msaa)
             },
         };
-        let planet = scene.planet().is_some();
         if planet != (mode == Mode::Clipmaps) && mode != Mode::Reference {
             return Err(crate::Error::value(
                 "render.mode",

@@ -65,6 +65,8 @@ struct CsvRow<'a> {
     normals_ms: Option<Fixed<3>>,
     terrain_ms: Option<Fixed<3>>,
     reference_ms: Option<Fixed<3>>,
+    clipmaps_ms: Option<Fixed<3>>,
+    planet_ms: Option<Fixed<3>>,
     file: &'a str,
 }
 
@@ -85,6 +87,8 @@ impl CsvRow<'_> {
             normals_ms: ms(NormalsPass::NAME),
             terrain_ms: ms(TerrainPass::NAME),
             reference_ms: ms(ReferencePass::NAME),
+            clipmaps_ms: ms(crate::gpu::clipmaps::ClipmapsPass::NAME),
+            planet_ms: ms(crate::gpu::planet::PlanetPass::NAME),
             file: &r.file,
         }
     }

@@ -73,7 +73,7 @@ impl CameraPath {
         if scene.planet().is_some() {
             return Err(Error::value(
                 "path",
-                "camera paths over a planet are not built yet: render single views",
+                "this command does not follow a planet yet (fly does, along a planet's [path])",
             ));
         }
         if let Some(p) = &scene.path {
