@@ -58,24 +58,29 @@ struct Scatter {
     through: vec3<f32>,
 }
 
+// The air's (x) and the haze's (y) phase at the cosine `mu` between the ray and the sun, each
+// with the isotropic share for the orders of scattering the integral leaves out.
+fn phases(mu: f32) -> vec2<f32> {
+    let g = MIE_G;
+    let rayleigh = 3.0 / 16.0 * (1.0 + mu * mu);
+    let mie = 3.0 / 8.0 * (1.0 - g * g) * (1.0 + mu * mu) / ((2.0 + g * g) * pow(1.0 + g * g - 2.0 * g * mu, 1.5));
+    return vec2<f32>(rayleigh, mie) + MULTIPLE * 0.25;
+}
+
 // The single-scattering integral over `len` metres from height `eye_z` along `dir`, in STEPS
 // samples spaced quadratically from the eye, plus an isotropic share for higher orders.
 fn scatter(eye_z: f32, dir: vec3<f32>, len: f32) -> Scatter {
     let hm = frame.shading.haze_height_m;
     let haze = frame.shading.haze_per_m;
-    let mu = dot(dir, frame.shading.sun);
-    let rayleigh_phase = 3.0 / 16.0 * (1.0 + mu * mu);
-    let g = MIE_G;
-    let mie_phase = 3.0 / 8.0 * (1.0 - g * g) * (1.0 + mu * mu) / ((2.0 + g * g) * pow(1.0 + g * g - 2.0 * g * mu, 1.5));
-    let iso = MULTIPLE * 0.25;
+    let phase = phases(dot(dir, frame.shading.sun));
     var inscatter = vec3<f32>(0.0);
     for (var i = 0; i < STEPS; i++) {
         let u = (f32(i) + 0.5) / f32(STEPS);
         let t = len * u * u;
         let dt = len * 2.0 * u / f32(STEPS);
         let z = eye_z + dir.z * t;
-        let scattered = RAYLEIGH * density(z, RAYLEIGH_SCALE_M) * (rayleigh_phase + iso)
-            + vec3<f32>(haze * HAZE_ALBEDO * density(z, hm) * (mie_phase + iso));
+        let scattered = RAYLEIGH * density(z, RAYLEIGH_SCALE_M) * phase.x
+            + vec3<f32>(haze * HAZE_ALBEDO * density(z, hm) * phase.y);
         let tau = RAYLEIGH * air_along(eye_z, z, t, RAYLEIGH_SCALE_M) + vec3<f32>(haze * air_along(eye_z, z, t, hm));
         inscatter += scattered * exp(-tau) * sun_at(z) * dt;
     }

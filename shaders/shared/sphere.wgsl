@@ -206,11 +206,7 @@ fn planet_scatter(eye: vec3<f32>, dir: vec3<f32>, len: f32) -> Scatter {
     }
     let hm = frame.shading.haze_height_m;
     let haze = frame.shading.haze_per_m;
-    let mu = dot(dir, planet.sun);
-    let rayleigh_phase = 3.0 / 16.0 * (1.0 + mu * mu);
-    let g = MIE_G;
-    let mie_phase = 3.0 / 8.0 * (1.0 - g * g) * (1.0 + mu * mu) / ((2.0 + g * g) * pow(1.0 + g * g - 2.0 * g * mu, 1.5));
-    let iso = MULTIPLE * 0.25;
+    let phase = phases(dot(dir, planet.sun));
     var tau = vec3<f32>(0.0);
     for (var i = 0; i < STEPS; i++) {
         let u = (f32(i) + 0.5) / f32(STEPS);
@@ -221,8 +217,8 @@ fn planet_scatter(eye: vec3<f32>, dir: vec3<f32>, len: f32) -> Scatter {
         let dist = length(from_centre);
         let z = max(dist - r, 0.0);
         let ext = RAYLEIGH * density(z, RAYLEIGH_SCALE_M) + vec3<f32>(haze * density(z, hm));
-        let scattered = RAYLEIGH * density(z, RAYLEIGH_SCALE_M) * (rayleigh_phase + iso)
-            + vec3<f32>(haze * HAZE_ALBEDO * density(z, hm) * (mie_phase + iso));
+        let scattered = RAYLEIGH * density(z, RAYLEIGH_SCALE_M) * phase.x
+            + vec3<f32>(haze * HAZE_ALBEDO * density(z, hm) * phase.y);
         let at = tau + 0.5 * ext * dt;
         out.inscatter += scattered * exp(-at) * planet_sun(z, dot(from_centre / dist, planet.sun)) * dt;
         tau += ext * dt;

@@ -4,6 +4,7 @@
 //! to and the f64 terrain function ([`crate::planet::Planet::ground`]) holds in turn.
 
 use super::alloc::{Alloc, Buffer};
+use super::warp_zoom::catmull_rom;
 use super::{bind, compute_pipeline, entry, storage, uniform};
 use crate::camera::Geo;
 use crate::detail::Detail;
@@ -11,7 +12,6 @@ use crate::error::Result;
 use crate::planet::noise::{SphereOctave, gradient_noise3, lattice_scale};
 use crate::planet::rings::{Rings, Span};
 use crate::planet::{Planet, Tangent};
-use crate::sketch::Atlas;
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, IVec2, Vec2, Vec3, Vec4};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
@@ -228,16 +228,6 @@ fn texel_of(u: &PlanetUniforms, v: Vec4) -> Vec2 {
     Vec2::from(u.texel_frac) + Vec2::new(d.y, d.x) * Vec2::from(u.texels_per_rad)
 }
 
-fn catmull_rom(f: f32) -> [f32; 4] {
-    let (f2, f3) = (f * f, f * f * f);
-    [
-        -0.5 * f3 + f2 - 0.5 * f,
-        1.5 * f3 - 2.5 * f2 + 1.0,
-        -1.5 * f3 + 2.0 * f2 + 0.5 * f,
-        0.5 * f3 - 0.5 * f2,
-    ]
-}
-
 /// `planet_level` in the shader.
 fn planet_level(planet: &Planet, u: &PlanetUniforms, t: Vec2, l: usize) -> f32 {
     let s = (1u32 << l) as f32;
@@ -307,9 +297,4 @@ pub fn lat_lon_of(geo: &Geo, a: f64, b: f64) -> (f64, f64) {
     let u = t.up * ca + (t.north * b.cos() + t.east * b.sin()) * sa;
     let (lat, lon) = crate::planet::lat_lon(u);
     (lat.clamp(-FRAC_PI_2, FRAC_PI_2), lon)
-}
-
-/// Whether the atlas is a planet's global sketch as the clipmaps sample it.
-pub fn sketch_is_global(atlas: &Atlas) -> bool {
-    atlas.width() == 2 * atlas.height()
 }

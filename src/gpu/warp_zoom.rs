@@ -111,7 +111,7 @@ fn mesh_xy(f: &FrameUniforms, phi: &[[f32; 2]], ij: IVec2) -> Vec2 {
     )
 }
 
-fn catmull_rom(t: f32) -> [f32; 4] {
+pub(crate) fn catmull_rom(t: f32) -> [f32; 4] {
     let (t2, t3) = (t * t, t * t * t);
     [
         -0.5 * t3 + t2 - 0.5 * t,
