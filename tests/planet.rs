@@ -358,3 +358,44 @@ fn moving_the_camera_a_metre_moves_the_picture_as_the_geometry_predicts() {
     );
     assert!(median <= 0.1, "median {median} px");
 }
+
+/// A global GeoTIFF as GDAL writes it (north row first, 5.625° cells; made by
+/// scripts/make-planet-fixture.sh) is a planet's sketch, read the right way up: the sketch's
+/// bicubic at a cell's centre is the formula's value there. A regional file is refused.
+#[test]
+fn a_global_geotiff_is_a_planet_and_a_regional_one_is_refused() {
+    let global = |path: &str| {
+        scene(
+            &format!(
+                "[sketch]\npath = \"{path}\"\n[planet]\n[camera]\nlat_deg = 10.0\nlon_deg = 45.0\n\
+                 altitude_m = 10000000.0\npitch_deg = -90.0\nwidth = 32\nheight = 32\n"
+            ),
+            manifest_dir(),
+        )
+    };
+    let s = global("tests/data/planet/global-64x32.tif");
+    let atlas = terrain::scene::load_atlas(&s).expect("a global sketch");
+    let planet = Planet {
+        radius: 6_371_000.0,
+        sketch: &atlas,
+    };
+    for (i, j) in [(0usize, 0usize), (10, 5), (40, 20), (63, 31)] {
+        let lon = (-180.0 + (i as f64 + 0.5) * 5.625f64).to_radians();
+        let lat = (90.0 - (j as f64 + 0.5) * 5.625f64).to_radians();
+        let want = 3000.0 * lat.cos() * (2.0 * lon).sin() + 1000.0 * (3.0 * lat).sin() - 500.0;
+        let got = planet.sketch_height(lat, lon, 0.0);
+        assert!((got - want).abs() < 0.1, "cell ({i}, {j}): {got} vs {want}");
+    }
+    let (_, frame) = render(&s);
+    let centre = ((16 * 32 + 16) * 4) as usize;
+    assert!(
+        frame.rgba[centre..centre + 3].iter().any(|&c| c > 20),
+        "the disc's centre is dark"
+    );
+    let regional = global("tests/data/formats/bigendian-lzw-pred1-Float32.tif");
+    let err = terrain::scene::load_atlas(&regional)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(err.contains("global") && !err.contains('\n'), "{err}");
+}
