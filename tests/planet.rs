@@ -394,8 +394,7 @@ fn a_global_geotiff_is_a_planet_and_a_regional_one_is_refused() {
     );
     let regional = global("tests/data/formats/bigendian-lzw-pred1-Float32.tif");
     let err = terrain::scene::load_atlas(&regional)
-        .err()
-        .expect("refused")
+        .expect_err("refused")
         .to_string();
     assert!(err.contains("global") && !err.contains('\n'), "{err}");
 }
