@@ -64,15 +64,13 @@ pub struct PlanetUniforms {
 }
 
 impl PlanetUniforms {
-    /// The block for a camera at `geo` drawing `span` of `rings`, the sun toward `sun` (the
-    /// nadir's east, north, up).
+    /// The block for a camera at `geo`, the sun toward `sun` (the nadir's east, north, up); the
+    /// rings' fields stay 0 until [`draw`](PlanetUniforms::draw) (the reference reads none).
     pub fn new(
         planet: &Planet,
         detail: &Detail,
         geo: &Geo,
         eye_m: f64,
-        rings: &Rings,
-        span: Span,
         sun: DVec3,
     ) -> PlanetUniforms {
         let t = Tangent::at(geo.lat, geo.lon);
@@ -81,12 +79,6 @@ impl PlanetUniforms {
         let w = planet.sketch.width() as f64;
         let whole = texel.floor();
         let origin = IVec2::new(whole.x.rem_euclid(w) as i32, whole.y as i32);
-        let range = rings.vertex_range(span);
-        let m = rings.rings_per_level;
-        let inner_ring = (span.last_level + 1) * m;
-        let a = crate::planet::rings::ring_angle(inner_ring, m);
-        let spacing = planet.radius
-            * (a * ((1.0 / m as f64).exp2() - 1.0)).max(a.sin() * TAU / rings.phi_steps as f64);
         let mut octave = [SphereOctaveUniforms::default(); 24];
         let anchor = t.up * planet.radius;
         for (k, o) in (1..=detail.octaves).zip(octave.iter_mut()) {
@@ -120,15 +112,15 @@ impl PlanetUniforms {
                 (w / TAU) as f32,
                 (planet.sketch.height() as f64 / PI) as f32,
             ],
-            phi_steps: rings.phi_steps,
-            rings_per_level: m,
-            first_vertex: range.start,
-            vertex_count: range.end - range.start,
-            nadir: rings.nadir(),
-            inner_ring,
+            phi_steps: 0,
+            rings_per_level: 0,
+            first_vertex: 0,
+            vertex_count: 0,
+            nadir: 0,
+            inner_ring: 0,
             levels: planet.usable_levels() as u32,
             octaves: detail.octaves.min(24),
-            min_spacing: spacing as f32,
+            min_spacing: 0.0,
             bias: detail.bias as f32,
             water_m: planet.sketch.water_m,
             pad0: 0,
@@ -136,6 +128,23 @@ impl PlanetUniforms {
             pad2: 0,
             octave,
         }
+    }
+
+    /// The rings' fields for drawing `span` of `rings` with a planet of `radius` metres.
+    pub fn draw(&mut self, rings: &Rings, span: Span, radius: f64) {
+        let range = rings.vertex_range(span);
+        let m = rings.rings_per_level;
+        let inner_ring = (span.last_level + 1) * m;
+        let a = crate::planet::rings::ring_angle(inner_ring, m);
+        let spacing = radius
+            * (a * ((1.0 / m as f64).exp2() - 1.0)).max(a.sin() * TAU / rings.phi_steps as f64);
+        self.phi_steps = rings.phi_steps;
+        self.rings_per_level = m;
+        self.first_vertex = range.start;
+        self.vertex_count = range.end - range.start;
+        self.nadir = rings.nadir();
+        self.inner_ring = inner_ring;
+        self.min_spacing = spacing as f32;
     }
 }
 

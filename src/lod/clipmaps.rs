@@ -122,16 +122,26 @@ pub fn sun_world(scene: &crate::scene::Scene) -> DVec3 {
     Tangent::at(lat, lon).world(local)
 }
 
-/// The levels and uniforms for `camera` over `atlas` (the planet's global sketch).
+/// The planet's uniforms for `camera` (at `geo`) over `atlas`, the planet's global sketch; the
+/// rings' fields are the clipmaps' to fill.
 pub fn plan(
     atlas: &Atlas,
     radius: f64,
     detail: &Detail,
-    rings: &Rings,
     sun_world: DVec3,
     camera: &Camera,
     geo: &Geo,
-) -> (Span, PlanetUniforms) {
+) -> PlanetUniforms {
+    let planet = Planet {
+        radius,
+        sketch: atlas,
+    };
+    let sun = Tangent::at(geo.lat, geo.lon).local(sun_world);
+    PlanetUniforms::new(&planet, detail, geo, camera.eye.z, sun)
+}
+
+/// The levels `camera` (at `geo`) sees of the planet (seed 003 §4.5).
+fn levels(atlas: &Atlas, radius: f64, detail: &Detail, camera: &Camera, geo: &Geo) -> Span {
     let planet = Planet {
         radius,
         sketch: atlas,
@@ -142,10 +152,7 @@ pub fn plan(
     let low = (atlas.min_m as f64 - detail.reach_m()).max(atlas.water_m as f64);
     let high = atlas.max_m as f64 + detail.reach_m();
     let pixel_rad = camera.fov_y / camera.height as f64;
-    let span = visible_span(radius, eye_m - low, high - low, eye_m - ground, pixel_rad);
-    let sun = Tangent::at(geo.lat, geo.lon).local(sun_world);
-    let u = PlanetUniforms::new(&planet, detail, geo, eye_m, rings, span, sun);
-    (span, u)
+    visible_span(radius, eye_m - low, high - low, eye_m - ground, pixel_rad)
 }
 
 impl Lod for Clipmaps {
@@ -156,15 +163,16 @@ impl Lod for Clipmaps {
     fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes {
         let start = Instant::now();
         if let Some(geo) = &camera.geo {
-            let (span, u) = plan(
+            let mut u = plan(
                 atlas,
                 self.radius,
                 &self.detail,
-                &self.rings,
                 self.sun_world,
                 camera,
                 geo,
             );
+            let span = levels(atlas, self.radius, &self.detail, camera, geo);
+            u.draw(&self.rings, span, self.radius);
             self.span = span;
             self.uniforms = Some(u);
         } else {

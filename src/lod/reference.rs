@@ -21,13 +21,11 @@ pub struct Reference {
     planet: Option<PlanetMarch>,
 }
 
-/// The planet's part of the reference: the sphere, its detail, the sun, the uniform block (a
-/// small hemisphere only to fill the block's ring fields, which the march does not read).
+/// The planet's part of the reference: the sphere, its detail, the sun, the uniform block.
 struct PlanetMarch {
     radius: f64,
     detail: crate::detail::Detail,
     sun_world: glam::DVec3,
-    rings: crate::planet::rings::Rings,
     buffer: crate::gpu::alloc::Buffer,
     uniforms: Option<crate::gpu::clipmaps::PlanetUniforms>,
 }
@@ -40,7 +38,6 @@ impl Reference {
             radius: p.radius_m,
             detail: s.detail.clone(),
             sun_world: crate::lod::clipmaps::sun_world(s.scene),
-            rings: crate::planet::rings::Rings::new(8, 1),
             buffer: s.alloc.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("planet uniforms"),
                 size: std::mem::size_of::<crate::gpu::clipmaps::PlanetUniforms>() as u64,
@@ -78,15 +75,8 @@ impl Lod for Reference {
 
     fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes {
         if let (Some(p), Some(geo)) = (&mut self.planet, &camera.geo) {
-            let (_, u) = crate::lod::clipmaps::plan(
-                atlas,
-                p.radius,
-                &p.detail,
-                &p.rings,
-                p.sun_world,
-                camera,
-                geo,
-            );
+            let u =
+                crate::lod::clipmaps::plan(atlas, p.radius, &p.detail, p.sun_world, camera, geo);
             p.uniforms = Some(u);
         }
         CpuTimes::default()

@@ -25,12 +25,13 @@ impl Scene {
         positive("sketch.spacing_m", s.spacing_m)?;
         positive("sketch.height_scale", s.height_scale)?;
         if let Some(size) = s.size {
-            let most = if self.planet().is_some() {
-                65536.0
+            // A planet's width: halved down its pyramid, 16384 × 8192 f32 is 512 MiB.
+            let (least, most) = if self.planet().is_some() {
+                (8.0, 16384.0)
             } else {
-                4097.0
+                (2.0, 4097.0)
             };
-            within("sketch.size", size as f64, 2.0, most)?;
+            within("sketch.size", size as f64, least, most)?;
         }
         if let Some(o) = s.origin_m {
             finite_all("sketch.origin_m", &o)?;
