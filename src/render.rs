@@ -58,13 +58,17 @@ pub struct Renderer {
 
 /// What a scene in `mode` needs of the adapter: the atlas, and the warped mode's mesh.
 pub fn needs(scene: &Scene, mode: Mode, atlas: &Atlas) -> Needs {
-    let mesh = if mode == Mode::Warped {
-        scene.warp.mesh as u64
-    } else {
-        0
+    let largest = match mode {
+        // The detailed geometry image: a vec4 per vertex.
+        Mode::Warped => (scene.warp.mesh as u64).pow(2) * 16,
+        // The hemisphere's vertices carried to the terrain: a vec4 each.
+        Mode::Clipmaps => scene.planet().map_or(0, |p| {
+            crate::planet::rings::vertex_count(p.phi_steps, p.rings_per_level) * 16
+        }),
+        _ => 0,
     };
     Needs {
-        storage_bytes: atlas.bytes().max(mesh * mesh * 16),
+        storage_bytes: atlas.bytes().max(largest),
     }
 }
 
@@ -188,7 +192,8 @@ impl Renderer {
     /// `camera` drawn with the level of detail of the last frame (the warped mode's CPU stage
     /// frozen, GeoMipMap's selection kept): what a frame would show without the LOD update.
     pub fn render_held(&mut self, camera: &Camera) -> Result<Frame> {
-        self.draw(camera, CpuTimes::default())
+        let camera = self.lod.held_camera(camera);
+        self.draw(&camera, CpuTimes::default())
     }
 
     /// The uniform block of a frame of `camera`: the shared part, then the scheme's.

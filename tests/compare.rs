@@ -238,3 +238,68 @@ fn scene_settings_are_in_the_default_sweep() {
         }
     }
 }
+
+/// On a planet `compare` sweeps clipmaps' φ steps and rings per level against the planet's
+/// reference (triangles doubling with φ steps), flies the default pass for the path series with
+/// the LOD change measured, and refuses planar modes in one line (and clipmaps on a sketch).
+#[test]
+fn compare_sweeps_a_planets_clipmaps() {
+    let dir = scratch("compare-planet");
+    let out = dir.display().to_string();
+    let planet = sketch("planet-10km.toml");
+    let (code, stdout, err) = terrain(&[
+        "compare",
+        &planet,
+        "--out-dir",
+        &out,
+        "--size",
+        "32",
+        "--repeat",
+        "1",
+        "--path-frames",
+        "3",
+        "--set",
+        "sketch.size=128",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("clipmaps"), "{stdout}");
+    let csv = std::fs::read_to_string(dir.join("report.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 6, "{csv}");
+    assert!(rows.iter().all(|r| r[0] == "clipmaps"), "{csv}");
+    let column = |name: &str| CSV_COLUMNS.iter().position(|c| *c == name).unwrap();
+    let triangles: Vec<u64> = rows[..4]
+        .iter()
+        .map(|r| r[column("triangles")].parse().unwrap())
+        .collect();
+    for w in triangles.windows(2) {
+        assert_eq!(w[1], 2 * w[0], "triangles over φ steps: {triangles:?}");
+    }
+    for r in &rows {
+        for name in ["psnr_db", "sse_mean_px", "lod_change_levels"] {
+            let v: f64 = r[column(name)].parse().unwrap_or(f64::NAN);
+            assert!(
+                v.is_finite() && v >= 0.0,
+                "{name} = {}: {csv}",
+                r[column(name)]
+            );
+        }
+    }
+    let path = std::fs::read_to_string(dir.join("path.csv")).unwrap();
+    assert_eq!(path.lines().count(), 4, "{path}");
+    assert!(dir.join("error_vs_triangles.png").exists() && dir.join("strip.png").exists());
+
+    for (scene, modes, cause) in [
+        (planet.as_str(), "warped", "planet"),
+        (&*sketch("gaussian.toml"), "clipmaps", "clipmaps"),
+    ] {
+        let (code, _, err) = terrain(&["compare", scene, "--out-dir", &out, "--modes", modes]);
+        assert_ne!(code, 0, "{modes} on {scene} succeeded");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(err.contains("--modes") && err.contains(cause), "{err}");
+    }
+}

@@ -398,3 +398,33 @@ fn a_global_geotiff_is_a_planet_and_a_regional_one_is_refused() {
         .to_string();
     assert!(err.contains("global") && !err.contains('\n'), "{err}");
 }
+
+/// Drawing with the last frame's rings (`render_held`, what `compare` measures swimming by)
+/// re-expresses the moved camera in the held nadir's frame: the held frame of a still camera is
+/// the frame itself, and after a move it shows what the moved camera sees, far closer to the
+/// updated frame than the unmoved picture is.
+#[test]
+fn held_rings_are_seen_from_where_the_camera_moved() {
+    let a = planet_scene(46.5, 9.8, 3000.0, -25.0, 64);
+    let mut b = a.clone();
+    b.camera.lon_deg = Some(9.8 + 0.03); // 2.3 km east
+    b.camera.heading_deg = 70.0;
+    let mut r = Renderer::new(&a, Mode::Clipmaps, View::Shaded).expect("renderer");
+    let (ca, cb) = (
+        terrain::scene::camera_of(&a, &r.atlas).expect("camera"),
+        terrain::scene::camera_of(&b, &r.atlas).expect("camera"),
+    );
+    let first = r.render(&ca).expect("frame");
+    assert_eq!(r.render_held(&ca).expect("held").rgba, first.rgba);
+    let held = r.render_held(&cb).expect("held");
+    let updated = r.render(&cb).expect("frame");
+    let (moved, unmoved) = (
+        psnr(&held.rgba, &updated.rgba),
+        psnr(&first.rgba, &updated.rgba),
+    );
+    eprintln!("held against updated {moved:.1} dB; the unmoved frame {unmoved:.1} dB");
+    assert!(
+        moved >= 30.0 && moved >= unmoved + 10.0,
+        "{moved:.1} / {unmoved:.1} dB"
+    );
+}

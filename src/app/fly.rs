@@ -13,7 +13,7 @@
 
 use crate::app::animation::{self, Apng};
 use crate::app::output::{Fixed, write_atomic, write_image};
-use crate::app::path::{CameraPath, PlanetFlight};
+use crate::app::path::Flight;
 use crate::app::progress::Progress;
 use crate::error::{Error, Result, Role};
 use crate::gpu::frame_io::PassTimes;
@@ -161,23 +161,12 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
     let mut r = Renderer::new(scene, o.mode, o.view)?;
     let atlas = r.atlas().clone();
     // A planet's flight runs in equal time from key to key; a sketch's path at constant speed.
-    let (times, frames_note, cameras) = if scene.planet().is_some() {
-        let flight = PlanetFlight::of_scene(scene)?;
-        let (times, note) = frame_times(flight.duration_s, o);
-        let cameras = times
-            .iter()
-            .map(|&t| flight.camera(t, scene, &atlas))
-            .collect::<Result<Vec<_>>>()?;
-        (times, note, cameras)
-    } else {
-        let path = CameraPath::of_scene(scene)?;
-        let (times, note) = frame_times(path.duration_s(), o);
-        let cameras = times
-            .iter()
-            .map(|&t| path.camera(t, scene, &atlas))
-            .collect::<Result<Vec<_>>>()?;
-        (times, note, cameras)
-    };
+    let flight = Flight::of_scene(scene)?;
+    let (times, frames_note) = frame_times(flight.duration_s(), o);
+    let cameras = times
+        .iter()
+        .map(|&t| flight.camera(t, scene, &atlas))
+        .collect::<Result<Vec<_>>>()?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     let mp4 = o.mp4 && animation::ffmpeg_available();
     let apng_path = out_dir.join("animation.png");

@@ -73,7 +73,7 @@ impl CameraPath {
         if scene.planet().is_some() {
             return Err(Error::value(
                 "path",
-                "this command does not follow a planet yet (fly does, along a planet's [path])",
+                "a planet scene flies a planet's flight, not a planar path",
             ));
         }
         if let Some(p) = &scene.path {
@@ -214,6 +214,73 @@ impl CameraPath {
     }
 }
 
+/// What a command flies: a sketch's camera path, or a flight over a planet.
+pub enum Flight {
+    Path(CameraPath),
+    Planet(PlanetFlight),
+}
+
+impl Flight {
+    /// The scene's `[path]`, or without one its camera flown straight ahead (see
+    /// [`CameraPath::of_scene`] and [`PlanetFlight::of_scene`]).
+    pub fn of_scene(scene: &Scene) -> Result<Flight> {
+        Ok(match scene.planet() {
+            Some(p) => Flight::Planet(PlanetFlight::of_scene(scene, p.radius_m)?),
+            None => Flight::Path(CameraPath::of_scene(scene)?),
+        })
+    }
+
+    pub fn duration_s(&self) -> f64 {
+        match self {
+            Flight::Path(p) => p.duration_s(),
+            Flight::Planet(f) => f.duration_s,
+        }
+    }
+
+    /// The camera at time `t_s` from the start, with the scene camera's lens and image.
+    pub fn camera(&self, t_s: f64, scene: &Scene, atlas: &Atlas) -> Result<Camera> {
+        match self {
+            Flight::Path(p) => p.camera(t_s, scene, atlas),
+            Flight::Planet(f) => f.camera(t_s, scene, atlas),
+        }
+    }
+
+    /// `frames` cameras `1/fps` seconds apart from the start (the last no further than the end).
+    pub fn cameras(
+        &self,
+        frames: usize,
+        fps: f64,
+        scene: &Scene,
+        atlas: &Atlas,
+    ) -> Result<Vec<Camera>> {
+        (0..frames)
+            .map(|i| self.camera((i as f64 / fps).min(self.duration_s()), scene, atlas))
+            .collect()
+    }
+
+    /// Where the flight comes from, for reports.
+    pub fn source(&self, scene: &Scene) -> &'static str {
+        match (self, scene.path.is_some()) {
+            (_, true) => "scene [path]",
+            (Flight::Path(_), false) => "default: straight ahead at 150 m/s",
+            (Flight::Planet(_), false) => {
+                "default: straight ahead, at the camera's altitude, its altitude's distance in 10 s"
+            }
+        }
+    }
+}
+
+/// The eye of `camera` in world metres: a planet's from its centre (`radius` its sphere's).
+pub fn world_eye(camera: &Camera, radius: Option<f64>) -> DVec3 {
+    match (camera.geo, radius) {
+        (Some(g), Some(r)) => {
+            crate::planet::unit(g.lat, g.lon) * r
+                + crate::planet::Tangent::at(g.lat, g.lon).world(camera.eye)
+        }
+        _ => camera.eye,
+    }
+}
+
 /// A flight over a planet (`[path]` keys with `lat_deg`, `lon_deg`, `altitude_m`, `heading_deg`,
 /// `pitch_deg`): each key to the next in equal time, `path.duration_s` (60 s by default) in all.
 /// Between two keys the nadir moves along the great circle, the altitude geometrically (a
@@ -224,21 +291,60 @@ impl CameraPath {
 pub struct PlanetFlight {
     keys: Vec<PathKey>,
     pub duration_s: f64,
+    /// Whether the camera rests at each key (a scene's path) or moves evenly (the default pass).
+    ease: bool,
 }
 
 /// A planet flight's default duration, seconds.
 pub const PLANET_FLIGHT_S: f64 = 60.0;
+/// The default pass over a planet without a `[path]`: this long, seconds.
+pub const PLANET_PASS_S: f64 = 10.0;
 
 impl PlanetFlight {
-    pub fn of_scene(scene: &Scene) -> Result<PlanetFlight> {
-        let p = scene.path.as_ref().ok_or(Error::value(
-            "path",
-            "a flight over a planet needs a [path] with keys (lat_deg, lon_deg, altitude_m, \
-             heading_deg, pitch_deg)",
-        ))?;
+    /// The scene's `[path]`; without one, a pass of [`PLANET_PASS_S`] seconds straight ahead
+    /// along the great circle of the camera's heading, at its altitude and pitch, covering its
+    /// altitude in ground distance (at least 10 m, at most a tenth of `radius`): from every height
+    /// the same apparent speed, evenly, with no rest at either end.
+    pub fn of_scene(scene: &Scene, radius: f64) -> Result<PlanetFlight> {
+        if let Some(p) = &scene.path {
+            return Ok(PlanetFlight {
+                keys: p.keys.clone(),
+                duration_s: p.duration_s.unwrap_or(PLANET_FLIGHT_S),
+                ease: true,
+            });
+        }
+        let c = &scene.camera;
+        let (lat, lon) = (
+            c.lat_deg.unwrap_or(0.0).to_radians(),
+            c.lon_deg.unwrap_or(0.0).to_radians(),
+        );
+        let altitude = c.altitude_m.unwrap_or(1.0);
+        let angle = altitude.clamp(10.0, 0.1 * radius) / radius;
+        let heading = c.heading_deg.to_radians();
+        let start = crate::planet::unit(lat, lon);
+        let t = crate::planet::Tangent::at(lat, lon);
+        let along = t.east * heading.sin() + t.north * heading.cos();
+        let end = start * angle.cos() + along * angle.sin();
+        let (lat2, lon2) = crate::planet::lat_lon(end);
+        // The track's bearing at the end: the great circle's tangent there.
+        let track = crate::planet::Tangent::at(lat2, lon2)
+            .local(-start * angle.sin() + along * angle.cos());
+        let key = |lat: f64, lon: f64, heading: f64| PathKey {
+            position: None,
+            look_at: None,
+            lat_deg: Some(lat.to_degrees()),
+            lon_deg: Some(lon.to_degrees()),
+            altitude_m: Some(altitude),
+            heading_deg: Some(heading),
+            pitch_deg: Some(c.pitch_deg),
+        };
         Ok(PlanetFlight {
-            keys: p.keys.clone(),
-            duration_s: p.duration_s.unwrap_or(PLANET_FLIGHT_S),
+            keys: vec![
+                key(lat, lon, c.heading_deg),
+                key(lat2, lon2, track.x.atan2(track.y).to_degrees()),
+            ],
+            duration_s: PLANET_PASS_S,
+            ease: false,
         })
     }
 
@@ -249,7 +355,11 @@ impl PlanetFlight {
         let x = (t_s / self.duration_s).clamp(0.0, 1.0) * segments;
         let seg = (x.floor() as usize).min(self.keys.len() - 2);
         let u = x - seg as f64;
-        let w = u * u * (3.0 - 2.0 * u);
+        let w = if self.ease {
+            u * u * (3.0 - 2.0 * u)
+        } else {
+            u
+        };
         let (a, b) = (&self.keys[seg], &self.keys[seg + 1]);
         let get = |k: &PathKey| {
             (
@@ -320,6 +430,7 @@ mod tests {
                 key(12.0, -169.0, 2.0, 10.0),
             ],
             duration_s: 20.0,
+            ease: true,
         };
         let start = flight.at(0.0);
         assert!(

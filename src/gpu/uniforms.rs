@@ -176,9 +176,13 @@ crate::named_enum! {
     }
 }
 
-/// The frame origin: the camera's ground point.
+/// The frame origin: the camera's ground point; on a planet the nadir of the tangent frame its
+/// eye is given in (its own, or the held rings' one, see `lod::clipmaps::reframed`).
 pub fn frame_origin(camera: &Camera) -> DVec2 {
-    camera.eye.truncate()
+    match camera.geo {
+        Some(_) => DVec2::ZERO,
+        None => camera.eye.truncate(),
+    }
 }
 
 /// The view-projection matrix relative to `origin`: right-handed, reversed-Z, infinite far plane.

@@ -40,6 +40,8 @@ pub struct Clipmaps {
     /// The last frame's levels and uniforms.
     pub span: Span,
     pub uniforms: Option<PlanetUniforms>,
+    /// The nadir the last frame's rings stand around.
+    geo: Option<Geo>,
 }
 
 impl Clipmaps {
@@ -99,6 +101,7 @@ impl Clipmaps {
                 last_level: 0,
             },
             uniforms: None,
+            geo: None,
         })
     }
 
@@ -140,6 +143,27 @@ pub fn plan(
     PlanetUniforms::new(&planet, detail, geo, camera.eye.z, sun)
 }
 
+/// `camera` expressed in the tangent frame of the nadir at `geo` instead of its own: how the
+/// rings built around `geo` look from where the camera is now. f64 throughout: the two nadirs'
+/// frames meet at the planet's scale.
+pub fn reframed(camera: &Camera, geo: Geo, radius: f64) -> Camera {
+    let Some(own) = camera.geo else {
+        return camera.clone();
+    };
+    let (from, to) = (Tangent::at(own.lat, own.lon), Tangent::at(geo.lat, geo.lon));
+    let origin =
+        (crate::planet::unit(own.lat, own.lon) - crate::planet::unit(geo.lat, geo.lon)) * radius;
+    let direction = |d: DVec3| to.local(from.world(d));
+    Camera {
+        eye: to.local(origin + from.world(camera.eye)),
+        forward: direction(camera.forward),
+        right: direction(camera.right),
+        up: direction(camera.up),
+        geo: Some(geo),
+        ..camera.clone()
+    }
+}
+
 /// The levels `camera` (at `geo`) sees of the planet (seed 003 §4.5).
 fn levels(atlas: &Atlas, radius: f64, detail: &Detail, camera: &Camera, geo: &Geo) -> Span {
     let planet = Planet {
@@ -178,6 +202,7 @@ impl Lod for Clipmaps {
         } else {
             self.uniforms = None;
         }
+        self.geo = camera.geo;
         CpuTimes {
             us: start.elapsed().as_secs_f64() * 1e6,
             ..Default::default()
@@ -211,6 +236,13 @@ impl Lod for Clipmaps {
 
     fn read_positions(&self, ctx: &GpuContext, camera: &Camera) -> Result<Vec<[f32; 4]>> {
         self.pass.read_positions(ctx, camera)
+    }
+
+    fn held_camera(&self, camera: &Camera) -> Camera {
+        match (self.geo, camera.geo) {
+            (Some(held), Some(_)) => reframed(camera, held, self.radius),
+            _ => camera.clone(),
+        }
     }
 
     fn triangles(&self) -> u64 {

@@ -93,6 +93,12 @@ pub trait Lod: Any {
     /// Forgets what earlier frames leave to the next (the warped mode's budget hysteresis), so the
     /// next frame is what a fresh renderer would draw: for snapshots of unrelated cameras.
     fn forget(&mut self) {}
+    /// `camera` in the frame of the last frame's level of detail, for drawing with it
+    /// ([`Renderer::render_held`](crate::render::Renderer::render_held)): the camera itself, but
+    /// for schemes whose geometry is placed relative to the camera it was prepared for.
+    fn held_camera(&self, camera: &Camera) -> Camera {
+        camera.clone()
+    }
     fn as_any(&self) -> &dyn Any;
     fn as_any_mut(&mut self) -> &mut dyn Any;
 }

@@ -46,7 +46,7 @@ impl Rings {
     pub fn new(phi_steps: u32, rings_per_level: u32) -> Rings {
         let (n, m) = (phi_steps, rings_per_level);
         let rings = LEVELS * m + 1;
-        let mut vertices = Vec::with_capacity((rings * n + 1) as usize);
+        let mut vertices = Vec::with_capacity(vertex_count(n, m) as usize);
         for r in 0..rings {
             let a = ring_angle(r, m);
             for k in 0..n {
@@ -109,6 +109,11 @@ impl Rings {
         let [q, f] = self.draw_ranges(span);
         ((q.end - q.start) + (f.end - f.start)) as u64 / 3
     }
+}
+
+/// Vertices of the hemisphere of `phi_steps` bearings and `rings_per_level` rings a level.
+pub fn vertex_count(phi_steps: u32, rings_per_level: u32) -> u64 {
+    (LEVELS * rings_per_level + 1) as u64 * phi_steps as u64 + 1
 }
 
 /// θ̃ of ring r with m rings per level.

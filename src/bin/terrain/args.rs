@@ -43,13 +43,31 @@ pub fn shard(s: &str) -> Result<(usize, usize), String> {
         .ok_or_else(|| "expected I/N with 0 ≤ I < N".into())
 }
 
-/// `--modes`, `view --mode`: a mode that draws a mesh (not the reference).
+/// `view --mode`: a mode that draws a mesh over a sketch (not the reference).
 pub fn mesh_mode(s: &str) -> Result<Mode, String> {
-    Mode::MESHES
-        .into_iter()
+    one_of(&Mode::MESHES, s)
+}
+
+/// `compare --modes`: a mode that draws a mesh, over a sketch or a planet.
+pub fn compared_mode(s: &str) -> Result<Mode, String> {
+    one_of(
+        &[
+            Mode::Warped,
+            Mode::Geomipmap,
+            Mode::Bruteforce,
+            Mode::Clipmaps,
+        ],
+        s,
+    )
+}
+
+fn one_of(modes: &[Mode], s: &str) -> Result<Mode, String> {
+    modes
+        .iter()
+        .copied()
         .find(|m| m.name() == s)
         .ok_or_else(|| {
-            let names: Vec<&str> = Mode::MESHES.iter().map(|m| m.name()).collect();
+            let names: Vec<&str> = modes.iter().map(|m| m.name()).collect();
             format!("expected one of {}", names.join(", "))
         })
 }

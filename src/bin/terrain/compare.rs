@@ -14,8 +14,9 @@ pub struct Args {
     /// Image size: N (square) or WxH.
     #[arg(long, value_name = "N|WxH", default_value = "256", value_parser = args::size)]
     size: (u32, u32),
-    /// Modes to compare, comma-separated.
-    #[arg(long, value_delimiter = ',', default_value = "warped,geomipmap,bruteforce", value_parser = args::mesh_mode)]
+    /// Modes to compare, comma-separated [default: warped,geomipmap,bruteforce; a planet's
+    /// clipmaps].
+    #[arg(long, value_delimiter = ',', value_parser = args::compared_mode)]
     modes: Vec<Mode>,
     /// Timed frames per setting after one warm-up; medians are reported.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
@@ -42,9 +43,12 @@ pub fn run(a: Args) -> Result<()> {
         println!("{n} rows redrawn in {}", a.out_dir.display());
         return Ok(());
     }
+    let scene = Scene::load_with(&a.scene, &a.set)?;
     let mut modes = a.modes;
     modes.dedup();
-    anyhow::ensure!(!modes.is_empty(), "--modes: give at least one mode");
+    if modes.is_empty() {
+        modes = terrain::eval::compare::default_modes(&scene);
+    }
     let opts = terrain::eval::compare::Options {
         size: a.size,
         modes,
@@ -53,7 +57,6 @@ pub fn run(a: Args) -> Result<()> {
         path_fps: a.path_fps,
         ..Default::default()
     };
-    let scene = Scene::load_with(&a.scene, &a.set)?;
     let name = a
         .scene
         .file_stem()

@@ -17,6 +17,7 @@ pub fn colour(mode: &str) -> Rgb {
         Some(Mode::Warped) => Rgb(230, 120, 20),
         Some(Mode::Geomipmap) => Rgb(40, 100, 200),
         Some(Mode::Bruteforce) => Rgb(40, 160, 70),
+        Some(Mode::Clipmaps) => Rgb(150, 60, 170),
         _ => Rgb(120, 120, 120),
     }
 }
@@ -47,6 +48,7 @@ pub fn display(mode: &str) -> &str {
     match Mode::parse(mode) {
         Some(Mode::Geomipmap) => "GeoMipMap",
         Some(Mode::Bruteforce) => "brute force",
+        Some(Mode::Clipmaps) => "spherical clipmaps",
         _ => mode,
     }
 }

@@ -28,7 +28,7 @@ pub mod sweep;
 pub mod temporal;
 
 use crate::app::output::{write_atomic, write_image};
-use crate::app::path::CameraPath;
+use crate::app::path::Flight;
 use crate::app::progress::Progress;
 use crate::camera::Camera;
 use crate::error::{Error, Result, Role};
@@ -85,6 +85,32 @@ impl Default for Options {
     }
 }
 
+/// The modes `compare` runs on `scene` by default: the mesh modes on a sketch, clipmaps on a
+/// planet.
+pub fn default_modes(scene: &Scene) -> Vec<Mode> {
+    if scene.planet().is_some() {
+        vec![Mode::Clipmaps]
+    } else {
+        vec![Mode::Warped, Mode::Geomipmap, Mode::Bruteforce]
+    }
+}
+
+/// Refuses modes that cannot draw `scene`, in one line, before any work.
+fn check_modes(scene: &Scene, modes: &[Mode]) -> Result<()> {
+    let planet = scene.planet().is_some();
+    match modes.iter().find(|&&m| (m == Mode::Clipmaps) != planet) {
+        Some(m) if planet => Err(Error::value(
+            "--modes",
+            format!("a planet scene compares clipmaps, not {m} (it draws planar sketches)"),
+        )),
+        Some(_) => Err(Error::value(
+            "--modes",
+            "clipmaps draws planet scenes; this scene is a planar sketch",
+        )),
+        None => Ok(()),
+    }
+}
+
 pub struct Outcome {
     pub rows: Vec<Row>,
     pub summary: report::Summary,
@@ -102,17 +128,14 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
         .settings
         .clone()
         .unwrap_or_else(|| sweep::default_sweep(&o.modes, &atlas));
-    let mesh = settings
+    check_modes(&scene, &o.modes)?;
+    let storage_bytes = settings
         .iter()
-        .filter_map(|s| match s {
-            Setting::Warped { mesh, .. } => Some(*mesh as u64),
-            _ => None,
-        })
+        .map(|s| crate::render::needs(&s.apply(&scene), s.mode(), &atlas).storage_bytes)
         .max()
-        .unwrap_or(0);
-    let ctx = GpuContext::new(&Needs {
-        storage_bytes: atlas.bytes().max(mesh * mesh * 16),
-    })?;
+        .unwrap_or(0)
+        .max(atlas.bytes());
+    let ctx = GpuContext::new(&Needs { storage_bytes })?;
     let path_frames = o.path_frames * o.modes.len().min(1);
     let mut progress = Progress::new(
         &format!("compare {name}"),
@@ -131,7 +154,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
 
     // The camera path once: each setting's LOD change per frame along it, and the path series.
     let flight = if path_frames > 0 {
-        let path = CameraPath::of_scene(&scene)?;
+        let path = Flight::of_scene(&scene)?;
         let frames = o.path_frames.max(LOD_STEPS + 1);
         let cameras = path.cameras(frames, o.path_fps, &scene, &atlas)?;
         Some((path, cameras))

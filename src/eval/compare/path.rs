@@ -7,7 +7,7 @@ use super::sweep::Setting;
 use super::temporal::{self, LodChange};
 use super::{Options, figures};
 use crate::app::output::{Fixed, write_atomic};
-use crate::app::path::CameraPath;
+use crate::app::path::{Flight, world_eye};
 use crate::app::progress::Progress;
 use crate::camera::Camera;
 use crate::error::Result;
@@ -37,7 +37,7 @@ struct PathRow {
 pub(super) struct Out<'a> {
     pub dir: &'a Path,
     pub title: &'a str,
-    pub path: &'a CameraPath,
+    pub path: &'a Flight,
     pub cameras: &'a [Camera],
 }
 
@@ -129,16 +129,16 @@ pub(super) fn path_series(
             }
         })
         .collect();
-    let travelled = path.speed_mps * (cameras.len().saturating_sub(1)) as f64 / o.path_fps;
+    let radius = scene.planet().map(|p| p.radius_m);
+    let travelled = cameras
+        .windows(2)
+        .map(|w| (world_eye(&w[1], radius) - world_eye(&w[0], radius)).length())
+        .sum();
     Ok(PathReport {
         frames: cameras.len(),
         fps: o.path_fps,
-        length_m: path.length_m().min(travelled),
-        source: if scene.path.is_some() {
-            "scene [path]"
-        } else {
-            "default: straight ahead at 150 m/s"
-        },
+        length_m: travelled,
+        source: path.source(scene),
         modes: per_mode,
     })
 }

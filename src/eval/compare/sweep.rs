@@ -3,7 +3,9 @@
 //! Default sweep: warped over mesh 64², 96², 128², 192², 256², 384², 512², 1024² at `quad_px` 2
 //! (from GeoMipMap's triangle counts up: 4k to 2M triangles), and `quad_px` 1 and 4 at mesh 512²; GeoMipMap over τ 0.5, 1, 2, 4, 8 px at blocks of 17, 33 and 65 vertices; brute force
 //! over grid spacings d_atlas/2^K for K = 0 up to the finest the device and the vertex budget
-//! allow ([`default_k`]).
+//! allow ([`default_k`]); on a planet, clipmaps over φ steps 128, 256, 512, 1024 at 20 rings per
+//! level and rings per level 10 and 40 at 512 φ steps (the paper's n and m, about 4× triangles
+//! end to end on each axis).
 //!
 //! Rejected alternative: the full product of `quad_px` and mesh size. `quad_px` scales the view
 //! importance everywhere alike, and the warp normalises importance to the mesh it has, so it
@@ -16,9 +18,21 @@ use crate::sketch::Atlas;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Setting {
-    Warped { quad_px: f64, mesh: u32 },
-    GeoMipMap { tau: f64, block: u32 },
-    BruteForce { k: u32 },
+    Warped {
+        quad_px: f64,
+        mesh: u32,
+    },
+    GeoMipMap {
+        tau: f64,
+        block: u32,
+    },
+    BruteForce {
+        k: u32,
+    },
+    Clipmaps {
+        phi_steps: u32,
+        rings_per_level: u32,
+    },
 }
 
 impl Setting {
@@ -27,6 +41,7 @@ impl Setting {
             Setting::Warped { .. } => Mode::Warped,
             Setting::GeoMipMap { .. } => Mode::Geomipmap,
             Setting::BruteForce { .. } => Mode::Bruteforce,
+            Setting::Clipmaps { .. } => Mode::Clipmaps,
         }
     }
 
@@ -40,6 +55,10 @@ impl Setting {
             Setting::Warped { quad_px, mesh } => format!("quad_px={quad_px} mesh={mesh}"),
             Setting::GeoMipMap { tau, block } => format!("tau={tau} block={block}"),
             Setting::BruteForce { k } => format!("K={k}"),
+            Setting::Clipmaps {
+                phi_steps,
+                rings_per_level,
+            } => format!("phi_steps={phi_steps} rings={rings_per_level}"),
         }
     }
 
@@ -56,6 +75,14 @@ impl Setting {
                 s.geomipmap.block = block;
             }
             Setting::BruteForce { k } => s.geomipmap.k = Some(k),
+            Setting::Clipmaps {
+                phi_steps,
+                rings_per_level,
+            } => {
+                let mut p = s.planet().unwrap_or_default();
+                (p.phi_steps, p.rings_per_level) = (phi_steps, rings_per_level);
+                s.planet = Some(p);
+            }
         }
         s
     }
@@ -74,7 +101,14 @@ impl Setting {
             Mode::Bruteforce => Setting::BruteForce {
                 k: scene.geomipmap.k.unwrap_or_else(|| default_k(atlas)),
             },
-            Mode::Reference | Mode::Clipmaps => return None,
+            Mode::Clipmaps => {
+                let p = scene.planet()?;
+                Setting::Clipmaps {
+                    phi_steps: p.phi_steps,
+                    rings_per_level: p.rings_per_level,
+                }
+            }
+            Mode::Reference => return None,
         })
     }
 }
@@ -104,7 +138,21 @@ pub fn default_sweep(modes: &[Mode], atlas: &Atlas) -> Vec<Setting> {
                     out.push(Setting::BruteForce { k });
                 }
             }
-            Mode::Reference | Mode::Clipmaps => {}
+            Mode::Clipmaps => {
+                for phi_steps in [128, 256, 512, 1024] {
+                    out.push(Setting::Clipmaps {
+                        phi_steps,
+                        rings_per_level: 20,
+                    });
+                }
+                for rings_per_level in [10, 40] {
+                    out.push(Setting::Clipmaps {
+                        phi_steps: 512,
+                        rings_per_level,
+                    });
+                }
+            }
+            Mode::Reference => {}
         }
     }
     out
