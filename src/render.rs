@@ -196,6 +196,13 @@ impl Renderer {
         self.draw(&camera, CpuTimes::default())
     }
 
+    /// The light of `scene`, which differs from the renderer's own only in the camera (a batch
+    /// reusing one renderer): on a planet the sun stands where that camera sees it.
+    pub fn relight(&mut self, scene: &Scene) {
+        self.light = scene::light_of(scene);
+        self.lod.relight(scene);
+    }
+
     /// The uniform block of a frame of `camera`: the shared part, then the scheme's.
     pub fn uniforms(&self, camera: &Camera) -> FrameUniforms {
         let mut inputs = FrameInputs {

@@ -238,6 +238,10 @@ impl Lod for Clipmaps {
         self.pass.read_positions(ctx, camera)
     }
 
+    fn relight(&mut self, scene: &crate::scene::Scene) {
+        self.sun_world = sun_world(scene);
+    }
+
     fn held_camera(&self, camera: &Camera) -> Camera {
         match (self.geo, camera.geo) {
             (Some(held), Some(_)) => reframed(camera, held, self.radius),

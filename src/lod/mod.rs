@@ -93,6 +93,10 @@ pub trait Lod: Any {
     /// Forgets what earlier frames leave to the next (the warped mode's budget hysteresis), so the
     /// next frame is what a fresh renderer would draw: for snapshots of unrelated cameras.
     fn forget(&mut self) {}
+    /// Places a planet's sun where `scene`'s camera sees it at the scene's light (see
+    /// [`clipmaps::sun_world`]): for a renderer reused across scenes that differ only in the
+    /// camera. Nothing to do off a planet, where the light is the frame's.
+    fn relight(&mut self, _scene: &Scene) {}
     /// `camera` in the frame of the last frame's level of detail, for drawing with it
     /// ([`Renderer::render_held`](crate::render::Renderer::render_held)): the camera itself, but
     /// for schemes whose geometry is placed relative to the camera it was prepared for.

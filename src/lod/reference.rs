@@ -114,6 +114,12 @@ impl Lod for Reference {
         self.pass.read_positions(ctx)
     }
 
+    fn relight(&mut self, scene: &crate::scene::Scene) {
+        if let Some(p) = &mut self.planet {
+            p.sun_world = crate::lod::clipmaps::sun_world(scene);
+        }
+    }
+
     fn triangles(&self) -> u64 {
         0
     }

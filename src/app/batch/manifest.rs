@@ -41,9 +41,24 @@ pub struct Snapshot {
     pub frame_ms: f64,
 }
 
+/// A snapshot's camera. On a planet `position` and `look_at` are in the nadir's tangent frame
+/// (metres, x east, y north, z up from the sphere under the camera), and `planet` holds the
+/// camera's keys, so a scene with them renders the same view again.
 #[derive(Debug, Serialize, Deserialize)]
 pub struct SnapshotCamera {
     pub position: [f64; 3],
     pub look_at: [f64; 3],
     pub fov_y_deg: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub planet: Option<PlanetKeys>,
+}
+
+/// A planet camera's keys, as `[camera]` takes them.
+#[derive(Debug, Serialize, Deserialize)]
+pub struct PlanetKeys {
+    pub lat_deg: f64,
+    pub lon_deg: f64,
+    pub altitude_m: f64,
+    pub heading_deg: f64,
+    pub pitch_deg: f64,
 }

@@ -22,18 +22,20 @@
 
 use crate::app::output::{write_atomic, write_image};
 use crate::app::progress::Progress;
+use crate::camera::Camera;
 use crate::error::{Error, Result, Role};
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::uniforms::View;
 use crate::render::Renderer;
 use crate::scene::{self, Scene};
+use crate::sketch::Atlas;
 
 mod jobs;
 mod manifest;
 mod random;
 
 pub use jobs::{Item, ItemKind, Jobs, JobsFile, MAX_RANDOM, Random, RandomSection};
-pub use manifest::{ManifestLine, Snapshot, SnapshotCamera, Status};
+pub use manifest::{ManifestLine, PlanetKeys, Snapshot, SnapshotCamera, Status};
 pub use random::{RANDOM_HEIGHT_M, random_camera};
 use std::collections::HashSet;
 use std::io::Write;
@@ -132,6 +134,9 @@ struct Cache {
 fn scene_key(scene: &Scene) -> String {
     let mut s = scene.clone();
     s.camera.aim(glam::DVec3::ZERO, glam::DVec3::ZERO);
+    let c = &mut s.camera;
+    (c.lat_deg, c.lon_deg, c.altitude_m) = (None, None, None);
+    (c.heading_deg, c.pitch_deg) = (0.0, 0.0);
     format!("{s:?}")
 }
 
@@ -182,13 +187,14 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
             let seed = jobs.random.as_ref().map_or(0, |r| r.seed);
             let r = cache.renderer(&scene)?;
             let reach = scene::detail_of(&scene, r.atlas()).reach_m();
-            let camera = random_camera(&scene, r.atlas(), reach, seed, i)?;
-            (scene, camera)
+            random_camera(&scene, r.atlas(), reach, seed, i)?
         }
     };
     let r = cache.renderer(&scene)?;
-    // Each snapshot as if alone: a resumed or sharded run makes the same images.
+    // Each snapshot as if alone: a resumed or sharded run makes the same images, and a planet's
+    // sun stands where this camera sees it, as `render` of the item's scene would put it.
     r.forget();
+    r.relight(&scene);
     let frame = r.render(&camera)?;
     let output = out_dir.join(format!("{}.png", item.name));
     write_image(&output, frame.width, frame.height, &frame.rgba)?;
@@ -199,6 +205,7 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
             position: camera.eye.to_array(),
             look_at: (camera.eye + camera.forward * 100.0).to_array(),
             fov_y_deg: camera.fov_y.to_degrees(),
+            planet: planet_keys(&scene, r.atlas(), &camera),
         },
         width: frame.width,
         height: frame.height,
@@ -206,6 +213,27 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
         cpu_stage_us: frame.cpu_us,
         gpu_ms: frame.gpu.gpu_ms,
         frame_ms: frame.gpu.gpu_ms + frame.cpu_us * 1e-3,
+    })
+}
+
+/// A planet camera's keys (its altitude above the ground as `[camera]` measures it); `None` off
+/// a planet.
+fn planet_keys(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Option<PlanetKeys> {
+    let (p, geo) = (scene.planet()?, camera.geo?);
+    let planet = crate::planet::Planet {
+        radius: p.radius_m,
+        sketch: atlas,
+    };
+    let ground = planet
+        .ground(&scene::detail_of(scene, atlas), geo.lat, geo.lon, 0.01)
+        .max(atlas.water_m as f64);
+    let f = camera.forward;
+    Some(PlanetKeys {
+        lat_deg: geo.lat.to_degrees(),
+        lon_deg: geo.lon.to_degrees(),
+        altitude_m: camera.eye.z - ground,
+        heading_deg: f.x.atan2(f.y).to_degrees().rem_euclid(360.0),
+        pitch_deg: f.z.clamp(-1.0, 1.0).asin().to_degrees(),
     })
 }
 

@@ -8,6 +8,8 @@ use glam::{DVec2, DVec3};
 
 /// Random cameras stand this far above the sketch's ground, plus the detail's reach (metres).
 pub const RANDOM_HEIGHT_M: (f64, f64) = (30.0, 3000.0);
+/// Random cameras over a planet stand this far above its ground (metres): from a walk to orbit.
+pub const RANDOM_PLANET_ALTITUDE_M: (f64, f64) = (2.0, 2e7);
 
 /// SplitMix64: a tiny, well-mixed generator, so a random camera is a pure function of
 /// (seed, index).
@@ -25,22 +27,20 @@ impl SplitMix {
 
 /// Random camera `i` over `atlas`: above the ground by 30 m to 3 km (log-uniform) plus the
 /// detail's reach, looking at a point of the sketch 2 to 8 heights away in a random heading.
+/// Returns `scene` with its camera keys set to it, and the camera.
 pub fn random_camera(
     scene: &Scene,
     atlas: &Atlas,
     reach_m: f64,
     seed: u64,
     i: usize,
-) -> Result<Camera> {
-    if scene.planet().is_some() {
-        return Err(crate::Error::value(
-            "random",
-            "random cameras over a planet are not built yet: give the jobs their cameras",
-        ));
-    }
+) -> Result<(Scene, Camera)> {
     let mut rng = SplitMix(seed ^ (i as u64).wrapping_mul(0xd1b5_4a32_d192_ed03));
     for _ in 0..3 {
         rng.next();
+    }
+    if let Some(p) = scene.planet() {
+        return random_planet_camera(scene, atlas, p.radius_m, &mut rng);
     }
     let (lo, hi) = (atlas.origin, atlas.max_corner());
     let inside = |u: f64, v: f64| DVec2::new(lo.x + (hi.x - lo.x) * u, lo.y + (hi.y - lo.y) * v);
@@ -61,7 +61,34 @@ pub fn random_camera(
         target
     };
     s.camera.aim(eye, target);
-    scene::camera_of(&s, atlas)
+    let camera = scene::camera_of(&s, atlas)?;
+    Ok((s, camera))
+}
+
+/// A random camera over a planet: its nadir uniform over the sphere, its altitude log-uniform
+/// over [`RANDOM_PLANET_ALTITUDE_M`], a random heading, and a pitch from 40° below the horizon
+/// (its dip at that altitude) to 10° above it, no steeper than straight down: the ground is in
+/// view from any height, the sky and limb often.
+fn random_planet_camera(
+    scene: &Scene,
+    atlas: &Atlas,
+    radius: f64,
+    rng: &mut SplitMix,
+) -> Result<(Scene, Camera)> {
+    let lat = (2.0 * rng.next() - 1.0).asin();
+    let lon = std::f64::consts::TAU * rng.next() - std::f64::consts::PI;
+    let (h0, h1) = RANDOM_PLANET_ALTITUDE_M;
+    let altitude = (h0.ln() + (h1.ln() - h0.ln()) * rng.next()).exp();
+    let dip = (radius / (radius + altitude)).acos().to_degrees();
+    let mut s = scene.clone();
+    let c = &mut s.camera;
+    c.lat_deg = Some(lat.to_degrees());
+    c.lon_deg = Some(lon.to_degrees());
+    c.altitude_m = Some(altitude);
+    c.heading_deg = 360.0 * rng.next();
+    c.pitch_deg = (-dip - 40.0 + 50.0 * rng.next()).max(-90.0);
+    let camera = scene::camera_of(&s, atlas)?;
+    Ok((s, camera))
 }
 
 #[cfg(test)]
