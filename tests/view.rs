@@ -18,7 +18,7 @@ type ViewTest = (&'static str, fn(), &'static [&'static str]);
 
 fn main() {
     let args = Arguments::from_args();
-    let tests: [ViewTest; 2] = [
+    let tests: [ViewTest; 3] = [
         (
             "view_opens_draws_and_screenshots_itself_under_xvfb",
             view_opens_draws_and_screenshots_itself_under_xvfb,
@@ -27,6 +27,11 @@ fn main() {
         (
             "view_keys_switch_mode_record_the_path_and_quit",
             view_keys_switch_mode_record_the_path_and_quit,
+            &["xvfb-run", "xdotool"],
+        ),
+        (
+            "view_flies_over_a_planet_and_records_a_planet_path",
+            view_flies_over_a_planet_and_records_a_planet_path,
             &["xvfb-run", "xdotool"],
         ),
     ];
@@ -210,4 +215,84 @@ fn view_keys_switch_mode_record_the_path_and_quit() {
         "moved sideways: {first:?} → {last:?}"
     );
     assert!(terrain::app::path::CameraPath::new(&path).is_ok());
+}
+
+/// Over a planet the window draws what `render` draws (clipmaps), and W flies along the
+/// camera's heading on a great circle: the recorded `[path]` is a planet's (the camera's keys,
+/// the time flown), heading east as the scene looks, at the altitude it started from.
+fn view_flies_over_a_planet_and_records_a_planet_path() {
+    let dir = scratch("view-planet");
+    let scene = dir.join("planet.toml");
+    let text = std::fs::read_to_string(manifest_dir().join("sketches/planet-10km.toml")).unwrap();
+    // A coarser planet than the bundled one, so llvmpipe draws a frame in well under a second.
+    let text = text
+        .replace(
+            "[planet]\n",
+            "[planet]\nphi_steps = 128\nrings_per_level = 10\n",
+        )
+        .replace(
+            "synthetic = \"planet\"\n",
+            "synthetic = \"planet\"\nsize = 256\n",
+        );
+    std::fs::write(&scene, text).unwrap();
+    let shot = dir.join("shot.png");
+    let script = format!(
+        "timeout 120 {bin} view {scene} --size 160x120 --screenshot {shot} --out-dir {dir} & pid=$!\n\
+         wid=$(xdotool search --sync --name 'terrain view')\n\
+         xdotool windowfocus --sync $wid\n\
+         sleep 2; xdotool key p; sleep 1\n\
+         xdotool key r; xdotool keydown w; sleep 2; xdotool keyup w; xdotool key r; sleep 1\n\
+         xdotool key Escape\n\
+         wait $pid\n",
+        bin = env!("CARGO_BIN_EXE_terrain"),
+        scene = scene.display(),
+        shot = shot.display(),
+        dir = dir.join("views").display(),
+    );
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24", "sh", "-c", &script])
+        .output()
+        .expect("run xvfb-run");
+    assert!(
+        out.status.success(),
+        "view: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (_, _, view) = read_png(&shot).expect("screenshot written by P");
+    let png = dir.join("render.png");
+    let rendered = Command::new(env!("CARGO_BIN_EXE_terrain"))
+        .args(["render", scene.to_str().unwrap(), "-o"])
+        .arg(&png)
+        .args(["--size", "160x120"])
+        .output()
+        .unwrap();
+    assert!(
+        rendered.status.success(),
+        "{}",
+        String::from_utf8_lossy(&rendered.stderr)
+    );
+    let band = |img: &[u8]| img[56 * 160 * 4..104 * 160 * 4].to_vec();
+    let db = psnr(&band(&view), &band(&read_png(&png).unwrap().2));
+    assert!(
+        db >= 40.0,
+        "the window's planet differs from render's: {db:.1} dB"
+    );
+
+    let flown = dir.join("views/planet-flown.toml");
+    let recorded = terrain::scene::Scene::load(&flown).expect("the recorded scene loads");
+    let path = recorded.path.clone().expect("a [path]");
+    let (first, last) = (&path.keys[0], &path.keys[path.keys.len() - 1]);
+    assert!(path.duration_s.is_some_and(|d| d > 1.0), "{path:?}");
+    let east = last.lon_deg.unwrap() - first.lon_deg.unwrap();
+    let north = last.lat_deg.unwrap() - first.lat_deg.unwrap();
+    // Heading 100°: mostly east, a little south; 8 km/s at 10 km for about 2 s.
+    assert!(
+        east > 0.05 && north < 0.0 && north.abs() < east,
+        "{first:?} → {last:?}"
+    );
+    assert!(
+        (last.altitude_m.unwrap() - 10_000.0).abs() < 1.0,
+        "{last:?}"
+    );
+    assert!(terrain::app::path::PlanetFlight::of_scene(&recorded, 6_371_000.0).is_ok());
 }

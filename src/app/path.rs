@@ -320,15 +320,8 @@ impl PlanetFlight {
         );
         let altitude = c.altitude_m.unwrap_or(1.0);
         let angle = altitude.clamp(10.0, 0.1 * radius) / radius;
-        let heading = c.heading_deg.to_radians();
-        let start = crate::planet::unit(lat, lon);
-        let t = crate::planet::Tangent::at(lat, lon);
-        let along = t.east * heading.sin() + t.north * heading.cos();
-        let end = start * angle.cos() + along * angle.sin();
-        let (lat2, lon2) = crate::planet::lat_lon(end);
-        // The track's bearing at the end: the great circle's tangent there.
-        let track = crate::planet::Tangent::at(lat2, lon2)
-            .local(-start * angle.sin() + along * angle.cos());
+        let (lat2, lon2, track) =
+            crate::planet::travel(lat, lon, c.heading_deg.to_radians(), angle);
         let key = |lat: f64, lon: f64, heading: f64| PathKey {
             position: None,
             look_at: None,
@@ -341,7 +334,7 @@ impl PlanetFlight {
         Ok(PlanetFlight {
             keys: vec![
                 key(lat, lon, c.heading_deg),
-                key(lat2, lon2, track.x.atan2(track.y).to_degrees()),
+                key(lat2, lon2, track.to_degrees()),
             ],
             duration_s: PLANET_PASS_S,
             ease: false,

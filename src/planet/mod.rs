@@ -57,6 +57,20 @@ pub fn lat_lon(p: DVec3) -> (f64, f64) {
     (p.z.atan2(p.truncate().length()), p.y.atan2(p.x))
 }
 
+/// Travel along a great circle: from latitude `lat`, longitude `lon` at `bearing` (radians, 0
+/// north, π/2 east) through the angle `angle`; returns where it ends and the track's bearing
+/// there (the bearing turns along a great circle unless it runs along a meridian or the
+/// equator).
+pub fn travel(lat: f64, lon: f64, bearing: f64, angle: f64) -> (f64, f64, f64) {
+    let start = unit(lat, lon);
+    let t = Tangent::at(lat, lon);
+    let along = t.east * bearing.sin() + t.north * bearing.cos();
+    let (s, c) = angle.sin_cos();
+    let (lat2, lon2) = lat_lon(start * c + along * s);
+    let track = Tangent::at(lat2, lon2).local(along * c - start * s);
+    (lat2, lon2, track.x.atan2(track.y))
+}
+
 /// The tangent frame at latitude `lat`, longitude `lon`: east, north, up (world axes).
 #[derive(Clone, Copy, Debug)]
 pub struct Tangent {
@@ -228,6 +242,26 @@ fn catmull_rom(f: f64) -> [f64; 4] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::FRAC_PI_4;
+
+    /// North along a meridian, east along the equator, and a quarter circle east from 45° N,
+    /// which meets the equator 90° east heading south-east.
+    #[test]
+    fn travel_follows_great_circles() {
+        let close = |a: (f64, f64, f64), b: (f64, f64, f64)| {
+            (a.0 - b.0).abs() < 1e-12 && (a.1 - b.1).abs() < 1e-12 && (a.2 - b.2).abs() < 1e-12
+        };
+        assert!(close(travel(0.0, 0.0, 0.0, 0.1), (0.1, 0.0, 0.0)));
+        assert!(close(
+            travel(0.0, 0.3, FRAC_PI_2, 0.2),
+            (0.0, 0.5, FRAC_PI_2)
+        ));
+        let quarter = travel(FRAC_PI_4, 0.0, FRAC_PI_2, FRAC_PI_2);
+        assert!(
+            close(quarter, (0.0, FRAC_PI_2, 3.0 * FRAC_PI_4)),
+            "{quarter:?}"
+        );
+    }
 
     /// The f32 offsets keep their relative precision from a millimetre to a hemisphere away, at
     /// the equator, mid latitudes and a metre from a pole; the central meridian's longitude

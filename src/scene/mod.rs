@@ -357,7 +357,12 @@ crate::named_enum! {
 
 impl Mode {
     /// The modes that draw a mesh (every one but the ray-marched reference).
-    pub const MESHES: [Mode; 3] = [Mode::Warped, Mode::Geomipmap, Mode::Bruteforce];
+    pub const MESHES: [Mode; 4] = [
+        Mode::Warped,
+        Mode::Geomipmap,
+        Mode::Bruteforce,
+        Mode::Clipmaps,
+    ];
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -444,17 +449,24 @@ fn default_speed() -> f64 {
     150.0
 }
 
-#[derive(Clone, Debug, Deserialize, Serialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PathKey {
     /// A point of a planar path (required there), world metres.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub position: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub look_at: Option<[f64; 3]>,
     /// A planet's key: where the camera stands and looks, as the camera's keys of the same names.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub lat_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub lon_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub altitude_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub heading_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub pitch_deg: Option<f64>,
 }
 

@@ -43,7 +43,7 @@ impl App {
             self.message = "recording".into();
             return Ok(());
         };
-        let Some(path) = r.finish(&self.cam) else {
+        let Some(path) = r.finish(self.cam.key().0) else {
             self.message = "nothing recorded: fly, then stop".into();
             return Ok(());
         };

@@ -8,7 +8,9 @@
 //! `<scene>-flown.toml`, the scene with that `[path]`); P writes a screenshot to `--out-dir`
 //! (`<scene>-view-<n>.png`); neither ever overwrites a file, taking the next free number; Esc
 //! quits. The figures on screen: mode, view, frame time per pass, triangles, height above the
-//! ground.
+//! ground. Over a planet the same keys fly great circles (`flycam::PlanetFlyCamera`) in clipmaps
+//! mode (1/2/3 do nothing), and a recorded path is a planet's `[path]`: the camera's keys and the
+//! time flown.
 //!
 //! Rules: the frame is rendered headless by the same renderers as every other command (one
 //! device, renderers rebuilt only when the mode, the view or the window's size changes), then
@@ -21,7 +23,7 @@
 //! and a GL context on the X display, which llvmpipe under Xvfb provides unreliably. The cost of
 //! the CPU path is one readback per frame (a few ms at 1080p on a discrete GPU).
 
-use crate::app::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder};
+use crate::app::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder, PlanetFlyCamera};
 use crate::app::hud;
 use crate::error::{Error, Result};
 
@@ -71,7 +73,7 @@ struct App {
     view: View,
     size: (u32, u32),
     frozen: bool,
-    cam: FlyCamera,
+    cam: Flyer,
     held: HashSet<KeyCode>,
     drag: Option<(f64, f64)>,
     last: Instant,
@@ -85,11 +87,56 @@ struct App {
     message: String,
 }
 
+/// The camera the window flies: over a sketch, or over a planet.
+enum Flyer {
+    Plane(FlyCamera),
+    Planet(PlanetFlyCamera),
+}
+
+impl Flyer {
+    fn look(&mut self, dx: f64, dy: f64) {
+        match self {
+            Flyer::Plane(c) => c.look(dx, dy),
+            Flyer::Planet(c) => c.look(dx, dy),
+        }
+    }
+
+    /// The camera's `[path]` key, and where its eye is in world metres.
+    fn key(&self) -> (crate::scene::PathKey, glam::DVec3) {
+        match self {
+            Flyer::Plane(c) => (PathRecorder::key_of(c), c.eye),
+            Flyer::Planet(c) => (c.key(), c.world()),
+        }
+    }
+}
+
 impl App {
     /// The least height of the eye at its position: the ground plus everything the detail can
-    /// add plus the clearance.
+    /// add plus the clearance (a planet's camera keeps its own: its altitude is above the ground).
     fn floor(&self) -> Option<f64> {
-        ground_under(&self.atlas, self.cam.eye.truncate()).map(|g| g + self.reach_m + CLEARANCE_M)
+        let Flyer::Plane(c) = &self.cam else {
+            return None;
+        };
+        ground_under(&self.atlas, c.eye.truncate()).map(|g| g + self.reach_m + CLEARANCE_M)
+    }
+
+    fn camera(&self) -> Result<crate::camera::Camera> {
+        let (w, h) = self.size;
+        match &self.cam {
+            Flyer::Plane(c) => c.camera(self.scene.camera.fov_y_deg, w, h, self.far),
+            Flyer::Planet(c) => c.camera(&self.scene, &self.atlas, w, h),
+        }
+    }
+
+    /// Metres between the eye and the ground under it.
+    fn above_m(&self) -> f64 {
+        match &self.cam {
+            Flyer::Plane(c) => {
+                let ground = ground_under(&self.atlas, c.eye.truncate());
+                c.eye.z - ground.unwrap_or(self.atlas.min_m as f64)
+            }
+            Flyer::Planet(c) => c.altitude,
+        }
     }
 
     fn motion(&self) -> Motion {
@@ -134,16 +181,15 @@ impl App {
         self.last = now;
         let motion = self.motion();
         let floor = self.floor();
-        self.cam.step(dt, &motion, floor);
-        if let Some(r) = &mut self.recorder {
-            r.record(&self.cam, dt);
+        match &mut self.cam {
+            Flyer::Plane(c) => c.step(dt, &motion, floor),
+            Flyer::Planet(c) => c.step(dt, &motion),
         }
-        let camera = self.cam.camera(
-            self.scene.camera.fov_y_deg,
-            self.size.0,
-            self.size.1,
-            self.far,
-        )?;
+        if let Some(r) = &mut self.recorder {
+            let (key, at) = self.cam.key();
+            r.record(key, at, dt);
+        }
+        let camera = self.camera()?;
         let frozen = self.frozen;
         let r = self.renderer()?;
         let frame = if frozen {
@@ -156,7 +202,6 @@ impl App {
 
     /// The frame with the figures written on it.
     fn hud(&self, frame: &Frame, dt: f64) -> Vec<u8> {
-        let ground = ground_under(&self.atlas, self.cam.eye.truncate());
         let mut flags = Vec::new();
         if self.frozen {
             flags.push("LOD frozen".to_string());
@@ -173,7 +218,7 @@ impl App {
                 mode: self.mode,
                 view: self.view,
                 dt,
-                above_m: self.cam.eye.z - ground.unwrap_or(self.atlas.min_m as f64),
+                above_m: self.above_m(),
                 flags,
             },
         )
@@ -207,7 +252,8 @@ impl App {
             KeyCode::Digit3 => mode(Mode::Bruteforce),
             _ => None,
         };
-        if let Some(m) = new_mode.filter(|m| *m != self.mode) {
+        let planet = matches!(self.cam, Flyer::Planet(_));
+        if let Some(m) = new_mode.filter(|m| *m != self.mode && !planet) {
             self.mode = m;
             self.renderer = None;
         }
@@ -364,8 +410,15 @@ pub fn run(scene: Scene, o: Options) -> Result<()> {
     let atlas = scene::load_atlas(&scene)?;
     let camera = scene::camera_of(&scene, &atlas)?;
     let reach_m = scene::detail_of(&scene, &atlas).reach_m();
-    // Enough for every mode the window can switch to (the warped mode's mesh the largest).
-    let ctx = GpuContext::new(&crate::render::needs(&scene, Mode::Warped, &atlas))?;
+    let (cam, largest) = match scene.planet() {
+        Some(p) => (
+            Flyer::Planet(PlanetFlyCamera::of_scene(&scene, p.radius_m)),
+            Mode::Clipmaps,
+        ),
+        // Enough for every mode the window can switch to (the warped mode's mesh the largest).
+        None => (Flyer::Plane(FlyCamera::from_camera(&camera)), Mode::Warped),
+    };
+    let ctx = GpuContext::new(&crate::render::needs(&scene, largest, &atlas))?;
     let event_loop = EventLoop::new().map_err(|e| Error::NoDisplay {
         cause: no_display(&e.to_string()),
     })?;
@@ -374,7 +427,7 @@ pub fn run(scene: Scene, o: Options) -> Result<()> {
         size: o.size,
         mode: o.mode,
         o,
-        cam: FlyCamera::from_camera(&camera),
+        cam,
         scene,
         atlas,
         reach_m,

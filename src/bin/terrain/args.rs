@@ -43,13 +43,9 @@ pub fn shard(s: &str) -> Result<(usize, usize), String> {
         .ok_or_else(|| "expected I/N with 0 ≤ I < N".into())
 }
 
-/// `view --mode`: a mode that draws a mesh over a sketch (not the reference).
+/// `view --mode`, `compare --modes`: a mode that draws a mesh (not the reference), over a sketch
+/// or a planet.
 pub fn mesh_mode(s: &str) -> Result<Mode, String> {
-    one_of(&Mode::MESHES, s)
-}
-
-/// `compare --modes`: a mode that draws a mesh, over a sketch or a planet.
-pub fn compared_mode(s: &str) -> Result<Mode, String> {
     one_of(
         &[
             Mode::Warped,

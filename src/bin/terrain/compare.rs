@@ -16,7 +16,7 @@ pub struct Args {
     size: (u32, u32),
     /// Modes to compare, comma-separated [default: warped,geomipmap,bruteforce; a planet's
     /// clipmaps].
-    #[arg(long, value_delimiter = ',', value_parser = args::compared_mode)]
+    #[arg(long, value_delimiter = ',', value_parser = args::mesh_mode)]
     modes: Vec<Mode>,
     /// Timed frames per setting after one warm-up; medians are reported.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]

@@ -8,6 +8,7 @@ use terrain::scene::Mode;
 #[derive(clap::Args)]
 pub struct Args {
     scene: PathBuf,
+    /// The mode [default: the scene's; warped for the reference; clipmaps on a planet].
     #[arg(long, value_parser = args::mesh_mode)]
     mode: Option<Mode>,
     /// Window size: N (square) or WxH.
@@ -32,13 +33,13 @@ pub struct Args {
 #[cfg(feature = "view")]
 pub fn run(a: Args) -> Result<()> {
     let scene = terrain::scene::Scene::load_with(&a.scene, &a.set)?;
-    if scene.planet().is_some() {
-        anyhow::bail!(
-            "view: flying over a planet is not built yet (render single views with --mode clipmaps)"
-        );
-    }
+    let planet = scene.planet().is_some();
     let mode = match a.mode {
+        Some(m) if planet && m != Mode::Clipmaps => anyhow::bail!(
+            "--mode: a planet scene is viewed in clipmaps mode, not {m} (it draws planar sketches)"
+        ),
         Some(m) => m,
+        None if planet => Mode::Clipmaps,
         None if scene.render.mode == Mode::Reference => Mode::Warped,
         None => scene.render.mode,
     };
