@@ -428,3 +428,38 @@ fn held_rings_are_seen_from_where_the_camera_moved() {
         "{moved:.1} / {unmoved:.1} dB"
     );
 }
+
+/// Reversed-Z with an infinite far plane into a 32-bit float depth buffer (0..1, as Vulkan, Metal
+/// and D3D clip): along the view ray of a camera 1 m above the ground and of one 20,000 km up,
+/// every point from 1 m (or the near plane) to 30,000 km gets a depth that the f32 projection,
+/// as uploaded, tells from a point 1e-5 farther: 1 cm at 1 km, 10 m at 1,000 km. Surfaces that
+/// close cannot z-fight.
+#[test]
+fn depth_resolves_a_hundred_thousandth_from_a_metre_to_20000_km() {
+    for (altitude, pitch) in [(1.0, 0.0), (1.0, 5.0), (2e7, -90.0)] {
+        let s = planet_scene(46.5, 9.8, altitude, pitch, 64);
+        let atlas = terrain::scene::load_atlas(&s).expect("atlas");
+        let camera = terrain::scene::camera_of(&s, &atlas).expect("camera");
+        let origin = terrain::gpu::uniforms::frame_origin(&camera);
+        let vp = terrain::gpu::uniforms::view_proj(&camera, origin).as_mat4();
+        let eye = (camera.eye - origin.extend(0.0)).as_vec3();
+        let depth = |d: f64| {
+            let p = eye + (camera.forward * d).as_vec3();
+            let clip = vp * p.extend(1.0);
+            clip.z / clip.w
+        };
+        // From orbit nothing lies nearer than half the height over the highest ground.
+        let mut d = camera.near.max(1.0);
+        let mut checked = 0;
+        while d < 3e7 {
+            let (near, far) = (depth(d), depth(d * (1.0 + 1e-5)));
+            assert!(
+                near > far && far > 0.0 && near <= 1.0,
+                "{altitude} m up: depth {near} at {d} m, {far} 1e-5 farther"
+            );
+            d *= 1.05;
+            checked += 1;
+        }
+        assert!(checked >= 10, "{checked}");
+    }
+}

@@ -274,8 +274,9 @@ impl Atlas {
         })
     }
 
-    /// Fills nodata, applies the scene's overrides and builds the pyramid.
-    pub(crate) fn from_raw(mut raw: RawGrid, opts: &LoadOptions) -> Result<Atlas> {
+    /// The atlas of a grid a reader (or a program) made: fills nodata, applies the scene's
+    /// overrides and builds the pyramid.
+    pub fn from_raw(mut raw: RawGrid, opts: &LoadOptions) -> Result<Atlas> {
         if let Some(s) = opts.spacing_m {
             raw.dx = s;
             raw.dy = s;
