@@ -12,38 +12,7 @@
 @group(0) @binding(4) var<storage, read> vertices: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> hemisphere: array<vec4<f32>>;
 
-// The colour, and with POSITIONS each pixel's depth as four bytes (0 on sky), as the terrain
-// pass writes it, for recovering its ground position on the CPU.
-struct FragOut {
-    @location(0) colour: vec4<f32>,
-#ifdef POSITIONS
-    @location(1) depth_bytes: vec4<f32>,
-#endif
-}
-
-fn frag_out(colour: vec3<f32>, depth: f32) -> FragOut {
-    var out: FragOut;
-    out.colour = vec4<f32>(select(colour, display(colour), frame.camera.view <= VIEW_WIREFRAME), 1.0);
-#ifdef POSITIONS
-    let bits = bitcast<u32>(depth);
-    out.depth_bytes = vec4<f32>(vec4<u32>(bits & 255u, (bits >> 8u) & 255u, (bits >> 16u) & 255u, bits >> 24u)) / 255.0;
-#endif
-    return out;
-}
-
-struct SkyOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) ndc: vec2<f32>,
-}
-
-@vertex
-fn sky_vs(@builtin(vertex_index) vi: u32) -> SkyOut {
-    let xy = vec2<f32>(f32((vi << 1u) & 2u), f32(vi & 2u)) * 2.0 - 1.0;
-    var out: SkyOut;
-    out.clip = vec4<f32>(xy, 0.0, 1.0);
-    out.ndc = xy;
-    return out;
-}
+#import raster
 
 @fragment
 fn sky_fs(in: SkyOut) -> FragOut {

@@ -30,48 +30,7 @@ fn vertex_normal(i: u32) -> vec3<f32> {
 #endif
 #import surface
 #import shading
-
-// The colour, and with POSITIONS each pixel's depth (for recovering its ground position on the
-// CPU; 0 on sky, as the reversed-Z clear). The depth's 32 bits go out as the four bytes of an
-// 8-bit RGBA target, which every adapter renders and stores exactly; float targets are not
-// renderable everywhere (llvmpipe's GL path), nor are depth textures copyable.
-struct FragOut {
-    @location(0) colour: vec4<f32>,
-#ifdef POSITIONS
-    @location(1) depth_bytes: vec4<f32>,
-#endif
-}
-
-// The depth's 32 bits as the four bytes of an 8-bit RGBA target.
-fn depth_bytes(depth: f32) -> vec4<f32> {
-    let bits = bitcast<u32>(depth);
-    let bytes = vec4<u32>(bits & 255u, (bits >> 8u) & 255u, (bits >> 16u) & 255u, bits >> 24u);
-    return vec4<f32>(bytes) / 255.0;
-}
-
-fn frag_out(colour: vec3<f32>, depth: f32) -> FragOut {
-    var out: FragOut;
-    // The debug views show their colours as they are; the picture goes through the tone map.
-    out.colour = vec4<f32>(select(colour, display(colour), frame.camera.view <= VIEW_WIREFRAME), 1.0);
-#ifdef POSITIONS
-    out.depth_bytes = depth_bytes(depth);
-#endif
-    return out;
-}
-
-struct SkyOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) ndc: vec2<f32>,
-}
-
-@vertex
-fn sky_vs(@builtin(vertex_index) vi: u32) -> SkyOut {
-    let xy = vec2<f32>(f32((vi << 1u) & 2u), f32(vi & 2u)) * 2.0 - 1.0;
-    var out: SkyOut;
-    out.clip = vec4<f32>(xy, 0.0, 1.0);
-    out.ndc = xy;
-    return out;
-}
+#import raster
 
 @fragment
 fn sky_fs(in: SkyOut) -> FragOut {

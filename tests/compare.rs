@@ -269,7 +269,7 @@ fn compare_sweeps_a_planets_clipmaps() {
         .skip(1)
         .map(|l| l.split(',').collect())
         .collect();
-    assert_eq!(rows.len(), 6, "{csv}");
+    assert_eq!(rows.len(), 8, "{csv}");
     assert!(rows.iter().all(|r| r[0] == "clipmaps"), "{csv}");
     let column = |name: &str| CSV_COLUMNS.iter().position(|c| *c == name).unwrap();
     let triangles: Vec<u64> = rows[..4]

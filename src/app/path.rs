@@ -199,19 +199,6 @@ impl CameraPath {
         base.camera.aim(eye, eye + self.direction(s) * 100.0);
         crate::scene::camera_of(&base, atlas)
     }
-
-    /// `frames` cameras `1/fps` seconds apart from the start (the last no further than the end).
-    pub fn cameras(
-        &self,
-        frames: usize,
-        fps: f64,
-        scene: &Scene,
-        atlas: &Atlas,
-    ) -> Result<Vec<Camera>> {
-        (0..frames)
-            .map(|i| self.camera((i as f64 / fps).min(self.duration_s()), scene, atlas))
-            .collect()
-    }
 }
 
 /// What a command flies: a sketch's camera path, or a flight over a planet.

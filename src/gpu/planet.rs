@@ -5,7 +5,7 @@
 //! z-fighting. Owns the colour and depth targets.
 
 use super::alloc::{Alloc, Buffer, Texture};
-use super::terrain::{COLOUR, DEPTH, DEPTH_COPY};
+use super::terrain::{COLOUR, DEPTH, DEPTH_COPY, RasterPipeline};
 use super::{bind, entry, shader_module, storage, uniform};
 use crate::error::Result;
 use crate::planet::rings::{Rings, Span};
@@ -63,37 +63,17 @@ impl PlanetPass {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline_of = |(vs, fs): (&str, &str), depth_write: bool, compare| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(fs),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some(vs),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState {
-                    topology: wgpu::PrimitiveTopology::TriangleList,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH,
-                    depth_write_enabled: Some(depth_write),
-                    depth_compare: Some(compare),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(fs),
-                    compilation_options: Default::default(),
-                    targets: &targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+        let pipeline_of = |entry, depth_write, compare| {
+            RasterPipeline {
+                layout: &pipeline_layout,
+                module: &module,
+                entry,
+                targets: &targets,
+                samples: 1,
+                depth_write,
+                compare,
+            }
+            .build(device)
         };
         let sky = pipeline_of(("sky_vs", "sky_fs"), false, wgpu::CompareFunction::Always);
         let planet_pipeline = pipeline_of(

@@ -9,13 +9,14 @@
 
 use crate::error::{Error, Result};
 
-const SHARED: [(&str, &str); 6] = [
+const SHARED: [(&str, &str); 7] = [
     ("frame", include_str!("../../shaders/shared/frame.wgsl")),
     ("noise", include_str!("../../shaders/shared/noise.wgsl")),
     ("atlas", include_str!("../../shaders/shared/atlas.wgsl")),
     ("shading", include_str!("../../shaders/shared/shading.wgsl")),
     ("surface", include_str!("../../shaders/shared/surface.wgsl")),
     ("sphere", include_str!("../../shaders/shared/sphere.wgsl")),
+    ("raster", include_str!("../../shaders/shared/raster.wgsl")),
 ];
 
 /// The passes' WGSL files, by name.

@@ -146,44 +146,21 @@ impl TerrainPass {
             immediate_size: 0,
         });
         let pipeline_of = |module: &wgpu::ShaderModule,
-                           (vs, fs): (&str, &str),
+                           entry: (&str, &str),
                            targets: &[Option<wgpu::ColorTargetState>],
                            samples: u32,
                            depth_write: bool,
                            compare: wgpu::CompareFunction| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(fs),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some(vs),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState {
-                    topology: wgpu::PrimitiveTopology::TriangleList,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH,
-                    depth_write_enabled: Some(depth_write),
-                    depth_compare: Some(compare),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: wgpu::MultisampleState {
-                    count: samples,
-                    ..Default::default()
-                },
-                fragment: Some(wgpu::FragmentState {
-                    module,
-                    entry_point: Some(fs),
-                    compilation_options: Default::default(),
-                    targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            RasterPipeline {
+                layout: &pipeline_layout,
+                module,
+                entry,
+                targets,
+                samples,
+                depth_write,
+                compare,
+            }
+            .build(device)
         };
         let (always, greater) = (
             wgpu::CompareFunction::Always,
@@ -432,4 +409,56 @@ pub fn quad_indices(mesh: u32) -> Vec<u32> {
         }
     }
     v
+}
+
+/// A render pipeline of the raster passes (terrain, planet): vertices pulled from storage (no
+/// vertex buffers), triangle lists, and the reversed-Z depth test `compare` into [`DEPTH`].
+pub(crate) struct RasterPipeline<'a> {
+    pub layout: &'a wgpu::PipelineLayout,
+    pub module: &'a wgpu::ShaderModule,
+    /// Vertex and fragment entry points.
+    pub entry: (&'a str, &'a str),
+    pub targets: &'a [Option<wgpu::ColorTargetState>],
+    pub samples: u32,
+    pub depth_write: bool,
+    pub compare: wgpu::CompareFunction,
+}
+
+impl RasterPipeline<'_> {
+    pub fn build(&self, device: &wgpu::Device) -> wgpu::RenderPipeline {
+        let (vs, fs) = self.entry;
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(fs),
+            layout: Some(self.layout),
+            vertex: wgpu::VertexState {
+                module: self.module,
+                entry_point: Some(vs),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH,
+                depth_write_enabled: Some(self.depth_write),
+                depth_compare: Some(self.compare),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: wgpu::MultisampleState {
+                count: self.samples,
+                ..Default::default()
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: self.module,
+                entry_point: Some(fs),
+                compilation_options: Default::default(),
+                targets: self.targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    }
 }

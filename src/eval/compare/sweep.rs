@@ -4,8 +4,8 @@
 //! (from GeoMipMap's triangle counts up: 4k to 2M triangles), and `quad_px` 1 and 4 at mesh 512²; GeoMipMap over τ 0.5, 1, 2, 4, 8 px at blocks of 17, 33 and 65 vertices; brute force
 //! over grid spacings d_atlas/2^K for K = 0 up to the finest the device and the vertex budget
 //! allow ([`default_k`]); on a planet, clipmaps over φ steps 128, 256, 512, 1024 at 20 rings per
-//! level and rings per level 10 and 40 at 512 φ steps (the paper's n and m, about 4× triangles
-//! end to end on each axis).
+//! level, rings per level 10 and 40 at 512 φ steps (the paper's n and m, 8× and 4× triangles end
+//! to end), and the paper's triangles split the other ways: 256 × 40 and 128 × 80.
 //!
 //! Rejected alternative: the full product of `quad_px` and mesh size. `quad_px` scales the view
 //! importance everywhere alike, and the warp normalises importance to the mesh it has, so it
@@ -148,6 +148,12 @@ pub fn default_sweep(modes: &[Mode], atlas: &Atlas) -> Vec<Setting> {
                 for rings_per_level in [10, 40] {
                     out.push(Setting::Clipmaps {
                         phi_steps: 512,
+                        rings_per_level,
+                    });
+                }
+                for (phi_steps, rings_per_level) in [(256, 40), (128, 80)] {
+                    out.push(Setting::Clipmaps {
+                        phi_steps,
                         rings_per_level,
                     });
                 }
