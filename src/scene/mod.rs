@@ -404,6 +404,12 @@ crate::named_enum! {
 }
 
 /// A planet and its spherical clipmaps (seed 003).
+///
+/// The defaults split the paper's triangles (512 × 20) the other way, 256 bearings × 40 rings a
+/// level: `terrain compare` on the three bundled planet views (256², llvmpipe) measures the same
+/// triangles at +0.1, +0.0 and +1.0 dB PSNR, 0.093 against 0.146 px mean screen-space error from
+/// 10 km and 0.49 against 0.75 px from 2 m, and a third less swimming from the ground: a ring's
+/// vertices a level apart matter more than its bearings.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlanetSection {
@@ -417,8 +423,8 @@ impl Default for PlanetSection {
     fn default() -> Self {
         PlanetSection {
             radius_m: crate::planet::EARTH_RADIUS_M,
-            phi_steps: 512,
-            rings_per_level: 20,
+            phi_steps: 256,
+            rings_per_level: 40,
         }
     }
 }
