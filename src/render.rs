@@ -190,7 +190,8 @@ impl Renderer {
     }
 
     /// `camera` drawn with the level of detail of the last frame (the warped mode's CPU stage
-    /// frozen, GeoMipMap's selection kept): what a frame would show without the LOD update.
+    /// frozen, GeoMipMap's selection kept, clipmaps' rings left around the last nadir): what a
+    /// frame would show without the LOD update.
     pub fn render_held(&mut self, camera: &Camera) -> Result<Frame> {
         let camera = self.lod.held_camera(camera);
         self.draw(&camera, CpuTimes::default())
