@@ -481,3 +481,55 @@ fn random_cameras_cover_a_planet_and_the_manifest_reproduces_them() {
         "{k}"
     );
 }
+
+/// Over a planet without a `[path]`, `fly` makes its pass straight ahead: the nadirs in
+/// `frames.csv` move along the camera's heading (100°: east, a little south), at its altitude.
+#[test]
+fn fly_over_a_planet_passes_straight_ahead() {
+    let dir = scratch("fly-planet");
+    let scene = dir.join("planet.toml");
+    std::fs::write(
+        &scene,
+        "[sketch]\nsynthetic = \"planet\"\nsize = 128\n[planet]\nphi_steps = 64\nrings_per_level = 6\n\
+         [camera]\nlat_deg = 27.8\nlon_deg = -47.8\naltitude_m = 10000.0\nheading_deg = 100.0\n\
+         pitch_deg = -20.0\nwidth = 24\nheight = 24\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let (code, _, err) = terrain(&[
+        "fly",
+        scene.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+        "--frames",
+        "3",
+        "--no-mp4",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let nadirs: Vec<(f64, f64)> = csv
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            (
+                c[col("lat_deg")].parse().unwrap(),
+                c[col("lon_deg")].parse().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(nadirs.len(), 3);
+    let (first, last) = (nadirs[0], nadirs[2]);
+    assert!(
+        (first.0 - 27.8).abs() < 1e-6 && (first.1 + 47.8).abs() < 1e-6,
+        "{nadirs:?}"
+    );
+    // 10 km of ground east-south-east: 0.10° of longitude at 27.8° N.
+    let (north, east) = (last.0 - first.0, last.1 - first.1);
+    assert!(
+        east > 0.09 && east < 0.11 && north < 0.0 && -north < east / 4.0,
+        "{nadirs:?}"
+    );
+}

@@ -46,7 +46,10 @@ pub struct Options {
 pub struct FrameRecord {
     pub frame: usize,
     pub time_s: f64,
+    /// The eye; on a planet in its nadir's tangent frame, from the sphere under it.
     pub eye_m: [f64; 3],
+    /// On a planet: the nadir's latitude and longitude, degrees.
+    pub nadir_deg: Option<[f64; 2]>,
     pub cpu_stage_us: f64,
     pub gpu_ms: f64,
     pub frame_ms: f64,
@@ -73,6 +76,8 @@ struct CsvRow<'a> {
     reference_ms: Option<Fixed<3>>,
     clipmaps_ms: Option<Fixed<3>>,
     planet_ms: Option<Fixed<3>>,
+    lat_deg: Option<Fixed<7>>,
+    lon_deg: Option<Fixed<7>>,
     file: &'a str,
 }
 
@@ -95,6 +100,8 @@ impl CsvRow<'_> {
             reference_ms: ms(ReferencePass::NAME),
             clipmaps_ms: ms(crate::gpu::clipmaps::ClipmapsPass::NAME),
             planet_ms: ms(crate::gpu::planet::PlanetPass::NAME),
+            lat_deg: r.nadir_deg.map(|g| Fixed(g[0])),
+            lon_deg: r.nadir_deg.map(|g| Fixed(g[1])),
             file: &r.file,
         }
     }
@@ -205,6 +212,7 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
             frame: k,
             time_s: t,
             eye_m: camera.eye.to_array(),
+            nadir_deg: camera.geo.map(|g| [g.lat.to_degrees(), g.lon.to_degrees()]),
             cpu_stage_us: frame.cpu_us,
             gpu_ms: frame.gpu.gpu_ms,
             frame_ms: frame.gpu.gpu_ms + frame.cpu_us * 1e-3,
