@@ -202,7 +202,7 @@ impl PlanetFlyCamera {
     }
 }
 
-/// Records the path flown: a key every `every_s` seconds of flight or `every_m` metres.
+/// Records the path flown: a key every second of flight or 500 m (over a planet, every second).
 #[derive(Debug, Default)]
 pub struct PathRecorder {
     pub keys: Vec<PathKey>,
@@ -234,9 +234,10 @@ impl PathRecorder {
         self.since_key_m += moved;
         self.seconds += dt;
         self.since_key_s += dt;
-        let due = self.keys.is_empty()
-            || (moved > 0.0
-                && (self.since_key_s >= Self::EVERY_S || self.since_key_m >= Self::EVERY_M));
+        // A planet's flight spends equal time between keys, so its keys come by time alone.
+        let far = key.position.is_some() && self.since_key_m >= Self::EVERY_M;
+        let due =
+            self.keys.is_empty() || (moved > 0.0 && (self.since_key_s >= Self::EVERY_S || far));
         if due {
             self.keys.push(key);
             self.since_key_s = 0.0;
