@@ -64,6 +64,16 @@ pub struct PlanetUniforms {
 }
 
 impl PlanetUniforms {
+    /// The uniform buffer a pass reads the block from (the clipmaps' and the reference's).
+    pub fn buffer(alloc: &Alloc) -> Buffer {
+        alloc.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("planet uniforms"),
+            size: std::mem::size_of::<PlanetUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
     /// The block for a camera at `geo`, the sun toward `sun` (the nadir's east, north, up); the
     /// rings' fields stay 0 until [`draw`](PlanetUniforms::draw) (the reference reads none).
     pub fn new(

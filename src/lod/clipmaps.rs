@@ -52,12 +52,7 @@ impl Clipmaps {
         ))?;
         let rings = Rings::new(p.phi_steps, p.rings_per_level);
         let device = &s.alloc;
-        let planet_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("planet uniforms"),
-            size: std::mem::size_of::<PlanetUniforms>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let planet_uniforms = PlanetUniforms::buffer(device);
         let noise = s.detail.octaves > 0;
         let clipmaps = ClipmapsPass::new(
             device,

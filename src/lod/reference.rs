@@ -38,12 +38,7 @@ impl Reference {
             radius: p.radius_m,
             detail: s.detail.clone(),
             sun_world: crate::lod::clipmaps::sun_world(s.scene),
-            buffer: s.alloc.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("planet uniforms"),
-                size: std::mem::size_of::<crate::gpu::clipmaps::PlanetUniforms>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
+            buffer: crate::gpu::clipmaps::PlanetUniforms::buffer(&s.alloc),
             uniforms: None,
         });
         let pass = ReferencePass::new(

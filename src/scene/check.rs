@@ -59,11 +59,16 @@ impl Scene {
                     "camera: a planet's camera needs lat_deg, lon_deg and altitude_m".into(),
                 );
             }
-            within("camera.lat_deg", c.lat_deg.unwrap_or(0.0), -90.0, 90.0)?;
-            finite_all("camera.lon_deg", &[c.lon_deg.unwrap_or(0.0)])?;
-            within("camera.altitude_m", c.altitude_m.unwrap_or(1.0), 0.01, 1e9)?;
-            finite_all("camera.heading_deg", &[c.heading_deg])?;
-            within("camera.pitch_deg", c.pitch_deg, -90.0, 90.0)?;
+            planet_keys(
+                "camera",
+                [
+                    c.lat_deg.unwrap_or(0.0),
+                    c.lon_deg.unwrap_or(0.0),
+                    c.altitude_m.unwrap_or(1.0),
+                    c.heading_deg,
+                    c.pitch_deg,
+                ],
+            )?;
             within("planet.radius_m", p.radius_m, 1000.0, 1e9)?;
             within("planet.phi_steps", p.phi_steps as f64, 8.0, 8192.0)?;
             within(
@@ -221,31 +226,15 @@ impl Scene {
                              altitude_m (with heading_deg, pitch_deg), not position and look_at"
                         ));
                     }
-                    within(
-                        &format!("path.keys[{k}].lat_deg"),
-                        key.lat_deg.unwrap_or(0.0),
-                        -90.0,
-                        90.0,
-                    )?;
-                    finite_all(
-                        &format!("path.keys[{k}].lon_deg"),
-                        &[key.lon_deg.unwrap_or(0.0)],
-                    )?;
-                    within(
-                        &format!("path.keys[{k}].altitude_m"),
-                        key.altitude_m.unwrap_or(1.0),
-                        0.01,
-                        1e9,
-                    )?;
-                    finite_all(
-                        &format!("path.keys[{k}].heading_deg"),
-                        &[key.heading_deg.unwrap_or(0.0)],
-                    )?;
-                    within(
-                        &format!("path.keys[{k}].pitch_deg"),
-                        key.pitch_deg.unwrap_or(0.0),
-                        -90.0,
-                        90.0,
+                    planet_keys(
+                        &format!("path.keys[{k}]"),
+                        [
+                            key.lat_deg.unwrap_or(0.0),
+                            key.lon_deg.unwrap_or(0.0),
+                            key.altitude_m.unwrap_or(1.0),
+                            key.heading_deg.unwrap_or(0.0),
+                            key.pitch_deg.unwrap_or(0.0),
+                        ],
                     )?;
                     continue;
                 }
@@ -270,6 +259,19 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// A planet camera's keys under `table` (`camera`, `path.keys[k]`): latitude, longitude,
+/// altitude, heading and pitch.
+fn planet_keys(
+    table: &str,
+    [lat, lon, altitude, heading, pitch]: [f64; 5],
+) -> std::result::Result<(), String> {
+    within(&format!("{table}.lat_deg"), lat, -90.0, 90.0)?;
+    finite_all(&format!("{table}.lon_deg"), &[lon])?;
+    within(&format!("{table}.altitude_m"), altitude, 0.01, 1e9)?;
+    finite_all(&format!("{table}.heading_deg"), &[heading])?;
+    within(&format!("{table}.pitch_deg"), pitch, -90.0, 90.0)
 }
 
 fn finite_all(key: &str, v: &[f64]) -> std::result::Result<(), String> {
