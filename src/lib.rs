@@ -25,5 +25,6 @@ pub mod render;
 pub mod scene;
 pub mod sketch;
 pub mod stage;
+pub mod tiles;
 
 pub use error::{Error, Result};

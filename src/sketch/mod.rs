@@ -18,7 +18,7 @@ pub mod fill;
 pub mod georef;
 mod geotiff;
 mod hgt;
-mod mosaic;
+pub mod mosaic;
 mod png;
 pub mod synthetic;
 mod xyz;
@@ -142,18 +142,31 @@ impl RawGrid {
 
     /// Checks the size against the limits before a reader allocates.
     pub fn check_size(path: &Path, width: i64, height: i64) -> Result<(usize, usize)> {
-        if width < 2 || height < 2 {
-            return Err(Error::sketch(
-                path,
-                format!("grid is {width}×{height}; a sketch needs at least 2×2 cells"),
-            ));
-        }
+        RawGrid::check_size_unlimited(path, width, height)?;
         let cells = (width as u128) * (height as u128);
         let limit = max_cells();
         if cells > limit as u128 {
             return Err(Error::sketch(
                 path,
                 format!("grid is {width}×{height}, more than the {limit} cells supported"),
+            ));
+        }
+        Ok((width as usize, height as usize))
+    }
+
+    /// Checks that a grid has at least 2×2 nodes and at most 2^31 along a side, whatever the cell
+    /// limit: for grids that are streamed rather than allocated (`terrain tiles`).
+    pub fn check_size_unlimited(path: &Path, width: i64, height: i64) -> Result<(usize, usize)> {
+        if width < 2 || height < 2 {
+            return Err(Error::sketch(
+                path,
+                format!("grid is {width}×{height}; a sketch needs at least 2×2 cells"),
+            ));
+        }
+        if width.max(height) > i32::MAX as i64 {
+            return Err(Error::sketch(
+                path,
+                format!("grid is {width}×{height}; a side longer than 2^31 nodes is no sketch's"),
             ));
         }
         Ok((width as usize, height as usize))
@@ -203,6 +216,10 @@ impl Format {
             "vrt" => return Ok(Format::Vrt),
             "xyz" | "csv" | "txt" => return Ok(Format::Xyz),
             "toml" => "a scene file, not a height map: give it to `terrain render`".to_string(),
+            "" if path.is_dir() => {
+                "is a folder without pyramid.toml, not a tile pyramid (`terrain tiles` writes one)"
+                    .to_string()
+            }
             "" => "no extension to tell its format".to_string(),
             other => format!("unknown sketch format `.{other}`"),
         };
@@ -212,6 +229,9 @@ impl Format {
 
 /// `depth`: how many mosaics enclose this file (a VRT may name VRTs).
 fn read_at_depth(path: &Path, opts: &LoadOptions, depth: usize) -> Result<RawGrid> {
+    if crate::tiles::is_pyramid(path) {
+        return crate::tiles::read::raw_grid(path, opts);
+    }
     if mosaic::is_glob(path) {
         return mosaic::read_glob(path, |tile| read_at_depth(tile, opts, depth + 1));
     }
@@ -248,7 +268,8 @@ const LARGE_FILE_BYTES: u64 = 64 << 20;
 
 /// The sketch formats by extension, for messages.
 const FORMATS: &str = ".asc/.grd (ESRI ASCII), .hgt/.hgt.zip (SRTM), .png (with a .pgw world file), \
-     .tif/.tiff (GeoTIFF), .vrt (GDAL mosaic), .xyz/.csv/.txt, or a glob of tiles (tiles/*.hgt)";
+     .tif/.tiff (GeoTIFF), .vrt (GDAL mosaic), .xyz/.csv/.txt, a glob of tiles (tiles/*.hgt), \
+     or a tile pyramid's folder (`terrain tiles`)";
 
 impl Atlas {
     /// Reads a sketch file, choosing the reader by its extension.
@@ -290,37 +311,7 @@ impl Atlas {
                 ),
             ));
         }
-        let scale = opts.height_scale.unwrap_or(1.0);
-        if !(scale.is_finite() && scale > 0.0) {
-            return Err(Error::value(
-                "sketch.height_scale",
-                format!("height scale {scale} is not positive and finite"),
-            ));
-        }
-        let (mut beyond, mut largest) = (0usize, 0.0f64);
-        for h in &mut raw.data {
-            let v = *h as f64 * scale;
-            *h = if v.abs() <= MAX_HEIGHT_M {
-                v as f32
-            } else {
-                if v.is_finite() {
-                    beyond += 1;
-                    largest = largest.max(v.abs());
-                }
-                f32::NAN
-            };
-        }
-        // A few such cells are damage or an undeclared nodata; many are heights in another unit.
-        if beyond * 100 > raw.data.len() {
-            return Err(Error::value(
-                "sketch.height_scale",
-                format!(
-                    "{beyond} of {} heights lie beyond ±1000 km (up to {largest:.3e} m after height_scale {scale}): \
-                     set sketch.height_scale to their unit in metres (0.001 for millimetres)",
-                    raw.data.len()
-                ),
-            ));
-        }
+        scale_heights(&mut raw.data, opts)?;
         let nodata = fill::fill_nodata(&mut raw.data, raw.width, raw.height);
         let mut min_m = f32::INFINITY;
         let mut max_m = f32::NEG_INFINITY;
@@ -459,6 +450,43 @@ impl Level {
 
 /// Halves (rounding down, as texture mip levels do, so the GPU holds the same pyramid) while the
 /// next level keeps 2 texels on its shorter side; an odd level's last row or column is dropped.
+/// Applies `sketch.height_scale` and takes heights beyond ±[`MAX_HEIGHT_M`] as nodata (NaN); more
+/// than 1 % of them beyond is a unit error and refused.
+pub fn scale_heights(data: &mut [f32], opts: &LoadOptions) -> Result<()> {
+    let scale = opts.height_scale.unwrap_or(1.0);
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(Error::value(
+            "sketch.height_scale",
+            format!("height scale {scale} is not positive and finite"),
+        ));
+    }
+    let (mut beyond, mut largest) = (0usize, 0.0f64);
+    for h in data.iter_mut() {
+        let v = *h as f64 * scale;
+        *h = if v.abs() <= MAX_HEIGHT_M {
+            v as f32
+        } else {
+            if v.is_finite() {
+                beyond += 1;
+                largest = largest.max(v.abs());
+            }
+            f32::NAN
+        };
+    }
+    // A few such cells are damage or an undeclared nodata; many are heights in another unit.
+    if beyond * 100 > data.len() {
+        return Err(Error::value(
+            "sketch.height_scale",
+            format!(
+                "{beyond} of {} heights lie beyond ±1000 km (up to {largest:.3e} m after height_scale {scale}): \
+                     set sketch.height_scale to their unit in metres (0.001 for millimetres)",
+                data.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
 fn build_pyramid(base: Level) -> Vec<Level> {
     let mut levels = vec![base];
     loop {

@@ -31,6 +31,16 @@ pub fn is_glob(path: &Path) -> bool {
 
 /// The tiles a glob names, sorted so the result does not depend on the directory's order.
 pub fn read_glob(pattern: &Path, read: impl Fn(&Path) -> Result<RawGrid>) -> Result<RawGrid> {
+    let grids = list_glob(pattern)?
+        .into_iter()
+        .map(|t| read(&t).map(|g| (t, g)))
+        .collect::<Result<Vec<_>>>()?;
+    mosaic(pattern, &grids)
+}
+
+/// The files a glob names, sorted so the mosaic does not depend on the directory's order; at
+/// least one.
+pub fn list_glob(pattern: &Path) -> Result<Vec<PathBuf>> {
     let bad = |reason: String| Error::sketch(pattern, reason);
     let text = pattern
         .to_str()
@@ -43,34 +53,52 @@ pub fn read_glob(pattern: &Path, read: impl Fn(&Path) -> Result<RawGrid>) -> Res
     if tiles.is_empty() {
         return Err(bad("no file matches the pattern".into()));
     }
-    let grids = tiles
-        .iter()
-        .map(|t| read(t).map(|g| (t.clone(), g)))
-        .collect::<Result<Vec<_>>>()?;
-    mosaic(pattern, &grids)
+    Ok(tiles)
 }
 
-/// Places georeferenced tiles on the first tile's grid.
-fn mosaic(pattern: &Path, grids: &[(PathBuf, RawGrid)]) -> Result<RawGrid> {
-    let first_ref = |(path, g): &(PathBuf, RawGrid)| -> Result<Georef> {
-        g.georef.ok_or_else(|| {
+/// Where each tile of a glob mosaic lies on the first tile's grid: the rules of this module's
+/// doc, told from the tiles' sizes and georeferences alone, so that `terrain tiles` can place
+/// tiles it streams one at a time.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Placement {
+    pub width: usize,
+    pub height: usize,
+    /// Each tile's south-west node, in nodes from the mosaic's south-west node.
+    pub offsets: Vec<(usize, usize)>,
+    pub georef: Georef,
+}
+
+/// One tile as [`place`] sees it: its file, georeference and size.
+pub struct TileExtent<'a> {
+    pub path: &'a Path,
+    pub georef: Option<Georef>,
+    pub width: usize,
+    pub height: usize,
+}
+
+/// Places georeferenced tiles on the first tile's grid (`pattern` names the mosaic in messages).
+pub fn place(pattern: &Path, tiles: &[TileExtent]) -> Result<Placement> {
+    let georef_of = |t: &TileExtent| -> Result<Georef> {
+        t.georef.ok_or_else(|| {
             Error::sketch(
-                path,
+                t.path,
                 "mosaic tile has no georeference (world file, GeoTIFF tags or a tile name)",
             )
         })
     };
-    let base = first_ref(&grids[0])?;
+    let Some(first) = tiles.first() else {
+        return Err(Error::sketch(pattern, "no file matches the pattern"));
+    };
+    let base = georef_of(first)?;
     let (mut west, mut south) = (f64::INFINITY, f64::INFINITY);
     let (mut east, mut north) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
-    let mut offsets = Vec::with_capacity(grids.len());
+    let mut nodes = Vec::with_capacity(tiles.len());
     let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
-    for tile in grids {
-        let (path, g) = tile;
-        let r = first_ref(tile)?;
+    for t in tiles {
+        let r = georef_of(t)?;
         if r.units != base.units || !same(r.cell_x, base.cell_x) || !same(r.cell_y, base.cell_y) {
             return Err(Error::sketch(
-                path,
+                t.path,
                 format!(
                     "mosaic tile has cells of {} × {} {:?}; the first tile's are {} × {} {:?}",
                     r.cell_x, r.cell_y, r.units, base.cell_x, base.cell_y, base.units
@@ -84,24 +112,53 @@ fn mosaic(pattern: &Path, grids: &[(PathBuf, RawGrid)]) -> Result<RawGrid> {
         let (i, j) = (fi.round(), fj.round());
         if (fi - i).abs() > 1e-3 || (fj - j).abs() > 1e-3 || !(i.abs() < 1e9 && j.abs() < 1e9) {
             return Err(Error::sketch(
-                path,
+                t.path,
                 "mosaic tile's nodes are off the first tile's grid",
             ));
         }
-        offsets.push((i as i64, j as i64));
+        nodes.push((i as i64, j as i64));
         west = west.min(i);
         south = south.min(j);
-        east = east.max(i + g.width as f64 - 1.0);
-        north = north.max(j + g.height as f64 - 1.0);
+        east = east.max(i + t.width as f64 - 1.0);
+        north = north.max(j + t.height as f64 - 1.0);
     }
-    let (w, h) = RawGrid::check_size(
+    let (width, height) = RawGrid::check_size_unlimited(
         pattern,
         (east - west) as i64 + 1,
         (north - south) as i64 + 1,
     )?;
+    let offsets = nodes
+        .into_iter()
+        .map(|(i, j)| ((i - west as i64) as usize, (j - south as i64) as usize))
+        .collect();
+    let georef = Georef {
+        west: base.west + west * base.cell_x,
+        south: base.south + south * base.cell_y,
+        ..base
+    };
+    Ok(Placement {
+        width,
+        height,
+        offsets,
+        georef,
+    })
+}
+
+/// Places georeferenced tiles on the first tile's grid.
+fn mosaic(pattern: &Path, grids: &[(PathBuf, RawGrid)]) -> Result<RawGrid> {
+    let extents: Vec<TileExtent> = grids
+        .iter()
+        .map(|(path, g)| TileExtent {
+            path,
+            georef: g.georef,
+            width: g.width,
+            height: g.height,
+        })
+        .collect();
+    let placed = place(pattern, &extents)?;
+    let (w, h) = RawGrid::check_size(pattern, placed.width as i64, placed.height as i64)?;
     let mut data = vec![f32::NAN; w * h];
-    for ((_, g), (i, j)) in grids.iter().zip(offsets) {
-        let (x0, y0) = ((i - west as i64) as usize, (j - south as i64) as usize);
+    for ((_, g), &(x0, y0)) in grids.iter().zip(&placed.offsets) {
         for r in 0..g.height {
             let src = &g.data[r * g.width..(r + 1) * g.width];
             let dst = &mut data[(y0 + r) * w + x0..(y0 + r) * w + x0 + g.width];
@@ -112,12 +169,7 @@ fn mosaic(pattern: &Path, grids: &[(PathBuf, RawGrid)]) -> Result<RawGrid> {
             }
         }
     }
-    let georef = Georef {
-        west: base.west + west * base.cell_x,
-        south: base.south + south * base.cell_y,
-        ..base
-    };
-    Ok(RawGrid::georeferenced(w, h, data, georef))
+    Ok(RawGrid::georeferenced(w, h, data, placed.georef))
 }
 
 /// Reads a GDAL VRT mosaic.

@@ -35,6 +35,11 @@ struct Report {
     nodata: usize,
     /// The file's coordinate system and its south-west node there; null when the file has none.
     georef: Option<GeorefReport>,
+    /// A tile pyramid's levels (nodes per side, level 0 first) and tiles; absent for a file.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    levels: Option<Vec<[usize; 2]>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tiles: Option<usize>,
 }
 
 #[derive(Serialize)]
@@ -87,6 +92,9 @@ impl GeorefReport {
 }
 
 pub fn run(a: Args) -> Result<()> {
+    if terrain::tiles::is_pyramid(&a.file) {
+        return pyramid(a);
+    }
     let opts = LoadOptions {
         spacing_m: a.spacing_m,
         height_scale: a.height_scale,
@@ -104,9 +112,39 @@ pub fn run(a: Args) -> Result<()> {
         max_m: atlas.max_m,
         nodata: atlas.nodata,
         georef: atlas.georef.map(GeorefReport::new),
+        levels: None,
+        tiles: None,
     };
-    if a.json {
-        return crate::print_json(&r);
+    print(&r, a.json)
+}
+
+/// A tile pyramid, from its `pyramid.toml` alone (a 32k² pyramid is not read to describe it).
+fn pyramid(a: Args) -> Result<()> {
+    let p = terrain::tiles::Pyramid::open(&a.file)?;
+    let m = &p.meta;
+    let r = Report {
+        file: a.file.display().to_string(),
+        width: m.width,
+        height: m.height,
+        spacing_m: m.dx_m.min(m.dy_m),
+        dx_m: m.dx_m,
+        dy_m: m.dy_m,
+        min_m: m.min_m,
+        max_m: m.max_m,
+        nodata: m.nodata as usize,
+        georef: m
+            .georef
+            .as_ref()
+            .map(|g| GeorefReport::new(terrain::tiles::read::georef(g))),
+        levels: Some(m.levels.clone()),
+        tiles: Some(m.tile_count()),
+    };
+    print(&r, a.json)
+}
+
+fn print(r: &Report, json: bool) -> Result<()> {
+    if json {
+        return crate::print_json(r);
     }
     println!(
         "{}: {} × {} cells of {:.2} × {:.2} m ({:.1} × {:.1} km), heights {:.1} … {:.1} m, {} nodata filled{}",
@@ -125,5 +163,13 @@ pub fn run(a: Args) -> Result<()> {
             .map(GeorefReport::describe)
             .unwrap_or_default()
     );
+    if let (Some(levels), Some(tiles)) = (&r.levels, r.tiles) {
+        println!(
+            "  a tile pyramid of {} levels (down to {}×{}) in {tiles} tiles",
+            levels.len(),
+            levels[levels.len() - 1][0],
+            levels[levels.len() - 1][1]
+        );
+    }
     Ok(())
 }

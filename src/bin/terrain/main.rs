@@ -10,6 +10,7 @@ mod compare;
 mod fly;
 mod info;
 mod render;
+mod tiles;
 mod view;
 mod warp;
 
@@ -31,6 +32,9 @@ struct Cli {
 enum Command {
     /// Reads a sketch and prints its size, spacing, height range and nodata count.
     Info(info::Args),
+    /// Converts a sketch (a file or a glob of tiles) into a tile pyramid on disk, with bounded
+    /// memory; resumable. Scenes name the pyramid's folder as their sketch.
+    Tiles(tiles::Args),
     /// Runs the CPU stage for the scene's camera; writes importance.png, mesh.png, ratio.png.
     Warp(warp::Args),
     /// Renders a snapshot of the scene from its camera (headless, on whatever adapter there is).
@@ -85,6 +89,7 @@ fn main() {
     };
     let result = match cli.command {
         Command::Info(a) => info::run(a),
+        Command::Tiles(a) => tiles::run(a),
         Command::Warp(a) => warp::run(a),
         Command::Render(a) => render::run(a),
         Command::Compare(a) => compare::run(a),

@@ -1,0 +1,55 @@
+//! `terrain tiles SRC --out DIR`: a sketch converted into a tile pyramid on disk, streamed with
+//! bounded memory and resumable (run it again after a kill).
+
+use anyhow::Result;
+use std::path::PathBuf;
+use terrain::sketch::LoadOptions;
+use terrain::tiles::{BuildOptions, build};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// A sketch file, or a quoted glob of tiles (`'srtm/*.hgt'`).
+    src: PathBuf,
+    /// The pyramid's folder: created, or resumed where an interrupted run stopped.
+    #[arg(long)]
+    out: PathBuf,
+    /// Grid spacing in metres, for formats that carry none (PNG without a world file).
+    #[arg(long)]
+    spacing_m: Option<f64>,
+    /// Metres per unit of the file's heights (0.001 for millimetres), as `sketch.height_scale`.
+    #[arg(long)]
+    height_scale: Option<f64>,
+    /// Threads encoding tiles (default: all cores).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(a: Args) -> Result<()> {
+    let opts = BuildOptions {
+        load: LoadOptions {
+            spacing_m: a.spacing_m,
+            height_scale: a.height_scale,
+            ..LoadOptions::default()
+        },
+        threads: a.threads,
+    };
+    let s = build(&a.src, &a.out, &opts)?;
+    if a.json {
+        return crate::print_json(&s);
+    }
+    println!(
+        "{}: {} × {} nodes from {} source file(s) in {} levels, {} tiles ({} written now), {:.1} MiB, {:.1} s",
+        a.out.display(),
+        s.width,
+        s.height,
+        s.sources,
+        s.levels,
+        s.tiles,
+        s.tiles_written,
+        s.disk_bytes as f64 / (1 << 20) as f64,
+        s.seconds
+    );
+    Ok(())
+}

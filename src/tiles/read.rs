@@ -1,0 +1,158 @@
+//! Reading a tile pyramid: its `pyramid.toml`, single tiles, and whole levels for a sketch that
+//! fits in memory.
+//!
+//! Rules:
+//! - A scene whose `sketch.path` names a pyramid folder reads level 0 when it fits the cell limit
+//!   ([`crate::sketch::max_cells`]); otherwise the finest level that fits stands in, with its
+//!   spacing, and a note on stderr says which. The stand-in's nodes lie where that level's
+//!   centres do: `(2^l − 1)/2` level-0 cells north-east of level 0's south-west node; its
+//!   georeference says so, the scene's `sketch.origin_m` places its first node.
+//! - Every tile is checked as it is read: its header, length, checksum and side; a missing tile is
+//!   an error naming it.
+
+pub use super::build::georef_of as georef;
+use super::codec::decode_tile;
+use super::{FORMAT, META, Meta, level_sizes, tile_path};
+use crate::error::{Error, Result, Role};
+use crate::sketch::{LoadOptions, RawGrid, max_cells};
+use std::path::{Path, PathBuf};
+
+/// An opened pyramid folder.
+#[derive(Clone, Debug)]
+pub struct Pyramid {
+    pub dir: PathBuf,
+    pub meta: Meta,
+}
+
+impl Pyramid {
+    /// Reads and checks `DIR/pyramid.toml`.
+    pub fn open(dir: &Path) -> Result<Pyramid> {
+        let path = dir.join(META);
+        let text = std::fs::read_to_string(&path).map_err(|e| Error::io(Role::Sketch, &path, e))?;
+        let meta: Meta = toml::from_str(&text)
+            .map_err(|e| Error::decode(Role::Sketch, &path, "a pyramid.toml", e))?;
+        let bad = |why: String| Error::sketch(&path, why);
+        if meta.format != FORMAT {
+            return Err(bad(format!(
+                "format is {:?}; this terrain reads {FORMAT:?}: convert the source again",
+                meta.format
+            )));
+        }
+        if meta.width < 2 || meta.height < 2 || meta.levels != level_sizes(meta.width, meta.height)
+        {
+            return Err(bad(format!(
+                "levels do not follow from a {}×{} grid",
+                meta.width, meta.height
+            )));
+        }
+        if !(16..=4096).contains(&meta.tile) || meta.border > 8 {
+            return Err(bad(format!(
+                "tile {} with border {} is not a layout this terrain writes",
+                meta.tile, meta.border
+            )));
+        }
+        let spacing_ok = |d: f64| d.is_finite() && d > 0.0;
+        if !(spacing_ok(meta.dx_m) && spacing_ok(meta.dy_m)) {
+            return Err(bad(format!(
+                "spacing {} × {} m is not positive and finite",
+                meta.dx_m, meta.dy_m
+            )));
+        }
+        if !(meta.min_m.is_finite() && meta.max_m.is_finite() && meta.min_m <= meta.max_m) {
+            return Err(bad("height range is not finite".into()));
+        }
+        Ok(Pyramid {
+            dir: dir.to_path_buf(),
+            meta,
+        })
+    }
+
+    /// Stored nodes per tile side.
+    pub fn side(&self) -> usize {
+        self.meta.tile + 2 * self.meta.border
+    }
+
+    /// Tile (tx, ty) of level `l`, border included, row-major, row 0 south.
+    pub fn tile(&self, l: usize, tx: usize, ty: usize) -> Result<Vec<f32>> {
+        read_tile_file(&tile_path(&self.dir, l, tx, ty), self.side())
+    }
+
+    /// Level `l` whole, from its tiles' interiors.
+    pub fn level(&self, l: usize) -> Result<crate::sketch::Level> {
+        let [width, height] = self.meta.levels[l];
+        let data = super::build::read_rows(&self.dir, &self.meta, l, 0, height)?;
+        Ok(crate::sketch::Level {
+            width,
+            height,
+            data,
+        })
+    }
+
+    /// The finest level with at most `cells` nodes.
+    pub fn finest_fitting(&self, cells: usize) -> usize {
+        self.meta
+            .levels
+            .iter()
+            .position(|[w, h]| (*w as u128) * (*h as u128) <= cells as u128)
+            .unwrap_or(self.meta.levels.len() - 1)
+    }
+}
+
+/// A tile file's heights, checked to hold `side`² of them.
+pub fn read_tile_file(path: &Path, side: usize) -> Result<Vec<f32>> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
+    let (header, heights) = decode_tile(path, &bytes)?;
+    if header.side != side {
+        return Err(Error::sketch(
+            path,
+            format!("tile is {}² nodes; its pyramid's are {side}²", header.side),
+        ));
+    }
+    Ok(heights)
+}
+
+/// A pyramid as a sketch grid: level 0, or the finest level that fits the cell limit.
+pub fn raw_grid(dir: &Path, _opts: &LoadOptions) -> Result<RawGrid> {
+    raw_grid_within(dir, max_cells())
+}
+
+/// A pyramid as a sketch grid of at most `cells` nodes (its level 0 when that fits).
+pub fn raw_grid_within(dir: &Path, cells: usize) -> Result<RawGrid> {
+    let pyramid = Pyramid::open(dir)?;
+    let l = pyramid.finest_fitting(cells);
+    let level = pyramid.level(l)?;
+    let m = &pyramid.meta;
+    let scale = (1u64 << l) as f64;
+    if l > 0 && std::env::var_os("TERRAIN_QUIET").is_none() {
+        eprintln!(
+            "note: sketch {}: {}×{} nodes exceed the in-memory limit of {} cells; level {l} \
+             ({}×{}, {:.3} m spacing) stands in",
+            dir.display(),
+            m.width,
+            m.height,
+            cells,
+            level.width,
+            level.height,
+            m.dx_m * scale
+        );
+    }
+    let georef = m.georef.as_ref().map(|g| {
+        let g = georef(g);
+        let shift = (scale - 1.0) * 0.5;
+        crate::sketch::georef::Georef {
+            west: g.west + shift * g.cell_x,
+            south: g.south + shift * g.cell_y,
+            cell_x: g.cell_x * scale,
+            cell_y: g.cell_y * scale,
+            units: g.units,
+        }
+    });
+    Ok(RawGrid {
+        width: level.width,
+        height: level.height,
+        dx: m.dx_m * scale,
+        dy: m.dy_m * scale,
+        data: level.data,
+        georef,
+    })
+}

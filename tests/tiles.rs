@@ -1,0 +1,334 @@
+//! `terrain tiles`: the pyramid on disk holds the atlas's numbers bit for bit, a glob mosaic
+//! converts as it loads, a killed build resumes to the same files, and bad folders and damaged
+//! tiles are refused in one line.
+
+mod common;
+
+use common::{scratch, terrain};
+use std::path::{Path, PathBuf};
+use terrain::sketch::{Atlas, LoadOptions};
+use terrain::tiles::{BORDER, BuildOptions, Pyramid, SIDE, TILE, build};
+
+/// Heights with detail at every scale and no symmetry, so a misplaced node shows.
+fn height(i: usize, j: usize) -> f32 {
+    let (x, y) = (i as f32, j as f32);
+    300.0
+        + 80.0 * (x * 0.013).sin() * (y * 0.021).cos()
+        + 7.0 * ((x * 1.7 + y * 0.3).sin())
+        + ((i * 7919 + j * 104_729) % 97) as f32 * 0.11
+}
+
+/// An ESRI ASCII grid of `w`×`h` nodes whose south-west node is global node (i0, j0) of a 30 m
+/// grid; `hole` marks nodata.
+fn write_asc(
+    path: &Path,
+    w: usize,
+    h: usize,
+    (i0, j0): (usize, usize),
+    hole: impl Fn(usize, usize) -> bool,
+) {
+    let mut text = format!(
+        "ncols {w}\nnrows {h}\nxllcenter {}\nyllcenter {}\ncellsize 30\nNODATA_value -9999\n",
+        500_000.0 + 30.0 * i0 as f64,
+        4_000_000.0 + 30.0 * j0 as f64
+    );
+    for r in (0..h).rev() {
+        for c in 0..w {
+            let (i, j) = (i0 + c, j0 + r);
+            if hole(i, j) {
+                text += "-9999 ";
+            } else {
+                text += &format!("{} ", height(i, j));
+            }
+        }
+        text += "\n";
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+fn convert(src: &Path, out: &Path) -> terrain::tiles::BuildSummary {
+    unsafe { std::env::set_var("TERRAIN_QUIET", "1") };
+    build(src, out, &BuildOptions::default())
+        .unwrap_or_else(|e| panic!("tiles {}: {e}", src.display()))
+}
+
+fn assert_same_atlas(a: &Atlas, b: &Atlas) {
+    assert_eq!(a.levels.len(), b.levels.len(), "levels");
+    for (l, (x, y)) in a.levels.iter().zip(&b.levels).enumerate() {
+        assert_eq!((x.width, x.height), (y.width, y.height), "level {l} size");
+        let differ = x
+            .data
+            .iter()
+            .zip(&y.data)
+            .filter(|(p, q)| p.to_bits() != q.to_bits())
+            .count();
+        assert_eq!(differ, 0, "level {l}: {differ} nodes differ");
+    }
+    assert_eq!(
+        (a.dx, a.dy, a.min_m, a.max_m),
+        (b.dx, b.dy, b.min_m, b.max_m)
+    );
+    assert_eq!(
+        a.edge_mean_m.to_bits(),
+        b.edge_mean_m.to_bits(),
+        "edge mean"
+    );
+    assert_eq!(a.georef, b.georef);
+}
+
+#[test]
+fn a_pyramid_holds_the_atlas_bit_for_bit_borders_included() {
+    let dir = scratch("tiles-atlas");
+    let src = dir.join("grid.asc");
+    // Sizes that are no multiple of the tile, so edge tiles and odd halvings are exercised.
+    write_asc(&src, 611, 529, (0, 0), |_, _| false);
+    let out = dir.join("pyramid");
+    let s = convert(&src, &out);
+    assert_eq!((s.width, s.height, s.sources), (611, 529, 1));
+    let from_file = Atlas::load(&src, &LoadOptions::default()).unwrap();
+    let from_tiles = Atlas::load(&out, &LoadOptions::default()).unwrap();
+    assert_same_atlas(&from_file, &from_tiles);
+    // Every stored node, border included, is its level's node clamped to the edge.
+    let p = Pyramid::open(&out).unwrap();
+    assert_eq!(p.meta.tile_count(), s.tiles);
+    for l in 0..p.meta.levels.len() {
+        let level = &from_file.levels[l];
+        let (nx, ny) = p.meta.tiles(l);
+        for ty in 0..ny {
+            for tx in 0..nx {
+                let t = p.tile(l, tx, ty).unwrap();
+                for j in 0..SIDE {
+                    for i in 0..SIDE {
+                        let gx = (tx * TILE + i).saturating_sub(BORDER).min(level.width - 1);
+                        let gy = (ty * TILE + j).saturating_sub(BORDER).min(level.height - 1);
+                        let want = level.data[gy * level.width + gx];
+                        assert_eq!(
+                            t[j * SIDE + i].to_bits(),
+                            want.to_bits(),
+                            "level {l} tile ({tx},{ty}) node ({i},{j})"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_glob_mosaic_converts_as_it_loads_and_nodata_is_counted() {
+    let dir = scratch("tiles-mosaic");
+    // Four tiles of unequal size; a small hole inside one band (so the band fill is the atlas's).
+    let hole = |i: usize, j: usize| (40..44).contains(&i) && (100..103).contains(&j);
+    write_asc(&dir.join("a.asc"), 300, 270, (0, 0), hole);
+    write_asc(&dir.join("b.asc"), 213, 270, (300, 0), hole);
+    write_asc(&dir.join("c.asc"), 300, 190, (0, 270), hole);
+    write_asc(&dir.join("d.asc"), 213, 190, (300, 270), hole);
+    let glob = dir.join("*.asc");
+    let out = dir.join("pyramid");
+    let s = convert(&glob, &out);
+    assert_eq!((s.width, s.height, s.sources), (513, 460, 4));
+    let from_glob = Atlas::load(&glob, &LoadOptions::default()).unwrap();
+    let from_tiles = Atlas::load(&out, &LoadOptions::default()).unwrap();
+    assert_same_atlas(&from_glob, &from_tiles);
+    let p = Pyramid::open(&out).unwrap();
+    assert_eq!(p.meta.nodata, 12);
+    assert_eq!(from_glob.nodata, 12);
+    assert!(
+        !out.join(".build").exists(),
+        "scratch removed once complete"
+    );
+}
+
+#[test]
+fn a_coarser_level_stands_in_for_a_pyramid_beyond_the_cell_limit() {
+    let dir = scratch("tiles-stand-in");
+    let src = dir.join("grid.asc");
+    write_asc(&src, 300, 300, (0, 0), |_, _| false);
+    let out = dir.join("pyramid");
+    convert(&src, &out);
+    let atlas = Atlas::load(&src, &LoadOptions::default()).unwrap();
+    unsafe { std::env::set_var("TERRAIN_QUIET", "1") };
+    let g = terrain::tiles::read::raw_grid_within(&out, 150 * 150).unwrap();
+    assert_eq!((g.width, g.height), (150, 150));
+    assert_eq!((g.dx, g.dy), (60.0, 60.0));
+    assert!(
+        g.data
+            .iter()
+            .zip(&atlas.levels[1].data)
+            .all(|(a, b)| a.to_bits() == b.to_bits())
+    );
+    // Level 1's first node is the centre of level 0's first 2×2 nodes: half a cell north-east.
+    let (a, b) = (atlas.georef.unwrap(), g.georef.unwrap());
+    assert_eq!((b.west - a.west, b.south - a.south), (15.0, 15.0));
+}
+
+fn all_files(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            out.extend(all_files(&p));
+        } else {
+            out.push((p.clone(), std::fs::read(&p).unwrap()));
+        }
+    }
+    out.sort();
+    out
+}
+
+/// A 16-bit PNG of `n`² nodes (heights are its values, metres).
+fn write_png16(path: &Path, n: usize) {
+    let mut bytes = Vec::new();
+    let mut enc = png::Encoder::new(&mut bytes, n as u32, n as u32);
+    enc.set_color(png::ColorType::Grayscale);
+    enc.set_depth(png::BitDepth::Sixteen);
+    let mut w = enc.write_header().unwrap();
+    let data: Vec<u8> = (0..n * n)
+        .flat_map(|k| ((height(k % n, k / n) * 20.0) as u16).to_be_bytes())
+        .collect();
+    w.write_image_data(&data).unwrap();
+    w.finish().unwrap();
+    std::fs::write(path, bytes).unwrap();
+}
+
+#[test]
+fn a_killed_build_resumes_to_the_same_files() {
+    let dir = scratch("tiles-resume");
+    let src = dir.join("big.png");
+    write_png16(&src, 3000);
+    let (killed, fresh) = (dir.join("killed"), dir.join("fresh"));
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_terrain"))
+        .args([
+            "tiles",
+            src.to_str().unwrap(),
+            "--out",
+            killed.to_str().unwrap(),
+            "--threads",
+            "1",
+        ])
+        .env("TERRAIN_QUIET", "1")
+        .spawn()
+        .unwrap();
+    // SIGKILL as soon as the first tile is in place: no chance to tidy up.
+    let first = killed.join("L0/0/0.tile");
+    let t0 = std::time::Instant::now();
+    while !first.exists() && t0.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(first.exists(), "no tile within 60 s");
+    assert!(
+        !killed.join("pyramid.toml").exists(),
+        "the build finished before it was killed"
+    );
+    let (code, stdout, stderr) = terrain(&[
+        "tiles",
+        src.to_str().unwrap(),
+        "--out",
+        killed.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let (tiles, written) = (
+        report["tiles"].as_u64().unwrap(),
+        report["tiles_written"].as_u64().unwrap(),
+    );
+    assert!(
+        written < tiles,
+        "the resumed run wrote all {tiles} tiles again"
+    );
+    let (code, _, stderr) = terrain(&[
+        "tiles",
+        src.to_str().unwrap(),
+        "--out",
+        fresh.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let (a, b) = (all_files(&killed), all_files(&fresh));
+    assert_eq!(a.len(), b.len(), "files");
+    for ((pa, ba), (pb, bb)) in a.iter().zip(&b) {
+        assert_eq!(
+            pa.strip_prefix(&killed).unwrap(),
+            pb.strip_prefix(&fresh).unwrap()
+        );
+        assert!(
+            ba == bb,
+            "{} differs from an uninterrupted build's",
+            pa.display()
+        );
+    }
+    // Run again on a whole pyramid: nothing to write.
+    let (code, stdout, _) = terrain(&[
+        "tiles",
+        src.to_str().unwrap(),
+        "--out",
+        killed.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(code, 0);
+    assert!(stdout.contains("\"tiles_written\":0"), "{stdout}");
+}
+
+#[test]
+fn folders_of_other_builds_and_damaged_tiles_are_refused_in_one_line() {
+    let dir = scratch("tiles-refused");
+    let (one, two) = (dir.join("one.asc"), dir.join("two.asc"));
+    write_asc(&one, 40, 30, (0, 0), |_, _| false);
+    write_asc(&two, 41, 30, (0, 0), |_, _| false);
+    let out = dir.join("pyramid");
+    convert(&one, &out);
+    let (code, _, stderr) = terrain(&[
+        "tiles",
+        two.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1);
+    assert!(
+        stderr.contains("other sources or options") && stderr.lines().count() == 1,
+        "{stderr}"
+    );
+    let other = dir.join("other");
+    std::fs::create_dir_all(&other).unwrap();
+    std::fs::write(other.join("notes.txt"), "mine").unwrap();
+    let (code, _, stderr) = terrain(&[
+        "tiles",
+        one.to_str().unwrap(),
+        "--out",
+        other.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1);
+    assert!(stderr.contains("not empty"), "{stderr}");
+    assert_eq!(
+        std::fs::read_to_string(other.join("notes.txt")).unwrap(),
+        "mine"
+    );
+    // A flipped byte in a tile's heights: its checksum catches it, and the message names it.
+    let tile = out.join("L0/0/0.tile");
+    let mut bytes = std::fs::read(&tile).unwrap();
+    let k = bytes.len() - 10;
+    bytes[k] ^= 0x10;
+    std::fs::write(&tile, bytes).unwrap();
+    let (code, _, stderr) = terrain(&["info", out.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "info reads pyramid.toml alone: {stderr}");
+    let err = Atlas::load(&out, &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with("sketch ") && err.contains("0.tile: tile"),
+        "{err}"
+    );
+    let (code, _, stderr) = terrain(&[
+        "tiles",
+        dir.join("missing.asc").to_str().unwrap(),
+        "--out",
+        dir.join("x").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1);
+    assert!(
+        stderr.starts_with("error: sketch ") && stderr.lines().count() == 1,
+        "{stderr}"
+    );
+}
