@@ -183,6 +183,32 @@ fn shards_together_are_the_whole_batch_byte_for_byte() {
     }
 }
 
+/// A scheduler's job script passes `--resume` from the first run on (the README's Slurm and
+/// Kubernetes examples): with no manifest yet, it renders everything.
+#[test]
+fn resume_on_a_fresh_folder_starts_the_batch() {
+    let dir = scratch("batch-resume-fresh");
+    base_scene(&dir, 24);
+    let jobs = jobs_file(&dir, "[random]\ncount = 3\nseed = 2\n");
+    let out = dir.join("out");
+    let (code, stdout, err) = terrain(&[
+        "batch",
+        jobs.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+        "--shard",
+        "1/2",
+        "--resume",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        manifest(&out.join("manifest-1-of-2.jsonl")).len(),
+        1,
+        "{stdout}"
+    );
+    assert!(out.join("random-1.png").is_file());
+}
+
 #[test]
 fn a_killed_batch_resumes_with_nothing_lost_or_listed_twice() {
     let dir = scratch("batch-resume");

@@ -69,6 +69,9 @@ pub fn manifest_name(shard: (usize, usize)) -> String {
 /// with only those lines, first of each name.
 fn resume_from(manifest: &Path, out_dir: &Path) -> Result<HashSet<String>> {
     let Ok(text) = std::fs::read_to_string(manifest) else {
+        // Nothing to resume: a first run with `--resume`, as a scheduler's job script always
+        // passes it, starts the manifest.
+        write_atomic(manifest, b"")?;
         return Ok(HashSet::new());
     };
     let mut done = HashSet::new();
