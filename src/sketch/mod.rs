@@ -142,7 +142,9 @@ impl RawGrid {
 
     /// Checks the size against the limits before a reader allocates.
     pub fn check_size(path: &Path, width: i64, height: i64) -> Result<(usize, usize)> {
-        RawGrid::check_size_unlimited(path, width, height)?;
+        if width < 2 || height < 2 {
+            RawGrid::check_size_unlimited(path, width, height)?;
+        }
         let cells = (width as u128) * (height as u128);
         let limit = max_cells();
         if cells > limit as u128 {
