@@ -4,7 +4,6 @@
 
 mod common;
 use common::*;
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -26,21 +25,6 @@ fn jobs_file(dir: &Path, body: &str) -> PathBuf {
     let path = dir.join("jobs.toml");
     std::fs::write(&path, format!("scene = \"base.toml\"\n{body}")).unwrap();
     path
-}
-
-/// name → PNG bytes of every snapshot in `dir`.
-fn pngs(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .flatten()
-        .filter(|e| e.file_name().to_string_lossy().ends_with(".png"))
-        .map(|e| {
-            (
-                e.file_name().to_string_lossy().into_owned(),
-                std::fs::read(e.path()).unwrap(),
-            )
-        })
-        .collect()
 }
 
 fn manifest(path: &Path) -> Vec<serde_json::Value> {

@@ -14,34 +14,18 @@
 
 mod common;
 use common::*;
-use libtest_mimic::{Arguments, Failed, Trial};
+use libtest_mimic::Arguments;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn main() {
     let args = Arguments::from_args();
-    let name = "the_readmes_slurm_array_job_merges_to_the_one_machine_batch";
-    let why = missing();
-    let required = std::env::var_os("TERRAIN_REQUIRE_SLURM_TESTS").is_some();
-    let reason = why.clone();
-    let trial = Trial::test(name, move || match &reason {
-        Some(why) => Err(Failed::from(format!(
-            "{why}, and TERRAIN_REQUIRE_SLURM_TESTS is set"
-        ))),
-        None => std::panic::catch_unwind(slurm_array_job).map_err(|p| {
-            let text = p
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()));
-            Failed::from(text.unwrap_or_else(|| "panicked".into()))
-        }),
-    });
-    let trial = match why {
-        Some(why) if !required => trial
-            .with_kind(format!("skipped: {why}"))
-            .with_ignored_flag(true),
-        _ => trial,
-    };
+    let trial = skippable_trial(
+        "the_readmes_slurm_array_job_merges_to_the_one_machine_batch",
+        slurm_array_job,
+        missing(),
+        "TERRAIN_REQUIRE_SLURM_TESTS",
+    );
     libtest_mimic::run(&args, vec![trial]).exit();
 }
 
@@ -216,21 +200,6 @@ fn comparable(path: &Path) -> Vec<serde_json::Value> {
                 assert!(o.remove(k).is_some(), "manifest line without {k}: {l}");
             }
             v
-        })
-        .collect()
-}
-
-/// name → bytes of every PNG in `dir`.
-fn pngs(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .flatten()
-        .filter(|e| e.file_name().to_string_lossy().ends_with(".png"))
-        .map(|e| {
-            (
-                e.file_name().to_string_lossy().into_owned(),
-                std::fs::read(e.path()).unwrap(),
-            )
         })
         .collect()
 }

@@ -10,7 +10,7 @@
 
 mod common;
 use common::*;
-use libtest_mimic::{Arguments, Failed, Trial};
+use libtest_mimic::Arguments;
 use std::process::Command;
 
 /// A test's name, its body, and the programs it needs.
@@ -35,30 +35,10 @@ fn main() {
             &["xvfb-run", "xdotool"],
         ),
     ];
-    let required = std::env::var_os("TERRAIN_REQUIRE_VIEW_TESTS").is_some();
     let trials = tests
         .into_iter()
         .map(|(name, test, tools)| {
-            let why = missing(tools);
-            let reason = why.clone();
-            let trial = Trial::test(name, move || match &reason {
-                Some(why) => Err(Failed::from(format!(
-                    "{why}, and TERRAIN_REQUIRE_VIEW_TESTS is set"
-                ))),
-                None => std::panic::catch_unwind(test).map_err(|p| {
-                    let text = p
-                        .downcast_ref::<String>()
-                        .cloned()
-                        .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()));
-                    Failed::from(text.unwrap_or_else(|| "panicked".into()))
-                }),
-            });
-            match why {
-                Some(why) if !required => trial
-                    .with_kind(format!("skipped: {why}"))
-                    .with_ignored_flag(true),
-                _ => trial,
-            }
+            skippable_trial(name, test, missing(tools), "TERRAIN_REQUIRE_VIEW_TESTS")
         })
         .collect();
     libtest_mimic::run(&args, trials).exit();

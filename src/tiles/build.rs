@@ -98,6 +98,20 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
         height_range_m: opts.load.height_range_m,
     };
     start_or_resume(out, &plan)?;
+    if super::is_pyramid(out) {
+        // Whole already: nothing to read or write.
+        let meta = super::Pyramid::open(out)?.meta;
+        return Ok(BuildSummary {
+            width: meta.width,
+            height: meta.height,
+            levels: meta.levels.len(),
+            tiles: meta.tile_count(),
+            tiles_written: 0,
+            sources: sources.len(),
+            disk_bytes: folder_bytes(out),
+            seconds: start.elapsed().as_secs_f64(),
+        });
+    }
     let scratch_dir = out.join(".build");
     let scratch = copy_sources(&sources, &scratch_dir, &opts.load)?;
     let (width, height, dx, dy, offsets, georef) = place(src, &sources, &scratch, &opts.load)?;

@@ -161,3 +161,49 @@ pub fn terrain(args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// name → PNG bytes of every snapshot in `dir`.
+pub fn pngs(dir: &std::path::Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".png"))
+        .map(|e| {
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                std::fs::read(e.path()).unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// A test run in its own harness (libtest-mimic) that needs programs the machine may lack: where
+/// `why_not` says it cannot run, it reports itself skipped with the reason, unless the
+/// environment variable `required` is set (`.ci/run` sets it), where it fails instead. A panic
+/// in `test` fails it with the panic's message.
+pub fn skippable_trial(
+    name: &'static str,
+    test: fn(),
+    why_not: Option<String>,
+    required: &'static str,
+) -> libtest_mimic::Trial {
+    use libtest_mimic::{Failed, Trial};
+    let must = std::env::var_os(required).is_some();
+    let reason = why_not.clone();
+    let trial = Trial::test(name, move || match &reason {
+        Some(why) => Err(Failed::from(format!("{why}, and {required} is set"))),
+        None => std::panic::catch_unwind(test).map_err(|p| {
+            let text = p
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()));
+            Failed::from(text.unwrap_or_else(|| "panicked".into()))
+        }),
+    });
+    match why_not {
+        Some(why) if !must => trial
+            .with_kind(format!("skipped: {why}"))
+            .with_ignored_flag(true),
+        _ => trial,
+    }
+}
