@@ -450,8 +450,6 @@ impl Level {
     }
 }
 
-/// Halves (rounding down, as texture mip levels do, so the GPU holds the same pyramid) while the
-/// next level keeps 2 texels on its shorter side; an odd level's last row or column is dropped.
 /// Applies `sketch.height_scale` and takes heights beyond ±[`MAX_HEIGHT_M`] as nodata (NaN); more
 /// than 1 % of them beyond is a unit error and refused.
 pub fn scale_heights(data: &mut [f32], opts: &LoadOptions) -> Result<()> {
@@ -489,6 +487,8 @@ pub fn scale_heights(data: &mut [f32], opts: &LoadOptions) -> Result<()> {
     Ok(())
 }
 
+/// Halves (rounding down, as texture mip levels do, so the GPU holds the same pyramid) while the
+/// next level keeps 2 texels on its shorter side; an odd level's last row or column is dropped.
 fn build_pyramid(base: Level) -> Vec<Level> {
     let mut levels = vec![base];
     loop {
