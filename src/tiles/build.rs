@@ -22,7 +22,7 @@ use crate::app::progress::Progress;
 use crate::error::{Error, Result, Role};
 use crate::sketch::georef::{Georef, Units};
 use crate::sketch::mosaic::{self, TileExtent};
-use crate::sketch::{LoadOptions, RawGrid, fill, read_grid, scale_heights};
+use crate::sketch::{LoadOptions, fill, read_grid, scale_heights};
 use serde::{Deserialize, Serialize};
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
@@ -298,9 +298,10 @@ fn place(
             })
             .collect();
         let p = mosaic::place(src, &extents)?;
-        let grid = RawGrid::georeferenced(2, 2, Vec::new(), p.georef);
-        let spacing = grid.georef.expect("placed").spacing_m(p.width, p.height);
-        (p.width, p.height, p.offsets, Some(p.georef), spacing)
+        // Resolved at the mosaic's size, as the in-memory mosaic's RawGrid::georeferenced does.
+        let georef = p.georef.resolved(p.width, p.height);
+        let spacing = georef.spacing_m(p.width, p.height);
+        (p.width, p.height, p.offsets, Some(georef), spacing)
     };
     let (dx, dy) = load.spacing_m.map_or((dx, dy), |s| (s, s));
     if !(dx.is_finite() && dy.is_finite() && dx > 0.0 && dy > 0.0) {
