@@ -13,6 +13,7 @@ use crate::error::Result;
 use crate::gpu::alloc::{Alloc, Buffer, Ledger};
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::frame_io::{FrameStats, PassTimes, Timer, uniform_buffer, upload_atlas};
+use crate::gpu::stream::{AtlasBinding, Stream};
 use crate::gpu::uniforms::{FrameInputs, FrameUniforms, View};
 use crate::lod::baseline::Baselines;
 use crate::lod::reference::Reference;
@@ -22,6 +23,7 @@ use crate::scene;
 use crate::scene::{Mode, Scene};
 use crate::sketch::Atlas;
 use crate::stage::StageTimes;
+use crate::tiles::cache::StreamStats;
 use std::time::Instant;
 
 /// One rendered frame: RGBA8 sRGB pixels, rows top first.
@@ -36,6 +38,14 @@ pub struct Frame {
     pub gpu: FrameStats,
     /// Blocks drawn (GeoMipMap and brute force).
     pub blocks: Option<usize>,
+    /// A streamed sketch: what the tile cache did for this frame.
+    pub stream: Option<StreamStats>,
+}
+
+/// The sketch on the GPU: the whole pyramid, or a tile pyramid through the tile cache.
+enum SketchGpu {
+    Whole(Buffer),
+    Streamed(Box<Stream>),
 }
 
 pub struct Renderer {
@@ -50,7 +60,7 @@ pub struct Renderer {
     pub samples: u32,
     view: View,
     frame: Buffer,
-    _atlas_buffer: Buffer,
+    sketch: SketchGpu,
     timer: Option<Timer>,
     lod: Box<dyn Lod>,
     ledger: Ledger,
@@ -67,8 +77,14 @@ pub fn needs(scene: &Scene, mode: Mode, atlas: &Atlas) -> Needs {
         }),
         _ => 0,
     };
+    // A streamed pyramid's pool fits itself to the adapter's binding limit.
+    let sketch = if atlas.pyramid.is_some() {
+        0
+    } else {
+        atlas.bytes()
+    };
     Needs {
-        storage_bytes: atlas.bytes().max(largest),
+        storage_bytes: sketch.max(largest),
     }
 }
 
@@ -107,7 +123,30 @@ impl Renderer {
         };
         let planet = scene.planet().is_some();
         let frame = uniform_buffer(&alloc);
-        let atlas_buffer = upload_atlas(&alloc, &atlas);
+        let sketch = match &atlas.pyramid {
+            Some(pyramid) => {
+                if !matches!(mode, Mode::Warped | Mode::Reference) {
+                    return Err(crate::Error::value(
+                        "render.mode",
+                        format!(
+                            "{mode} bakes the whole sketch, and {} is a tile pyramid streamed \
+                             in tiles: draw it in warped or reference mode",
+                            pyramid.dir.display()
+                        ),
+                    ));
+                }
+                let cfg = scene::stream_config(scene);
+                SketchGpu::Streamed(Box::new(Stream::new(&ctx, &alloc, pyramid, cfg)?))
+            }
+            None => SketchGpu::Whole(upload_atlas(&alloc, &atlas)),
+        };
+        let atlas_binding = match &sketch {
+            SketchGpu::Whole(b) => AtlasBinding {
+                atlas: wgpu::Buffer::clone(b),
+                marks: None,
+            },
+            SketchGpu::Streamed(s) => s.binding(),
+        };
         let shared = Shared {
             ctx: &ctx,
             alloc,
@@ -115,7 +154,7 @@ impl Renderer {
             atlas: &atlas,
             detail: &detail,
             frame: &frame,
-            atlas_buffer: &atlas_buffer,
+            atlas_binding: &atlas_binding,
             view,
             positions,
             // Planets are not multisampled (nor supersampled) yet.
@@ -153,7 +192,7 @@ impl Renderer {
             mode,
             view,
             frame,
-            _atlas_buffer: atlas_buffer,
+            sketch,
             lod,
             ledger,
         })
@@ -221,7 +260,11 @@ impl Renderer {
             step_factor: 0.0,
         };
         self.lod.frame_inputs(&mut inputs);
-        FrameUniforms::new(&inputs)
+        let mut u = FrameUniforms::new(&inputs);
+        if let SketchGpu::Streamed(s) = &self.sketch {
+            s.uniforms(&mut u.atlas);
+        }
+        u
     }
 
     fn draw(&mut self, camera: &Camera, cpu: CpuTimes) -> Result<Frame> {
@@ -230,15 +273,25 @@ impl Renderer {
         ctx.queue
             .write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniforms));
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        if let SketchGpu::Streamed(s) = &mut self.sketch {
+            s.begin_frame(ctx, &mut encoder)?;
+        }
         let timer = self.timer.as_ref();
         let ran = self.lod.record(ctx, &mut encoder, timer);
         if let Some(t) = timer {
             t.resolve(&mut encoder, ran);
         }
+        if let SketchGpu::Streamed(s) = &self.sketch {
+            s.record_marks(&mut encoder);
+        }
         let start = Instant::now();
         ctx.queue.submit([encoder.finish()]);
         let rgba = self.lod.read_image(ctx)?;
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        let stream = match &mut self.sketch {
+            SketchGpu::Streamed(s) => Some(s.end_frame(ctx)?),
+            SketchGpu::Whole(_) => None,
+        };
         let passes = match timer {
             Some(t) => t.read(ctx, ran)?,
             None => PassTimes::default(),
@@ -252,6 +305,7 @@ impl Renderer {
             cpu_us: cpu.us,
             gpu: FrameStats::new(passes, timer.is_some(), wall_ms, triangles),
             blocks: self.lod.blocks(),
+            stream,
         })
     }
 

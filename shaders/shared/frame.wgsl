@@ -51,13 +51,16 @@ struct ShadingUniforms {
 
 // The sketch's pyramid in the atlas buffer.
 struct AtlasUniforms {
-    level: array<vec4<u32>, 16>, // per level: width, height, first texel, 0
+    level: array<vec4<u32>, 16>, // per level: width, height, first texel (streamed: first page-table entry), 0 (streamed: tiles a row)
     offset: vec2<f32>,           // frame origin − atlas origin
     inv_spacing: vec2<f32>,
     d_atlas: f32,
     levels: u32,                 // mip levels in use
     max_m: f32,                  // the sketch's highest height (a ray above it hits nothing)
     water_m: f32,                // the water's surface: the terrain function is never below it
+    tile: u32,                   // streamed: interior nodes per tile side
+    border: u32,                 // streamed: border nodes on each side of a tile
+    pad: vec2<u32>,
 }
 
 // The procedural octaves.

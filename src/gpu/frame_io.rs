@@ -321,7 +321,7 @@ pub fn read_vec4(ctx: &GpuContext, source: &wgpu::Buffer) -> Result<Vec<[f32; 4]
     read_buffer(ctx, &staging, |b| bytemuck::cast_slice(b).to_vec())
 }
 
-fn read_buffer<T>(
+pub(crate) fn read_buffer<T>(
     ctx: &GpuContext,
     buffer: &wgpu::Buffer,
     f: impl FnOnce(&[u8]) -> T,

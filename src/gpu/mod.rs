@@ -10,6 +10,7 @@ pub mod normals;
 pub mod planet;
 pub mod reference;
 pub mod shaders;
+pub mod stream;
 pub mod terrain;
 pub mod uniforms;
 pub mod warp_zoom;

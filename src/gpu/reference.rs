@@ -4,6 +4,7 @@
 use super::alloc::{Alloc, Buffer};
 use super::context::GpuContext;
 use super::frame_io::read_vec4;
+use super::stream::AtlasBinding;
 use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
@@ -40,17 +41,17 @@ impl ReferencePass {
     pub fn new(
         device: &Alloc,
         frame: &wgpu::Buffer,
-        atlas: &wgpu::Buffer,
+        atlas: &AtlasBinding,
         width: u32,
         height: u32,
         features: Features,
     ) -> Result<ReferencePass> {
-        let mut entries = vec![
-            entry(0, S::COMPUTE, uniform()),
-            entry(1, S::COMPUTE, storage(true)),
+        let mut entries = vec![entry(0, S::COMPUTE, uniform())];
+        entries.extend(atlas.entries(S::COMPUTE));
+        entries.extend([
             entry(2, S::COMPUTE, storage(false)),
             entry(3, S::COMPUTE, storage(false)),
-        ];
+        ]);
         if features.planet.is_some() {
             entries.push(entry(4, S::COMPUTE, uniform()));
         }
@@ -72,6 +73,7 @@ impl ReferencePass {
                 flags.push(flag);
             }
         }
+        atlas.flag(&mut flags);
         let flags = flags.as_slice();
         let shader = match features.planet {
             Some(_) => "planet_reference",
@@ -87,12 +89,9 @@ impl ReferencePass {
             })
         };
         let (colour, position) = (buffer("reference colour"), buffer("reference position"));
-        let mut binds = vec![
-            bind(0, frame),
-            bind(1, atlas),
-            bind(2, &colour),
-            bind(3, &position),
-        ];
+        let mut binds = vec![bind(0, frame)];
+        binds.extend(atlas.binds());
+        binds.extend([bind(2, &colour), bind(3, &position)]);
         if let Some(planet) = &features.planet {
             binds.push(bind(4, planet));
         }

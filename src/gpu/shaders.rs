@@ -34,7 +34,7 @@ pub const PASSES: [(&str, &str); 7] = [
 ];
 
 /// Every flag any pass tests, for validating all variants.
-pub const FLAGS: [&str; 10] = [
+pub const FLAGS: [&str; 11] = [
     "DETAIL",
     "BUMP",
     "NOISE",
@@ -45,6 +45,7 @@ pub const FLAGS: [&str; 10] = [
     "SHADOWS",
     "DETAIL_SHADOWS",
     "SUPERSAMPLE",
+    "STREAMED",
 ];
 
 /// The combined source of pass `name` with `flags` set.

@@ -5,6 +5,7 @@
 //! for positions in a second, single-sampled pass of the terrain's depth alone.
 
 use super::alloc::{Alloc, Buffer, Texture};
+use super::stream::AtlasBinding;
 use super::{bind, entry, shader_module, storage, uniform};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
@@ -66,7 +67,7 @@ pub struct Variant {
     pub positions: bool,
     /// The sketch's pyramid: the surface types read its curvature, the shadow ray and pixel
     /// normals its heights.
-    pub atlas: wgpu::Buffer,
+    pub atlas: AtlasBinding,
     /// The sketch shadows itself (`render.shadows`).
     pub shadows: bool,
     /// The detail shadows itself too (`render.detail_shadows`, with shadows and noise).
@@ -89,12 +90,11 @@ impl TerrainPass {
         height: u32,
         variant: &Variant,
     ) -> Result<TerrainPass> {
-        let mut entries = vec![
-            entry(0, S::VERTEX_FRAGMENT, uniform()),
-            entry(1, S::FRAGMENT, storage(true)),
-            entry(3, S::VERTEX, storage(true)),
-        ];
+        let mut entries = vec![entry(0, S::VERTEX_FRAGMENT, uniform())];
+        entries.extend(variant.atlas.entries(S::FRAGMENT));
+        entries.push(entry(3, S::VERTEX, storage(true)));
         let mut flags = Vec::new();
+        variant.atlas.flag(&mut flags);
         if variant.noise {
             flags.push("NOISE");
         }
@@ -175,7 +175,9 @@ impl TerrainPass {
             pipeline_of(&m, ("terrain_vs", "depth_fs"), &targets, 1, true, greater)
         });
 
-        let mut bind_entries = vec![bind(0, frame), bind(1, &variant.atlas), bind(3, detailed)];
+        let mut bind_entries = vec![bind(0, frame)];
+        bind_entries.extend(variant.atlas.binds());
+        bind_entries.push(bind(3, detailed));
         if let Shading::MeshNormals(normals) = &variant.shading {
             bind_entries.push(bind(4, normals));
         }

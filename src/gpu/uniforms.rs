@@ -84,7 +84,8 @@ pub struct ShadingUniforms {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct AtlasUniforms {
-    /// Per level: width, height, first texel, 0.
+    /// Per level: width, height, first texel, 0; streamed, the last two are the level's first
+    /// page-table entry and its tiles a row (see `shaders/shared/atlas.wgsl`).
     pub level: [[u32; 4]; MAX_LEVELS],
     /// Frame origin − atlas origin.
     pub offset: [f32; 2],
@@ -95,6 +96,10 @@ pub struct AtlasUniforms {
     pub max_m: f32,
     /// The water's surface: the terrain function is never below it.
     pub water_m: f32,
+    /// A streamed pyramid's tile: interior nodes a side, and border nodes on each side (0 when whole).
+    pub tile: u32,
+    pub border: u32,
+    pub pad: [u32; 2],
 }
 
 /// The procedural octaves.
@@ -335,6 +340,9 @@ impl AtlasUniforms {
             levels: atlas.levels.len().min(MAX_LEVELS) as u32,
             max_m: atlas.max_m.max(atlas.water_m),
             water_m: atlas.water_m,
+            tile: 0,
+            border: 0,
+            pad: [0; 2],
         }
     }
 }

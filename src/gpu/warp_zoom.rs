@@ -3,6 +3,7 @@
 //! hold the GPU to the CPU stage's definitions.
 
 use super::alloc::{Alloc, Buffer};
+use super::stream::AtlasBinding;
 use super::uniforms::FrameUniforms;
 use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
 use crate::detail::{OctaveFrame, gradient_noise};
@@ -28,7 +29,7 @@ impl WarpZoomPass {
     pub fn new(
         device: &Alloc,
         frame: &wgpu::Buffer,
-        atlas: &wgpu::Buffer,
+        atlas: &AtlasBinding,
         n: u32,
         mesh: u32,
         detail: bool,
@@ -36,14 +37,21 @@ impl WarpZoomPass {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("warp_zoom"),
             entries: &[
-                entry(0, S::COMPUTE, uniform()),
-                entry(1, S::COMPUTE, storage(true)),
-                entry(2, S::COMPUTE, storage(true)),
-                entry(3, S::COMPUTE, storage(false)),
-            ],
+                vec![entry(0, S::COMPUTE, uniform())],
+                atlas.entries(S::COMPUTE),
+                vec![
+                    entry(2, S::COMPUTE, storage(true)),
+                    entry(3, S::COMPUTE, storage(false)),
+                ],
+            ]
+            .concat(),
         });
-        let flags: &[&str] = if detail { &["DETAIL"] } else { &[] };
-        let pipeline = compute_pipeline(device, "warp_zoom", flags, &layout)?;
+        let mut flags = Vec::new();
+        if detail {
+            flags.push("DETAIL");
+        }
+        atlas.flag(&mut flags);
+        let pipeline = compute_pipeline(device, "warp_zoom", &flags, &layout)?;
         let phi = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("phi"),
             size: (n * n) as u64 * 8,
@@ -60,11 +68,11 @@ impl WarpZoomPass {
             label: Some("warp_zoom"),
             layout: &layout,
             entries: &[
-                bind(0, frame),
-                bind(1, atlas),
-                bind(2, &phi),
-                bind(3, &detailed),
-            ],
+                vec![bind(0, frame)],
+                atlas.binds(),
+                vec![bind(2, &phi), bind(3, &detailed)],
+            ]
+            .concat(),
         });
         Ok(WarpZoomPass {
             pipeline,

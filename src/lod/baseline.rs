@@ -81,7 +81,7 @@ pub fn bake(s: &Shared, k: u32, cells: usize) -> Result<Bake> {
     let warp_zoom = WarpZoomPass::new(
         device,
         &frame,
-        s.atlas_buffer,
+        s.atlas_binding,
         n as u32,
         n as u32,
         detail.octaves > 0,
@@ -176,7 +176,7 @@ impl Baselines {
             importance: None,
             geomipmap: Some((wgpu::Buffer::clone(&block_buffer), capacity)),
             positions: s.positions,
-            atlas: wgpu::Buffer::clone(s.atlas_buffer),
+            atlas: s.atlas_binding.clone(),
             shadows: s.scene.render.shadows,
             detail_shadows: s.scene.render.detail_shadows,
             samples: s.samples,

@@ -57,7 +57,7 @@ impl Clipmaps {
         let clipmaps = ClipmapsPass::new(
             device,
             s.frame,
-            s.atlas_buffer,
+            &s.atlas_binding.atlas,
             &planet_uniforms,
             &rings,
             noise,
@@ -73,7 +73,7 @@ impl Clipmaps {
         let pass = PlanetPass::new(
             device,
             s.frame,
-            s.atlas_buffer,
+            &s.atlas_binding.atlas,
             &planet_uniforms,
             &clipmaps.hemisphere,
             &clipmaps.vertices,

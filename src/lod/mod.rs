@@ -38,8 +38,8 @@ pub struct Shared<'a> {
     pub detail: &'a Detail,
     /// The frame's uniform block.
     pub frame: &'a wgpu::Buffer,
-    /// The sketch's pyramid on the GPU.
-    pub atlas_buffer: &'a wgpu::Buffer,
+    /// The sketch's pyramid on the GPU: whole, or the tile cache's pages (and its marks).
+    pub atlas_binding: &'a crate::gpu::stream::AtlasBinding,
     pub view: View,
     /// Also write each pixel's ground position (for screen-space error).
     pub positions: bool,

@@ -44,7 +44,7 @@ impl Reference {
         let pass = ReferencePass::new(
             &s.alloc,
             s.frame,
-            s.atlas_buffer,
+            s.atlas_binding,
             w,
             h,
             Features {

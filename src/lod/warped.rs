@@ -40,7 +40,7 @@ impl Warped {
         let (width, height) = (s.scene.camera.width, s.scene.camera.height);
         let stage = CpuStage::new(s.scene, s.detail)?;
         let noise = s.detail.octaves > 0;
-        let warp_zoom = WarpZoomPass::new(device, s.frame, s.atlas_buffer, n, mesh, noise)?;
+        let warp_zoom = WarpZoomPass::new(device, s.frame, s.atlas_binding, n, mesh, noise)?;
         let normals = if s.scene.render.pixel_normals {
             None
         } else {
@@ -70,7 +70,7 @@ impl Warped {
             importance: importance.as_ref().map(|b| wgpu::Buffer::clone(b)),
             geomipmap: None,
             positions: s.positions,
-            atlas: wgpu::Buffer::clone(s.atlas_buffer),
+            atlas: s.atlas_binding.clone(),
             shadows: s.scene.render.shadows,
             detail_shadows: s.scene.render.detail_shadows,
             samples: s.samples,

@@ -16,6 +16,18 @@ pub fn scene_load_options(scene: &Scene) -> LoadOptions {
         origin_m: s.origin_m.map(DVec2::from),
         height_scale: s.height_scale,
         height_range_m: s.height_range_m,
+        stream_cpu_bytes: Some((scene.stream.cpu_mb * 1048576.0) as u64),
+    }
+}
+
+/// The tile cache's budgets from `[stream]`.
+pub fn stream_config(scene: &Scene) -> crate::gpu::stream::StreamConfig {
+    let s = &scene.stream;
+    crate::gpu::stream::StreamConfig {
+        gpu_bytes: (s.gpu_mb * 1048576.0) as u64,
+        loads_per_frame: s.loads_per_frame as usize,
+        fade_frames: s.fade_frames,
+        threads: s.threads as usize,
     }
 }
 

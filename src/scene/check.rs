@@ -131,6 +131,17 @@ impl Scene {
         if let Some(k) = g.k {
             within("geomipmap.k", k as f64, 0.0, 6.0)?;
         }
+        let st = &self.stream;
+        within("stream.gpu_mb", st.gpu_mb, 1.0, 65536.0)?;
+        within("stream.cpu_mb", st.cpu_mb, 1.0, 1048576.0)?;
+        within(
+            "stream.loads_per_frame",
+            st.loads_per_frame as f64,
+            1.0,
+            4096.0,
+        )?;
+        within("stream.fade_frames", st.fade_frames as f64, 0.0, 1000.0)?;
+        within("stream.threads", st.threads as f64, 1.0, 64.0)?;
         open_range(
             "reference.step",
             self.reference.step,

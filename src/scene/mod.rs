@@ -13,7 +13,9 @@ mod build;
 mod check;
 mod parse;
 
-pub use build::{camera_of, detail_of, ground_under, light_of, load_atlas, scene_load_options};
+pub use build::{
+    camera_of, detail_of, ground_under, light_of, load_atlas, scene_load_options, stream_config,
+};
 pub use parse::Fault;
 
 use serde::{Deserialize, Serialize};
@@ -38,6 +40,8 @@ pub struct Scene {
     pub reference: ReferenceSection,
     #[serde(default)]
     pub light: LightSection,
+    #[serde(default)]
+    pub stream: StreamSection,
     pub path: Option<PathSection>,
     /// A planet: the sketch is global and wraps a sphere (`sketch.synthetic = "planet"` implies
     /// one with the defaults).
@@ -277,6 +281,35 @@ impl Default for GeoMipMapSection {
             exact: false,
             morph: true,
             block: 33,
+        }
+    }
+}
+
+/// A sketch read from a tile pyramid (`terrain tiles`) streams through the tile cache (see
+/// [`crate::tiles::cache`]); these are its budgets.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StreamSection {
+    /// GPU memory for the tile pages and the page table, MiB (less where the adapter's largest
+    /// storage binding is smaller).
+    pub gpu_mb: f64,
+    /// Main memory for the coarse levels the CPU stage reads, MiB.
+    pub cpu_mb: f64,
+    /// Tiles placed on the GPU per frame at most.
+    pub loads_per_frame: u32,
+    /// Frames a newly loaded tile takes to blend in over the coarser level that stood in.
+    pub fade_frames: u32,
+    /// Threads reading and decoding tiles.
+    pub threads: u32,
+}
+impl Default for StreamSection {
+    fn default() -> Self {
+        StreamSection {
+            gpu_mb: 128.0,
+            cpu_mb: 256.0,
+            loads_per_frame: 32,
+            fade_frames: 8,
+            threads: 2,
         }
     }
 }

@@ -84,6 +84,14 @@ pub struct Atlas {
     /// Where the file put its south-west node, in the file's coordinate system (not the world's:
     /// the world is `origin`-based metres), when the file says.
     pub georef: Option<Georef>,
+    /// Levels finer than this are not held in memory (their `data` is empty): a tile pyramid
+    /// streamed to the GPU through the tile cache keeps only its coarse levels here, and the CPU
+    /// reads the finest of those. 0 for a sketch read whole.
+    pub resident_from: usize,
+    /// The tile pyramid the sketch streams from, when it is one.
+    pub pyramid: Option<crate::tiles::Pyramid>,
+    /// [`Atlas::finest_relief`] measured when the finest levels were read, for a streamed sketch.
+    pub relief_m: Option<[f64; 2]>,
 }
 
 /// What a file does not say about itself, from the scene.
@@ -94,6 +102,8 @@ pub struct LoadOptions {
     pub height_scale: Option<f64>,
     /// For 8/16-bit images: the heights that pixel values 0 and the maximum stand for.
     pub height_range_m: Option<[f64; 2]>,
+    /// A streamed tile pyramid: bytes of its coarse levels to hold in memory (`stream.cpu_mb`).
+    pub stream_cpu_bytes: Option<u64>,
 }
 
 /// A grid as a format reader produces it, before filling and the pyramid.
@@ -290,6 +300,9 @@ impl Atlas {
     }
 
     fn load_quietly(path: &Path, opts: &LoadOptions) -> Result<Atlas> {
+        if crate::tiles::is_pyramid(path) {
+            return crate::tiles::read::streamed_atlas(path, opts);
+        }
         let raw = read_grid(path, opts)?;
         Atlas::from_raw(raw, opts).map_err(|e| match e {
             Error::Value { reason, .. } => Error::sketch(path, reason),
@@ -338,6 +351,9 @@ impl Atlas {
             water_m: 0.0,
             levels: build_pyramid(base),
             georef: raw.georef,
+            resident_from: 0,
+            pyramid: None,
+            relief_m: None,
         })
     }
 
@@ -354,6 +370,9 @@ impl Atlas {
     /// none. At most about 256² texels are
     /// visited, so a sketch of any size costs the same.
     pub fn finest_relief(&self) -> [f64; 2] {
+        if let Some(r) = self.relief_m {
+            return r;
+        }
         let band = |l: usize| -> f64 {
             if l + 1 >= self.levels.len() {
                 return 0.0;
@@ -383,7 +402,7 @@ impl Atlas {
     pub fn height(&self) -> usize {
         self.levels[0].height
     }
-    /// Bytes of heights in the whole pyramid (what the GPU holds of the atlas).
+    /// Bytes of heights in the whole pyramid held in memory (what the GPU holds of a whole atlas).
     pub fn bytes(&self) -> u64 {
         self.levels.iter().map(|l| l.data.len() as u64 * 4).sum()
     }
@@ -404,7 +423,7 @@ impl Atlas {
     /// Height at a position given in level-0 texel units, at mip level `lod` (fractional ≥ 0 is
     /// trilinear; below 0 is level 0), clamped to the edge.
     pub fn sample_texel(&self, u: f64, v: f64, lod: f64) -> f32 {
-        let lod = lod.clamp(0.0, (self.levels.len() - 1) as f64);
+        let lod = lod.clamp(self.resident_from as f64, (self.levels.len() - 1) as f64);
         let l0 = lod.floor() as usize;
         let t = (lod - l0 as f64) as f32;
         let a = self.levels[l0].bilinear_at_level(u, v, l0);
@@ -489,7 +508,7 @@ pub fn scale_heights(data: &mut [f32], opts: &LoadOptions) -> Result<()> {
 
 /// Halves (rounding down, as texture mip levels do, so the GPU holds the same pyramid) while the
 /// next level keeps 2 texels on its shorter side; an odd level's last row or column is dropped.
-fn build_pyramid(base: Level) -> Vec<Level> {
+pub(crate) fn build_pyramid(base: Level) -> Vec<Level> {
     let mut levels = vec![base];
     loop {
         let prev = levels.last().expect("pyramid has a base");

@@ -184,7 +184,10 @@ pub fn resample(
     r: &mut Resampler,
 ) {
     let top = atlas.levels.len() - 1;
-    let lod = (spacing / atlas.d_atlas()).log2().clamp(0.0, top as f64);
+    // A streamed sketch's finest levels are on the GPU only: the CPU reads the finest it holds.
+    let lod = (spacing / atlas.d_atlas())
+        .log2()
+        .clamp(atlas.resident_from as f64, top as f64);
     let l0 = lod as usize;
     let l1 = (l0 + 1).min(top);
     let t = (lod - l0 as f64) as f32;

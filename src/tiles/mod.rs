@@ -25,6 +25,7 @@
 //!   the predicted byte planes 4.12× (`cargo test --release --lib tiles -- --nocapture`).
 
 pub mod build;
+pub mod cache;
 mod codec;
 pub mod read;
 

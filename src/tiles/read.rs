@@ -88,6 +88,24 @@ impl Pyramid {
         })
     }
 
+    /// Nodes `x0 .. x0 + w` × `y0 .. y0 + h` of level `l` (inside the level), row-major, from the
+    /// interiors of the tiles that hold them.
+    pub fn window(&self, l: usize, x0: usize, y0: usize, w: usize, h: usize) -> Result<Vec<f32>> {
+        let (t, b, side) = (self.meta.tile, self.meta.border, self.side());
+        let mut out = vec![0f32; w * h];
+        for ty in y0 / t..=(y0 + h - 1) / t {
+            for tx in x0 / t..=(x0 + w - 1) / t {
+                let heights = self.tile(l, tx, ty)?;
+                let (c0, c1) = (x0.max(tx * t), (x0 + w).min(tx * t + t));
+                for r in y0.max(ty * t)..(y0 + h).min(ty * t + t) {
+                    let src = &heights[(r - ty * t + b) * side + b + c0 - tx * t..][..c1 - c0];
+                    out[(r - y0) * w + c0 - x0..][..c1 - c0].copy_from_slice(src);
+                }
+            }
+        }
+        Ok(out)
+    }
+
     /// The finest level with at most `cells` nodes.
     pub fn finest_fitting(&self, cells: usize) -> usize {
         self.meta
@@ -155,4 +173,109 @@ pub fn raw_grid_within(dir: &Path, cells: usize) -> Result<RawGrid> {
         data: level.data,
         georef,
     })
+}
+
+/// Bytes of the coarse levels a streamed sketch holds in memory by default (`stream.cpu_mb`).
+pub const DEFAULT_CPU_BYTES: u64 = 256 << 20;
+/// The side of the level-0 window a streamed sketch's relief is measured on.
+const RELIEF_WINDOW: usize = 1024;
+
+/// A pyramid as a streamed sketch: its true geometry (level 0's spacing and sizes, every level),
+/// with the levels from the finest whose pyramid fits `cpu_bytes` held in memory and the finer
+/// ones left to the tile cache (empty here). The relief that sets the detail's default amplitude
+/// is measured on level 0's central window of at most 1024² nodes, read from its tiles: the
+/// finest bands are what it measures, and they are not in memory.
+pub fn streamed_atlas(dir: &Path, opts: &LoadOptions) -> Result<crate::sketch::Atlas> {
+    let pyramid = Pyramid::open(dir)?;
+    let m = &pyramid.meta;
+    let meta_path = dir.join(META);
+    if opts.height_scale.is_some_and(|s| s != 1.0) || opts.height_range_m.is_some() {
+        return Err(Error::value(
+            "sketch.height_scale",
+            format!(
+                "{}: a tile pyramid's heights are metres; scale them when converting (`terrain tiles --height-scale`)",
+                meta_path.display()
+            ),
+        ));
+    }
+    if opts.spacing_m.is_some_and(|s| s != m.dx_m || s != m.dy_m) {
+        return Err(Error::value(
+            "sketch.spacing_m",
+            format!(
+                "{}: a tile pyramid keeps its spacing ({} × {} m); give it when converting (`terrain tiles --spacing-m`)",
+                meta_path.display(),
+                m.dx_m,
+                m.dy_m
+            ),
+        ));
+    }
+    let budget = opts.stream_cpu_bytes.unwrap_or(DEFAULT_CPU_BYTES);
+    let bytes_from = |l: usize| -> u64 {
+        m.levels[l..]
+            .iter()
+            .map(|[w, h]| (*w as u64) * (*h as u64) * 4)
+            .sum()
+    };
+    let first = (0..m.levels.len())
+        .find(|&l| bytes_from(l) <= budget && m.levels[l][0] * m.levels[l][1] <= max_cells())
+        .unwrap_or(m.levels.len() - 1);
+    let held = crate::sketch::build_pyramid(pyramid.level(first)?);
+    let mut levels: Vec<crate::sketch::Level> = m.levels[..first]
+        .iter()
+        .map(|&[width, height]| crate::sketch::Level {
+            width,
+            height,
+            data: Vec::new(),
+        })
+        .collect();
+    levels.extend(held);
+    let relief_m = if first == 0 {
+        None
+    } else {
+        Some(window_relief(&pyramid)?)
+    };
+    Ok(crate::sketch::Atlas {
+        dx: m.dx_m,
+        dy: m.dy_m,
+        origin: opts.origin_m.unwrap_or(glam::DVec2::ZERO),
+        nodata: m.nodata as usize,
+        min_m: m.min_m,
+        max_m: m.max_m,
+        edge_mean_m: m.edge_mean_m,
+        water_m: 0.0,
+        levels,
+        georef: m.georef.as_ref().map(georef),
+        resident_from: first,
+        pyramid: Some(pyramid),
+        relief_m,
+    })
+}
+
+/// [`crate::sketch::Atlas::finest_relief`] of level 0's central window.
+fn window_relief(pyramid: &Pyramid) -> Result<[f64; 2]> {
+    let [w, h] = pyramid.meta.levels[0];
+    let (ww, wh) = (w.min(RELIEF_WINDOW), h.min(RELIEF_WINDOW));
+    let (x0, y0) = ((w - ww) / 2, (h - wh) / 2);
+    let data = pyramid.window(0, x0, y0, ww, wh)?;
+    let base = crate::sketch::Level {
+        width: ww,
+        height: wh,
+        data,
+    };
+    let probe = crate::sketch::Atlas {
+        dx: pyramid.meta.dx_m,
+        dy: pyramid.meta.dy_m,
+        origin: glam::DVec2::ZERO,
+        nodata: 0,
+        min_m: pyramid.meta.min_m,
+        max_m: pyramid.meta.max_m,
+        edge_mean_m: pyramid.meta.edge_mean_m,
+        water_m: 0.0,
+        levels: crate::sketch::build_pyramid(base),
+        georef: None,
+        resident_from: 0,
+        pyramid: None,
+        relief_m: None,
+    };
+    Ok(probe.finest_relief())
 }

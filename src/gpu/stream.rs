@@ -1,0 +1,212 @@
+//! A streamed sketch on the GPU: the tile cache's pool of pages and its page table in one
+//! read-only storage buffer (the atlas binding every planar pass already has), and the marks the
+//! shaders leave per page-table entry (binding 7, cleared before each frame and read back after
+//! it). The policy — what to load, keep and evict — is [`crate::tiles::cache`]'s; this moves the
+//! bytes.
+//!
+//! Rules: the buffer's size is fixed when the renderer is made, from `stream.gpu_mb` and the
+//! adapter's binding limit, and never grows; a frame copies at most `stream.loads_per_frame` tiles
+//! into it and rewrites the page table whole (175 KB for a 32,768² pyramid: cheaper than tracking
+//! which entries a fade or an eviction changed).
+
+use super::alloc::{Alloc, Buffer};
+use super::context::GpuContext;
+use super::uniforms::{AtlasUniforms, MAX_LEVELS};
+use super::{bind, entry, storage};
+use crate::error::{Error, Result};
+use crate::tiles::Pyramid;
+use crate::tiles::cache::{Budget, StreamStats, TileCache};
+
+/// The sketch's atlas as a pass binds it: the heights at binding 1 and, for a streamed pyramid,
+/// the marks at binding 7 (`shaders/shared/atlas.wgsl`).
+#[derive(Clone)]
+pub struct AtlasBinding {
+    pub atlas: wgpu::Buffer,
+    pub marks: Option<wgpu::Buffer>,
+}
+
+impl AtlasBinding {
+    /// The layout entries, visible to `stages`.
+    pub fn entries(&self, stages: wgpu::ShaderStages) -> Vec<wgpu::BindGroupLayoutEntry> {
+        let mut e = vec![entry(1, stages, storage(true))];
+        if self.marks.is_some() {
+            e.push(entry(7, stages, storage(false)));
+        }
+        e
+    }
+
+    pub fn binds(&self) -> Vec<wgpu::BindGroupEntry<'_>> {
+        let mut b = vec![bind(1, &self.atlas)];
+        if let Some(m) = &self.marks {
+            b.push(bind(7, m));
+        }
+        b
+    }
+
+    /// Adds the shader flag the binding needs.
+    pub fn flag(&self, flags: &mut Vec<&'static str>) {
+        if self.marks.is_some() {
+            flags.push("STREAMED");
+        }
+    }
+}
+
+/// What the scene asks of the stream (the `[stream]` keys, resolved).
+#[derive(Clone, Copy, Debug)]
+pub struct StreamConfig {
+    /// Bytes of GPU memory for pages and page table.
+    pub gpu_bytes: u64,
+    pub loads_per_frame: usize,
+    pub fade_frames: u32,
+    pub threads: usize,
+}
+
+pub struct Stream {
+    cache: TileCache,
+    /// Pages, then the page table.
+    pub atlas: Buffer,
+    /// A u32 mark per page-table entry.
+    pub marks: Buffer,
+    readback: Buffer,
+    /// Floats before the page table.
+    table_first: u32,
+    tile: u32,
+    border: u32,
+    last: StreamStats,
+}
+
+impl Stream {
+    pub fn new(
+        ctx: &GpuContext,
+        alloc: &Alloc,
+        pyramid: &Pyramid,
+        cfg: StreamConfig,
+    ) -> Result<Stream> {
+        let side = pyramid.side() as u64;
+        let page_bytes = side * side * 4;
+        let layout = crate::tiles::cache::Layout::new(pyramid);
+        let table_bytes = layout.len as u64 * 8;
+        let limit = cfg
+            .gpu_bytes
+            .min(ctx.limits.max_storage_buffer_binding_size)
+            .min(ctx.limits.max_buffer_size);
+        // Entries hold page·256 + fade exactly in an f32: pages below 2^16.
+        let pages = (limit.saturating_sub(table_bytes) / page_bytes).min(65_535) as usize;
+        let cache = TileCache::new(
+            pyramid.clone(),
+            Budget {
+                pages,
+                loads_per_frame: cfg.loads_per_frame,
+                fade_frames: cfg.fade_frames,
+                threads: cfg.threads,
+            },
+        )?;
+        let table_first = pages as u64 * side * side;
+        if table_first + 2 * layout.len as u64 > u32::MAX as u64 {
+            return Err(Error::value(
+                "stream.gpu_mb",
+                "the pool is larger than a shader can index",
+            ));
+        }
+        let atlas = alloc.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tile pages and page table"),
+            size: table_first * 4 + table_bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let marks = alloc.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tile marks"),
+            size: layout.len as u64 * 4,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let readback = alloc.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tile marks read-back"),
+            size: layout.len as u64 * 4,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Ok(Stream {
+            cache,
+            atlas,
+            marks,
+            readback,
+            table_first: table_first as u32,
+            tile: pyramid.meta.tile as u32,
+            border: pyramid.meta.border as u32,
+            last: StreamStats::default(),
+        })
+    }
+
+    pub fn binding(&self) -> AtlasBinding {
+        AtlasBinding {
+            atlas: wgpu::Buffer::clone(&self.atlas),
+            marks: Some(wgpu::Buffer::clone(&self.marks)),
+        }
+    }
+
+    /// The atlas uniforms' level table as the streamed shaders read it.
+    pub fn uniforms(&self, u: &mut AtlasUniforms) {
+        let layout = &self.cache.layout;
+        for (l, slot) in u.level.iter_mut().enumerate().take(MAX_LEVELS) {
+            if l < layout.first.len() {
+                slot[2] = self.table_first + 2 * layout.first[l] as u32;
+                slot[3] = layout.tiles[l].0 as u32;
+            }
+        }
+        u.tile = self.tile;
+        u.border = self.border;
+    }
+
+    /// Before the frame's passes: places arrived tiles, writes them and the page table, and
+    /// clears the marks.
+    pub fn begin_frame(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<()> {
+        let uploads = self.cache.begin_frame()?;
+        let page_floats = {
+            let side = (self.tile + 2 * self.border) as u64;
+            side * side
+        };
+        for u in &uploads {
+            ctx.queue.write_buffer(
+                &self.atlas,
+                u.page as u64 * page_floats * 4,
+                bytemuck::cast_slice(&u.heights),
+            );
+        }
+        // Written whole: 175 KB for a 32,768² pyramid.
+        ctx.queue.write_buffer(
+            &self.atlas,
+            self.table_first as u64 * 4,
+            bytemuck::cast_slice(self.cache.table()),
+        );
+        encoder.clear_buffer(&self.marks, 0, None);
+        Ok(())
+    }
+
+    /// After the frame's passes, in the same encoder: the marks to the read-back buffer.
+    pub fn record_marks(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.copy_buffer_to_buffer(&self.marks, 0, &self.readback, 0, self.marks.size());
+    }
+
+    /// After the frame was submitted: reads the marks and queues the missing tiles.
+    pub fn end_frame(&mut self, ctx: &GpuContext) -> Result<StreamStats> {
+        let marks: Vec<u32> = super::frame_io::read_buffer(ctx, &self.readback, |b| {
+            bytemuck::cast_slice(b).to_vec()
+        })?;
+        self.last = self.cache.end_frame(&marks);
+        if std::env::var_os("TERRAIN_DEBUG_STREAM").is_some() {
+            eprintln!("{:?}", self.last);
+        }
+        Ok(self.last)
+    }
+
+    pub fn budget(&self) -> Budget {
+        self.cache.budget()
+    }
+}

@@ -1,0 +1,442 @@
+//! The tile cache: which tiles of a pyramid are resident in a fixed pool of GPU pages, what the
+//! page table says of them, and the loader threads that read them off the render thread.
+//! [`crate::gpu::stream`] owns the GPU buffers and moves the bytes; this is the policy, testable
+//! without a GPU.
+//!
+//! Rules:
+//! - The page table has one entry per tile of every level, level 0 first. An entry is two exact
+//!   f32s: `page·256 + fade` (fade 255: arrived) and the level of the tile in that page. A tile
+//!   not resident is filled down with its finest resident ancestor's page and level (the ancestor
+//!   of tile t on level r is t >> (r − l), clamped to level r's tiles, as the shader computes it),
+//!   so a lookup is one read, never a walk. The pool holds [`Budget::pages`] pages, each one tile
+//!   with its border; they never move or grow.
+//! - The coarsest levels are pinned: from the top level down, every level whose tiles still fit in
+//!   a quarter of the pool, loaded before the first frame. So every sample has a resident level to
+//!   fall back to, and a frame never waits for a tile.
+//! - What to load is what the frame asked for: the shaders mark every entry they look up (1:
+//!   missing, 2: used; see `shaders/shared/atlas.wgsl`). After the frame the missing entries
+//!   become the loader's queue, coarsest level first (a coarse tile improves the stand-in for the
+//!   most ground), replacing the last frame's queue so a camera that moved on does not wait behind
+//!   tiles it no longer sees.
+//! - At most [`Budget::loads_per_frame`] arrived tiles are placed per frame. A tile takes a free
+//!   page, else the least recently used page that the last frame did not use; when every page
+//!   was used by the last frame, the tile is dropped and asked for again later (the stand-in
+//!   stays: a budget too small for the view shows coarser ground, never a hole).
+//! - A placed tile's fade rises from 0 to 255 over [`Budget::fade_frames`] frames; the shader
+//!   blends it over the next coarser resident level meanwhile.
+//!
+//! Rejected alternatives: requests computed on the CPU from the view (the sketch map's Φ, the
+//! blocks' boxes): each consumer would need its own estimate, and the shading's reads (pixel
+//! normals, the sun's shadow ray, the surface types' footprints) none would see; the marks are
+//! exact for every mode and cost one store per sample. A hash-map page table on the GPU: the
+//! table for a 32,768² pyramid is 21,845 entries, 175 KB, cheaper to index than to probe.
+
+use super::Pyramid;
+use crate::error::{Error, Result};
+use serde::Serialize;
+use std::collections::HashSet;
+use std::sync::{Arc, Condvar, Mutex, mpsc};
+use std::thread::JoinHandle;
+
+/// The shaders' marks in the feedback buffer.
+pub const MARK_MISSING: u32 = 1;
+pub const MARK_USED: u32 = 2;
+
+/// The cache's budgets (the `[stream]` scene keys).
+#[derive(Clone, Copy, Debug)]
+pub struct Budget {
+    /// Tiles resident at once.
+    pub pages: usize,
+    /// Arrived tiles placed per frame at most.
+    pub loads_per_frame: usize,
+    /// Frames a placed tile takes to blend in over its stand-in (0: at once).
+    pub fade_frames: u32,
+    /// Threads reading and decoding tiles.
+    pub threads: usize,
+}
+
+/// Where each level's tiles sit in the page table.
+#[derive(Clone, Debug)]
+pub struct Layout {
+    /// Level l's first entry.
+    pub first: Vec<usize>,
+    /// Level l's tiles east and north.
+    pub tiles: Vec<(usize, usize)>,
+    /// Entries in all.
+    pub len: usize,
+}
+
+impl Layout {
+    pub fn new(pyramid: &Pyramid) -> Layout {
+        let mut first = Vec::new();
+        let mut tiles = Vec::new();
+        let mut len = 0;
+        for l in 0..pyramid.meta.levels.len() {
+            let t = pyramid.meta.tiles(l);
+            first.push(len);
+            tiles.push(t);
+            len += t.0 * t.1;
+        }
+        Layout { first, tiles, len }
+    }
+
+    /// Level and tile of entry `e`.
+    pub fn tile_of(&self, e: usize) -> (usize, usize, usize) {
+        let l = self.first.partition_point(|&f| f <= e) - 1;
+        let k = e - self.first[l];
+        (l, k % self.tiles[l].0, k / self.tiles[l].0)
+    }
+}
+
+/// A tile to copy into a page.
+pub struct Upload {
+    pub page: u32,
+    pub heights: Vec<f32>,
+}
+
+/// What a frame did with the cache.
+#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
+pub struct StreamStats {
+    /// Tiles placed in pages before this frame was drawn.
+    pub loaded: usize,
+    /// Tiles the frame asked for that were not resident.
+    pub missing: usize,
+    /// Whether any sample read a stand-in level: a missing tile, or one still blending in.
+    pub stand_in: bool,
+    /// Pages holding a tile after the frame.
+    pub resident: usize,
+    /// Tiles that arrived but found no page the last frame had not used.
+    pub dropped: usize,
+}
+
+struct Page {
+    entry: usize,
+    last_used: u64,
+    pinned: bool,
+    placed: u64,
+}
+
+pub struct TileCache {
+    pub layout: Layout,
+    budget: Budget,
+    /// The page table as the shaders read it: two floats per entry, filled down.
+    table: Vec<f32>,
+    /// The table needs filling again: a tile was placed or evicted, or a fade moved.
+    dirty: bool,
+    page_of: Vec<Option<u32>>,
+    /// Each resident entry's fade, 0..=255.
+    fade: Vec<u8>,
+    pages: Vec<Option<Page>>,
+    free: Vec<u32>,
+    /// Entries still blending in.
+    fading: Vec<usize>,
+    frame: u64,
+    pinned_uploads: Vec<Upload>,
+    loader: Loader,
+    last: StreamStats,
+}
+
+impl TileCache {
+    /// Opens the cache over `pyramid`, reading its pinned levels now.
+    pub fn new(pyramid: Pyramid, budget: Budget) -> Result<TileCache> {
+        let layout = Layout::new(&pyramid);
+        let levels = layout.first.len();
+        let mut pinned_tiles = 0;
+        let mut pinned_from = levels;
+        for l in (0..levels).rev() {
+            let n = layout.tiles[l].0 * layout.tiles[l].1;
+            if l + 1 < levels && pinned_tiles + n > budget.pages / 4 {
+                break;
+            }
+            pinned_tiles += n;
+            pinned_from = l;
+        }
+        if pinned_tiles > budget.pages {
+            return Err(Error::value(
+                "stream.gpu_mb",
+                format!(
+                    "{} pages hold less than the pyramid's top level ({pinned_tiles} tiles)",
+                    budget.pages
+                ),
+            ));
+        }
+        let mut cache = TileCache {
+            table: vec![0.0; 2 * layout.len],
+            dirty: true,
+            page_of: vec![None; layout.len],
+            fade: vec![0; layout.len],
+            pages: (0..budget.pages).map(|_| None).collect(),
+            free: (0..budget.pages as u32).rev().collect(),
+            fading: Vec::new(),
+            frame: 0,
+            pinned_uploads: Vec::new(),
+            loader: Loader::start(Arc::new(pyramid.clone()), layout.clone(), budget.threads),
+            last: StreamStats::default(),
+            layout,
+            budget,
+        };
+        for l in pinned_from..levels {
+            let (tx, ty) = cache.layout.tiles[l];
+            for y in 0..ty {
+                for x in 0..tx {
+                    let e = cache.layout.first[l] + y * tx + x;
+                    let heights = pyramid.tile(l, x, y)?;
+                    let page = cache.free.pop().expect("pinned tiles fit the pool");
+                    cache.place(e, page, true);
+                    cache.pinned_uploads.push(Upload { page, heights });
+                }
+            }
+        }
+        Ok(cache)
+    }
+
+    /// The page table as the shaders read it: two floats per entry.
+    pub fn table(&self) -> &[f32] {
+        &self.table
+    }
+
+    pub fn budget(&self) -> Budget {
+        self.budget
+    }
+
+    /// Before a frame: advances the fades and places arrived tiles; returns the tiles to copy into
+    /// their pages. A tile that failed to read fails the frame, naming it.
+    pub fn begin_frame(&mut self) -> Result<Vec<Upload>> {
+        self.frame += 1;
+        let mut uploads = std::mem::take(&mut self.pinned_uploads);
+        self.advance_fades();
+        let (mut loaded, mut dropped) = (0, 0);
+        while loaded < self.budget.loads_per_frame {
+            let Some((e, heights)) = self.loader.try_take() else {
+                break;
+            };
+            let heights = heights?;
+            if self.page_of[e].is_some() {
+                continue;
+            }
+            let Some(page) = self.free.pop().or_else(|| self.evict()) else {
+                dropped += 1;
+                continue;
+            };
+            self.place(e, page, false);
+            uploads.push(Upload { page, heights });
+            loaded += 1;
+        }
+        self.last = StreamStats {
+            loaded,
+            dropped,
+            ..StreamStats::default()
+        };
+        if self.dirty {
+            self.fill();
+        }
+        Ok(uploads)
+    }
+
+    /// After a frame: `marks` holds the shaders' mark per entry. Keeps what was used, queues what
+    /// was missing, and returns the frame's figures.
+    pub fn end_frame(&mut self, marks: &[u32]) -> StreamStats {
+        let mut missing = Vec::new();
+        let mut stand_in = false;
+        for (e, &m) in marks.iter().enumerate().take(self.layout.len) {
+            match (m, self.page_of[e]) {
+                (MARK_USED, Some(p)) => {
+                    let page = self.pages[p as usize]
+                        .as_mut()
+                        .expect("a mapped page is held");
+                    page.last_used = self.frame;
+                    stand_in |= page.placed + (self.budget.fade_frames as u64) > self.frame;
+                }
+                (MARK_MISSING, None) => missing.push(e),
+                _ => {}
+            }
+        }
+        stand_in |= !missing.is_empty();
+        // The loader takes from the end: coarsest last.
+        missing.sort_by_key(|&e| self.layout.tile_of(e).0);
+        self.loader.want(&missing);
+        self.last.missing = missing.len();
+        self.last.stand_in = stand_in;
+        self.last.resident = self.pages.iter().filter(|p| p.is_some()).count();
+        self.last
+    }
+
+    fn place(&mut self, e: usize, page: u32, pinned: bool) {
+        let fade = if pinned || self.budget.fade_frames == 0 {
+            255
+        } else {
+            self.fading.push(e);
+            0
+        };
+        self.pages[page as usize] = Some(Page {
+            entry: e,
+            last_used: self.frame,
+            pinned,
+            placed: self.frame,
+        });
+        self.page_of[e] = Some(page);
+        self.fade[e] = fade;
+        self.dirty = true;
+    }
+
+    /// Writes every entry: its own page, or its finest resident ancestor's.
+    fn fill(&mut self) {
+        let levels = self.layout.first.len();
+        for l in 0..levels {
+            let (tx, ty) = self.layout.tiles[l];
+            for y in 0..ty {
+                for x in 0..tx {
+                    let e = self.layout.first[l] + y * tx + x;
+                    let (page, fade, r) = (l..levels)
+                        .find_map(|r| {
+                            let (rx, ry) = self.layout.tiles[r];
+                            let k = r - l;
+                            let a = self.layout.first[r]
+                                + (y >> k).min(ry - 1) * rx
+                                + (x >> k).min(rx - 1);
+                            self.page_of[a].map(|p| (p, self.fade[a], r))
+                        })
+                        .expect("the top level is pinned");
+                    self.table[2 * e] = (page * 256 + fade as u32) as f32;
+                    self.table[2 * e + 1] = r as f32;
+                }
+            }
+        }
+        self.dirty = false;
+    }
+
+    /// The least recently used page the last frame did not use, emptied.
+    fn evict(&mut self) -> Option<u32> {
+        let (k, _) = self
+            .pages
+            .iter()
+            .enumerate()
+            .filter_map(|(k, p)| p.as_ref().map(|p| (k, p)))
+            .filter(|(_, p)| !p.pinned && p.last_used + 1 < self.frame)
+            .min_by_key(|(_, p)| p.last_used)?;
+        let page = self.pages[k].take().expect("found held");
+        self.page_of[page.entry] = None;
+        self.dirty = true;
+        self.fading.retain(|&e| e != page.entry);
+        Some(k as u32)
+    }
+
+    fn advance_fades(&mut self) {
+        let frames = self.budget.fade_frames.max(1) as u64;
+        let frame = self.frame;
+        let (pages, fades, page_of) = (&self.pages, &mut self.fade, &self.page_of);
+        self.dirty |= !self.fading.is_empty();
+        self.fading.retain(|&e| {
+            let p = page_of[e].expect("a fading entry is resident");
+            let placed = pages[p as usize].as_ref().expect("held").placed;
+            let fade = ((frame - placed) * 255 / frames).min(255) as u8;
+            fades[e] = fade;
+            fade < 255
+        });
+    }
+}
+
+type Loaded = (usize, Result<Vec<f32>>);
+
+struct Queue {
+    /// Entries to load, the next one last.
+    wanted: Vec<usize>,
+    in_flight: HashSet<usize>,
+    stop: bool,
+}
+
+/// Threads that read and decode tiles the render thread asks for.
+struct Loader {
+    queue: Arc<(Mutex<Queue>, Condvar)>,
+    arrived: mpsc::Receiver<Loaded>,
+    threads: Vec<JoinHandle<()>>,
+}
+
+impl Loader {
+    fn start(pyramid: Arc<Pyramid>, layout: Layout, threads: usize) -> Loader {
+        let queue = Arc::new((
+            Mutex::new(Queue {
+                wanted: Vec::new(),
+                in_flight: HashSet::new(),
+                stop: false,
+            }),
+            Condvar::new(),
+        ));
+        let (send, arrived) = mpsc::channel();
+        let threads = (0..threads.max(1))
+            .map(|_| {
+                let (queue, send, pyramid, layout) =
+                    (queue.clone(), send.clone(), pyramid.clone(), layout.clone());
+                std::thread::spawn(move || load_loop(&queue, &send, &pyramid, &layout))
+            })
+            .collect();
+        Loader {
+            queue,
+            arrived,
+            threads,
+        }
+    }
+
+    /// Replaces the queue with `wanted` (the next one last), less what is being read.
+    fn want(&self, wanted: &[usize]) {
+        let (lock, wake) = &*self.queue;
+        let mut q = lock.lock().unwrap_or_else(|e| e.into_inner());
+        q.wanted.clear();
+        let in_flight = std::mem::take(&mut q.in_flight);
+        q.wanted
+            .extend(wanted.iter().filter(|e| !in_flight.contains(e)));
+        q.in_flight = in_flight;
+        wake.notify_all();
+    }
+
+    fn try_take(&self) -> Option<Loaded> {
+        let loaded = self.arrived.try_recv().ok()?;
+        let (lock, _) = &*self.queue;
+        lock.lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .in_flight
+            .remove(&loaded.0);
+        Some(loaded)
+    }
+}
+
+fn load_loop(
+    queue: &(Mutex<Queue>, Condvar),
+    send: &mpsc::Sender<Loaded>,
+    pyramid: &Pyramid,
+    layout: &Layout,
+) {
+    let (lock, wake) = queue;
+    loop {
+        let e = {
+            let mut q = lock.lock().unwrap_or_else(|e| e.into_inner());
+            loop {
+                if q.stop {
+                    return;
+                }
+                if let Some(e) = q.wanted.pop() {
+                    q.in_flight.insert(e);
+                    break e;
+                }
+                q = wake.wait(q).unwrap_or_else(|e| e.into_inner());
+            }
+        };
+        let (l, tx, ty) = layout.tile_of(e);
+        if send.send((e, pyramid.tile(l, tx, ty))).is_err() {
+            return;
+        }
+    }
+}
+
+impl Drop for Loader {
+    fn drop(&mut self) {
+        {
+            let (lock, wake) = &*self.queue;
+            lock.lock().unwrap_or_else(|e| e.into_inner()).stop = true;
+            wake.notify_all();
+        }
+        for t in self.threads.drain(..) {
+            let _ = t.join();
+        }
+    }
+}
