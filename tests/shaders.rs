@@ -129,7 +129,10 @@ fn uniform_structs_match_the_wgsl_field_by_field() {
                 d_atlas,
                 levels,
                 max_m,
-                water_m
+                water_m,
+                tile,
+                border,
+                pad
             }),
             size_of::<AtlasUniforms>(),
         ),

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{scratch, terrain};
+use common::{psnr, scratch, terrain};
 use std::path::{Path, PathBuf};
 use terrain::sketch::{Atlas, LoadOptions};
 use terrain::tiles::{BORDER, BuildOptions, Pyramid, SIDE, TILE, build};
@@ -331,4 +331,71 @@ fn folders_of_other_builds_and_damaged_tiles_are_refused_in_one_line() {
         stderr.starts_with("error: sketch ") && stderr.lines().count() == 1,
         "{stderr}"
     );
+}
+
+/// The bundled Jacksboro scene at 128², reading `sketch` (a path), with `extra` appended.
+fn jacksboro_scene(sketch: &Path, extra: &str) -> terrain::scene::Scene {
+    let dir = common::manifest_dir().join("sketches");
+    let text = std::fs::read_to_string(dir.join("jacksboro.toml"))
+        .unwrap()
+        .replace(
+            "path = \"jacksboro_fault_dem.asc\"",
+            &format!("path = {:?}", sketch.display().to_string()),
+        )
+        .replace("width = 512", "width = 128")
+        .replace("height = 512", "height = 128");
+    common::scene(&format!("{text}\n{extra}\n"), dir)
+}
+
+#[test]
+fn a_streamed_pyramid_renders_as_the_sketch_in_memory_once_its_tiles_are_resident() {
+    use terrain::gpu::uniforms::View;
+    use terrain::render::Renderer;
+    use terrain::scene::Mode;
+    let dir = scratch("tiles-streamed");
+    let asc = common::manifest_dir().join("sketches/jacksboro_fault_dem.asc");
+    let pyr = dir.join("pyr");
+    convert(&asc, &pyr);
+    // 4 MiB: 14 pages for the pyramid's 11 tiles, of which the top three levels are pinned, so
+    // the first frame stands in with them.
+    let streamed = jacksboro_scene(&pyr, "[stream]\ngpu_mb = 4");
+    let whole = jacksboro_scene(&asc, "");
+    for mode in [Mode::Warped, Mode::Reference] {
+        let mut m = Renderer::new(&whole, mode, View::Shaded).unwrap();
+        let camera = terrain::scene::camera_of(&whole, &m.atlas).unwrap();
+        let expected = m.render(&camera).unwrap();
+        assert!(expected.stream.is_none());
+        let mut s = Renderer::new(&streamed, mode, View::Shaded).unwrap();
+        let first = s.render(&camera).unwrap();
+        let stats = first.stream.expect("a pyramid streams");
+        assert!(stats.stand_in && stats.missing > 0, "{mode}: {stats:?}");
+        let first_db = psnr(&first.rgba, &expected.rgba);
+        let (mut frames, mut loaded) = (1, 0);
+        let last = loop {
+            let f = s.render(&camera).unwrap();
+            let st = f.stream.unwrap();
+            loaded += st.loaded;
+            frames += 1;
+            if !st.stand_in || frames > 100 {
+                break f;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        };
+        let db = psnr(&last.rgba, &expected.rgba);
+        eprintln!(
+            "{mode}: first frame {first_db:.1} dB; {loaded} tiles loaded, resident after {frames} frames: {db:.1} dB"
+        );
+        assert!(frames <= 100, "{mode}: still standing in after 100 frames");
+        assert!(loaded > 0);
+        assert!(first_db < 50.0, "{mode}: the stand-in frame should differ");
+        assert!(
+            db >= 50.0,
+            "{mode}: {db:.1} dB against the sketch in memory"
+        );
+    }
+    // The baselines bake the whole sketch: refused in one line, naming the mode.
+    let e = Renderer::new(&streamed, Mode::Geomipmap, View::Shaded)
+        .err()
+        .expect("geomipmap on a pyramid is refused");
+    assert!(e.to_string().contains("render.mode"), "{e}");
 }

@@ -440,3 +440,142 @@ impl Drop for Loader {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::{Duration, Instant};
+
+    /// A 600² pyramid (levels of 3×3, 2×2, then single tiles) in a fresh folder.
+    fn pyramid(name: &str) -> Pyramid {
+        let dir = std::env::temp_dir().join(format!("terrain-cache-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let n = 600;
+        let mut asc = format!("ncols {n}\nnrows {n}\nxllcorner 0\nyllcorner 0\ncellsize 10\n");
+        for j in 0..n {
+            let row: Vec<String> = (0..n)
+                .map(|i| format!("{}", (i * 7 + j * 3) % 50))
+                .collect();
+            asc.push_str(&row.join(" "));
+            asc.push('\n');
+        }
+        let src = dir.join("sketch.asc");
+        std::fs::write(&src, asc).unwrap();
+        let out = dir.join("pyr");
+        let opts = super::super::BuildOptions {
+            load: Default::default(),
+            threads: 1,
+        };
+        super::super::build(&src, &out, &opts).unwrap();
+        Pyramid::open(&out).unwrap()
+    }
+
+    fn budget(pages: usize) -> Budget {
+        Budget {
+            pages,
+            loads_per_frame: 8,
+            fade_frames: 4,
+            threads: 1,
+        }
+    }
+
+    /// Frames until `done` holds (the loader runs on its own thread), with `marks` each frame.
+    fn frames_until(
+        cache: &mut TileCache,
+        marks: &[u32],
+        done: impl Fn(&TileCache) -> bool,
+    ) -> usize {
+        let start = Instant::now();
+        let mut frames = 0;
+        while !done(cache) {
+            assert!(
+                start.elapsed() < Duration::from_secs(20),
+                "the loader never delivered"
+            );
+            cache.begin_frame().unwrap();
+            cache.end_frame(marks);
+            frames += 1;
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        frames
+    }
+
+    fn level_of(cache: &TileCache, e: usize) -> f32 {
+        cache.table()[2 * e + 1]
+    }
+
+    #[test]
+    fn a_missing_tile_stands_in_with_its_ancestor_then_loads_and_fades_in() {
+        let p = pyramid("load");
+        let mut cache = TileCache::new(p, budget(8)).unwrap();
+        let layout = cache.layout.clone();
+        assert_eq!(layout.tiles[0], (3, 3));
+        // Pinned: the top levels while they fit a quarter of the pool (8 / 4 = 2 tiles).
+        let top = layout.first.len() - 1;
+        cache.begin_frame().unwrap();
+        let e = layout.first[0] + 4; // level 0, tile (1, 1)
+        assert_eq!(level_of(&cache, e), (top - 1) as f32);
+        let mut marks = vec![0; layout.len];
+        marks[e] = MARK_MISSING;
+        let stats = cache.end_frame(&marks);
+        assert!(stats.stand_in && stats.missing == 1, "{stats:?}");
+        frames_until(&mut cache, &marks, |c| level_of(c, e) == 0.0);
+        let fade = |c: &TileCache| c.table()[2 * e] as u32 & 255;
+        assert!(fade(&cache) < 255, "a placed tile blends in");
+        marks[e] = MARK_USED;
+        let frames = frames_until(&mut cache, &marks, |c| fade(c) == 255);
+        assert!(frames <= 4, "faded in over {frames} frames, fade_frames 4");
+        cache.begin_frame().unwrap();
+        assert!(!cache.end_frame(&marks).stand_in);
+        // Every other level-0 entry still stands in with the pinned level.
+        assert_eq!(level_of(&cache, layout.first[0]), (top - 1) as f32);
+    }
+
+    #[test]
+    fn eviction_takes_the_least_recently_used_page_and_never_one_the_last_frame_used() {
+        let p = pyramid("evict");
+        // One pinned page (the top level) and three free.
+        let mut cache = TileCache::new(p, budget(4)).unwrap();
+        let first = cache.layout.first[0];
+        let len = cache.layout.len;
+        let resident = |c: &TileCache, e: usize| c.page_of[e].is_some();
+        let mut marks = vec![0; len];
+        for k in 0..3 {
+            marks[first + k] = MARK_MISSING;
+        }
+        frames_until(&mut cache, &marks, |c| {
+            (0..3).all(|k| resident(c, first + k))
+        });
+        // All three in use, a fourth asked for: it finds no page and is dropped, not forced in.
+        let mut marks = vec![0; len];
+        for k in 0..3 {
+            marks[first + k] = MARK_USED;
+        }
+        marks[first + 3] = MARK_MISSING;
+        let start = Instant::now();
+        let mut dropped = 0;
+        while dropped == 0 && start.elapsed() < Duration::from_secs(10) {
+            dropped += cache.begin_frame().map(|_| cache.last.dropped).unwrap();
+            cache.end_frame(&marks);
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        assert!(dropped > 0);
+        assert!((0..3).all(|k| resident(&cache, first + k)));
+        // Tile 0 falls out of use first, then tile 1: the fourth takes tile 0's page.
+        marks[first] = 0;
+        cache.begin_frame().unwrap();
+        cache.end_frame(&marks);
+        marks[first + 1] = 0;
+        frames_until(&mut cache, &marks, |c| resident(c, first + 3));
+        assert!(!resident(&cache, first));
+        assert!(resident(&cache, first + 1) && resident(&cache, first + 2));
+    }
+
+    #[test]
+    fn a_pool_smaller_than_the_top_level_is_refused() {
+        let p = pyramid("small");
+        let e = TileCache::new(p, budget(0)).err().expect("refused");
+        assert!(e.to_string().contains("stream.gpu_mb"), "{e}");
+    }
+}
