@@ -40,6 +40,9 @@ pub struct Frame {
     pub blocks: Option<usize>,
     /// A streamed sketch: what the tile cache did for this frame.
     pub stream: Option<StreamStats>,
+    /// The tile cache's own CPU time in the frame: placing tiles, writing pages and the page
+    /// table, reading the marks back (µs; 0 for a sketch held whole).
+    pub stream_us: f64,
 }
 
 /// The sketch on the GPU: the whole pyramid, or a tile pyramid through the tile cache.
@@ -273,9 +276,11 @@ impl Renderer {
         ctx.queue
             .write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniforms));
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        let stream_start = Instant::now();
         if let SketchGpu::Streamed(s) = &mut self.sketch {
             s.begin_frame(ctx, &mut encoder)?;
         }
+        let mut stream_us = stream_start.elapsed().as_secs_f64() * 1e6;
         let timer = self.timer.as_ref();
         let ran = self.lod.record(ctx, &mut encoder, timer);
         if let Some(t) = timer {
@@ -288,10 +293,16 @@ impl Renderer {
         ctx.queue.submit([encoder.finish()]);
         let rgba = self.lod.read_image(ctx)?;
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        let stream_start = Instant::now();
         let stream = match &mut self.sketch {
             SketchGpu::Streamed(s) => Some(s.end_frame(ctx)?),
             SketchGpu::Whole(_) => None,
         };
+        if stream.is_some() {
+            stream_us += stream_start.elapsed().as_secs_f64() * 1e6;
+        } else {
+            stream_us = 0.0;
+        }
         let passes = match timer {
             Some(t) => t.read(ctx, ran)?,
             None => PassTimes::default(),
@@ -306,6 +317,7 @@ impl Renderer {
             gpu: FrameStats::new(passes, timer.is_some(), wall_ms, triangles),
             blocks: self.lod.blocks(),
             stream,
+            stream_us,
         })
     }
 
@@ -313,6 +325,14 @@ impl Renderer {
     /// queries and whatever the scheme allocated, as counted at allocation (see [`crate::gpu::alloc`]).
     pub fn gpu_bytes(&self) -> u64 {
         self.ledger.bytes()
+    }
+
+    /// A streamed sketch: the pages its tile pool holds.
+    pub fn stream_pages(&self) -> Option<usize> {
+        match &self.sketch {
+            SketchGpu::Streamed(s) => Some(s.budget().pages),
+            SketchGpu::Whole(_) => None,
+        }
     }
 
     /// The baselines' precomputation: milliseconds and bytes of the baked grid.

@@ -29,6 +29,7 @@ use crate::gpu::{
 };
 use crate::render::Renderer;
 use crate::scene::{Mode, Scene};
+use crate::tiles::cache::StreamStats;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -55,6 +56,10 @@ pub struct FrameRecord {
     pub frame_ms: f64,
     pub triangles: u64,
     pub passes_ms: PassTimes,
+    /// A streamed sketch: what the tile cache did before and after the frame.
+    pub stream: Option<StreamStats>,
+    /// The tile cache's CPU time in the frame (µs), part of `frame_ms`.
+    pub stream_us: f64,
     pub file: String,
 }
 
@@ -78,6 +83,11 @@ struct CsvRow<'a> {
     planet_ms: Option<Fixed<3>>,
     lat_deg: Option<Fixed<7>>,
     lon_deg: Option<Fixed<7>>,
+    stream_us: Option<Fixed<1>>,
+    tiles_loaded: Option<usize>,
+    tiles_missing: Option<usize>,
+    tiles_resident: Option<usize>,
+    stand_in: Option<bool>,
     file: &'a str,
 }
 
@@ -102,6 +112,11 @@ impl CsvRow<'_> {
             planet_ms: ms(crate::gpu::planet::PlanetPass::NAME),
             lat_deg: r.nadir_deg.map(|g| Fixed(g[0])),
             lon_deg: r.nadir_deg.map(|g| Fixed(g[1])),
+            stream_us: r.stream.map(|_| Fixed(r.stream_us)),
+            tiles_loaded: r.stream.map(|s| s.loaded),
+            tiles_missing: r.stream.map(|s| s.missing),
+            tiles_resident: r.stream.map(|s| s.resident),
+            stand_in: r.stream.map(|s| s.stand_in),
             file: &r.file,
         }
     }
@@ -123,6 +138,20 @@ pub struct Outcome {
     /// Why the frame count differs from `fps` frames a second of travel, when it does.
     pub frames_note: Option<String>,
     pub elapsed_s: f64,
+    /// GPU memory the renderer held at the end, bytes (as allocated: [`crate::gpu::alloc`]).
+    pub gpu_memory_bytes: u64,
+    /// A streamed sketch: tiles loaded per frame (mean and most), and frames that showed a
+    /// stand-in level somewhere.
+    pub stream: Option<StreamSummary>,
+}
+
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct StreamSummary {
+    pub tiles_loaded_mean: f64,
+    pub tiles_loaded_max: usize,
+    pub stand_in_frames: usize,
+    /// Pages the pool holds.
+    pub pages: usize,
 }
 
 fn percentile(v: &[f64], q: f64) -> f64 {
@@ -215,9 +244,11 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
             nadir_deg: camera.geo.map(|g| [g.lat.to_degrees(), g.lon.to_degrees()]),
             cpu_stage_us: frame.cpu_us,
             gpu_ms: frame.gpu.gpu_ms,
-            frame_ms: frame.gpu.gpu_ms + frame.cpu_us * 1e-3,
+            frame_ms: frame.gpu.gpu_ms + (frame.cpu_us + frame.stream_us) * 1e-3,
             triangles: frame.gpu.triangles,
             passes_ms: p.clone(),
+            stream: frame.stream,
+            stream_us: frame.stream_us,
             file,
         };
         records.push(record);
@@ -253,6 +284,14 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
     };
     let ms: Vec<f64> = records.iter().map(|r| r.frame_ms).collect();
     let (median, p95) = (percentile(&ms, 0.5), percentile(&ms, 0.95));
+    let streamed: Vec<StreamStats> = records.iter().filter_map(|r| r.stream).collect();
+    let stream = (!streamed.is_empty()).then(|| StreamSummary {
+        tiles_loaded_mean: streamed.iter().map(|s| s.loaded as f64).sum::<f64>()
+            / streamed.len() as f64,
+        tiles_loaded_max: streamed.iter().map(|s| s.loaded).max().unwrap_or(0),
+        stand_in_frames: streamed.iter().filter(|s| s.stand_in).count(),
+        pages: r.stream_pages().unwrap_or(0),
+    });
     Ok(Outcome {
         adapter: r.ctx().adapter_name(),
         frames: records,
@@ -264,6 +303,8 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
         mp4_note,
         frames_note,
         elapsed_s: progress.elapsed().as_secs_f64(),
+        gpu_memory_bytes: r.gpu_bytes(),
+        stream,
     })
 }
 

@@ -73,6 +73,12 @@ fn load_global(scene: &Scene, radius: f64) -> Result<Atlas> {
         ));
     };
     let path = scene.resolve(path);
+    if crate::tiles::is_pyramid(&path) {
+        return Err(Error::sketch(
+            &path,
+            "is a tile pyramid, and a planet's sketch is read whole: give the file it was converted from",
+        ));
+    }
     let mut atlas = Atlas::load(&path, &scene_load_options(scene))?;
     let global = |g: &crate::sketch::georef::Georef| {
         let (w, h) = (atlas.width() as f64, atlas.height() as f64);

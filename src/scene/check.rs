@@ -133,7 +133,7 @@ impl Scene {
         }
         let st = &self.stream;
         within("stream.gpu_mb", st.gpu_mb, 1.0, 65536.0)?;
-        within("stream.cpu_mb", st.cpu_mb, 1.0, 1048576.0)?;
+        within("stream.cpu_mb", st.cpu_mb, 0.0, 1048576.0)?;
         within(
             "stream.loads_per_frame",
             st.loads_per_frame as f64,

@@ -1,12 +1,15 @@
-//! Reading a tile pyramid: its `pyramid.toml`, single tiles, and whole levels for a sketch that
-//! fits in memory.
+//! Reading a tile pyramid: its `pyramid.toml`, single tiles and windows, whole levels, and the
+//! streamed sketch a scene gets from it.
 //!
 //! Rules:
-//! - A scene whose `sketch.path` names a pyramid folder reads level 0 when it fits the cell limit
-//!   ([`crate::sketch::max_cells`]); otherwise the finest level that fits stands in, with its
+//! - A scene whose `sketch.path` names a pyramid folder gets a streamed atlas
+//!   ([`streamed_atlas`]): the pyramid's true geometry, its coarse levels in memory within
+//!   `stream.cpu_mb`, the finer ones left to the tile cache ([`super::cache`]).
+//! - A pyramid inside a mosaic is read as a grid ([`raw_grid`]): level 0 when it fits the cell
+//!   limit ([`crate::sketch::max_cells`]); otherwise the finest level that fits stands in, with its
 //!   spacing, and a note on stderr says which. The stand-in's nodes lie where that level's
 //!   centres do: `(2^l − 1)/2` level-0 cells north-east of level 0's south-west node; its
-//!   georeference says so, the scene's `sketch.origin_m` places its first node.
+//!   georeference says so.
 //! - Every tile is checked as it is read: its header, length, checksum and side; a missing tile is
 //!   an error naming it.
 

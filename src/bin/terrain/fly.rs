@@ -49,6 +49,9 @@ struct Report {
     animation: PathBuf,
     mp4: Option<PathBuf>,
     elapsed_s: f64,
+    gpu_memory_bytes: u64,
+    /// A streamed sketch (a tile pyramid): tiles loaded per frame, stand-in frames, pages.
+    stream: Option<terrain::app::fly::StreamSummary>,
 }
 
 pub fn run(a: Args) -> Result<()> {
@@ -76,6 +79,8 @@ pub fn run(a: Args) -> Result<()> {
         animation: o.animation,
         mp4: o.mp4,
         elapsed_s: o.elapsed_s,
+        gpu_memory_bytes: o.gpu_memory_bytes,
+        stream: o.stream,
     };
     if a.json {
         return crate::print_json(&r);
@@ -91,5 +96,16 @@ pub fn run(a: Args) -> Result<()> {
         r.animation.display(),
         a.out_dir.display()
     );
+    if let Some(s) = &r.stream {
+        println!(
+            "streamed: {:.1} tiles loaded a frame (most {}), {} of {} frames showed a stand-in level; {} pages, {:.0} MiB of GPU memory in all",
+            s.tiles_loaded_mean,
+            s.tiles_loaded_max,
+            s.stand_in_frames,
+            r.frames,
+            s.pages,
+            r.gpu_memory_bytes as f64 / 1048576.0
+        );
+    }
     Ok(())
 }
