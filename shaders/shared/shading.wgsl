@@ -268,16 +268,21 @@ fn detail_visibility(local: vec2<f32>, footprint: f32) -> f32 {
 // detail (DETAIL_SHADOWS), then past the sketch: a ray marched toward the sun in steps that grow
 // with distance, each sampling the pyramid level whose texels match the step (a cone), soft by
 // the closest miss (the penumbra of a sun of finite size), until it rises above the sketch's
-// highest point. That ray leaves from the sketch's own height under the pixel, two cells out
-// (where the detail's ends): the detail a mesh or the reference adds is the detail's to shadow,
-// so a dip in it is not shadowed by the bare sketch around it, in every mode alike.
+// highest point, on no level finer than the pixel's footprint. That ray leaves from the sketch's
+// own height under the pixel, two cells out (where the detail's ends): the detail a mesh or the
+// reference adds is the detail's to shadow, so a dip in it is not shadowed by the bare sketch
+// around it, in every mode alike.
 fn sun_visibility(local: vec3<f32>, footprint: f32) -> f32 {
     let sun = frame.shading.sun;
     if (sun.z <= 0.0) {
         return 0.0;
     }
     let d = frame.atlas.d_atlas;
-    let start = vec3<f32>(local.xy, shadow_caster(local.xy, 0u));
+    // The sketch under a pixel is band-limited to its footprint: the ray reads no level finer
+    // than the footprint's, so a far pixel neither pays for nor (streamed) asks for level-0
+    // tiles whose detail it cannot show.
+    let lf = clamp(log2(max(footprint / d, 1.0)), 0.0, f32(frame.atlas.levels - 1u));
+    let start = vec3<f32>(local.xy, shadow_caster(local.xy, u32(lf)));
     var t = 2.0 * d;
     var seen = 1.0;
     for (var i = 0; i < SHADOW_STEPS; i++) {
@@ -285,7 +290,7 @@ fn sun_visibility(local: vec3<f32>, footprint: f32) -> f32 {
         if (p.z > frame.atlas.max_m) {
             break;
         }
-        let l = u32(clamp(log2(max(0.25 * t / d, 1.0)), 0.0, f32(frame.atlas.levels - 1u)));
+        let l = u32(clamp(max(log2(max(0.25 * t / d, 1.0)), lf), 0.0, f32(frame.atlas.levels - 1u)));
         let clearance = p.z - shadow_caster(p.xy, l);
         seen = min(seen, clamp(0.5 + clearance / (0.03 * t), 0.0, 1.0));
         if (seen <= 0.0) {
