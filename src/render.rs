@@ -231,6 +231,40 @@ impl Renderer {
         self.draw(camera, cpu)
     }
 
+    /// A snapshot of `camera`: as [`Renderer::render`], then for a streamed sketch again, each
+    /// frame waiting for the tiles the last one missed, until no sample reads a stand-in level.
+    /// The image is then the one the sketch held whole gives. Where the view needs more tiles
+    /// than the pool holds (or the loader stops delivering), the first frame that placed none is
+    /// returned, its stand-ins counted in [`Frame::stream`].
+    pub fn render_settled(&mut self, camera: &Camera) -> Result<Frame> {
+        let SketchGpu::Streamed(s) = &mut self.sketch else {
+            return self.render(camera);
+        };
+        s.settle(true);
+        let frame = self.settle_frames(camera);
+        if let SketchGpu::Streamed(s) = &mut self.sketch {
+            s.settle(false);
+        }
+        frame
+    }
+
+    fn settle_frames(&mut self, camera: &Camera) -> Result<Frame> {
+        // Each frame places at least one tile of a finite pyramid for a still camera; the bound
+        // only guards against a pool that trades the same tiles back and forth.
+        const MOST_FRAMES: usize = 1000;
+        let mut frame = self.render(camera)?;
+        for _ in 0..MOST_FRAMES {
+            if !frame.stream.is_some_and(|s| s.stand_in) {
+                break;
+            }
+            frame = self.render(camera)?;
+            if frame.stream.is_some_and(|s| s.loaded == 0) {
+                break;
+            }
+        }
+        Ok(frame)
+    }
+
     /// `camera` drawn with the level of detail of the last frame (the warped mode's CPU stage
     /// frozen, GeoMipMap's selection kept, clipmaps' rings left around the last nadir): what a
     /// frame would show without the LOD update.

@@ -399,3 +399,121 @@ fn a_streamed_pyramid_renders_as_the_sketch_in_memory_once_its_tiles_are_residen
         .expect("geomipmap on a pyramid is refused");
     assert!(e.to_string().contains("render.mode"), "{e}");
 }
+
+#[test]
+fn a_streamed_sketchs_ground_is_level_0s_so_a_camera_under_a_peak_is_refused() {
+    use glam::{DVec2, DVec3};
+    use terrain::scene::{camera_of, ground_under, load_atlas};
+    let dir = scratch("tiles-ground");
+    let asc = common::manifest_dir().join("sketches/jacksboro_fault_dem.asc");
+    let pyr = dir.join("pyr");
+    convert(&asc, &pyr);
+    // cpu_mb = 0: main memory holds the top level alone, 2 × 2 nodes.
+    let streamed_scene = jacksboro_scene(&pyr, "[stream]\ncpu_mb = 0");
+    let whole_scene = jacksboro_scene(&asc, "");
+    let streamed = load_atlas(&streamed_scene).unwrap();
+    let whole = load_atlas(&whole_scene).unwrap();
+    assert!(streamed.resident_from > 0 && streamed.levels[0].data.is_empty());
+    // Nodes, cell interiors, the tile seam at node 256 (read from one tile's border), the edges.
+    let (lo, hi) = (whole.origin, whole.max_corner());
+    let mut points = Vec::new();
+    for &u in &[
+        0.0, 0.37, 100.5, 254.9, 255.0, 255.5, 256.0, 256.25, 401.9, 402.0,
+    ] {
+        for &v in &[0.0, 17.3, 255.75, 256.0, 300.1, 343.0] {
+            points.push(lo + DVec2::new(u * whole.dx, v * whole.dy));
+        }
+    }
+    let (mut worst, mut deepest) = (0.0f64, lo);
+    for k in 0..2000 {
+        let t = DVec2::new(
+            (k as f64 * 0.618_034).fract(),
+            (k as f64 * 0.414_214).fract(),
+        );
+        points.push(lo + (hi - lo) * t);
+    }
+    for &p in &points {
+        let a = ground_under(&streamed, p).unwrap().unwrap();
+        let b = ground_under(&whole, p).unwrap().unwrap();
+        assert_eq!(a.to_bits(), b.to_bits(), "at {p}: {a} streamed, {b} whole");
+        // What the coarse levels in memory would have said.
+        let (u, v) = ((p.x - lo.x) / whole.dx, (p.y - lo.y) / whole.dy);
+        let coarse = streamed.sample_texel(u, v, 0.0) as f64;
+        if b - coarse > worst {
+            (worst, deepest) = (b - coarse, p);
+        }
+    }
+    assert!(
+        worst > 20.0,
+        "the top level should smooth a peak away: {worst} m"
+    );
+    // A camera 1 m under that peak but far above the coarse surface: refused, as in memory.
+    let ground = ground_under(&whole, deepest).unwrap().unwrap();
+    for scene in [&streamed_scene, &whole_scene] {
+        let mut s = scene.clone();
+        let eye = deepest.extend(ground - 1.0);
+        s.camera.aim(eye, eye + DVec3::new(100.0, 0.0, -10.0));
+        let atlas = load_atlas(&s).unwrap();
+        let e = camera_of(&s, &atlas).expect_err("under the peak");
+        assert!(e.to_string().contains("below the surface"), "{e}");
+    }
+    // A damaged level-0 tile: the query names it rather than answering from a coarser level.
+    let tile = pyr.join("L0/0/0.tile");
+    let mut bytes = std::fs::read(&tile).unwrap();
+    let k = bytes.len() - 10;
+    bytes[k] ^= 0x10;
+    std::fs::write(&tile, bytes).unwrap();
+    let fresh = load_atlas(&streamed_scene);
+    let e = match fresh {
+        Ok(a) => ground_under(&a, lo + DVec2::splat(10.0)).unwrap_err(),
+        Err(e) => e,
+    };
+    assert!(e.to_string().contains("0.tile"), "{e}");
+}
+
+#[test]
+fn a_streamed_snapshot_settles_on_the_whole_sketchs_image_and_a_damaged_tile_fails_it() {
+    use terrain::gpu::uniforms::View;
+    use terrain::render::Renderer;
+    use terrain::scene::Mode;
+    let dir = scratch("tiles-settled");
+    let asc = common::manifest_dir().join("sketches/jacksboro_fault_dem.asc");
+    let pyr = dir.join("pyr");
+    convert(&asc, &pyr);
+    // Fades of 8 frames, as by default: a settled snapshot places its tiles without them.
+    let streamed = jacksboro_scene(&pyr, "[stream]\ngpu_mb = 4");
+    let whole = jacksboro_scene(&asc, "");
+    let mut m = Renderer::new(&whole, Mode::Warped, View::Shaded).unwrap();
+    let camera = terrain::scene::camera_of(&whole, &m.atlas).unwrap();
+    let expected = m.render(&camera).unwrap();
+    let mut s = Renderer::new(&streamed, Mode::Warped, View::Shaded).unwrap();
+    let first = s.render(&camera).unwrap();
+    assert!(first.stream.unwrap().stand_in);
+    let mut s = Renderer::new(&streamed, Mode::Warped, View::Shaded).unwrap();
+    let settled = s.render_settled(&camera).unwrap();
+    let stats = settled.stream.unwrap();
+    assert!(!stats.stand_in, "{stats:?}");
+    let (before, after) = (
+        psnr(&first.rgba, &expected.rgba),
+        psnr(&settled.rgba, &expected.rgba),
+    );
+    eprintln!("first frame {before:.1} dB, settled {after:.1} dB");
+    assert!(
+        before < 50.0 && after >= 50.0,
+        "{before:.1} → {after:.1} dB"
+    );
+    // A damaged tile the loader reads fails the snapshot, naming it; no panic, no stand-in image.
+    // (cpu_mb = 0: the load itself reads only the top level and level 0's relief.)
+    let streamed = jacksboro_scene(&pyr, "[stream]\ngpu_mb = 4\ncpu_mb = 0");
+    let tile = pyr.join("L1/0/0.tile");
+    let mut bytes = std::fs::read(&tile).unwrap();
+    let k = bytes.len() - 10;
+    bytes[k] ^= 0x10;
+    std::fs::write(&tile, bytes).unwrap();
+    let mut s = Renderer::new(&streamed, Mode::Warped, View::Shaded).unwrap();
+    let e = s.render_settled(&camera).err().expect("a damaged tile");
+    assert!(
+        e.to_string().contains("L1") && e.to_string().lines().count() == 1,
+        "{e}"
+    );
+}

@@ -192,7 +192,7 @@ impl CameraPath {
     pub fn camera(&self, t_s: f64, scene: &Scene, atlas: &Atlas) -> Result<Camera> {
         let s = t_s * self.speed_mps;
         let mut eye = self.position(s);
-        if let Some(ground) = ground_under(atlas, eye.truncate()) {
+        if let Some(ground) = ground_under(atlas, eye.truncate())? {
             eye.z = eye.z.max(ground + CLEARANCE_M);
         }
         let mut base = scene.clone();

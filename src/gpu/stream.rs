@@ -200,10 +200,12 @@ impl Stream {
             bytemuck::cast_slice(b).to_vec()
         })?;
         self.last = self.cache.end_frame(&marks);
-        if std::env::var_os("TERRAIN_DEBUG_STREAM").is_some() {
-            eprintln!("{:?}", self.last);
-        }
         Ok(self.last)
+    }
+
+    /// Snapshots settle: see [`TileCache::settle`].
+    pub fn settle(&mut self, on: bool) {
+        self.cache.settle(on);
     }
 
     pub fn budget(&self) -> Budget {

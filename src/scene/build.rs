@@ -119,16 +119,18 @@ pub fn light_of(scene: &Scene) -> crate::light::Light {
     )
 }
 
-/// The surface's height under a world position, the sketch's or the water's over it, if the
-/// position is over the sketch.
-pub fn ground_under(atlas: &Atlas, p: DVec2) -> Option<f64> {
+/// The surface's height under a world position, the sketch's at its own spacing (read from the
+/// tile for a streamed sketch) or the water's over it, if the position is over the sketch.
+pub fn ground_under(atlas: &Atlas, p: DVec2) -> Result<Option<f64>> {
     let (lo, hi) = (atlas.origin, atlas.max_corner());
     if p.x < lo.x || p.y < lo.y || p.x > hi.x || p.y > hi.y {
-        return None;
+        return Ok(None);
     }
     let u = (p.x - atlas.origin.x) / atlas.dx;
     let v = (p.y - atlas.origin.y) / atlas.dy;
-    Some((atlas.sample_texel(u, v, 0.0) as f64).max(atlas.water_m as f64))
+    Ok(Some(
+        (atlas.ground_texel(u, v)? as f64).max(atlas.water_m as f64),
+    ))
 }
 
 /// The scene's detail parameters over `atlas`; unset octaves and amplitude follow the sketch
@@ -164,7 +166,7 @@ pub fn camera_of(scene: &Scene, atlas: &Atlas) -> Result<Camera> {
     }
     let c = &scene.camera;
     let eye = c.eye();
-    if let Some(ground) = ground_under(atlas, eye.truncate())
+    if let Some(ground) = ground_under(atlas, eye.truncate())?
         && eye.z < ground
     {
         return Err(Error::Camera(format!(

@@ -420,6 +420,17 @@ impl Atlas {
             )
     }
 
+    /// Height at level-0 texel (u, v), bilinear on level 0, clamped to the edge: from memory, or
+    /// for a streamed sketch from the tile that holds it. A point query, for the ground under a
+    /// camera: a check on the coarse levels held in memory would let a camera sink under a peak
+    /// they smooth away. Errors only where a tile cannot be read.
+    pub fn ground_texel(&self, u: f64, v: f64) -> Result<f32> {
+        match &self.pyramid {
+            Some(p) if self.resident_from > 0 => p.bilinear(0, u, v),
+            _ => Ok(self.levels[0].bilinear(u, v)),
+        }
+    }
+
     /// Height at a position given in level-0 texel units, at mip level `lod` (fractional ≥ 0 is
     /// trilinear; below 0 is level 0), clamped to the edge.
     pub fn sample_texel(&self, u: f64, v: f64, lod: f64) -> f32 {

@@ -24,6 +24,9 @@
 //!   stays: a budget too small for the view shows coarser ground, never a hole).
 //! - A placed tile's fade rises from 0 to 255 over [`Budget::fade_frames`] frames; the shader
 //!   blends it over the next coarser resident level meanwhile.
+//! - A snapshot (`render`, `batch`, `compare`'s views) settles instead ([`TileCache::settle`]):
+//!   each frame waits for the tiles the last one missed and places them at once, so a few frames
+//!   converge on the image of the sketch held whole; a flight never waits.
 //!
 //! Rejected alternatives: requests computed on the CPU from the view (the sketch map's Φ, the
 //! blocks' boxes): each consumer would need its own estimate, and the shading's reads (pixel
@@ -37,6 +40,11 @@ use serde::Serialize;
 use std::collections::HashSet;
 use std::sync::{Arc, Condvar, Mutex, mpsc};
 use std::thread::JoinHandle;
+use std::time::Duration;
+
+/// How long a settling frame waits for a missed tile: a tile is read in milliseconds, so this
+/// only ends a wait on a loader that has nothing left to send.
+pub const SETTLE_WAIT: Duration = Duration::from_secs(10);
 
 /// The shaders' marks in the feedback buffer.
 pub const MARK_MISSING: u32 = 1;
@@ -134,6 +142,8 @@ pub struct TileCache {
     pinned_uploads: Vec<Upload>,
     loader: Loader,
     last: StreamStats,
+    /// Frames wait for the tiles the last one missed and place them without a fade.
+    settling: bool,
 }
 
 impl TileCache {
@@ -172,6 +182,7 @@ impl TileCache {
             pinned_uploads: Vec::new(),
             loader: Loader::start(Arc::new(pyramid.clone()), layout.clone(), budget.threads),
             last: StreamStats::default(),
+            settling: false,
             layout,
             budget,
         };
@@ -199,15 +210,28 @@ impl TileCache {
         self.budget
     }
 
+    /// Snapshots: with `on`, a frame waits (up to [`SETTLE_WAIT`]) for the first of the tiles
+    /// the last frame missed, and tiles are placed without a fade (those fading finish), so each
+    /// frame is as fine as the tiles read so far allow.
+    pub fn settle(&mut self, on: bool) {
+        self.settling = on;
+    }
+
     /// Before a frame: advances the fades and places arrived tiles; returns the tiles to copy into
     /// their pages. A tile that failed to read fails the frame, naming it.
     pub fn begin_frame(&mut self) -> Result<Vec<Upload>> {
         self.frame += 1;
         let mut uploads = std::mem::take(&mut self.pinned_uploads);
         self.advance_fades();
+        let wait = self.settling && self.last.missing > 0;
         let (mut loaded, mut dropped) = (0, 0);
         while loaded < self.budget.loads_per_frame {
-            let Some((e, heights)) = self.loader.try_take() else {
+            let next = if wait && loaded + dropped == 0 {
+                self.loader.take_within(SETTLE_WAIT)
+            } else {
+                self.loader.try_take()
+            };
+            let Some((e, heights)) = next else {
                 break;
             };
             let heights = heights?;
@@ -245,7 +269,7 @@ impl TileCache {
                         .as_mut()
                         .expect("a mapped page is held");
                     page.last_used = self.frame;
-                    stand_in |= page.placed + (self.budget.fade_frames as u64) > self.frame;
+                    stand_in |= self.fade[e] < 255;
                 }
                 (MARK_MISSING, None) => missing.push(e),
                 _ => {}
@@ -262,7 +286,7 @@ impl TileCache {
     }
 
     fn place(&mut self, e: usize, page: u32, pinned: bool) {
-        let fade = if pinned || self.budget.fade_frames == 0 {
+        let fade = if pinned || self.settling || self.budget.fade_frames == 0 {
             255
         } else {
             self.fading.push(e);
@@ -322,7 +346,10 @@ impl TileCache {
     }
 
     fn advance_fades(&mut self) {
-        let frames = self.budget.fade_frames.max(1) as u64;
+        let frames = match self.settling {
+            true => 1,
+            false => self.budget.fade_frames.max(1) as u64,
+        };
         let frame = self.frame;
         let (pages, fades, page_of) = (&self.pages, &mut self.fade, &self.page_of);
         self.dirty |= !self.fading.is_empty();
@@ -390,7 +417,15 @@ impl Loader {
     }
 
     fn try_take(&self) -> Option<Loaded> {
-        let loaded = self.arrived.try_recv().ok()?;
+        self.received(self.arrived.try_recv().ok()?)
+    }
+
+    /// The next tile to arrive within `wait`, if any.
+    fn take_within(&self, wait: Duration) -> Option<Loaded> {
+        self.received(self.arrived.recv_timeout(wait).ok()?)
+    }
+
+    fn received(&self, loaded: Loaded) -> Option<Loaded> {
         let (lock, _) = &*self.queue;
         lock.lock()
             .unwrap_or_else(|e| e.into_inner())
@@ -444,7 +479,7 @@ impl Drop for Loader {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::time::{Duration, Instant};
+    use std::time::Instant;
 
     /// A 600² pyramid (levels of 3×3, 2×2, then single tiles) in a fresh folder.
     fn pyramid(name: &str) -> Pyramid {

@@ -19,12 +19,23 @@ use super::{FORMAT, META, Meta, level_sizes, tile_path};
 use crate::error::{Error, Result, Role};
 use crate::sketch::{LoadOptions, RawGrid, max_cells};
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+/// Tiles the point queries ([`Pyramid::bilinear`]) keep decoded. The ground under a moving
+/// camera stays in one tile for 256 nodes (7.7 km at 30 m), and a sample reads a single tile, so
+/// a few suffice; a decode costs about a millisecond, as much as a GPU frame.
+const RECENT_TILES: usize = 4;
+
+/// A decoded tile of level `.0`, column `.1`, row `.2`.
+type Recent = Vec<((usize, usize, usize), Arc<Vec<f32>>)>;
 
 /// An opened pyramid folder.
 #[derive(Clone, Debug)]
 pub struct Pyramid {
     pub dir: PathBuf,
     pub meta: Meta,
+    /// The tiles point queries read last, most recent first (shared by clones).
+    recent: Arc<Mutex<Recent>>,
 }
 
 impl Pyramid {
@@ -48,7 +59,8 @@ impl Pyramid {
                 meta.width, meta.height
             )));
         }
-        if !(16..=4096).contains(&meta.tile) || meta.border > 8 {
+        // A border of at least one node lets a bilinear sample read one tile, here and on the GPU.
+        if !(16..=4096).contains(&meta.tile) || !(1..=8).contains(&meta.border) {
             return Err(bad(format!(
                 "tile {} with border {} is not a layout this terrain writes",
                 meta.tile, meta.border
@@ -67,6 +79,7 @@ impl Pyramid {
         Ok(Pyramid {
             dir: dir.to_path_buf(),
             meta,
+            recent: Arc::default(),
         })
     }
 
@@ -107,6 +120,41 @@ impl Pyramid {
             }
         }
         Ok(out)
+    }
+
+    /// Height at level `l`'s node coordinates (x, y), bilinear, clamped to the level: the nodes
+    /// come from the one tile holding (x, y) (its border holds the next node), and the arithmetic
+    /// is `Level::bilinear`'s, so it equals the level held in memory bit for bit.
+    pub fn bilinear(&self, l: usize, x: f64, y: f64) -> Result<f32> {
+        let [w, h] = self.meta.levels[l];
+        let (t, b, side) = (self.meta.tile, self.meta.border, self.side());
+        let x = x.clamp(0.0, (w - 1) as f64);
+        let y = y.clamp(0.0, (h - 1) as f64);
+        let i = (x.floor() as usize).min(w - 2);
+        let j = (y.floor() as usize).min(h - 2);
+        let (fu, fv) = ((x - i as f64) as f32, (y - j as f64) as f32);
+        let (tx, ty) = (i / t, j / t);
+        let heights = self.recent_tile(l, tx, ty)?;
+        let at = |i: usize, j: usize| heights[(j - ty * t + b) * side + i - tx * t + b];
+        let a = at(i, j) + (at(i + 1, j) - at(i, j)) * fu;
+        let c = at(i, j + 1) + (at(i + 1, j + 1) - at(i, j + 1)) * fu;
+        Ok(a + (c - a) * fv)
+    }
+
+    /// Tile (tx, ty) of level `l` from the recent tiles, or read and kept there.
+    fn recent_tile(&self, l: usize, tx: usize, ty: usize) -> Result<Arc<Vec<f32>>> {
+        let key = (l, tx, ty);
+        // A poisoned lock only means another query panicked; the tiles it holds are whole.
+        let mut recent = self.recent.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(k) = recent.iter().position(|(k, _)| *k == key) {
+            let hit = recent.remove(k);
+            recent.insert(0, hit.clone());
+            return Ok(hit.1);
+        }
+        let heights = Arc::new(self.tile(l, tx, ty)?);
+        recent.truncate(RECENT_TILES - 1);
+        recent.insert(0, (key, heights.clone()));
+        Ok(heights)
     }
 
     /// The finest level with at most `cells` nodes.

@@ -198,7 +198,7 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
     // sun stands where this camera sees it, as `render` of the item's scene would put it.
     r.forget();
     r.relight(&scene);
-    let frame = r.render(&camera)?;
+    let frame = r.render_settled(&camera)?;
     let output = out_dir.join(format!("{}.png", item.name));
     write_image(&output, frame.width, frame.height, &frame.rgba)?;
     Ok(Snapshot {

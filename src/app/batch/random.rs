@@ -47,13 +47,13 @@ pub fn random_camera(
     let ground = inside(0.1 + 0.8 * rng.next(), 0.1 + 0.8 * rng.next());
     let (h0, h1) = RANDOM_HEIGHT_M;
     let above = (h0.ln() + (h1.ln() - h0.ln()) * rng.next()).exp();
-    let z = ground_under(atlas, ground).unwrap_or(atlas.max_m as f64);
+    let z = ground_under(atlas, ground)?.unwrap_or(atlas.max_m as f64);
     let eye = ground.extend(z + reach_m + above);
     let heading = std::f64::consts::TAU * rng.next();
     let distance = above * (2.0 + 6.0 * rng.next());
     let aim = ground + DVec2::new(heading.cos(), heading.sin()) * distance;
     let aim = aim.clamp(lo, hi);
-    let target = aim.extend(ground_under(atlas, aim).unwrap_or(z));
+    let target = aim.extend(ground_under(atlas, aim)?.unwrap_or(z));
     let mut s = scene.clone();
     let target = if (target - eye).truncate().length() < 1.0 {
         target - DVec3::Y

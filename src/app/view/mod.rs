@@ -117,7 +117,9 @@ impl App {
         let Flyer::Plane(c) = &self.cam else {
             return None;
         };
-        ground_under(&self.atlas, c.eye.truncate()).map(|g| g + self.reach_m + CLEARANCE_M)
+        // A tile that cannot be read fails the frame that draws it; here it only loses the floor.
+        let ground = ground_under(&self.atlas, c.eye.truncate()).ok().flatten();
+        ground.map(|g| g + self.reach_m + CLEARANCE_M)
     }
 
     fn camera(&self) -> Result<crate::camera::Camera> {
@@ -132,7 +134,7 @@ impl App {
     fn above_m(&self) -> f64 {
         match &self.cam {
             Flyer::Plane(c) => {
-                let ground = ground_under(&self.atlas, c.eye.truncate());
+                let ground = ground_under(&self.atlas, c.eye.truncate()).ok().flatten();
                 c.eye.z - ground.unwrap_or(self.atlas.min_m as f64)
             }
             Flyer::Planet(c) => c.altitude,

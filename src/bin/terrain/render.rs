@@ -121,6 +121,13 @@ pub fn run(a: Args) -> Result<()> {
     let camera = scene::camera_of(&scene, r.atlas())?;
     let frames = frames(&mut r, &camera, &scene, a.repeat)?;
     let last = frames.last().context("no frame rendered")?;
+    if let Some(st) = last.stream.filter(|s| s.stand_in) {
+        eprintln!(
+            "note: {} tiles this view needs do not fit the {} pages of stream.gpu_mb: coarser levels stand in for them",
+            st.missing,
+            r.stream_pages().unwrap_or(0)
+        );
+    }
     // The image and the positions land together or not at all.
     let mut staged = Staged::default();
     staged.add_image(&a.output, last.width, last.height, &last.rgba)?;
@@ -211,7 +218,7 @@ fn frames(
     let (w, h) = (scene.camera.width, scene.camera.height);
     let spinner = (w as u64 * h as u64 > BIG_RENDER_PIXELS)
         .then(|| Spinner::new(&format!("rendering {w}×{h} ({} frames)", repeat + 1)));
-    r.render(camera)?;
+    r.render_settled(camera)?;
     // Each timed frame is drawn as a snapshot's is: nothing held from the one before
     // (`warp.hold` would otherwise time the held frame's shortcut).
     let frames = (0..repeat)

@@ -29,7 +29,7 @@ pub(super) struct Truth {
 }
 
 pub(super) fn truth(r: &mut Renderer, camera: &Camera) -> Result<(Truth, Frame)> {
-    let frame = r.render(camera)?;
+    let frame = r.render_settled(camera)?;
     let positions = r.read_positions(camera)?;
     Ok((
         Truth {
@@ -70,7 +70,7 @@ pub(super) fn measure(
     truth: &Truth,
     o: &Options,
 ) -> Result<(Row, Vec<u8>)> {
-    r.render(camera)?;
+    r.render_settled(camera)?;
     // At least one timed frame: `last` below is the one whose image is kept. Each is drawn as by
     // a fresh renderer, so a still camera times the whole CPU stage, not a held warp.
     let mut frames = Vec::new();
