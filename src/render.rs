@@ -235,7 +235,8 @@ impl Renderer {
     /// frame waiting for the tiles the last one missed, until no sample reads a stand-in level.
     /// The image is then the one the sketch held whole gives. Where the view needs more tiles
     /// than the pool holds (or the loader stops delivering), the first frame that placed none is
-    /// returned, its stand-ins counted in [`Frame::stream`].
+    /// returned, its stand-ins counted in [`Frame::stream`], and a note on stderr says so (every
+    /// snapshot command: `render`, `batch`, `compare`).
     pub fn render_settled(&mut self, camera: &Camera) -> Result<Frame> {
         let SketchGpu::Streamed(s) = &mut self.sketch else {
             return self.render(camera);
@@ -261,6 +262,16 @@ impl Renderer {
             if frame.stream.is_some_and(|s| s.loaded == 0) {
                 break;
             }
+        }
+        if let Some(st) = frame.stream.filter(|s| s.stand_in)
+            && std::env::var_os("TERRAIN_QUIET").is_none()
+        {
+            eprintln!(
+                "note: {} tiles this view needs do not fit the {} pages of stream.gpu_mb: \
+                 coarser levels stand in for them",
+                st.missing,
+                self.stream_pages().unwrap_or(0)
+            );
         }
         Ok(frame)
     }

@@ -356,7 +356,7 @@ fn a_streamed_pyramid_renders_as_the_sketch_in_memory_once_its_tiles_are_residen
     let asc = common::manifest_dir().join("sketches/jacksboro_fault_dem.asc");
     let pyr = dir.join("pyr");
     convert(&asc, &pyr);
-    // 4 MiB: 14 pages for the pyramid's 11 tiles, of which the top three levels are pinned, so
+    // 4 MiB: 15 pages for the pyramid's 11 tiles, of which the top three levels are pinned, so
     // the first frame stands in with them.
     let streamed = jacksboro_scene(&pyr, "[stream]\ngpu_mb = 4");
     let whole = jacksboro_scene(&asc, "");
@@ -457,17 +457,15 @@ fn a_streamed_sketchs_ground_is_level_0s_so_a_camera_under_a_peak_is_refused() {
         let e = camera_of(&s, &atlas).expect_err("under the peak");
         assert!(e.to_string().contains("below the surface"), "{e}");
     }
-    // A damaged level-0 tile: the query names it rather than answering from a coarser level.
+    // A level-0 tile damaged after the load (which read it for the relief): the query names it
+    // rather than answering from a coarser level. A fresh atlas has no tile kept decoded.
+    let fresh = load_atlas(&streamed_scene).unwrap();
     let tile = pyr.join("L0/0/0.tile");
     let mut bytes = std::fs::read(&tile).unwrap();
     let k = bytes.len() - 10;
     bytes[k] ^= 0x10;
     std::fs::write(&tile, bytes).unwrap();
-    let fresh = load_atlas(&streamed_scene);
-    let e = match fresh {
-        Ok(a) => ground_under(&a, lo + DVec2::splat(10.0)).unwrap_err(),
-        Err(e) => e,
-    };
+    let e = ground_under(&fresh, lo + DVec2::splat(10.0)).unwrap_err();
     assert!(e.to_string().contains("0.tile"), "{e}");
 }
 
@@ -516,4 +514,48 @@ fn a_streamed_snapshot_settles_on_the_whole_sketchs_image_and_a_damaged_tile_fai
         e.to_string().contains("L1") && e.to_string().lines().count() == 1,
         "{e}"
     );
+}
+
+#[test]
+fn fly_settle_waits_for_every_frames_tiles_and_without_it_the_first_frame_stands_in() {
+    let dir = scratch("tiles-fly-settle");
+    let asc = common::manifest_dir().join("sketches/jacksboro_fault_dem.asc");
+    let pyr = dir.join("pyr");
+    convert(&asc, &pyr);
+    let text = std::fs::read_to_string(common::manifest_dir().join("sketches/jacksboro.toml"))
+        .unwrap()
+        .replace(
+            "path = \"jacksboro_fault_dem.asc\"",
+            &format!("path = {:?}", pyr.display().to_string()),
+        );
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, format!("{text}\n[stream]\ngpu_mb = 4\n")).unwrap();
+    let stand_in = |settle: bool| -> Vec<String> {
+        let out = dir.join(if settle { "settled" } else { "free" });
+        let mut args = vec![
+            "fly",
+            scene.to_str().unwrap(),
+            "--out-dir",
+            out.to_str().unwrap(),
+            "--frames",
+            "3",
+            "--size",
+            "96",
+            "--no-mp4",
+        ];
+        if settle {
+            args.push("--settle");
+        }
+        let (code, _, stderr) = terrain(&args);
+        assert_eq!(code, 0, "{stderr}");
+        let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+        let mut lines = csv.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let k = header.iter().position(|&c| c == "stand_in").unwrap();
+        lines
+            .map(|l| l.split(',').nth(k).unwrap().to_string())
+            .collect()
+    };
+    assert_eq!(stand_in(true), ["false"; 3]);
+    assert_eq!(stand_in(false)[0], "true");
 }

@@ -94,8 +94,8 @@ fn mark(index: u32, m: u32) {
 // page, or (filled down by the cache) the page of its finest resident ancestor, with that tile's
 // level r. The ancestor of tile t is t >> (r − l), clamped to level r's tiles; its page holds
 // every node a bicubic sample on level r reads there (the two-node border covers the half-texel
-// shift between levels). The entry is marked missing when it stands in, and the tile read is
-// marked used. No loop: an earlier version walked up the levels, and llvmpipe's compiler spent
+// shift between levels). With `want`, the entry is marked missing when it stands in; the tile
+// read is marked used. No loop: an earlier version walked up the levels, and llvmpipe's compiler spent
 // minutes on the unrolled walks of a fragment shader.
 struct Lookup {
     level: u32,
@@ -103,7 +103,7 @@ struct Lookup {
     texels: Texels,
 }
 
-fn lookup(uv: vec2<f32>, l: u32) -> Lookup {
+fn lookup(uv: vec2<f32>, l: u32, want: bool) -> Lookup {
     let t = tile_of(l, vec2<i32>(floor(level_coords(uv, l))));
     let e = table_index(l, t);
     let page_fade = u32(atlas[e]);
@@ -113,7 +113,9 @@ fn lookup(uv: vec2<f32>, l: u32) -> Lookup {
     if (r == l) {
         mark(e, 2u);
     } else {
-        mark(e, 1u);
+        if (want) {
+            mark(e, 1u);
+        }
         mark(table_index(r, a), 2u);
     }
     let side = frame.atlas.tile + 2u * frame.atlas.border;
@@ -123,14 +125,14 @@ fn lookup(uv: vec2<f32>, l: u32) -> Lookup {
 }
 
 // The finest resident level at or coarser than `l` around `uv`, and while it blends in, the next
-// resident one under it.
+// resident one under it (read as it is: a tile blending in does not ask for its parent).
 fn resolve(uv: vec2<f32>, l: u32) -> Resolved {
-    let a = lookup(uv, l);
+    let a = lookup(uv, l, true);
     let fade = f32(a.page_fade & 255u) / 255.0;
     if (fade >= 1.0 || a.level + 1u >= frame.atlas.levels) {
         return Resolved(a.level, a.texels, 1.0, a.level, a.texels);
     }
-    let b = lookup(uv, a.level + 1u);
+    let b = lookup(uv, a.level + 1u, false);
     return Resolved(a.level, a.texels, fade, b.level, b.texels);
 }
 #else

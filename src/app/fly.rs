@@ -41,6 +41,9 @@ pub struct Options {
     pub fps: f64,
     /// Encode `animation.mp4` (instead of the APNG) when ffmpeg is on the PATH.
     pub mp4: bool,
+    /// A streamed sketch: each frame waits for its tiles as a snapshot does
+    /// ([`Renderer::render_settled`]); its figures are then those of the frame written.
+    pub settle: bool,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -231,7 +234,10 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
     let mut records = Vec::with_capacity(cameras.len());
     let writer = FrameWriter::new(w, h);
     for (k, (camera, &t)) in cameras.iter().zip(&times).enumerate() {
-        let frame = r.render(camera)?;
+        let frame = match o.settle {
+            true => r.render_settled(camera)?,
+            false => r.render(camera)?,
+        };
         let file = format!("frame-{k:05}.png");
         if !writer.write(out_dir.join(&file), frame.rgba) {
             break; // every writer stopped: `finish` says why

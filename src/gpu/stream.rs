@@ -72,7 +72,8 @@ pub struct Stream {
     table_first: u32,
     tile: u32,
     border: u32,
-    last: StreamStats,
+    /// Floats per page: a tile with its border.
+    page_floats: u64,
 }
 
 impl Stream {
@@ -85,6 +86,16 @@ impl Stream {
         let side = pyramid.side() as u64;
         let page_bytes = side * side * 4;
         let layout = crate::tiles::cache::Layout::new(pyramid);
+        if layout.first.len() > MAX_LEVELS {
+            return Err(Error::sketch(
+                &pyramid.dir,
+                format!(
+                    "a pyramid of {} levels; the shaders' level table holds {MAX_LEVELS} \
+                     (sketches up to 65,536 nodes a side)",
+                    layout.first.len()
+                ),
+            ));
+        }
         let table_bytes = layout.len as u64 * 8;
         let limit = cfg
             .gpu_bytes
@@ -136,7 +147,7 @@ impl Stream {
             table_first: table_first as u32,
             tile: pyramid.meta.tile as u32,
             border: pyramid.meta.border as u32,
-            last: StreamStats::default(),
+            page_floats: side * side,
         })
     }
 
@@ -168,14 +179,10 @@ impl Stream {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<()> {
         let uploads = self.cache.begin_frame()?;
-        let page_floats = {
-            let side = (self.tile + 2 * self.border) as u64;
-            side * side
-        };
         for u in &uploads {
             ctx.queue.write_buffer(
                 &self.atlas,
-                u.page as u64 * page_floats * 4,
+                u.page as u64 * self.page_floats * 4,
                 bytemuck::cast_slice(&u.heights),
             );
         }
@@ -199,8 +206,7 @@ impl Stream {
         let marks: Vec<u32> = super::frame_io::read_buffer(ctx, &self.readback, |b| {
             bytemuck::cast_slice(b).to_vec()
         })?;
-        self.last = self.cache.end_frame(&marks);
-        Ok(self.last)
+        Ok(self.cache.end_frame(&marks))
     }
 
     /// Snapshots settle: see [`TileCache::settle`].

@@ -18,7 +18,9 @@
 //!   become the loader's queue, coarsest level first (a coarse tile improves the stand-in for the
 //!   most ground), replacing the last frame's queue so a camera that moved on does not wait behind
 //!   tiles it no longer sees.
-//! - At most [`Budget::loads_per_frame`] arrived tiles are placed per frame. A tile takes a free
+//! - At most [`Budget::loads_per_frame`] arrived tiles are placed per frame, and the loader
+//!   holds no more than that many read and not yet placed (memory stays bounded, and what
+//!   arrives is what recent frames asked for). A tile takes a free
 //!   page, else the least recently used page that the last frame did not use; when every page
 //!   was used by the last frame, the tile is dropped and asked for again later (the stand-in
 //!   stays: a budget too small for the view shows coarser ground, never a hole).
@@ -32,7 +34,7 @@
 //! blocks' boxes): each consumer would need its own estimate, and the shading's reads (pixel
 //! normals, the sun's shadow ray, the surface types' footprints) none would see; the marks are
 //! exact for every mode and cost one store per sample. A hash-map page table on the GPU: the
-//! table for a 32,768² pyramid is 21,845 entries, 175 KB, cheaper to index than to probe.
+//! table for a 32,768² pyramid is 21,852 entries, 175 KB, cheaper to index than to probe.
 
 use super::Pyramid;
 use crate::error::{Error, Result};
@@ -139,7 +141,7 @@ pub struct TileCache {
     /// Entries still blending in.
     fading: Vec<usize>,
     frame: u64,
-    pinned_uploads: Vec<Upload>,
+    pending_uploads: Vec<Upload>,
     loader: Loader,
     last: StreamStats,
     /// Frames wait for the tiles the last one missed and place them without a fade.
@@ -179,8 +181,8 @@ impl TileCache {
             free: (0..budget.pages as u32).rev().collect(),
             fading: Vec::new(),
             frame: 0,
-            pinned_uploads: Vec::new(),
-            loader: Loader::start(Arc::new(pyramid.clone()), layout.clone(), budget.threads),
+            pending_uploads: Vec::new(),
+            loader: Loader::start(Arc::new(pyramid.clone()), layout.clone(), &budget),
             last: StreamStats::default(),
             settling: false,
             layout,
@@ -194,7 +196,7 @@ impl TileCache {
                     let heights = pyramid.tile(l, x, y)?;
                     let page = cache.free.pop().expect("pinned tiles fit the pool");
                     cache.place(e, page, true);
-                    cache.pinned_uploads.push(Upload { page, heights });
+                    cache.pending_uploads.push(Upload { page, heights });
                 }
             }
         }
@@ -221,7 +223,7 @@ impl TileCache {
     /// their pages. A tile that failed to read fails the frame, naming it.
     pub fn begin_frame(&mut self) -> Result<Vec<Upload>> {
         self.frame += 1;
-        let mut uploads = std::mem::take(&mut self.pinned_uploads);
+        let mut uploads = std::mem::take(&mut self.pending_uploads);
         self.advance_fades();
         let wait = self.settling && self.last.missing > 0;
         let (mut loaded, mut dropped) = (0, 0);
@@ -234,7 +236,14 @@ impl TileCache {
             let Some((e, heights)) = next else {
                 break;
             };
-            let heights = heights?;
+            let heights = match heights {
+                Ok(h) => h,
+                Err(e) => {
+                    // The pages placed so far keep their heights for the next frame's copy.
+                    self.pending_uploads = uploads;
+                    return Err(e);
+                }
+            };
             if self.page_of[e].is_some() {
                 continue;
             }
@@ -276,8 +285,8 @@ impl TileCache {
             }
         }
         stand_in |= !missing.is_empty();
-        // The loader takes from the end: coarsest last.
-        missing.sort_by_key(|&e| self.layout.tile_of(e).0);
+        // Entries are numbered level 0 first, so the loader, taking from the end, reads the
+        // coarsest first.
         self.loader.want(&missing);
         self.last.missing = missing.len();
         self.last.stand_in = stand_in;
@@ -368,7 +377,11 @@ type Loaded = (usize, Result<Vec<f32>>);
 struct Queue {
     /// Entries to load, the next one last.
     wanted: Vec<usize>,
+    /// Entries being read or read and not yet taken by the render thread.
     in_flight: HashSet<usize>,
+    /// The most entries in flight: decoded tiles wait in memory until placed, so the loader
+    /// reads no more than a frame places (`loads_per_frame`), and arrivals stay current.
+    most: usize,
     stop: bool,
 }
 
@@ -380,17 +393,18 @@ struct Loader {
 }
 
 impl Loader {
-    fn start(pyramid: Arc<Pyramid>, layout: Layout, threads: usize) -> Loader {
+    fn start(pyramid: Arc<Pyramid>, layout: Layout, budget: &Budget) -> Loader {
         let queue = Arc::new((
             Mutex::new(Queue {
                 wanted: Vec::new(),
                 in_flight: HashSet::new(),
+                most: budget.loads_per_frame.max(1),
                 stop: false,
             }),
             Condvar::new(),
         ));
         let (send, arrived) = mpsc::channel();
-        let threads = (0..threads.max(1))
+        let threads = (0..budget.threads.max(1))
             .map(|_| {
                 let (queue, send, pyramid, layout) =
                     (queue.clone(), send.clone(), pyramid.clone(), layout.clone());
@@ -408,11 +422,10 @@ impl Loader {
     fn want(&self, wanted: &[usize]) {
         let (lock, wake) = &*self.queue;
         let mut q = lock.lock().unwrap_or_else(|e| e.into_inner());
+        let q = &mut *q;
         q.wanted.clear();
-        let in_flight = std::mem::take(&mut q.in_flight);
         q.wanted
-            .extend(wanted.iter().filter(|e| !in_flight.contains(e)));
-        q.in_flight = in_flight;
+            .extend(wanted.iter().filter(|e| !q.in_flight.contains(e)));
         wake.notify_all();
     }
 
@@ -426,11 +439,13 @@ impl Loader {
     }
 
     fn received(&self, loaded: Loaded) -> Option<Loaded> {
-        let (lock, _) = &*self.queue;
+        let (lock, wake) = &*self.queue;
         lock.lock()
             .unwrap_or_else(|e| e.into_inner())
             .in_flight
             .remove(&loaded.0);
+        // A slot freed: a loader waiting on the bound may read the next.
+        wake.notify_one();
         Some(loaded)
     }
 }
@@ -449,7 +464,9 @@ fn load_loop(
                 if q.stop {
                     return;
                 }
-                if let Some(e) = q.wanted.pop() {
+                if q.in_flight.len() < q.most
+                    && let Some(e) = q.wanted.pop()
+                {
                     q.in_flight.insert(e);
                     break e;
                 }
@@ -565,6 +582,41 @@ mod tests {
         assert!(!cache.end_frame(&marks).stand_in);
         // Every other level-0 entry still stands in with the pinned level.
         assert_eq!(level_of(&cache, layout.first[0]), (top - 1) as f32);
+    }
+
+    #[test]
+    fn the_loader_holds_no_more_tiles_read_and_unplaced_than_a_frame_places() {
+        let p = pyramid("bound");
+        let mut cache = TileCache::new(
+            p,
+            Budget {
+                loads_per_frame: 2,
+                threads: 3,
+                ..budget(16)
+            },
+        )
+        .unwrap();
+        let layout = cache.layout.clone();
+        cache.begin_frame().unwrap();
+        // All nine level-0 tiles are missing at once.
+        let mut marks = vec![0; layout.len];
+        for k in 0..9 {
+            marks[layout.first[0] + k] = MARK_MISSING;
+        }
+        assert_eq!(cache.end_frame(&marks).missing, 9);
+        let held = |c: &TileCache| {
+            let q = c.loader.queue.0.lock().unwrap();
+            (q.in_flight.len(), q.wanted.len())
+        };
+        // Three threads, and time to read all nine: two are read, the rest wait their turn.
+        std::thread::sleep(Duration::from_millis(300));
+        assert_eq!(held(&cache), (2, 7));
+        let stats = {
+            cache.begin_frame().unwrap();
+            cache.end_frame(&marks)
+        };
+        assert_eq!(stats.loaded, 2);
+        assert!(held(&cache).0 <= 2, "{:?}", held(&cache));
     }
 
     #[test]

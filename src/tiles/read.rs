@@ -59,8 +59,9 @@ impl Pyramid {
                 meta.width, meta.height
             )));
         }
-        // A border of at least one node lets a bilinear sample read one tile, here and on the GPU.
-        if !(16..=4096).contains(&meta.tile) || !(1..=8).contains(&meta.border) {
+        // A border of two nodes lets a sample read one tile: a bilinear one here, a bicubic one
+        // (floor − 1 to floor + 2, half a texel off on an ancestor level) on the GPU.
+        if !(16..=4096).contains(&meta.tile) || !(2..=8).contains(&meta.border) {
             return Err(bad(format!(
                 "tile {} with border {} is not a layout this terrain writes",
                 meta.tile, meta.border
@@ -240,9 +241,14 @@ pub fn streamed_atlas(dir: &Path, opts: &LoadOptions) -> Result<crate::sketch::A
     let pyramid = Pyramid::open(dir)?;
     let m = &pyramid.meta;
     let meta_path = dir.join(META);
-    if opts.height_scale.is_some_and(|s| s != 1.0) || opts.height_range_m.is_some() {
+    let scaled = opts.height_scale.is_some_and(|s| s != 1.0);
+    if scaled || opts.height_range_m.is_some() {
         return Err(Error::value(
-            "sketch.height_scale",
+            if scaled {
+                "sketch.height_scale"
+            } else {
+                "sketch.height_range_m"
+            },
             format!(
                 "{}: a tile pyramid's heights are metres; scale them when converting (`terrain tiles --height-scale`)",
                 meta_path.display()

@@ -30,6 +30,10 @@ pub struct Args {
     /// Writes the animation as APNG even when ffmpeg could make an MP4.
     #[arg(long)]
     no_mp4: bool,
+    /// A streamed sketch (a tile pyramid): every frame waits for the tiles it needs, as `render`
+    /// does, instead of showing a coarser level while they load.
+    #[arg(long)]
+    settle: bool,
     /// Overrides a scene key (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
@@ -65,6 +69,7 @@ pub fn run(a: Args) -> Result<()> {
         frames: a.frames.map(|n| n as usize),
         fps: a.fps,
         mp4: !a.no_mp4,
+        settle: a.settle,
     };
     let o = terrain::app::fly::run(&scene, &opts, &a.out_dir)?;
     if let Some(note) = &o.mp4_note {

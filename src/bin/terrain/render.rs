@@ -121,13 +121,6 @@ pub fn run(a: Args) -> Result<()> {
     let camera = scene::camera_of(&scene, r.atlas())?;
     let frames = frames(&mut r, &camera, &scene, a.repeat)?;
     let last = frames.last().context("no frame rendered")?;
-    if let Some(st) = last.stream.filter(|s| s.stand_in) {
-        eprintln!(
-            "note: {} tiles this view needs do not fit the {} pages of stream.gpu_mb: coarser levels stand in for them",
-            st.missing,
-            r.stream_pages().unwrap_or(0)
-        );
-    }
     // The image and the positions land together or not at all.
     let mut staged = Staged::default();
     staged.add_image(&a.output, last.width, last.height, &last.rgba)?;
