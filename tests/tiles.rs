@@ -307,10 +307,7 @@ fn folders_of_other_builds_and_damaged_tiles_are_refused_in_one_line() {
     );
     // A flipped byte in a tile's heights: its checksum catches it, and the message names it.
     let tile = out.join("L0/0/0.tile");
-    let mut bytes = std::fs::read(&tile).unwrap();
-    let k = bytes.len() - 10;
-    bytes[k] ^= 0x10;
-    std::fs::write(&tile, bytes).unwrap();
+    damage(&tile);
     let (code, _, stderr) = terrain(&["info", out.to_str().unwrap(), "--json"]);
     assert_eq!(code, 0, "info reads pyramid.toml alone: {stderr}");
     let err = Atlas::load(&out, &LoadOptions::default())
@@ -333,6 +330,24 @@ fn folders_of_other_builds_and_damaged_tiles_are_refused_in_one_line() {
     );
 }
 
+/// A scratch folder `name` holding the bundled Jacksboro sketch converted to `pyr`: the folder,
+/// the sketch and the pyramid.
+fn jacksboro_pyramid(name: &str) -> (PathBuf, PathBuf, PathBuf) {
+    let dir = scratch(name);
+    let asc = common::manifest_dir().join("sketches/jacksboro_fault_dem.asc");
+    let pyr = dir.join("pyr");
+    convert(&asc, &pyr);
+    (dir, asc, pyr)
+}
+
+/// Flips a bit near the end of a tile: its checksum no longer holds.
+fn damage(tile: &Path) {
+    let mut bytes = std::fs::read(tile).unwrap();
+    let k = bytes.len() - 10;
+    bytes[k] ^= 0x10;
+    std::fs::write(tile, bytes).unwrap();
+}
+
 /// The bundled Jacksboro scene at 128², reading `sketch` (a path), with `extra` appended.
 fn jacksboro_scene(sketch: &Path, extra: &str) -> terrain::scene::Scene {
     let dir = common::manifest_dir().join("sketches");
@@ -352,10 +367,7 @@ fn a_streamed_pyramid_renders_as_the_sketch_in_memory_once_its_tiles_are_residen
     use terrain::gpu::uniforms::View;
     use terrain::render::Renderer;
     use terrain::scene::Mode;
-    let dir = scratch("tiles-streamed");
-    let asc = common::manifest_dir().join("sketches/jacksboro_fault_dem.asc");
-    let pyr = dir.join("pyr");
-    convert(&asc, &pyr);
+    let (_, asc, pyr) = jacksboro_pyramid("tiles-streamed");
     // 4 MiB: 15 pages for the pyramid's 11 tiles, of which the top three levels are pinned, so
     // the first frame stands in with them.
     let streamed = jacksboro_scene(&pyr, "[stream]\ngpu_mb = 4");
@@ -404,10 +416,7 @@ fn a_streamed_pyramid_renders_as_the_sketch_in_memory_once_its_tiles_are_residen
 fn a_streamed_sketchs_ground_is_level_0s_so_a_camera_under_a_peak_is_refused() {
     use glam::{DVec2, DVec3};
     use terrain::scene::{camera_of, ground_under, load_atlas};
-    let dir = scratch("tiles-ground");
-    let asc = common::manifest_dir().join("sketches/jacksboro_fault_dem.asc");
-    let pyr = dir.join("pyr");
-    convert(&asc, &pyr);
+    let (_, asc, pyr) = jacksboro_pyramid("tiles-ground");
     // cpu_mb = 0: main memory holds the top level alone, 2 × 2 nodes.
     let streamed_scene = jacksboro_scene(&pyr, "[stream]\ncpu_mb = 0");
     let whole_scene = jacksboro_scene(&asc, "");
@@ -461,10 +470,7 @@ fn a_streamed_sketchs_ground_is_level_0s_so_a_camera_under_a_peak_is_refused() {
     // rather than answering from a coarser level. A fresh atlas has no tile kept decoded.
     let fresh = load_atlas(&streamed_scene).unwrap();
     let tile = pyr.join("L0/0/0.tile");
-    let mut bytes = std::fs::read(&tile).unwrap();
-    let k = bytes.len() - 10;
-    bytes[k] ^= 0x10;
-    std::fs::write(&tile, bytes).unwrap();
+    damage(&tile);
     let e = ground_under(&fresh, lo + DVec2::splat(10.0)).unwrap_err();
     assert!(e.to_string().contains("0.tile"), "{e}");
 }
@@ -474,10 +480,7 @@ fn a_streamed_snapshot_settles_on_the_whole_sketchs_image_and_a_damaged_tile_fai
     use terrain::gpu::uniforms::View;
     use terrain::render::Renderer;
     use terrain::scene::Mode;
-    let dir = scratch("tiles-settled");
-    let asc = common::manifest_dir().join("sketches/jacksboro_fault_dem.asc");
-    let pyr = dir.join("pyr");
-    convert(&asc, &pyr);
+    let (_, asc, pyr) = jacksboro_pyramid("tiles-settled");
     // Fades of 8 frames, as by default: a settled snapshot places its tiles without them.
     let streamed = jacksboro_scene(&pyr, "[stream]\ngpu_mb = 4");
     let whole = jacksboro_scene(&asc, "");
@@ -504,10 +507,7 @@ fn a_streamed_snapshot_settles_on_the_whole_sketchs_image_and_a_damaged_tile_fai
     // (cpu_mb = 0: the load itself reads only the top level and level 0's relief.)
     let streamed = jacksboro_scene(&pyr, "[stream]\ngpu_mb = 4\ncpu_mb = 0");
     let tile = pyr.join("L1/0/0.tile");
-    let mut bytes = std::fs::read(&tile).unwrap();
-    let k = bytes.len() - 10;
-    bytes[k] ^= 0x10;
-    std::fs::write(&tile, bytes).unwrap();
+    damage(&tile);
     let mut s = Renderer::new(&streamed, Mode::Warped, View::Shaded).unwrap();
     let e = s.render_settled(&camera).err().expect("a damaged tile");
     assert!(
@@ -518,10 +518,7 @@ fn a_streamed_snapshot_settles_on_the_whole_sketchs_image_and_a_damaged_tile_fai
 
 #[test]
 fn fly_settle_waits_for_every_frames_tiles_and_without_it_the_first_frame_stands_in() {
-    let dir = scratch("tiles-fly-settle");
-    let asc = common::manifest_dir().join("sketches/jacksboro_fault_dem.asc");
-    let pyr = dir.join("pyr");
-    convert(&asc, &pyr);
+    let (dir, _, pyr) = jacksboro_pyramid("tiles-fly-settle");
     let text = std::fs::read_to_string(common::manifest_dir().join("sketches/jacksboro.toml"))
         .unwrap()
         .replace(

@@ -20,10 +20,10 @@
 //!   tiles it no longer sees.
 //! - At most [`Budget::loads_per_frame`] arrived tiles are placed per frame, and the loader
 //!   holds no more than that many read and not yet placed (memory stays bounded, and what
-//!   arrives is what recent frames asked for). A tile takes a free
-//!   page, else the least recently used page that the last frame did not use; when every page
-//!   was used by the last frame, the tile is dropped and asked for again later (the stand-in
-//!   stays: a budget too small for the view shows coarser ground, never a hole).
+//!   arrives is what recent frames asked for). A tile takes a free page, else the least recently
+//!   used page that the last frame did not use; when every page was used by the last frame, the
+//!   tile is dropped and asked for again later (the stand-in stays: a budget too small for the
+//!   view shows coarser ground, never a hole).
 //! - A placed tile's fade rises from 0 to 255 over [`Budget::fade_frames`] frames; the shader
 //!   blends it over the next coarser resident level meanwhile.
 //! - A snapshot (`render`, `batch`, `compare`'s views) settles instead ([`TileCache::settle`]):
