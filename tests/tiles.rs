@@ -556,3 +556,42 @@ fn fly_settle_waits_for_every_frames_tiles_and_without_it_the_first_frame_stands
     assert_eq!(stand_in(true), ["false"; 3]);
     assert_eq!(stand_in(false)[0], "true");
 }
+
+#[test]
+fn compare_over_a_pyramid_sweeps_warped_and_refuses_the_baselines_before_any_work() {
+    use terrain::scene::Mode;
+    let (dir, _, pyr) = jacksboro_pyramid("tiles-compare");
+    let scene = jacksboro_scene(&pyr, "");
+    assert_eq!(
+        terrain::eval::compare::default_modes(&scene),
+        [Mode::Warped]
+    );
+    let whole = jacksboro_scene(
+        &common::manifest_dir().join("sketches/jacksboro_fault_dem.asc"),
+        "",
+    );
+    assert_eq!(terrain::eval::compare::default_modes(&whole).len(), 3);
+    let text = std::fs::read_to_string(common::manifest_dir().join("sketches/jacksboro.toml"))
+        .unwrap()
+        .replace(
+            "path = \"jacksboro_fault_dem.asc\"",
+            &format!("path = {:?}", pyr.display().to_string()),
+        );
+    let file = dir.join("scene.toml");
+    std::fs::write(&file, text).unwrap();
+    let out = dir.join("cmp");
+    let (code, _, stderr) = terrain(&[
+        "compare",
+        file.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+        "--modes",
+        "warped,geomipmap",
+    ]);
+    assert_eq!(code, 1);
+    assert!(
+        stderr.contains("--modes") && stderr.contains("geomipmap") && stderr.lines().count() == 1,
+        "{stderr}"
+    );
+    assert!(!out.join("report.csv").exists(), "refused before any work");
+}

@@ -396,6 +396,12 @@ impl Mode {
         Mode::Bruteforce,
         Mode::Clipmaps,
     ];
+
+    /// GeoMipMap and brute force: they bake the whole sketch onto a grid once, so a streamed
+    /// sketch (a tile pyramid) cannot feed them.
+    pub fn bakes_whole_sketch(self) -> bool {
+        matches!(self, Mode::Geomipmap | Mode::Bruteforce)
+    }
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]

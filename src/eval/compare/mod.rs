@@ -85,14 +85,22 @@ impl Default for Options {
     }
 }
 
-/// The modes `compare` runs on `scene` by default: the mesh modes on a sketch, clipmaps on a
-/// planet.
+/// The modes `compare` runs on `scene` by default: the mesh modes on a sketch, warped alone on
+/// a tile pyramid (the baselines bake the whole sketch), clipmaps on a planet.
 pub fn default_modes(scene: &Scene) -> Vec<Mode> {
     if scene.planet().is_some() {
         vec![Mode::Clipmaps]
+    } else if streamed(scene) {
+        vec![Mode::Warped]
     } else {
         vec![Mode::Warped, Mode::Geomipmap, Mode::Bruteforce]
     }
+}
+
+/// Whether `scene`'s sketch is a tile pyramid, streamed through the tile cache.
+fn streamed(scene: &Scene) -> bool {
+    let path = scene.sketch.path.as_ref();
+    path.is_some_and(|p| crate::tiles::is_pyramid(&scene.resolve(p)))
 }
 
 /// Refuses modes that cannot draw `scene`, in one line, before any work.
@@ -107,7 +115,16 @@ fn check_modes(scene: &Scene, modes: &[Mode]) -> Result<()> {
             "--modes",
             "clipmaps draws planet scenes; this scene is a planar sketch",
         )),
-        None => Ok(()),
+        None => match modes.iter().find(|&&m| m.bakes_whole_sketch()) {
+            Some(m) if streamed(scene) => Err(Error::value(
+                "--modes",
+                format!(
+                    "{m} bakes the whole sketch, and this scene's is a tile pyramid, streamed: \
+                     compare warped"
+                ),
+            )),
+            _ => Ok(()),
+        },
     }
 }
 
