@@ -255,9 +255,14 @@ impl App {
             _ => None,
         };
         let planet = matches!(self.cam, Flyer::Planet(_));
-        if let Some(m) = new_mode.filter(|m| *m != self.mode && !planet) {
-            self.mode = m;
-            self.renderer = None;
+        let streamed = self.atlas.pyramid.is_some();
+        match new_mode.map(|m| switch_mode(self.mode, m, planet, streamed)) {
+            Some(Ok(Some(m))) => {
+                self.mode = m;
+                self.renderer = None;
+            }
+            Some(Err(why)) => self.message = why,
+            _ => {}
         }
         match code {
             KeyCode::KeyV => {
@@ -391,6 +396,26 @@ impl App {
     }
 }
 
+/// The mode a mode key asks for, from `current`: none on a planet (clipmaps draw it) or when
+/// it is the current one; refused with a message for the HUD where `requested` bakes the whole
+/// sketch and the sketch is streamed, rather than ending the session on the renderer's error.
+fn switch_mode(
+    current: Mode,
+    requested: Mode,
+    planet: bool,
+    streamed: bool,
+) -> std::result::Result<Option<Mode>, String> {
+    if planet || requested == current {
+        return Ok(None);
+    }
+    if streamed && requested.bakes_whole_sketch() {
+        return Err(format!(
+            "{requested} bakes the whole sketch; this one is a streamed tile pyramid"
+        ));
+    }
+    Ok(Some(requested))
+}
+
 /// Why no window opens, in the user's terms: winit's message carries its own source path
 /// (`os error at …/winit-0.30/src/…/mod.rs:765: …`), which is dropped.
 fn no_display(winit: &str) -> String {
@@ -462,4 +487,20 @@ pub fn run(scene: Scene, o: Options) -> Result<()> {
         eprintln!("{}", app.message);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_mode_key_switches_except_on_a_planet_or_to_a_baseline_over_a_streamed_sketch() {
+        let (w, g) = (Mode::Warped, Mode::Geomipmap);
+        assert_eq!(switch_mode(w, g, false, false), Ok(Some(g)));
+        assert_eq!(switch_mode(w, w, false, false), Ok(None));
+        assert_eq!(switch_mode(Mode::Clipmaps, g, true, false), Ok(None));
+        let why = switch_mode(w, Mode::Bruteforce, false, true).unwrap_err();
+        assert!(why.contains("bruteforce"), "{why}");
+        assert_eq!(switch_mode(g, w, false, true), Ok(Some(w)));
+    }
 }
