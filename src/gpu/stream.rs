@@ -178,7 +178,7 @@ impl Stream {
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<()> {
-        let uploads = self.cache.begin_frame()?;
+        let (uploads, table_changed) = self.cache.begin_frame()?;
         for u in &uploads {
             ctx.queue.write_buffer(
                 &self.atlas,
@@ -186,12 +186,15 @@ impl Stream {
                 bytemuck::cast_slice(&u.heights),
             );
         }
-        // Written whole: 175 KB for a 32,768² pyramid.
-        ctx.queue.write_buffer(
-            &self.atlas,
-            self.table_first as u64 * 4,
-            bytemuck::cast_slice(self.cache.table()),
-        );
+        // Written whole when it changed (175 KB for a 32,768² pyramid): most frames of a flight
+        // place nothing and fade nothing.
+        if table_changed {
+            ctx.queue.write_buffer(
+                &self.atlas,
+                self.table_first as u64 * 4,
+                bytemuck::cast_slice(self.cache.table()),
+            );
+        }
         encoder.clear_buffer(&self.marks, 0, None);
         Ok(())
     }

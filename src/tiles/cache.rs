@@ -220,8 +220,9 @@ impl TileCache {
     }
 
     /// Before a frame: advances the fades and places arrived tiles; returns the tiles to copy into
-    /// their pages. A tile that failed to read fails the frame, naming it.
-    pub fn begin_frame(&mut self) -> Result<Vec<Upload>> {
+    /// their pages, and whether the page table changed (it needs copying too). A tile that failed
+    /// to read fails the frame, naming it.
+    pub fn begin_frame(&mut self) -> Result<(Vec<Upload>, bool)> {
         self.frame += 1;
         let mut uploads = std::mem::take(&mut self.pending_uploads);
         self.advance_fades();
@@ -260,10 +261,11 @@ impl TileCache {
             dropped,
             ..StreamStats::default()
         };
-        if self.dirty {
+        let changed = self.dirty;
+        if changed {
             self.fill();
         }
-        Ok(uploads)
+        Ok((uploads, changed))
     }
 
     /// After a frame: `marks` holds the shaders' mark per entry. Keeps what was used, queues what
