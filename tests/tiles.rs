@@ -348,10 +348,10 @@ fn damage(tile: &Path) {
     std::fs::write(tile, bytes).unwrap();
 }
 
-/// The bundled Jacksboro scene at 128², reading `sketch` (a path), with `extra` appended.
-fn jacksboro_scene(sketch: &Path, extra: &str) -> terrain::scene::Scene {
-    let dir = common::manifest_dir().join("sketches");
-    let text = std::fs::read_to_string(dir.join("jacksboro.toml"))
+/// The bundled Jacksboro scene's text at 128², reading `sketch` (an absolute path), with `extra`
+/// appended.
+fn jacksboro_text(sketch: &Path, extra: &str) -> String {
+    let text = std::fs::read_to_string(common::manifest_dir().join("sketches/jacksboro.toml"))
         .unwrap()
         .replace(
             "path = \"jacksboro_fault_dem.asc\"",
@@ -359,7 +359,13 @@ fn jacksboro_scene(sketch: &Path, extra: &str) -> terrain::scene::Scene {
         )
         .replace("width = 512", "width = 128")
         .replace("height = 512", "height = 128");
-    common::scene(&format!("{text}\n{extra}\n"), dir)
+    format!("{text}\n{extra}\n")
+}
+
+/// The bundled Jacksboro scene at 128², reading `sketch` (a path), with `extra` appended.
+fn jacksboro_scene(sketch: &Path, extra: &str) -> terrain::scene::Scene {
+    let dir = common::manifest_dir().join("sketches");
+    common::scene(&jacksboro_text(sketch, extra), dir)
 }
 
 #[test]
@@ -519,14 +525,8 @@ fn a_streamed_snapshot_settles_on_the_whole_sketchs_image_and_a_damaged_tile_fai
 #[test]
 fn fly_settle_waits_for_every_frames_tiles_and_without_it_the_first_frame_stands_in() {
     let (dir, _, pyr) = jacksboro_pyramid("tiles-fly-settle");
-    let text = std::fs::read_to_string(common::manifest_dir().join("sketches/jacksboro.toml"))
-        .unwrap()
-        .replace(
-            "path = \"jacksboro_fault_dem.asc\"",
-            &format!("path = {:?}", pyr.display().to_string()),
-        );
     let scene = dir.join("scene.toml");
-    std::fs::write(&scene, format!("{text}\n[stream]\ngpu_mb = 4\n")).unwrap();
+    std::fs::write(&scene, jacksboro_text(&pyr, "[stream]\ngpu_mb = 4")).unwrap();
     let stand_in = |settle: bool| -> Vec<String> {
         let out = dir.join(if settle { "settled" } else { "free" });
         let mut args = vec![
@@ -571,14 +571,8 @@ fn compare_over_a_pyramid_sweeps_warped_and_refuses_the_baselines_before_any_wor
         "",
     );
     assert_eq!(terrain::eval::compare::default_modes(&whole).len(), 3);
-    let text = std::fs::read_to_string(common::manifest_dir().join("sketches/jacksboro.toml"))
-        .unwrap()
-        .replace(
-            "path = \"jacksboro_fault_dem.asc\"",
-            &format!("path = {:?}", pyr.display().to_string()),
-        );
     let file = dir.join("scene.toml");
-    std::fs::write(&file, text).unwrap();
+    std::fs::write(&file, jacksboro_text(&pyr, "")).unwrap();
     let out = dir.join("cmp");
     let (code, _, stderr) = terrain(&[
         "compare",
