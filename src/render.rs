@@ -128,7 +128,8 @@ impl Renderer {
         let frame = uniform_buffer(&alloc);
         let sketch = match &atlas.pyramid {
             Some(pyramid) => {
-                if !matches!(mode, Mode::Warped | Mode::Reference) {
+                // Planets refuse a pyramid when their sketch loads.
+                if mode.bakes_whole_sketch() {
                     return Err(crate::Error::value(
                         "render.mode",
                         format!(

@@ -95,8 +95,8 @@ fn mark(index: u32, m: u32) {
 // level r. The ancestor of tile t is t >> (r − l), clamped to level r's tiles; its page holds
 // every node a bicubic sample on level r reads there (the two-node border covers the half-texel
 // shift between levels). With `want`, the entry is marked missing when it stands in; the tile
-// read is marked used. No loop: an earlier version walked up the levels, and llvmpipe's compiler spent
-// minutes on the unrolled walks of a fragment shader.
+// read is marked used. No loop: an earlier version walked up the levels, and llvmpipe's
+// compiler spent minutes on the unrolled walks of a fragment shader.
 struct Lookup {
     level: u32,
     page_fade: u32,

@@ -72,8 +72,6 @@ pub struct Stream {
     table_first: u32,
     tile: u32,
     border: u32,
-    /// Floats per page: a tile with its border.
-    page_floats: u64,
 }
 
 impl Stream {
@@ -147,7 +145,6 @@ impl Stream {
             table_first: table_first as u32,
             tile: pyramid.meta.tile as u32,
             border: pyramid.meta.border as u32,
-            page_floats: side * side,
         })
     }
 
@@ -182,7 +179,7 @@ impl Stream {
         for u in &uploads {
             ctx.queue.write_buffer(
                 &self.atlas,
-                u.page as u64 * self.page_floats * 4,
+                u.page as u64 * self.page_floats() * 4,
                 bytemuck::cast_slice(&u.heights),
             );
         }
@@ -210,6 +207,12 @@ impl Stream {
             bytemuck::cast_slice(b).to_vec()
         })?;
         Ok(self.cache.end_frame(&marks))
+    }
+
+    /// Floats per page: a tile with its border.
+    fn page_floats(&self) -> u64 {
+        let side = (self.tile + 2 * self.border) as u64;
+        side * side
     }
 
     /// Snapshots settle: see [`TileCache::settle`].

@@ -465,19 +465,31 @@ impl Level {
 
     /// Bilinear sample at this level's texel coordinates, clamped to the edge.
     pub fn bilinear(&self, u: f64, v: f64) -> f32 {
-        let u = u.clamp(0.0, (self.width - 1) as f64);
-        let v = v.clamp(0.0, (self.height - 1) as f64);
-        let i = (u.floor() as usize).min(self.width - 2);
-        let j = (v.floor() as usize).min(self.height - 2);
-        let fu = (u - i as f64) as f32;
-        let fv = (v - j as f64) as f32;
+        let ((i, j), f) = bilinear_cell(u, v, self.width, self.height);
         let w = self.width;
         let r0 = &self.data[j * w + i..j * w + i + 2];
         let r1 = &self.data[(j + 1) * w + i..(j + 1) * w + i + 2];
-        let a = r0[0] + (r0[1] - r0[0]) * fu;
-        let b = r1[0] + (r1[1] - r1[0]) * fu;
-        a + (b - a) * fv
+        bilinear_blend([[r0[0], r0[1]], [r1[0], r1[1]]], f)
     }
+}
+
+/// The cell of a `width` × `height` grid (at least 2 × 2) a bilinear sample at (u, v) reads,
+/// clamped to the edge: its south-west node and the fractions across it. With
+/// [`bilinear_blend`], the one rule of every bilinear read of heights on the CPU, in memory or
+/// from a pyramid's tiles (`tiles::Pyramid::bilinear`), so they agree bit for bit.
+pub fn bilinear_cell(u: f64, v: f64, width: usize, height: usize) -> ((usize, usize), [f32; 2]) {
+    let u = u.clamp(0.0, (width - 1) as f64);
+    let v = v.clamp(0.0, (height - 1) as f64);
+    let i = (u.floor() as usize).min(width - 2);
+    let j = (v.floor() as usize).min(height - 2);
+    ((i, j), [(u - i as f64) as f32, (v - j as f64) as f32])
+}
+
+/// A cell's corners `z[row][column]` (row 0 south) blended at fractions `f`.
+pub fn bilinear_blend(z: [[f32; 2]; 2], f: [f32; 2]) -> f32 {
+    let a = z[0][0] + (z[0][1] - z[0][0]) * f[0];
+    let b = z[1][0] + (z[1][1] - z[1][0]) * f[0];
+    a + (b - a) * f[1]
 }
 
 /// Applies `sketch.height_scale` and takes heights beyond ±[`MAX_HEIGHT_M`] as nodata (NaN); more

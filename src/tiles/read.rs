@@ -125,22 +125,18 @@ impl Pyramid {
     }
 
     /// Height at level `l`'s node coordinates (x, y), bilinear, clamped to the level: the nodes
-    /// come from the one tile holding (x, y) (its border holds the next node), and the arithmetic
-    /// is `Level::bilinear`'s, so it equals the level held in memory bit for bit.
+    /// come from the one tile holding (x, y) (its border holds the next node), and the rule is
+    /// `Level::bilinear`'s ([`crate::sketch::bilinear_cell`]), so it equals the level held in
+    /// memory bit for bit.
     pub fn bilinear(&self, l: usize, x: f64, y: f64) -> Result<f32> {
         let [w, h] = self.meta.levels[l];
         let (t, b, side) = (self.meta.tile, self.meta.border, self.side());
-        let x = x.clamp(0.0, (w - 1) as f64);
-        let y = y.clamp(0.0, (h - 1) as f64);
-        let i = (x.floor() as usize).min(w - 2);
-        let j = (y.floor() as usize).min(h - 2);
-        let (fu, fv) = ((x - i as f64) as f32, (y - j as f64) as f32);
+        let ((i, j), f) = crate::sketch::bilinear_cell(x, y, w, h);
         let (tx, ty) = (i / t, j / t);
         let heights = self.recent_tile(l, tx, ty)?;
         let at = |i: usize, j: usize| heights[(j - ty * t + b) * side + i - tx * t + b];
-        let a = at(i, j) + (at(i + 1, j) - at(i, j)) * fu;
-        let c = at(i, j + 1) + (at(i + 1, j + 1) - at(i, j + 1)) * fu;
-        Ok(a + (c - a) * fv)
+        let z = [[at(i, j), at(i + 1, j)], [at(i, j + 1), at(i + 1, j + 1)]];
+        Ok(crate::sketch::bilinear_blend(z, f))
     }
 
     /// Tile (tx, ty) of level `l` from the recent tiles, or read and kept there.
