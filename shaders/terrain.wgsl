@@ -2,12 +2,21 @@
 // split along (s,t)–(s+1,t+1)), shaded with the terrain function's normal at each pixel
 // (PIXEL_NORMALS, shared with the reference) or with the mesh's normals plus per-pixel bump
 // detail from the split octave up to the pixel's own octave (BUMP); procedural surface types, sun
-// and sky light and aerial perspective.
+// and sky light and aerial perspective. GEOMIPMAP draws a baked grid's blocks instead; with
+// GRID_STREAMED (a tile pyramid) there is no baked grid, and each vertex reads the sketch.
 // Also the sky, drawn first as one full-screen triangle.
 
 #import frame
 @group(0) @binding(0) var<uniform> frame: Frame;
+#ifdef GRID_STREAMED
+#ifdef GEOMIPMAP
+// GeoMipMap over a streamed sketch: no baked grid, no vertex normals (see grid_vertex).
+#else
 @group(0) @binding(3) var<storage, read> detailed: array<vec4<f32>>;
+#endif
+#else
+@group(0) @binding(3) var<storage, read> detailed: array<vec4<f32>>;
+#endif
 #ifdef PIXEL_NORMALS
 // Shading reads the terrain function's normal per pixel: no vertex normals are bound.
 fn vertex_normal(i: u32) -> vec3<f32> {
@@ -102,6 +111,40 @@ fn grid_index(g: vec2<u32>) -> u32 {
     return g.y * frame.mesh.mesh + g.x;
 }
 
+#ifdef GRID_STREAMED
+// Grid vertex `g` (x, y from the grid's origin, z, split octave) evaluated where it is drawn, as
+// warp_zoom.wgsl bakes it with Φ the identity: a grid over a tile pyramid is the sketch's own
+// nodes (k = 0) with no octaves in it (baseline.rs refuses the rest), so the vertex is the
+// sketch's height there, read through the tile cache, which the read marks.
+fn grid_vertex(g: vec2<u32>) -> vec4<f32> {
+    let d = frame.atlas.d_atlas;
+    let p = vec2<f32>(min(g, vec2<u32>(frame.mesh.mesh - 1u))) * d;
+    let z = atlas_height(p + frame.mesh.mesh_offset, d);
+    return vec4<f32>(p, max(z, frame.atlas.water_m), -frame.detail.bias);
+}
+
+// The normals pass's central differences at grid vertex `g`.
+fn grid_normal(g: vec2<u32>) -> vec3<f32> {
+    let hi = vec2<u32>(frame.mesh.mesh - 1u);
+    let ds = grid_vertex(min(g + vec2<u32>(1u, 0u), hi)).xyz - grid_vertex(g - min(vec2<u32>(1u, 0u), g)).xyz;
+    let dt = grid_vertex(min(g + vec2<u32>(0u, 1u), hi)).xyz - grid_vertex(g - min(vec2<u32>(0u, 1u), g)).xyz;
+    let c = cross(ds, dt);
+    let len = length(c);
+    if (len > 0.0) {
+        return c / len;
+    }
+    return vec3<f32>(0.0, 0.0, 1.0);
+}
+#else
+fn grid_vertex(g: vec2<u32>) -> vec4<f32> {
+    return detailed[grid_index(g)];
+}
+
+fn grid_normal(g: vec2<u32>) -> vec3<f32> {
+    return vertex_normal(grid_index(g));
+}
+#endif
+
 // The normal of the surface a block of grid step `s` draws at vertex `g`: central differences
 // over the vertices `s` steps away (clamped at the grid's edge). The baked grid's own normal at
 // `g` is the finest level's; a coarse block that took it would point-sample a normal field far
@@ -109,16 +152,16 @@ fn grid_index(g: vec2<u32>) -> u32 {
 fn level_normal(g: vec2<u32>, s: u32) -> vec3<f32> {
 #ifdef PIXEL_NORMALS
     // Shading takes the terrain function's normal per pixel; the mesh's is not read.
-    return vertex_normal(0u);
+    return vec3<f32>(0.0, 0.0, 1.0);
 #else
     if (s == 1u) {
-        return vertex_normal(grid_index(g));
+        return grid_normal(g);
     }
     let hi = vec2<u32>(frame.mesh.mesh - 1u);
-    let east = detailed[grid_index(min(g + vec2<u32>(s, 0u), hi))].xyz;
-    let west = detailed[grid_index(g - min(vec2<u32>(s, 0u), g))].xyz;
-    let north = detailed[grid_index(min(g + vec2<u32>(0u, s), hi))].xyz;
-    let south = detailed[grid_index(g - min(vec2<u32>(0u, s), g))].xyz;
+    let east = grid_vertex(min(g + vec2<u32>(s, 0u), hi)).xyz;
+    let west = grid_vertex(g - min(vec2<u32>(s, 0u), g)).xyz;
+    let north = grid_vertex(min(g + vec2<u32>(0u, s), hi)).xyz;
+    let south = grid_vertex(g - min(vec2<u32>(0u, s), g)).xyz;
     return normalize(cross(east - west, north - south));
 #endif
 }
@@ -134,7 +177,7 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     let local = vi & ((1u << frame.blocks.index_bits) - 1u);
     let l2 = vec2<u32>(local % (cells + 1u), local / (cells + 1u));
     let g = b.origin + l2;
-    var p = detailed[grid_index(g)];
+    var p = grid_vertex(g);
     var level = b.level;
     var start = b.morph.x;
     var end = b.morph.y;
@@ -151,8 +194,8 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
     var morph = 0.0;
     if (level + 1u < frame.blocks.levels && (g.x % s2 != 0u || g.y % s2 != 0u)) {
         let d = vec2<u32>(select(0u, s, g.x % s2 != 0u), select(0u, s, g.y % s2 != 0u));
-        let a = detailed[grid_index(g - d)];
-        let c = detailed[grid_index(g + d)];
+        let a = grid_vertex(g - d);
+        let c = grid_vertex(g + d);
         // Inside: the block's factor (continuous when it changes level); on an edge: the
         // vertex's own distance over the edge's shared range (both blocks compute the same).
         var m = b.morph.z;

@@ -411,11 +411,105 @@ fn a_streamed_pyramid_renders_as_the_sketch_in_memory_once_its_tiles_are_residen
             "{mode}: {db:.1} dB against the sketch in memory"
         );
     }
-    // The baselines bake the whole sketch: refused in one line, naming the mode.
-    let e = Renderer::new(&streamed, Mode::Geomipmap, View::Shaded)
-        .err()
-        .expect("geomipmap on a pyramid is refused");
-    assert!(e.to_string().contains("render.mode"), "{e}");
+    // Brute force bakes the whole sketch: refused in one line, naming the mode. GeoMipMap
+    // streams, on square cells only, and Jacksboro's are 0.0008333° by 0.0008333°.
+    for (mode, why) in [
+        (Mode::Bruteforce, "bakes the whole sketch"),
+        (Mode::Geomipmap, "square cells"),
+    ] {
+        let e = Renderer::new(&streamed, mode, View::Shaded)
+            .err()
+            .unwrap_or_else(|| panic!("{mode} on this pyramid is refused"));
+        let e = e.to_string();
+        assert!(e.contains("render.mode") && e.contains(why), "{e}");
+    }
+}
+
+/// The bundled Jacksboro heights in `dir` as a sketch of square 30 m cells (its own are degrees,
+/// and GeoMipMap over a pyramid needs square ones).
+fn jacksboro_in_metres(dir: &Path) -> PathBuf {
+    let text =
+        std::fs::read_to_string(common::manifest_dir().join("sketches/jacksboro_fault_dem.asc"))
+            .unwrap();
+    let body: Vec<String> = text
+        .lines()
+        .map(|l| match l.split_whitespace().next() {
+            Some("xllcorner") => "xllcorner 0".into(),
+            Some("yllcorner") => "yllcorner 0".into(),
+            Some("cellsize") => "cellsize 30".into(),
+            _ => l.to_string(),
+        })
+        .collect();
+    let path = dir.join("jacksboro_30m.asc");
+    std::fs::write(&path, body.join("\n")).unwrap();
+    path
+}
+
+#[test]
+fn streamed_geomipmap_measures_the_baked_grids_blocks_and_renders_as_it_once_resident() {
+    use terrain::gpu::uniforms::View;
+    use terrain::lod::baseline::Baselines;
+    use terrain::render::Renderer;
+    use terrain::scene::Mode;
+    let dir = scratch("tiles-geomipmap");
+    let asc = jacksboro_in_metres(&dir);
+    let pyr = dir.join("pyr");
+    convert(&asc, &pyr);
+    // k = 0: over a pyramid the grid is the sketch's own nodes; the sketch in memory bakes the
+    // same grid. 4 MiB of pages: the first frame stands in.
+    let streamed = jacksboro_scene(&pyr, "[geomipmap]\nk = 0\n[stream]\ngpu_mb = 4");
+    let whole = jacksboro_scene(&asc, "[geomipmap]\nk = 0");
+    let mut m = Renderer::new(&whole, Mode::Geomipmap, View::Shaded).unwrap();
+    let camera = terrain::scene::camera_of(&whole, &m.atlas).unwrap();
+    let expected = m.render(&camera).unwrap();
+    let mut s = Renderer::new(&streamed, Mode::Geomipmap, View::Shaded).unwrap();
+
+    // δ and height ranges measured on the tiles are the baked grid's.
+    let (a, b) = (
+        &m.lod::<Baselines>().unwrap().blocks,
+        &s.lod::<Baselines>().unwrap().blocks,
+    );
+    assert_eq!((a.per_side, a.levels), (b.per_side, b.levels));
+    // The bake samples the sketch bicubically at f32 texel coordinates a few 1e-5 texels off the
+    // nodes: millimetres on Jacksboro's slopes.
+    let close = |x: f32, y: f32| (x - y).abs() <= 1e-2 + 1e-4 * x.abs().max(y.abs());
+    for k in 0..a.per_side * a.per_side {
+        for l in 0..a.levels {
+            assert!(
+                close(a.delta[k][l], b.delta[k][l]),
+                "block {k} δ_{l}: {} vs {}",
+                a.delta[k][l],
+                b.delta[k][l]
+            );
+        }
+        let (ra, rb) = (a.z_range[k], b.z_range[k]);
+        assert!(
+            close(ra.0, rb.0) && close(ra.1, rb.1),
+            "block {k}: {ra:?} vs {rb:?}"
+        );
+    }
+    assert!(a.delta.iter().any(|d| d[1] > 1.0), "a relief to measure");
+    // Kept beside the tiles, and read back by the next renderer.
+    let kept = pyr.join(format!("geomipmap-{}.bin", a.cells + 1));
+    assert!(kept.exists());
+    let again = Renderer::new(&streamed, Mode::Geomipmap, View::Shaded).unwrap();
+    assert_eq!(again.lod::<Baselines>().unwrap().blocks.delta, b.delta);
+    drop(again);
+
+    let first = s.render(&camera).unwrap();
+    let stats = first.stream.expect("a pyramid streams");
+    assert!(stats.stand_in && stats.missing > 0, "{stats:?}");
+    let first_db = psnr(&first.rgba, &expected.rgba);
+    let last = s.render_settled(&camera).unwrap();
+    assert!(!last.stream.unwrap().stand_in);
+    assert_eq!(
+        last.gpu.triangles, expected.gpu.triangles,
+        "the same blocks at the same levels"
+    );
+    let db = psnr(&last.rgba, &expected.rgba);
+    eprintln!("geomipmap: first frame {first_db:.1} dB, resident {db:.1} dB");
+    assert!(first_db < 50.0, "the stand-in frame should differ");
+    assert!(db >= 50.0, "{db:.1} dB against the sketch in memory");
 }
 
 #[test]
@@ -558,13 +652,13 @@ fn fly_settle_waits_for_every_frames_tiles_and_without_it_the_first_frame_stands
 }
 
 #[test]
-fn compare_over_a_pyramid_sweeps_warped_and_refuses_the_baselines_before_any_work() {
+fn compare_over_a_pyramid_sweeps_warped_and_geomipmap_and_refuses_brute_force_before_any_work() {
     use terrain::scene::Mode;
     let (dir, _, pyr) = jacksboro_pyramid("tiles-compare");
     let scene = jacksboro_scene(&pyr, "");
     assert_eq!(
         terrain::eval::compare::default_modes(&scene),
-        [Mode::Warped]
+        [Mode::Warped, Mode::Geomipmap]
     );
     let whole = jacksboro_scene(
         &common::manifest_dir().join("sketches/jacksboro_fault_dem.asc"),
@@ -580,11 +674,11 @@ fn compare_over_a_pyramid_sweeps_warped_and_refuses_the_baselines_before_any_wor
         "--out-dir",
         out.to_str().unwrap(),
         "--modes",
-        "warped,geomipmap",
+        "warped,bruteforce",
     ]);
     assert_eq!(code, 1);
     assert!(
-        stderr.contains("--modes") && stderr.contains("geomipmap") && stderr.lines().count() == 1,
+        stderr.contains("--modes") && stderr.contains("bruteforce") && stderr.lines().count() == 1,
         "{stderr}"
     );
     assert!(!out.join("report.csv").exists(), "refused before any work");

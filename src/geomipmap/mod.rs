@@ -77,22 +77,61 @@ impl Grid {
     }
     /// Height of the level-`l` surface at vertex (i, j) (not morphed).
     pub fn level_height(&self, i: usize, j: usize, l: usize) -> f32 {
-        let s = 1 << l;
-        let (ci, cj) = ((i / s) * s, (j / s) * s);
-        let (fx, fy) = ((i - ci) as f32 / s as f32, (j - cj) as f32 / s as f32);
-        if fx == 0.0 && fy == 0.0 {
-            return self.z(i, j);
-        }
-        let (i1, j1) = ((ci + s).min(self.n - 1), (cj + s).min(self.n - 1));
-        let (z00, z11) = (self.z(ci, cj), self.z(i1, j1));
-        if fx >= fy {
-            let z10 = self.z(i1, cj);
-            z00 + fx * (z10 - z00) + fy * (z11 - z10)
-        } else {
-            let z01 = self.z(ci, j1);
-            z00 + fy * (z01 - z00) + fx * (z11 - z01)
+        level_height(|i, j| self.z(i, j), self.n - 1, i, j, l)
+    }
+}
+
+/// Height of the level-`l` surface at vertex (i, j) of a grid whose last vertex is `last` and
+/// whose heights `z` gives: the level's cells split along (i, j)–(i+s, j+s), as drawn.
+pub fn level_height(
+    z: impl Fn(usize, usize) -> f32,
+    last: usize,
+    i: usize,
+    j: usize,
+    l: usize,
+) -> f32 {
+    let s = 1 << l;
+    let (ci, cj) = ((i / s) * s, (j / s) * s);
+    let (fx, fy) = ((i - ci) as f32 / s as f32, (j - cj) as f32 / s as f32);
+    if fx == 0.0 && fy == 0.0 {
+        return z(i, j);
+    }
+    let (i1, j1) = ((ci + s).min(last), (cj + s).min(last));
+    let (z00, z11) = (z(ci, cj), z(i1, j1));
+    if fx >= fy {
+        let z10 = z(i1, cj);
+        z00 + fx * (z10 - z00) + fy * (z11 - z10)
+    } else {
+        let z01 = z(ci, j1);
+        z00 + fy * (z01 - z00) + fx * (z11 - z01)
+    }
+}
+
+/// δ per level and the height range of one block of `cells` cells and `levels` levels, from its
+/// vertices' heights `z(i, j)`, (i, j) in 0..=cells (level cells never cross a block's edge:
+/// blocks start at multiples of `cells`, a multiple of every level's step).
+pub fn block_stats(
+    cells: usize,
+    levels: usize,
+    z: impl Fn(usize, usize) -> f32,
+) -> ([f32; MAX_LEVELS], (f32, f32)) {
+    let mut delta = [0.0f32; MAX_LEVELS];
+    let mut range = (f32::INFINITY, f32::NEG_INFINITY);
+    for j in 0..=cells {
+        for i in 0..=cells {
+            let h = z(i, j);
+            range = (range.0.min(h), range.1.max(h));
+            for (l, d) in delta.iter_mut().enumerate().take(levels).skip(1) {
+                *d = d.max((h - level_height(&z, cells, i, j, l)).abs());
+            }
         }
     }
+    // At least double per level (an over-estimate, so τ still holds): each level then spans a
+    // distance range at least as long as the one before, room to morph in.
+    for l in 2..levels {
+        delta[l] = delta[l].max(2.0 * delta[l - 1]);
+    }
+    (delta, range)
 }
 
 /// Per block: δ per level and the box of its vertices.
@@ -113,28 +152,25 @@ impl Blocks {
     pub fn new(grid: &Grid) -> Blocks {
         let b = grid.blocks_per_side();
         let (c, levels) = (grid.cells, grid.levels());
-        let mut delta = vec![[0.0f32; MAX_LEVELS]; b * b];
-        let mut z_range = vec![(f32::INFINITY, f32::NEG_INFINITY); b * b];
-        for by in 0..b {
-            for bx in 0..b {
-                let k = by * b + bx;
-                for j in by * c..=by * c + c {
-                    for i in bx * c..=bx * c + c {
-                        let z = grid.z(i, j);
-                        z_range[k].0 = z_range[k].0.min(z);
-                        z_range[k].1 = z_range[k].1.max(z);
-                        for (l, d) in delta[k].iter_mut().enumerate().take(levels).skip(1) {
-                            *d = d.max((z - grid.level_height(i, j, l)).abs());
-                        }
-                    }
-                }
-                // At least double per level (an over-estimate, so τ still holds): each level then
-                // spans a distance range at least as long as the one before, room to morph in.
-                for l in 2..levels {
-                    delta[k][l] = delta[k][l].max(2.0 * delta[k][l - 1]);
-                }
-            }
-        }
+        let (delta, z_range) = (0..b * b)
+            .map(|k| {
+                let (x0, y0) = ((k % b) * c, (k / b) * c);
+                block_stats(c, levels, |i, j| grid.z(x0 + i, y0 + j))
+            })
+            .unzip();
+        Blocks::from_stats(b, c, grid.spacing, delta, z_range)
+    }
+
+    /// Blocks of `cells` cells, `per_side` a side, from each block's δ and height range
+    /// ([`block_stats`]), row by row: builds the culling quadtree.
+    pub fn from_stats(
+        per_side: usize,
+        cells: usize,
+        spacing: f64,
+        delta: Vec<[f32; MAX_LEVELS]>,
+        z_range: Vec<(f32, f32)>,
+    ) -> Blocks {
+        let (b, c, levels) = (per_side, cells, cells.trailing_zeros() as usize + 1);
         let mut tree = vec![z_range.clone()];
         let mut side = b;
         while side > 1 {
@@ -155,7 +191,7 @@ impl Blocks {
             per_side: b,
             cells: c,
             levels,
-            spacing: grid.spacing,
+            spacing,
             delta,
             z_range,
             tree,

@@ -52,11 +52,14 @@ impl GpuContext {
         let lavapipe =
             info.backend == wgpu::Backend::Vulkan && info.device_type == wgpu::DeviceType::Cpu;
         let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY) && !lavapipe;
-        let required_features = if timestamps {
+        let mut required_features = if timestamps {
             wgpu::Features::TIMESTAMP_QUERY
         } else {
             wgpu::Features::empty()
         };
+        // GeoMipMap over a tile pyramid reads the sketch in its vertex shader, which marks the
+        // tiles it reads; where the adapter cannot, that mode says so and the others do not care.
+        required_features |= adapter.features() & wgpu::Features::VERTEX_WRITABLE_STORAGE;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("terrain"),
             required_features,

@@ -34,7 +34,7 @@ pub const PASSES: [(&str, &str); 7] = [
 ];
 
 /// Every flag any pass tests, for validating all variants.
-pub const FLAGS: [&str; 11] = [
+pub const FLAGS: [&str; 12] = [
     "DETAIL",
     "BUMP",
     "NOISE",
@@ -46,6 +46,7 @@ pub const FLAGS: [&str; 11] = [
     "DETAIL_SHADOWS",
     "SUPERSAMPLE",
     "STREAMED",
+    "GRID_STREAMED",
 ];
 
 /// The combined source of pass `name` with `flags` set.

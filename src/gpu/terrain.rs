@@ -49,6 +49,9 @@ pub enum Shading {
     /// The terrain function's normal at each pixel, sampled from the atlas (as the reference
     /// shades); no vertex normals are bound or computed.
     PixelNormals,
+    /// A streamed GeoMipMap grid's normals, from its vertices evaluated in the vertex shader (the
+    /// normals pass's central differences), plus bump detail with `bump`.
+    GridNormals,
 }
 
 /// Which variant of the shaders to build.
@@ -81,19 +84,29 @@ impl TerrainPass {
     pub const NAME: &'static str = "terrain";
 
     #[allow(clippy::too_many_arguments)]
+    /// `detailed`: the geometry image; `None` for GeoMipMap over a streamed sketch, whose grid
+    /// vertices the vertex shader evaluates from the atlas (GRID_STREAMED).
     pub fn new(
         device: &Alloc,
         frame: &wgpu::Buffer,
-        detailed: &wgpu::Buffer,
+        detailed: Option<&wgpu::Buffer>,
         mesh: u32,
         width: u32,
         height: u32,
         variant: &Variant,
     ) -> Result<TerrainPass> {
         let mut entries = vec![entry(0, S::VERTEX_FRAGMENT, uniform())];
-        entries.extend(variant.atlas.entries(S::FRAGMENT));
-        entries.push(entry(3, S::VERTEX, storage(true)));
         let mut flags = Vec::new();
+        match detailed {
+            Some(_) => {
+                entries.extend(variant.atlas.entries(S::FRAGMENT));
+                entries.push(entry(3, S::VERTEX, storage(true)));
+            }
+            None => {
+                entries.extend(variant.atlas.entries(S::VERTEX_FRAGMENT));
+                flags.push("GRID_STREAMED");
+            }
+        }
         variant.atlas.flag(&mut flags);
         if variant.noise {
             flags.push("NOISE");
@@ -106,6 +119,11 @@ impl TerrainPass {
                 }
             }
             Shading::PixelNormals => flags.push("PIXEL_NORMALS"),
+            Shading::GridNormals => {
+                if variant.bump {
+                    flags.push("BUMP");
+                }
+            }
         }
         if variant.shadows {
             flags.push("SHADOWS");
@@ -177,7 +195,9 @@ impl TerrainPass {
 
         let mut bind_entries = vec![bind(0, frame)];
         bind_entries.extend(variant.atlas.binds());
-        bind_entries.push(bind(3, detailed));
+        if let Some(detailed) = detailed {
+            bind_entries.push(bind(3, detailed));
+        }
         if let Shading::MeshNormals(normals) = &variant.shading {
             bind_entries.push(bind(4, normals));
         }

@@ -35,7 +35,6 @@ pub fn default_k(atlas: &Atlas) -> u32 {
 }
 
 pub struct Bake {
-    pub grid: Grid,
     pub detailed: Buffer,
     /// The grid's normals, unless the terrain is lit per pixel.
     pub normals: Option<Buffer>,
@@ -49,15 +48,28 @@ impl Bake {
     }
 }
 
-/// Bakes the terrain function over the square enclosing the atlas at spacing d_atlas / 2^k, in
-/// blocks of `cells` cells a side; its normals too unless the scene lights the terrain per pixel.
-pub fn bake(s: &Shared, k: u32, cells: usize) -> Result<Bake> {
-    let (ctx, device, atlas, detail) = (s.ctx, &s.alloc, s.atlas, s.detail);
-    let start = Instant::now();
+/// The grid over the square enclosing the atlas at spacing d_atlas / 2^k, in blocks of `cells`
+/// cells a side, its heights not yet baked.
+pub fn grid_of(atlas: &Atlas, k: u32, cells: usize) -> Grid {
     let spacing = atlas.d_atlas() / (1u32 << k) as f64;
     let side = (atlas.max_corner() - atlas.origin).max_element();
     let blocks = ((side / (cells as f64 * spacing)).ceil() as usize).max(1);
-    let n = cells * blocks + 1;
+    Grid {
+        n: cells * blocks + 1,
+        cells,
+        spacing,
+        origin: atlas.origin,
+        heights: Vec::new(),
+    }
+}
+
+/// Bakes the terrain function over [`grid_of`]'s grid; its normals too unless the scene lights
+/// the terrain per pixel.
+pub fn bake(s: &Shared, k: u32, cells: usize) -> Result<(Grid, Bake)> {
+    let (ctx, device, atlas, detail) = (s.ctx, &s.alloc, s.atlas, s.detail);
+    let start = Instant::now();
+    let mut grid = grid_of(atlas, k, cells);
+    let (n, spacing) = (grid.n, grid.spacing);
     let bytes = (n * n) as u64 * 16;
     if bytes > ctx.limits.max_storage_buffer_binding_size {
         let advice = if k > 0 {
@@ -113,26 +125,23 @@ pub fn bake(s: &Shared, k: u32, cells: usize) -> Result<Bake> {
     }
     ctx.queue.submit([encoder.finish()]);
     let detailed = warp_zoom.into_detailed();
-    let heights = read_vec4(ctx, &detailed)?.iter().map(|v| v[2]).collect();
-    let grid = Grid {
-        n,
-        cells,
-        spacing,
-        origin: atlas.origin,
-        heights,
-    };
-    Ok(Bake {
-        grid,
+    grid.heights = read_vec4(ctx, &detailed)?.iter().map(|v| v[2]).collect();
+    let bake = Bake {
         detailed,
         normals: normals.map(NormalsPass::into_normals),
         ms: start.elapsed().as_secs_f64() * 1e3,
-    })
+    };
+    Ok((grid, bake))
 }
 
-/// GeoMipMap or brute force (`kind`) over one baked grid.
+/// GeoMipMap or brute force (`kind`) over one baked grid, or GeoMipMap over a streamed sketch.
 pub struct Baselines {
     pub kind: Mode,
-    pub bake: Bake,
+    /// The grid the blocks divide (its heights empty when streamed).
+    pub grid: Grid,
+    /// The baked grid on the GPU; `None` over a tile pyramid, whose grid vertices the terrain
+    /// pass evaluates where it draws them.
+    pub bake: Option<Bake>,
     pub blocks: Blocks,
     pub templates: Templates,
     pub selection: Selection,
@@ -140,10 +149,78 @@ pub struct Baselines {
     pub params: LodParams,
     indices: Vec<u32>,
     block_buffer: Buffer,
+    /// Blocks the block buffer holds, and indices the index buffer holds.
+    capacity: (usize, usize),
+    /// Visible blocks left out of the last frame because the buffers could not hold them.
+    pub dropped: usize,
+    /// Whether stderr has said so (once per renderer).
+    noted: bool,
     terrain: TerrainPass,
     readback: ColourReadback,
     /// Precomputation (bake, δ, quadtree), milliseconds.
     pub precompute_ms: f64,
+}
+
+/// The most blocks a streamed GeoMipMap frame draws (80 bytes each on the GPU, 40 MiB). The
+/// README's view of the 32,768² pyramid sees 472,057 blocks of 33² vertices to its far plane, at
+/// 1.9 M triangles; beyond these the farthest blocks are left out, with a note.
+const STREAMED_BLOCKS: usize = 1 << 19;
+/// The most indices a streamed GeoMipMap frame draws (4 bytes each, 32 MiB).
+const STREAMED_INDICES: usize = 1 << 23;
+
+/// The grid and its blocks over a tile pyramid: the sketch's own nodes (k = 0), δ and height
+/// ranges measured on its tiles ([`crate::tiles::blocks`]). What the bake would put in the grid
+/// beyond the sketch (octaves, with k > 0 or a negative bias) is refused, since δ would not see it.
+fn streamed_grid(
+    s: &Shared,
+    pyramid: &crate::tiles::Pyramid,
+    cells: usize,
+) -> Result<(Grid, Blocks)> {
+    let (scene, atlas) = (s.scene, s.atlas);
+    if scene.geomipmap.k.is_some_and(|k| k > 0) {
+        return Err(Error::value(
+            "geomipmap.k",
+            "over a tile pyramid GeoMipMap's grid is the sketch's own nodes: k = 0",
+        ));
+    }
+    if s.detail.octaves > 0 && scene.detail.bias < 0.0 {
+        return Err(Error::value(
+            "detail.bias",
+            "a negative bias puts octaves into GeoMipMap's grid, whose δ over a tile pyramid is \
+             measured on the sketch alone: use a bias of 0 or more",
+        ));
+    }
+    if atlas.dx != atlas.dy {
+        return Err(Error::value(
+            "render.mode",
+            format!(
+                "GeoMipMap over a tile pyramid needs square cells, and {} has {} × {} m",
+                pyramid.dir.display(),
+                atlas.dx,
+                atlas.dy
+            ),
+        ));
+    }
+    if !s
+        .ctx
+        .device
+        .features()
+        .contains(wgpu::Features::VERTEX_WRITABLE_STORAGE)
+    {
+        return Err(Error::value(
+            "render.mode",
+            format!(
+                "GeoMipMap over a tile pyramid reads the sketch in the vertex shader, and {} \
+                 cannot write the tile marks from there: use warped mode",
+                s.ctx.adapter_name()
+            ),
+        ));
+    }
+    let grid = grid_of(atlas, 0, cells);
+    let per_side = grid.blocks_per_side();
+    let stats = crate::tiles::blocks::block_stats_of(pyramid, cells, per_side)?;
+    let blocks = Blocks::from_stats(per_side, cells, grid.spacing, stats.delta, stats.z_range);
+    Ok((grid, blocks))
 }
 
 impl Baselines {
@@ -152,16 +229,31 @@ impl Baselines {
         let start = Instant::now();
         let (scene, detail) = (s.scene, s.detail);
         let device = &s.alloc;
-        let k = scene.geomipmap.k.unwrap_or_else(|| default_k(s.atlas));
         let cells = scene.geomipmap.block as usize - 1;
-        let bake = bake(s, k, cells)?;
-        let blocks = Blocks::new(&bake.grid);
-        let templates = Templates::new(&bake.grid);
-        let per_side = blocks.per_side;
-        let capacity = (per_side * per_side * cells * cells * 6) as u64;
+        let (grid, blocks, bake) = match &s.atlas.pyramid {
+            Some(pyramid) => {
+                let (grid, blocks) = streamed_grid(s, pyramid, cells)?;
+                (grid, blocks, None)
+            }
+            None => {
+                let k = scene.geomipmap.k.unwrap_or_else(|| default_k(s.atlas));
+                let (grid, bake) = bake(s, k, cells)?;
+                let blocks = Blocks::new(&grid);
+                (grid, blocks, Some(bake))
+            }
+        };
+        let templates = Templates::new(&grid);
+        let all = blocks.per_side * blocks.per_side;
+        let capacity = match bake {
+            Some(_) => (all, all * cells * cells * 6),
+            None => (
+                all.min(STREAMED_BLOCKS),
+                (all * cells * cells * 6).min(STREAMED_INDICES),
+            ),
+        };
         let block_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("blocks"),
-            size: (per_side * per_side * std::mem::size_of::<BlockGpu>()) as u64,
+            size: (capacity.0 * std::mem::size_of::<BlockGpu>()) as u64,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -169,26 +261,27 @@ impl Baselines {
         let variant = Variant {
             noise,
             bump: noise && scene.detail.bump,
-            shading: match &bake.normals {
+            shading: match bake.as_ref().and_then(|b| b.normals.as_ref()) {
                 Some(normals) => Shading::MeshNormals(wgpu::Buffer::clone(normals)),
+                None if bake.is_none() && !scene.render.pixel_normals => Shading::GridNormals,
                 None => Shading::PixelNormals,
             },
             importance: None,
-            geomipmap: Some((wgpu::Buffer::clone(&block_buffer), capacity)),
+            geomipmap: Some((wgpu::Buffer::clone(&block_buffer), capacity.1 as u64)),
             positions: s.positions,
             atlas: s.atlas_binding.clone(),
             shadows: s.scene.render.shadows,
             detail_shadows: s.scene.render.detail_shadows,
             samples: s.samples,
         };
-        let n = bake.grid.n as u32;
+        let n = grid.n as u32;
         let (width, height) = (scene.camera.width, scene.camera.height);
-        let terrain =
-            TerrainPass::new(device, s.frame, &bake.detailed, n, width, height, &variant)?;
+        let detailed = bake.as_ref().map(|b| &*b.detailed);
+        let terrain = TerrainPass::new(device, s.frame, detailed, n, width, height, &variant)?;
         let readback = ColourReadback::new(device, width, height);
         let mut selection = Selection::default();
         if kind == Mode::Bruteforce {
-            selection.all_at(&bake.grid, &blocks, 0);
+            selection.all_at(&grid, &blocks, 0);
         }
         let g = &scene.geomipmap;
         Ok(Baselines {
@@ -200,15 +293,61 @@ impl Baselines {
                 reach_m: detail.reach_m(),
             },
             precompute_ms: start.elapsed().as_secs_f64() * 1e3,
+            grid,
             bake,
             blocks,
             templates,
             selection,
             indices: Vec::new(),
             block_buffer,
+            capacity,
+            dropped: 0,
+            noted: false,
             terrain,
             readback,
         })
+    }
+}
+
+impl Baselines {
+    /// Keeps the nearest blocks the buffers hold when the selection is larger (only a streamed
+    /// grid's buffers are smaller than its blocks), counting the rest in `dropped`.
+    fn fit(&mut self) {
+        let sel = &mut self.selection;
+        let (max_blocks, max_indices) = self.capacity;
+        let total: usize = sel.gpu.iter().map(|g| self.templates.count(g)).sum();
+        self.dropped = 0;
+        if sel.gpu.len() <= max_blocks && total <= max_indices {
+            return;
+        }
+        let mut order: Vec<usize> = (0..sel.gpu.len()).collect();
+        order.sort_by(|&a, &b| {
+            let d = |i: usize| sel.distance.get(sel.visible[i]).copied().unwrap_or(0.0);
+            d(a).total_cmp(&d(b))
+        });
+        let mut indices = 0;
+        let kept: Vec<usize> = order
+            .into_iter()
+            .take(max_blocks)
+            .take_while(|&i| {
+                indices += self.templates.count(&sel.gpu[i]);
+                indices <= max_indices
+            })
+            .collect();
+        if !self.noted {
+            self.noted = true;
+            eprintln!(
+                "note: GeoMipMap sees {} blocks; its buffers hold {} blocks and {} indices, so the \
+                 farthest {} are left out",
+                sel.gpu.len(),
+                max_blocks,
+                max_indices,
+                sel.gpu.len() - kept.len()
+            );
+        }
+        self.dropped = sel.gpu.len() - kept.len();
+        sel.gpu = kept.iter().map(|&i| sel.gpu[i]).collect();
+        sel.visible = kept.iter().map(|&i| sel.visible[i]).collect();
     }
 }
 
@@ -222,7 +361,7 @@ impl Lod for Baselines {
         let start = Instant::now();
         if self.kind == Mode::Geomipmap {
             self.selection
-                .select(&self.bake.grid, &self.blocks, camera, &self.params);
+                .select(&self.grid, &self.blocks, camera, &self.params);
         }
         CpuTimes {
             us: start.elapsed().as_secs_f64() * 1e6,
@@ -231,7 +370,7 @@ impl Lod for Baselines {
     }
 
     fn frame_inputs<'a>(&'a self, f: &mut FrameInputs<'a>) {
-        let g = &self.bake.grid;
+        let g = &self.grid;
         f.mesh_origin = Some(g.origin);
         f.mesh = g.n as u32;
         f.block = BlockUniforms {
@@ -249,6 +388,7 @@ impl Lod for Baselines {
         t: Option<&Timer>,
     ) -> &'static [&'static str] {
         let queue = &ctx.queue;
+        self.fit();
         self.templates
             .append(&self.selection.gpu, &mut self.indices);
         queue.write_buffer(
@@ -285,7 +425,10 @@ impl Lod for Baselines {
     }
 
     fn precompute(&self) -> Option<(f64, u64)> {
-        Some((self.precompute_ms, self.bake.bytes()))
+        Some((
+            self.precompute_ms,
+            self.bake.as_ref().map_or(0, Bake::bytes),
+        ))
     }
 
     fn as_any(&self) -> &dyn Any {

@@ -78,7 +78,7 @@ impl Warped {
         let terrain = TerrainPass::new(
             device,
             s.frame,
-            &warp_zoom.detailed,
+            Some(&warp_zoom.detailed),
             mesh,
             width,
             height,

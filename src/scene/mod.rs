@@ -397,10 +397,11 @@ impl Mode {
         Mode::Clipmaps,
     ];
 
-    /// GeoMipMap and brute force: they bake the whole sketch onto a grid once, so a streamed
-    /// sketch (a tile pyramid) cannot feed them.
+    /// Brute force: it draws every vertex of a grid baked whole, so a streamed sketch (a tile
+    /// pyramid) cannot feed it. (GeoMipMap over a pyramid reads its blocks' vertices through the
+    /// tile cache instead.)
     pub fn bakes_whole_sketch(self) -> bool {
-        matches!(self, Mode::Geomipmap | Mode::Bruteforce)
+        self == Mode::Bruteforce
     }
 }
 

@@ -24,6 +24,7 @@
 //! - Plain zstd on the f32 bytes: on the bundled Jacksboro DEM's 128² windows it compresses 2.64×,
 //!   the predicted byte planes 4.12× (`cargo test --release --lib tiles -- --nocapture`).
 
+pub mod blocks;
 pub mod build;
 pub mod cache;
 mod codec;

@@ -85,13 +85,13 @@ impl Default for Options {
     }
 }
 
-/// The modes `compare` runs on `scene` by default: the mesh modes on a sketch, warped alone on
-/// a tile pyramid (the baselines bake the whole sketch), clipmaps on a planet.
+/// The modes `compare` runs on `scene` by default: the mesh modes on a sketch, warped and
+/// GeoMipMap on a tile pyramid (brute force bakes the whole sketch), clipmaps on a planet.
 pub fn default_modes(scene: &Scene) -> Vec<Mode> {
     if scene.planet().is_some() {
         vec![Mode::Clipmaps]
     } else if streamed(scene) {
-        vec![Mode::Warped]
+        vec![Mode::Warped, Mode::Geomipmap]
     } else {
         vec![Mode::Warped, Mode::Geomipmap, Mode::Bruteforce]
     }
@@ -120,7 +120,7 @@ fn check_modes(scene: &Scene, modes: &[Mode]) -> Result<()> {
                 "--modes",
                 format!(
                     "{m} bakes the whole sketch, and this scene's is a tile pyramid, streamed: \
-                     compare warped"
+                     compare warped and geomipmap"
                 ),
             )),
             _ => Ok(()),

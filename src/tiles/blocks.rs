@@ -1,0 +1,195 @@
+//! GeoMipMap's per-block figures for a tile pyramid: each block's δ per level and height range,
+//! measured once on level 0's tiles and kept beside them, so a streamed GeoMipMap chooses levels
+//! for blocks whose heights were never in memory.
+//!
+//! Rules:
+//! - The grid is level 0's nodes (GeoMipMap's k = 0), vertex (i, j) the node
+//!   (min(i, W−1), min(j, H−1)): the baked grid's heights, whose bicubic sampling meets every node
+//!   and clamps past the edge. δ and the range follow [`crate::geomipmap::block_stats`], the rule
+//!   the baked grid's blocks use, so both paths choose the same levels.
+//! - A block lies inside one level-0 tile and its border (blocks start at multiples of their
+//!   cells, which divide the tile), so each tile is read once, on as many threads as the machine
+//!   has.
+//! - The figures are written to `geomipmap-<block>.bin` in the pyramid folder (atomically) and
+//!   read back on the next run while `pyramid.toml` is unchanged; a folder that cannot be
+//!   written costs the measurement on every run, with a note.
+//!
+//! Rejected: measuring δ in `terrain tiles` for every block size. The sizes a scene may ask for
+//! (17 to 129 vertices) would cost four passes for the one a user flies, and a pyramid made
+//! before GeoMipMap could stream would have none.
+
+use super::{META, Pyramid};
+use crate::app::progress::Progress;
+use crate::error::{Error, Result, Role};
+use crate::geomipmap::{MAX_LEVELS, block_stats};
+use std::hash::{Hash, Hasher};
+use std::path::PathBuf;
+
+/// δ per level and the height range of every block, row by row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlockStats {
+    pub per_side: usize,
+    pub cells: usize,
+    pub delta: Vec<[f32; MAX_LEVELS]>,
+    pub z_range: Vec<(f32, f32)>,
+}
+
+const MAGIC: &[u8; 8] = b"TGMMB\x001\n";
+
+/// The figures of `per_side`² blocks of `cells` cells over `pyramid`'s level 0: from the folder's
+/// file when it matches, else measured (with progress) and kept there.
+pub fn block_stats_of(pyramid: &Pyramid, cells: usize, per_side: usize) -> Result<BlockStats> {
+    let path = cache_path(pyramid, cells);
+    let key = meta_key(pyramid)?;
+    if let Some(stats) = std::fs::read(&path)
+        .ok()
+        .and_then(|b| decode(&b, key, cells, per_side))
+    {
+        return Ok(stats);
+    }
+    let stats = measure(pyramid, cells, per_side)?;
+    if let Err(e) = crate::app::output::write_atomic(&path, &encode(&stats, key)) {
+        eprintln!("note: GeoMipMap's block figures are measured again next run: {e}");
+    }
+    Ok(stats)
+}
+
+fn cache_path(pyramid: &Pyramid, cells: usize) -> PathBuf {
+    pyramid.dir.join(format!("geomipmap-{}.bin", cells + 1))
+}
+
+/// A hash of `pyramid.toml`: a pyramid converted again invalidates its figures.
+fn meta_key(pyramid: &Pyramid) -> Result<u64> {
+    let path = pyramid.dir.join(META);
+    let text = std::fs::read(&path).map_err(|e| Error::io(Role::Sketch, &path, e))?;
+    let mut h = std::hash::DefaultHasher::new();
+    text.hash(&mut h);
+    Ok(h.finish())
+}
+
+/// Measures every block on level 0's tiles.
+pub fn measure(pyramid: &Pyramid, cells: usize, per_side: usize) -> Result<BlockStats> {
+    let m = &pyramid.meta;
+    let (t, border, side) = (m.tile, m.border, pyramid.side());
+    if t % cells != 0 {
+        return Err(Error::value(
+            "geomipmap.block",
+            format!(
+                "blocks of {cells} cells do not divide {}'s tiles of {t}",
+                pyramid.dir.display()
+            ),
+        ));
+    }
+    let [w, h] = m.levels[0];
+    let levels = cells.trailing_zeros() as usize + 1;
+    // Each block's tile: that of its south-west vertex, clamped into the level.
+    let tile_of = |b: usize, last: usize| (b * cells).min(last) / t;
+    let (tiles_x, tiles_y) = m.tiles(0);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut delta = vec![[0.0f32; MAX_LEVELS]; per_side * per_side];
+    let mut z_range = vec![(0.0f32, 0.0f32); per_side * per_side];
+    let mut progress = Progress::new("GeoMipMap blocks", tiles_y as f64);
+    // Rows of blocks by tile row; each tile row is measured in parallel across its tiles.
+    let mut by = 0;
+    for ty in 0..tiles_y {
+        let rows: Vec<usize> = (by..per_side)
+            .take_while(|&r| tile_of(r, h - 1) == ty)
+            .collect();
+        by += rows.len();
+        let chunk = tiles_x.div_ceil(threads);
+        let results: Vec<Result<Vec<(usize, ([f32; MAX_LEVELS], (f32, f32)))>>> =
+            std::thread::scope(|s| {
+                let handles: Vec<_> = (0..tiles_x)
+                    .step_by(chunk.max(1))
+                    .map(|tx0| {
+                        let rows = &rows;
+                        s.spawn(move || {
+                            let mut out = Vec::new();
+                            for tx in tx0..(tx0 + chunk).min(tiles_x) {
+                                let heights = pyramid.tile(0, tx, ty)?;
+                                let z = |gi: usize, gj: usize| {
+                                    let (i, j) = (gi.min(w - 1), gj.min(h - 1));
+                                    heights[(j + border - ty * t) * side + i + border - tx * t]
+                                };
+                                for &r in rows {
+                                    for bx in (0..per_side).filter(|&b| tile_of(b, w - 1) == tx) {
+                                        let (x0, y0) = (bx * cells, r * cells);
+                                        let stats =
+                                            block_stats(cells, levels, |i, j| z(x0 + i, y0 + j));
+                                        out.push((r * per_side + bx, stats));
+                                    }
+                                }
+                            }
+                            Ok(out)
+                        })
+                    })
+                    .collect();
+                handles
+                    .into_iter()
+                    .map(|h| h.join().expect("a measuring thread does not panic"))
+                    .collect()
+            });
+        for part in results {
+            for (k, (d, r)) in part? {
+                delta[k] = d;
+                z_range[k] = r;
+            }
+        }
+        progress.advance(1.0, &format!("tile row {ty}"));
+    }
+    progress.finish();
+    Ok(BlockStats {
+        per_side,
+        cells,
+        delta,
+        z_range,
+    })
+}
+
+fn encode(s: &BlockStats, key: u64) -> Vec<u8> {
+    let mut b = Vec::with_capacity(32 + s.delta.len() * (MAX_LEVELS + 2) * 4);
+    b.extend_from_slice(MAGIC);
+    b.extend_from_slice(&key.to_le_bytes());
+    b.extend_from_slice(&(s.cells as u64).to_le_bytes());
+    b.extend_from_slice(&(s.per_side as u64).to_le_bytes());
+    for (d, r) in s.delta.iter().zip(&s.z_range) {
+        for v in d.iter().chain([&r.0, &r.1]) {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    b
+}
+
+/// The figures in `bytes` if they are whole and for this pyramid, cell count and grid.
+fn decode(bytes: &[u8], key: u64, cells: usize, per_side: usize) -> Option<BlockStats> {
+    let word = |i: usize| u64::from_le_bytes(bytes[8 + 8 * i..16 + 8 * i].try_into().unwrap());
+    let n = per_side * per_side;
+    let record = (MAX_LEVELS + 2) * 4;
+    if bytes.len() != 32 + n * record
+        || &bytes[..8] != MAGIC
+        || word(0) != key
+        || word(1) != cells as u64
+        || word(2) != per_side as u64
+    {
+        return None;
+    }
+    let mut delta = Vec::with_capacity(n);
+    let mut z_range = Vec::with_capacity(n);
+    for rec in bytes[32..].chunks_exact(record) {
+        let v: Vec<f32> = rec
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        if v.iter().any(|x| !x.is_finite()) {
+            return None;
+        }
+        delta.push(v[..MAX_LEVELS].try_into().unwrap());
+        z_range.push((v[MAX_LEVELS], v[MAX_LEVELS + 1]));
+    }
+    Some(BlockStats {
+        per_side,
+        cells,
+        delta,
+        z_range,
+    })
+}
