@@ -57,9 +57,9 @@ fn main() -> anyhow::Result<()> {
         let b = r.lod::<Baselines>().context("a baseline mode")?;
         eprintln!(
             "{kind}: baked {}² grid in {:.0} ms, {:.0} MiB",
-            b.bake.grid.n,
+            b.grid.n,
             b.precompute_ms,
-            b.bake.bytes() as f64 / 1048576.0
+            b.bake.as_ref().map_or(0, |k| k.bytes()) as f64 / 1048576.0
         );
         let settings: Vec<(String, f64, bool)> = match kind {
             Mode::Geomipmap => [1.0, 2.0, 4.0, 8.0]

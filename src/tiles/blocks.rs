@@ -67,73 +67,114 @@ fn meta_key(pyramid: &Pyramid) -> Result<u64> {
     Ok(h.finish())
 }
 
-/// Measures every block on level 0's tiles.
+/// One block's δ per level and height range.
+type Stats = ([f32; MAX_LEVELS], (f32, f32));
+
+/// The grid's blocks of `cells` cells over `pyramid`'s level 0, `per_side` a side.
+struct Layout<'a> {
+    pyramid: &'a Pyramid,
+    cells: usize,
+    per_side: usize,
+}
+
+impl Layout<'_> {
+    /// The tile (along one axis) holding block `b`'s south-west vertex, clamped into a level
+    /// whose last node is `last`.
+    fn tile_of(&self, b: usize, last: usize) -> usize {
+        (b * self.cells).min(last) / self.pyramid.meta.tile
+    }
+
+    /// The blocks of rows `rows` lying in tile (tx, ty), measured on that tile and its border.
+    fn measure_tile(&self, tx: usize, ty: usize, rows: &[usize]) -> Result<Vec<(usize, Stats)>> {
+        let m = &self.pyramid.meta;
+        let (t, border, side) = (m.tile, m.border, self.pyramid.side());
+        let [w, h] = m.levels[0];
+        let levels = self.cells.trailing_zeros() as usize + 1;
+        let heights = self.pyramid.tile(0, tx, ty)?;
+        // Past the level's edge a vertex takes the edge node, as the GPU's clamped reads do.
+        let z = |gi: usize, gj: usize| {
+            let (i, j) = (gi.min(w - 1), gj.min(h - 1));
+            heights[(j + border - ty * t) * side + i + border - tx * t]
+        };
+        let mut out = Vec::new();
+        for &r in rows {
+            for bx in (0..self.per_side).filter(|&b| self.tile_of(b, w - 1) == tx) {
+                let (x0, y0) = (bx * self.cells, r * self.cells);
+                let stats = block_stats(self.cells, levels, |i, j| z(x0 + i, y0 + j));
+                out.push((r * self.per_side + bx, stats));
+            }
+        }
+        Ok(out)
+    }
+
+    /// Tile row `ty`'s blocks of rows `rows`, its tiles split among `threads`.
+    fn measure_row(
+        &self,
+        ty: usize,
+        rows: &[usize],
+        threads: usize,
+    ) -> Result<Vec<(usize, Stats)>> {
+        let (tiles_x, _) = self.pyramid.meta.tiles(0);
+        let chunk = tiles_x.div_ceil(threads).max(1);
+        let parts: Vec<Result<Vec<(usize, Stats)>>> = std::thread::scope(|s| {
+            let handles: Vec<_> = (0..tiles_x)
+                .step_by(chunk)
+                .map(|tx0| {
+                    s.spawn(move || {
+                        let mut out = Vec::new();
+                        for tx in tx0..(tx0 + chunk).min(tiles_x) {
+                            out.extend(self.measure_tile(tx, ty, rows)?);
+                        }
+                        Ok(out)
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| h.join().expect("a measuring thread does not panic"))
+                .collect()
+        });
+        let mut all = Vec::new();
+        for part in parts {
+            all.extend(part?);
+        }
+        Ok(all)
+    }
+}
+
+/// Measures every block on level 0's tiles, a tile row at a time.
 pub fn measure(pyramid: &Pyramid, cells: usize, per_side: usize) -> Result<BlockStats> {
     let m = &pyramid.meta;
-    let (t, border, side) = (m.tile, m.border, pyramid.side());
-    if t % cells != 0 {
+    if !m.tile.is_multiple_of(cells) {
         return Err(Error::value(
             "geomipmap.block",
             format!(
-                "blocks of {cells} cells do not divide {}'s tiles of {t}",
-                pyramid.dir.display()
+                "blocks of {cells} cells do not divide {}'s tiles of {}",
+                pyramid.dir.display(),
+                m.tile
             ),
         ));
     }
-    let [w, h] = m.levels[0];
-    let levels = cells.trailing_zeros() as usize + 1;
-    // Each block's tile: that of its south-west vertex, clamped into the level.
-    let tile_of = |b: usize, last: usize| (b * cells).min(last) / t;
-    let (tiles_x, tiles_y) = m.tiles(0);
+    let layout = Layout {
+        pyramid,
+        cells,
+        per_side,
+    };
+    let last_row = m.levels[0][1] - 1;
+    let (_, tiles_y) = m.tiles(0);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut delta = vec![[0.0f32; MAX_LEVELS]; per_side * per_side];
     let mut z_range = vec![(0.0f32, 0.0f32); per_side * per_side];
     let mut progress = Progress::new("GeoMipMap blocks", tiles_y as f64);
-    // Rows of blocks by tile row; each tile row is measured in parallel across its tiles.
-    let mut by = 0;
+    let mut next = 0;
     for ty in 0..tiles_y {
-        let rows: Vec<usize> = (by..per_side)
-            .take_while(|&r| tile_of(r, h - 1) == ty)
+        let rows: Vec<usize> = (next..per_side)
+            .take_while(|&r| layout.tile_of(r, last_row) == ty)
             .collect();
-        by += rows.len();
-        let chunk = tiles_x.div_ceil(threads);
-        let results: Vec<Result<Vec<(usize, ([f32; MAX_LEVELS], (f32, f32)))>>> =
-            std::thread::scope(|s| {
-                let handles: Vec<_> = (0..tiles_x)
-                    .step_by(chunk.max(1))
-                    .map(|tx0| {
-                        let rows = &rows;
-                        s.spawn(move || {
-                            let mut out = Vec::new();
-                            for tx in tx0..(tx0 + chunk).min(tiles_x) {
-                                let heights = pyramid.tile(0, tx, ty)?;
-                                let z = |gi: usize, gj: usize| {
-                                    let (i, j) = (gi.min(w - 1), gj.min(h - 1));
-                                    heights[(j + border - ty * t) * side + i + border - tx * t]
-                                };
-                                for &r in rows {
-                                    for bx in (0..per_side).filter(|&b| tile_of(b, w - 1) == tx) {
-                                        let (x0, y0) = (bx * cells, r * cells);
-                                        let stats =
-                                            block_stats(cells, levels, |i, j| z(x0 + i, y0 + j));
-                                        out.push((r * per_side + bx, stats));
-                                    }
-                                }
-                            }
-                            Ok(out)
-                        })
-                    })
-                    .collect();
-                handles
-                    .into_iter()
-                    .map(|h| h.join().expect("a measuring thread does not panic"))
-                    .collect()
-            });
-        for part in results {
-            for (k, (d, r)) in part? {
-                delta[k] = d;
-                z_range[k] = r;
-            }
+        next += rows.len();
+        for (k, (d, r)) in layout.measure_row(ty, &rows, threads)? {
+            delta[k] = d;
+            z_range[k] = r;
         }
         progress.advance(1.0, &format!("tile row {ty}"));
     }
