@@ -143,7 +143,10 @@ fn tangent_plane_map(
             let (rho, bearing) = (p.length(), p.x.atan2(p.y));
             let ground = |theta: f64| {
                 let (la, lo, _) = terrain::planet::travel(lat, lon, bearing, theta);
-                planet.ground(detail, la, lo, step).max(water_m)
+                planet
+                    .ground(detail, la, lo, step)
+                    .expect("an in-memory sketch")
+                    .max(water_m)
             };
             let mut theta = (rho / r).min(1.0).asin();
             let mut h = ground(theta);

@@ -128,7 +128,6 @@ impl Renderer {
         let frame = uniform_buffer(&alloc);
         let sketch = match &atlas.pyramid {
             Some(pyramid) => {
-                // Planets refuse a pyramid when their sketch loads.
                 if mode.bakes_whole_sketch() {
                     return Err(crate::Error::value(
                         "render.mode",

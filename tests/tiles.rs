@@ -411,22 +411,16 @@ fn a_streamed_pyramid_renders_as_the_sketch_in_memory_once_its_tiles_are_residen
             "{mode}: {db:.1} dB against the sketch in memory"
         );
     }
-    // Brute force bakes the whole sketch: refused in one line, naming the mode. GeoMipMap
-    // streams, on square cells only, and Jacksboro's are 0.0008333° by 0.0008333°.
-    for (mode, why) in [
-        (Mode::Bruteforce, "bakes the whole sketch"),
-        (Mode::Geomipmap, "square cells"),
-    ] {
-        let e = Renderer::new(&streamed, mode, View::Shaded)
-            .err()
-            .unwrap_or_else(|| panic!("{mode} on this pyramid is refused"));
-        let e = e.to_string();
-        assert!(e.contains("render.mode") && e.contains(why), "{e}");
-    }
+    // Brute force bakes the whole sketch: refused in one line, naming the mode.
+    let e = Renderer::new(&streamed, Mode::Bruteforce, View::Shaded)
+        .err()
+        .expect("brute force on a pyramid is refused");
+    let e = e.to_string();
+    assert!(e.contains("render.mode") && e.contains("bakes the whole sketch"), "{e}");
 }
 
-/// The bundled Jacksboro heights in `dir` as a sketch of square 30 m cells (its own are degrees,
-/// and GeoMipMap over a pyramid needs square ones).
+/// The bundled Jacksboro heights in `dir` as a sketch of square 30 m cells (its own are
+/// 0.00083° both ways: 74 × 93 m).
 fn jacksboro_in_metres(dir: &Path) -> PathBuf {
     let text =
         std::fs::read_to_string(common::manifest_dir().join("sketches/jacksboro_fault_dem.asc"))
@@ -447,18 +441,26 @@ fn jacksboro_in_metres(dir: &Path) -> PathBuf {
 
 #[test]
 fn streamed_geomipmap_measures_the_baked_grids_blocks_and_renders_as_it_once_resident() {
+    let dir = scratch("tiles-geomipmap");
+    let square = jacksboro_in_metres(&dir);
+    let degrees = common::manifest_dir().join("sketches/jacksboro_fault_dem.asc");
+    for (name, sketch) in [("square", square), ("degrees", degrees)] {
+        let pyr = dir.join(format!("pyr-{name}"));
+        convert(&sketch, &pyr);
+        streamed_geomipmap_matches(name, &sketch, &pyr);
+    }
+}
+
+/// GeoMipMap over `pyr`, converted from `sketch`, against GeoMipMap over `sketch` in memory.
+fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path) {
     use terrain::gpu::uniforms::View;
     use terrain::lod::baseline::Baselines;
     use terrain::render::Renderer;
     use terrain::scene::Mode;
-    let dir = scratch("tiles-geomipmap");
-    let asc = jacksboro_in_metres(&dir);
-    let pyr = dir.join("pyr");
-    convert(&asc, &pyr);
-    // k = 0: over a pyramid the grid is the sketch's own nodes; the sketch in memory bakes the
-    // same grid. 4 MiB of pages: the first frame stands in.
-    let streamed = jacksboro_scene(&pyr, "[geomipmap]\nk = 0\n[stream]\ngpu_mb = 4");
-    let whole = jacksboro_scene(&asc, "[geomipmap]\nk = 0");
+    // k = 0: over a pyramid the grid is the sketch at its own spacing; the sketch in memory bakes
+    // the same grid. 4 MiB of pages: the first frame stands in.
+    let streamed = jacksboro_scene(pyr, "[geomipmap]\nk = 0\n[stream]\ngpu_mb = 4");
+    let whole = jacksboro_scene(sketch, "[geomipmap]\nk = 0");
     let mut m = Renderer::new(&whole, Mode::Geomipmap, View::Shaded).unwrap();
     let camera = terrain::scene::camera_of(&whole, &m.atlas).unwrap();
     let expected = m.render(&camera).unwrap();
@@ -469,47 +471,40 @@ fn streamed_geomipmap_measures_the_baked_grids_blocks_and_renders_as_it_once_res
         &m.lod::<Baselines>().unwrap().blocks,
         &s.lod::<Baselines>().unwrap().blocks,
     );
-    assert_eq!((a.per_side, a.levels), (b.per_side, b.levels));
-    // The bake samples the sketch bicubically at f32 texel coordinates a few 1e-5 texels off the
-    // nodes: millimetres on Jacksboro's slopes.
+    assert_eq!((a.per_side, a.levels), (b.per_side, b.levels), "{name}");
+    // The bake samples the sketch bicubically at f32 texel coordinates a few 1e-5 texels off
+    // where the CPU computes them: millimetres on Jacksboro's slopes.
     let close = |x: f32, y: f32| (x - y).abs() <= 1e-2 + 1e-4 * x.abs().max(y.abs());
     for k in 0..a.per_side * a.per_side {
         for l in 0..a.levels {
-            assert!(
-                close(a.delta[k][l], b.delta[k][l]),
-                "block {k} δ_{l}: {} vs {}",
-                a.delta[k][l],
-                b.delta[k][l]
-            );
+            let (x, y) = (a.delta[k][l], b.delta[k][l]);
+            assert!(close(x, y), "{name}: block {k} δ_{l}: {x} vs {y}");
         }
         let (ra, rb) = (a.z_range[k], b.z_range[k]);
-        assert!(
-            close(ra.0, rb.0) && close(ra.1, rb.1),
-            "block {k}: {ra:?} vs {rb:?}"
-        );
+        assert!(close(ra.0, rb.0) && close(ra.1, rb.1), "{name}: block {k}: {ra:?} vs {rb:?}");
     }
-    assert!(a.delta.iter().any(|d| d[1] > 1.0), "a relief to measure");
+    assert!(a.delta.iter().any(|d| d[1] > 1.0), "{name}: a relief to measure");
     // Kept beside the tiles, and read back by the next renderer.
     let kept = pyr.join(format!("geomipmap-{}.bin", a.cells + 1));
-    assert!(kept.exists());
+    assert!(kept.exists(), "{name}");
     let again = Renderer::new(&streamed, Mode::Geomipmap, View::Shaded).unwrap();
-    assert_eq!(again.lod::<Baselines>().unwrap().blocks.delta, b.delta);
+    assert_eq!(again.lod::<Baselines>().unwrap().blocks.delta, b.delta, "{name}");
     drop(again);
 
     let first = s.render(&camera).unwrap();
     let stats = first.stream.expect("a pyramid streams");
-    assert!(stats.stand_in && stats.missing > 0, "{stats:?}");
+    assert!(stats.stand_in && stats.missing > 0, "{name}: {stats:?}");
     let first_db = psnr(&first.rgba, &expected.rgba);
     let last = s.render_settled(&camera).unwrap();
-    assert!(!last.stream.unwrap().stand_in);
+    assert!(!last.stream.unwrap().stand_in, "{name}");
     assert_eq!(
         last.gpu.triangles, expected.gpu.triangles,
-        "the same blocks at the same levels"
+        "{name}: the same blocks at the same levels"
     );
     let db = psnr(&last.rgba, &expected.rgba);
-    eprintln!("geomipmap: first frame {first_db:.1} dB, resident {db:.1} dB");
-    assert!(first_db < 50.0, "the stand-in frame should differ");
-    assert!(db >= 50.0, "{db:.1} dB against the sketch in memory");
+    eprintln!("geomipmap, {name} cells: first frame {first_db:.1} dB, resident {db:.1} dB");
+    assert!(first_db < 50.0, "{name}: the stand-in frame should differ");
+    assert!(db >= 50.0, "{name}: {db:.1} dB against the sketch in memory");
 }
 
 #[test]
@@ -682,4 +677,52 @@ fn compare_over_a_pyramid_sweeps_warped_and_geomipmap_and_refuses_brute_force_be
         "{stderr}"
     );
     assert!(!out.join("report.csv").exists(), "refused before any work");
+}
+
+/// A planet's global sketch streamed from a pyramid of several tiles a level (1024 × 512 nodes
+/// of 0.35°: level 0 in 4 × 2 tiles) draws as the same sketch in memory once its tiles are
+/// resident, in clipmaps and reference modes, on the date line where the bicubic's taps wrap
+/// across tiles; the camera is placed on the same ground (read from level 0's tiles); and the
+/// first frame, with 4 MiB of pages, stands in.
+#[test]
+fn a_streamed_planet_draws_as_its_sketch_in_memory_once_resident() {
+    use terrain::gpu::uniforms::View;
+    use terrain::render::Renderer;
+    use terrain::scene::Mode;
+    let dir = scratch("tiles-planet");
+    let tif = common::manifest_dir().join("tests/data/planet/global-1024x512.tif");
+    let pyr = dir.join("pyr");
+    convert(&tif, &pyr);
+    let text = |sketch: &Path, extra: &str| {
+        format!(
+            "[sketch]\npath = {:?}\n[planet]\n[camera]\nlat_deg = 30.0\nlon_deg = 179.9\n\
+             altitude_m = 60000.0\npitch_deg = -25.0\nheading_deg = 80.0\nwidth = 96\nheight = 64\n{extra}\n",
+            sketch.display().to_string()
+        )
+    };
+    let whole = common::scene(&text(&tif, ""), dir.clone());
+    let streamed = common::scene(&text(&pyr, "[stream]\ngpu_mb = 4"), dir.clone());
+    for mode in [Mode::Clipmaps, Mode::Reference] {
+        let mut m = Renderer::new(&whole, mode, View::Shaded).unwrap();
+        let camera = terrain::scene::camera_of(&whole, &m.atlas).unwrap();
+        let expected = m.render(&camera).unwrap();
+        let mut s = Renderer::new(&streamed, mode, View::Shaded).unwrap();
+        let placed = terrain::scene::camera_of(&streamed, &s.atlas).unwrap();
+        assert!(
+            (placed.eye - camera.eye).length() < 1e-6,
+            "{mode}: the camera stands on other ground: {} vs {}",
+            placed.eye,
+            camera.eye
+        );
+        let first = s.render(&camera).unwrap();
+        let stats = first.stream.expect("a pyramid streams");
+        assert!(stats.stand_in && stats.missing > 0, "{mode}: {stats:?}");
+        let first_db = psnr(&first.rgba, &expected.rgba);
+        let last = s.render_settled(&camera).unwrap();
+        assert!(!last.stream.unwrap().stand_in, "{mode}");
+        let db = psnr(&last.rgba, &expected.rgba);
+        eprintln!("planet {mode}: first frame {first_db:.1} dB, resident {db:.1} dB");
+        assert!(first_db < 50.0, "{mode}: the stand-in frame should differ");
+        assert!(db >= 50.0, "{mode}: {db:.1} dB against the sketch in memory");
+    }
 }

@@ -78,8 +78,51 @@ fn planet_texel(i_in: i32, j_in: i32, l: u32) -> f32 {
     }
     j = clamp(j, 0, h - 1);
     i = ((i % w) + w) % w;
+#ifdef STREAMED
+    // A tile still blending in mixes over the next coarser level's node.
+    let a = page_texel(vec2<i32>(i, j), l, true);
+    let r = u32(a.z);
+    if (a.y >= 1.0 || r + 1u >= frame.atlas.levels) {
+        return a.x;
+    }
+    let b = page_texel(vec2<i32>(i, j) >> vec2<u32>(r + 1u - l), r + 1u, false);
+    return mix(b.x, a.x, a.y);
+#else
     return atlas[frame.atlas.level[l].z + u32(j * w + i)];
+#endif
 }
+
+#ifdef STREAMED
+// Node `n` of level l (inside the level) through the tile cache: (height, fade, level read). The
+// page-table entry of n's tile holds its page, or where it is not resident the page of its
+// finest resident ancestor on level r (filled down by the cache): the node over n there stands
+// in, a point sample, as a coarser level stands in for every streamed read. Marks as `lookup`
+// in atlas.wgsl does (with `want`, a stand-in entry asks for its tile).
+fn page_texel(n: vec2<i32>, l: u32, want: bool) -> vec3<f32> {
+    let t = vec2<u32>(n) / frame.atlas.tile;
+    let e = table_index(l, t);
+    let page_fade = u32(atlas[e]);
+    let r = u32(atlas[e + 1u]);
+    var node = n;
+    var tile = t;
+    if (r == l) {
+        mark(e, 2u);
+    } else {
+        if (want) {
+            mark(e, 1u);
+        }
+        let level = frame.atlas.level[r];
+        let tiles = vec2<u32>(level.w, (level.y + frame.atlas.tile - 1u) / frame.atlas.tile);
+        node = min(n >> vec2<u32>(r - l), vec2<i32>(level.xy) - 1);
+        tile = min(t >> vec2<u32>(r - l), tiles - 1u);
+        mark(table_index(r, tile), 2u);
+    }
+    let side = frame.atlas.tile + 2u * frame.atlas.border;
+    let c = vec2<u32>(node - vec2<i32>(tile * frame.atlas.tile) + i32(frame.atlas.border));
+    let h = atlas[(page_fade >> 8u) * side * side + c.y * side + c.x];
+    return vec3<f32>(h, f32(page_fade & 255u) / 255.0, f32(r));
+}
+#endif
 
 // Bicubic on level `l` at level-0 texel `t` relative to the nadir's whole texel: the level's
 // whole texel comes from integer shifts, so only a small fraction is ever an f32.

@@ -4,6 +4,7 @@
 //! to and the f64 terrain function ([`crate::planet::Planet::ground`]) holds in turn.
 
 use super::alloc::{Alloc, Buffer};
+use super::stream::AtlasBinding;
 use super::warp_zoom::catmull_rom;
 use super::{bind, compute_pipeline, entry, storage, uniform};
 use crate::camera::Geo;
@@ -175,23 +176,28 @@ impl ClipmapsPass {
     pub fn new(
         device: &Alloc,
         frame: &wgpu::Buffer,
-        atlas: &wgpu::Buffer,
+        atlas: &AtlasBinding,
         planet: &wgpu::Buffer,
         rings: &Rings,
         noise: bool,
     ) -> Result<ClipmapsPass> {
+        let mut entries = vec![entry(0, S::COMPUTE, uniform())];
+        entries.extend(atlas.entries(S::COMPUTE));
+        entries.extend([
+            entry(2, S::COMPUTE, uniform()),
+            entry(3, S::COMPUTE, storage(true)),
+            entry(4, S::COMPUTE, storage(false)),
+        ]);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("clipmaps"),
-            entries: &[
-                entry(0, S::COMPUTE, uniform()),
-                entry(1, S::COMPUTE, storage(true)),
-                entry(2, S::COMPUTE, uniform()),
-                entry(3, S::COMPUTE, storage(true)),
-                entry(4, S::COMPUTE, storage(false)),
-            ],
+            entries: &entries,
         });
-        let flags: &[&str] = if noise { &["NOISE"] } else { &[] };
-        let pipeline = compute_pipeline(device, "clipmaps", flags, &layout)?;
+        let mut flags = Vec::new();
+        if noise {
+            flags.push("NOISE");
+        }
+        atlas.flag(&mut flags);
+        let pipeline = compute_pipeline(device, "clipmaps", &flags, &layout)?;
         let points: Vec<[f32; 4]> = rings.vertices.iter().map(|v| v.to_array()).collect();
         let hemisphere = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("hemisphere"),
@@ -208,12 +214,11 @@ impl ClipmapsPass {
             label: Some("clipmaps"),
             layout: &layout,
             entries: &[
-                bind(0, frame),
-                bind(1, atlas),
-                bind(2, planet),
-                bind(3, &hemisphere),
-                bind(4, &vertices),
-            ],
+                vec![bind(0, frame)],
+                atlas.binds(),
+                vec![bind(2, planet), bind(3, &hemisphere), bind(4, &vertices)],
+            ]
+            .concat(),
         });
         Ok(ClipmapsPass {
             pipeline,
@@ -248,7 +253,7 @@ fn texel_of(u: &PlanetUniforms, v: Vec4) -> Vec2 {
 }
 
 /// `planet_level` in the shader.
-fn planet_level(planet: &Planet, u: &PlanetUniforms, t: Vec2, l: usize) -> f32 {
+fn planet_level(planet: &Planet, u: &PlanetUniforms, t: Vec2, l: usize) -> Result<f32> {
     let s = (1u32 << l) as f32;
     let origin = IVec2::from(u.texel_origin);
     let mask = IVec2::splat((1 << l) - 1);
@@ -261,12 +266,13 @@ fn planet_level(planet: &Planet, u: &PlanetUniforms, t: Vec2, l: usize) -> f32 {
     let mut h = 0.0;
     for (r, wyr) in wy.iter().enumerate() {
         let j = i.y - 1 + r as i32;
-        let row: f32 = (0..4)
-            .map(|c| wx[c] * planet.texel_value((i.x - 1 + c as i32) as i64, j as i64, l))
-            .sum();
+        let mut row = 0.0;
+        for (c, wxc) in wx.iter().enumerate() {
+            row += wxc * planet.texel_value((i.x - 1 + c as i32) as i64, j as i64, l)?;
+        }
         h += wyr * row;
     }
-    h
+    Ok(h)
 }
 
 /// `ring_spacing` in the shader.
@@ -277,19 +283,19 @@ fn ring_spacing(u: &PlanetUniforms, a: f32) -> f32 {
 }
 
 /// The clipmaps pass's vertex for hemisphere point `v` (CPU twin of `clipmaps.wgsl`'s `main`).
-pub fn vertex_cpu(planet: &Planet, atlas_d: f32, u: &PlanetUniforms, v: Vec4) -> Vec4 {
+pub fn vertex_cpu(planet: &Planet, atlas_d: f32, u: &PlanetUniforms, v: Vec4) -> Result<Vec4> {
     let spacing = ring_spacing(u, v.w);
     let t = texel_of(u, v);
     let lod = (spacing.max(1e-6) / atlas_d)
         .log2()
         .clamp(0.0, (u.levels - 1) as f32);
     let l0 = lod as usize;
-    let a = planet_level(planet, u, t, l0);
+    let a = planet_level(planet, u, t, l0)?;
     let f = lod - l0 as f32;
     let mut h = if f <= 0.0 || l0 + 1 >= u.levels as usize {
         a
     } else {
-        a + (planet_level(planet, u, t, l0 + 1) - a) * f
+        a + (planet_level(planet, u, t, l0 + 1)? - a) * f
     };
     let o = (atlas_d / spacing).log2() - u.bias;
     let rel =
@@ -305,7 +311,7 @@ pub fn vertex_cpu(planet: &Planet, atlas_d: f32, u: &PlanetUniforms, v: Vec4) ->
     }
     let ground = h.max(u.water_m);
     let rh = u.radius + ground;
-    Vec4::new(rh * v.x, rh * v.y, ground - rh * v.z, h)
+    Ok(Vec4::new(rh * v.x, rh * v.y, ground - rh * v.z, h))
 }
 
 /// The geographic position of hemisphere point (angle `a`, bearing `b`) seen from `geo`

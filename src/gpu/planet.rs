@@ -4,6 +4,7 @@
 //! with an infinite far plane, so a view holds ground from a metre to 20,000 km away without
 //! z-fighting. Owns the colour and depth targets.
 
+use super::stream::AtlasBinding;
 use super::alloc::{Alloc, Buffer, Texture};
 use super::terrain::{COLOUR, DEPTH, DEPTH_COPY, RasterPipeline};
 use super::{bind, entry, shader_module, storage, uniform};
@@ -32,16 +33,17 @@ impl PlanetPass {
     pub fn new(
         device: &Alloc,
         frame: &wgpu::Buffer,
-        atlas: &wgpu::Buffer,
+        atlas: &AtlasBinding,
         planet: &wgpu::Buffer,
         hemisphere: &wgpu::Buffer,
         vertices: &wgpu::Buffer,
         rings: &Rings,
         (width, height): (u32, u32),
-        flags: &[&str],
+        flags: &[&'static str],
         positions: bool,
     ) -> Result<PlanetPass> {
         let mut flags = flags.to_vec();
+        atlas.flag(&mut flags);
         let mut targets = vec![Some(wgpu::ColorTargetState::from(COLOUR))];
         if positions {
             flags.push("POSITIONS");
@@ -50,12 +52,15 @@ impl PlanetPass {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("planet"),
             entries: &[
-                entry(0, S::VERTEX_FRAGMENT, uniform()),
-                entry(1, S::VERTEX_FRAGMENT, storage(true)),
-                entry(2, S::VERTEX_FRAGMENT, uniform()),
-                entry(3, S::VERTEX, storage(true)),
-                entry(4, S::VERTEX, storage(true)),
-            ],
+                vec![entry(0, S::VERTEX_FRAGMENT, uniform())],
+                atlas.entries(S::VERTEX_FRAGMENT),
+                vec![
+                    entry(2, S::VERTEX_FRAGMENT, uniform()),
+                    entry(3, S::VERTEX, storage(true)),
+                    entry(4, S::VERTEX, storage(true)),
+                ],
+            ]
+            .concat(),
         });
         let module = shader_module(device, Self::NAME, &flags)?;
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -85,12 +90,11 @@ impl PlanetPass {
             label: Some("planet"),
             layout: &layout,
             entries: &[
-                bind(0, frame),
-                bind(1, atlas),
-                bind(2, planet),
-                bind(3, hemisphere),
-                bind(4, vertices),
-            ],
+                vec![bind(0, frame)],
+                atlas.binds(),
+                vec![bind(2, planet), bind(3, hemisphere), bind(4, vertices)],
+            ]
+            .concat(),
         });
         let index = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("clipmap indices"),

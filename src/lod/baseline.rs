@@ -5,6 +5,17 @@
 //! The bake is the warp & zoom pass run with Φ the identity grid: the same code, hence the same
 //! terrain function, as the warped mode's (heights, split octave K − bias, octaves up to K as
 //! geometry); the terrain pass's GEOMIPMAP variant draws it with the same shading and bump detail.
+//!
+//! Over a tile pyramid nothing is baked. The grid is the sketch at its own spacing (k = 0, no
+//! octave in it), each block's δ and height range come from level 0's tiles
+//! ([`crate::tiles::blocks`]), and the GRID_STREAMED vertex shader evaluates each vertex it draws
+//! as the bake would, reading the sketch through the tile cache (which the reads mark), so GPU
+//! memory is the tile pool plus this frame's blocks and indices.
+//! Rejected: baking blocks on demand into a cache of pages. The README's view of the 32,768²
+//! pyramid sees 472,057 blocks to its far plane: 17 KiB each at 33² vertices, 8 GB; baked at
+//! their own level they would need a pool per level and a rebake at every level change. The
+//! price of evaluating instead is GPU time: up to 11 bicubic reads per vertex with mesh normals
+//! and morphing (the same view: 6.5 s a frame on llvmpipe for 1.9 M triangles).
 
 use super::{CpuTimes, Lod, Shared};
 use crate::camera::Camera;
@@ -188,17 +199,6 @@ fn streamed_grid(
             "detail.bias",
             "a negative bias puts octaves into GeoMipMap's grid, whose δ over a tile pyramid is \
              measured on the sketch alone: use a bias of 0 or more",
-        ));
-    }
-    if atlas.dx != atlas.dy {
-        return Err(Error::value(
-            "render.mode",
-            format!(
-                "GeoMipMap over a tile pyramid needs square cells, and {} has {} × {} m",
-                pyramid.dir.display(),
-                atlas.dx,
-                atlas.dy
-            ),
         ));
     }
     if !s

@@ -50,6 +50,17 @@ impl Clipmaps {
             "render.mode",
             "clipmaps draws planet scenes (add [planet])",
         ))?;
+        let vertex_marks = wgpu::Features::VERTEX_WRITABLE_STORAGE;
+        if s.atlas_binding.marks.is_some() && !s.ctx.device.features().contains(vertex_marks) {
+            return Err(Error::value(
+                "sketch.path",
+                format!(
+                    "a planet streamed from a tile pyramid reads it in the vertex shader, and {} \
+                     cannot write the tile marks from there: give the file it was converted from",
+                    s.ctx.adapter_name()
+                ),
+            ));
+        }
         let rings = Rings::new(p.phi_steps, p.rings_per_level);
         let device = &s.alloc;
         let planet_uniforms = PlanetUniforms::buffer(device);
@@ -57,7 +68,7 @@ impl Clipmaps {
         let clipmaps = ClipmapsPass::new(
             device,
             s.frame,
-            &s.atlas_binding.atlas,
+            s.atlas_binding,
             &planet_uniforms,
             &rings,
             noise,
@@ -73,7 +84,7 @@ impl Clipmaps {
         let pass = PlanetPass::new(
             device,
             s.frame,
-            &s.atlas_binding.atlas,
+            s.atlas_binding,
             &planet_uniforms,
             &clipmaps.hemisphere,
             &clipmaps.vertices,
@@ -166,9 +177,11 @@ fn levels(atlas: &Atlas, radius: f64, detail: &Detail, camera: &Camera, geo: &Ge
         sketch: atlas,
     };
     let eye_m = camera.eye.z;
-    let ground = planet.ground(detail, geo.lat, geo.lon, 0.01);
     // The lowest surface is the sea's where the sketch dips below it.
     let low = (atlas.min_m as f64 - detail.reach_m()).max(atlas.water_m as f64);
+    // A streamed sketch's tile that cannot be read fails the tile cache's loads, which end the
+    // frame with its error; until then the levels take the lowest surface.
+    let ground = planet.ground(detail, geo.lat, geo.lon, 0.01).unwrap_or(low);
     let high = atlas.max_m as f64 + detail.reach_m();
     let pixel_rad = camera.fov_y / camera.height as f64;
     visible_span(radius, eye_m - low, high - low, eye_m - ground, pixel_rad)

@@ -33,6 +33,7 @@ pub mod rings;
 pub mod synthetic;
 
 use crate::detail::Detail;
+use crate::error::Result;
 use crate::sketch::Atlas;
 use glam::{DVec2, DVec3, Vec2, Vec4};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
@@ -151,8 +152,9 @@ impl Planet<'_> {
     }
 
     /// The sketch's height at `lat`, `lon` for a footprint of `footprint` metres: bicubic on the
-    /// footprint's level (linear between two), as `sphere.wgsl`'s `planet_sketch`.
-    pub fn sketch_height(&self, lat: f64, lon: f64, footprint: f64) -> f64 {
+    /// footprint's level (linear between two), as `sphere.wgsl`'s `planet_sketch`. Fails only
+    /// where a streamed sketch's tile cannot be read.
+    pub fn sketch_height(&self, lat: f64, lon: f64, footprint: f64) -> Result<f64> {
         let levels = self.usable_levels();
         let lod = (footprint.max(1e-9) / self.d_atlas())
             .log2()
@@ -160,11 +162,11 @@ impl Planet<'_> {
         let l0 = lod.floor() as usize;
         let t = lod - l0 as f64;
         let uv = self.texel(lat, lon);
-        let a = self.bicubic(uv, l0);
+        let a = self.bicubic(uv, l0)?;
         if t <= 0.0 || l0 + 1 >= levels {
-            return a;
+            return Ok(a);
         }
-        a + (self.bicubic(uv, l0 + 1) - a) * t
+        Ok(a + (self.bicubic(uv, l0 + 1)? - a) * t)
     }
 
     /// Pyramid levels the wrap can use: those at least 4 texels wide and 2 high, with an even
@@ -178,8 +180,9 @@ impl Planet<'_> {
             .max(1)
     }
 
-    /// Texel (i, j) of level `l`, across the date line and the poles.
-    pub fn texel_value(&self, i: i64, j: i64, l: usize) -> f32 {
+    /// Texel (i, j) of level `l`, across the date line and the poles: from memory, or on a level
+    /// a streamed sketch leaves to the tile cache, from its tile (the last few kept decoded).
+    pub fn texel_value(&self, i: i64, j: i64, l: usize) -> Result<f32> {
         let level = &self.sketch.levels[l];
         let (w, h) = (level.width as i64, level.height as i64);
         let (mut i, mut j) = (i, j);
@@ -190,11 +193,14 @@ impl Planet<'_> {
             j = 2 * h - 1 - j;
             i += w / 2;
         }
-        let j = j.clamp(0, h - 1);
-        level.data[(j * w + i.rem_euclid(w)) as usize]
+        let (i, j) = (i.rem_euclid(w) as usize, j.clamp(0, h - 1) as usize);
+        match &self.sketch.pyramid {
+            Some(pyramid) if level.data.is_empty() => pyramid.node(l, i, j),
+            _ => Ok(level.data[j * w as usize + i]),
+        }
     }
 
-    fn bicubic(&self, uv: DVec2, l: usize) -> f64 {
+    fn bicubic(&self, uv: DVec2, l: usize) -> Result<f64> {
         let s = (1u64 << l) as f64;
         let x = (uv - DVec2::splat((s - 1.0) * 0.5)) / s;
         let i = x.floor();
@@ -203,19 +209,19 @@ impl Planet<'_> {
         let mut h = 0.0;
         for (r, wyr) in wy.iter().enumerate() {
             for (c, wxc) in wx.iter().enumerate() {
-                let v = self.texel_value(i.x as i64 - 1 + c as i64, i.y as i64 - 1 + r as i64, l);
+                let v = self.texel_value(i.x as i64 - 1 + c as i64, i.y as i64 - 1 + r as i64, l)?;
                 h += wyr * wxc * v as f64;
             }
         }
-        h
+        Ok(h)
     }
 
     /// The terrain function's height at `lat`, `lon` for a footprint of `footprint` metres: the
     /// sketch and every octave with its pixel share b_k (the reference's surface).
-    pub fn ground(&self, detail: &Detail, lat: f64, lon: f64, footprint: f64) -> f64 {
+    pub fn ground(&self, detail: &Detail, lat: f64, lon: f64, footprint: f64) -> Result<f64> {
         let p = unit(lat, lon) * self.radius;
         let o_px = (detail.d_atlas / footprint.max(1e-9)).log2() as f32;
-        let mut h = self.sketch_height(lat, lon, footprint);
+        let mut h = self.sketch_height(lat, lon, footprint)?;
         for k in 1..=detail.last_octave(o_px) {
             let b = (o_px - k as f32 + 1.0).clamp(0.0, 1.0);
             let (v, _) = noise::octave_at(
@@ -225,7 +231,7 @@ impl Planet<'_> {
             );
             h += detail.weight(k) * (b * v) as f64;
         }
-        h
+        Ok(h)
     }
 }
 
@@ -313,15 +319,15 @@ mod tests {
         };
         let e = 1e-9;
         for lat in [-1.0, 0.0, 0.4, 1.3] {
-            let a = p.sketch_height(lat, PI - e, 0.0);
-            let b = p.sketch_height(lat, -PI + e, 0.0);
+            let a = p.sketch_height(lat, PI - e, 0.0).unwrap();
+            let b = p.sketch_height(lat, -PI + e, 0.0).unwrap();
             assert!((a - b).abs() < 1e-3, "date line at {lat}: {a} vs {b}");
         }
         for lon in [0.0, 1.0, -2.5] {
             // Crossing the north pole along a meridian: the height moves on smoothly.
-            let before = p.sketch_height(FRAC_PI_2 - 1e-6, lon, 0.0);
-            let at = p.sketch_height(FRAC_PI_2, lon, 0.0);
-            let other = p.sketch_height(FRAC_PI_2 - 1e-6, lon + PI, 0.0);
+            let before = p.sketch_height(FRAC_PI_2 - 1e-6, lon, 0.0).unwrap();
+            let at = p.sketch_height(FRAC_PI_2, lon, 0.0).unwrap();
+            let other = p.sketch_height(FRAC_PI_2 - 1e-6, lon + PI, 0.0).unwrap();
             assert!(
                 (before - at).abs() < 0.1 && (other - at).abs() < 0.1,
                 "pole: {before} {at} {other}"
@@ -331,8 +337,8 @@ mod tests {
             let row = &p.sketch.levels[0].data[..p.sketch.width()];
             let spread = row.iter().cloned().fold(f32::MIN, f32::max)
                 - row.iter().cloned().fold(f32::MAX, f32::min);
-            let south = p.sketch_height(-FRAC_PI_2, lon, 0.0);
-            let south_other = p.sketch_height(-FRAC_PI_2, lon + 2.0, 0.0);
+            let south = p.sketch_height(-FRAC_PI_2, lon, 0.0).unwrap();
+            let south_other = p.sketch_height(-FRAC_PI_2, lon + 2.0, 0.0).unwrap();
             assert!(
                 (south - south_other).abs() <= spread as f64,
                 "south pole: {south} vs {south_other}"

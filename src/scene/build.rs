@@ -73,12 +73,6 @@ fn load_global(scene: &Scene, radius: f64) -> Result<Atlas> {
         ));
     };
     let path = scene.resolve(path);
-    if crate::tiles::is_pyramid(&path) {
-        return Err(Error::sketch(
-            &path,
-            "is a tile pyramid, and a planet's sketch is read whole: give the file it was converted from",
-        ));
-    }
     let mut atlas = Atlas::load(&path, &scene_load_options(scene))?;
     let global = |g: &crate::sketch::georef::Georef| {
         let (w, h) = (atlas.width() as f64, atlas.height() as f64);
@@ -204,7 +198,7 @@ fn planet_camera(scene: &Scene, atlas: &Atlas, radius: f64) -> Result<Camera> {
         sketch: atlas,
     };
     let ground = planet
-        .ground(&detail, lat, lon, 0.01)
+        .ground(&detail, lat, lon, 0.01)?
         .max(atlas.water_m as f64);
     let eye = DVec3::new(0.0, 0.0, ground + c.altitude_m.unwrap_or(1.0));
     let (h, p) = (c.heading_deg.to_radians(), c.pitch_deg.to_radians());

@@ -3,13 +3,16 @@
 //! for blocks whose heights were never in memory.
 //!
 //! Rules:
-//! - The grid is level 0's nodes (GeoMipMap's k = 0), vertex (i, j) the node
-//!   (min(i, W−1), min(j, H−1)): the baked grid's heights, whose bicubic sampling meets every node
-//!   and clamps past the edge. δ and the range follow [`crate::geomipmap::block_stats`], the rule
-//!   the baked grid's blocks use, so both paths choose the same levels.
-//! - A block lies inside one level-0 tile and its border (blocks start at multiples of their
-//!   cells, which divide the tile), so each tile is read once, on as many threads as the machine
-//!   has.
+//! - The grid is GeoMipMap's at k = 0: spacing d = min(dx, dy), vertex (i, j) the bake's
+//!   Catmull-Rom sample of level 0 at texel coordinates (i·d/dx, j·d/dy), taps clamped to the
+//!   level. δ and the range follow [`crate::geomipmap::block_stats`], the rule the baked grid's
+//!   blocks use, so both paths choose the same levels.
+//! - Square cells: every vertex is a node (min(i, W−1), min(j, H−1)), and a block lies inside
+//!   one level-0 tile and its border (blocks start at multiples of their cells, which divide the
+//!   tile), so each tile is read once.
+//! - Other cells: a block row's vertices are sampled from the texel rows under it, read as a
+//!   window (each tile then about tile·dy / (block·d) times).
+//! - Either way on as many threads as the machine has.
 //! - The figures are written to `geomipmap-<block>.bin` in the pyramid folder (atomically) and
 //!   read back on the next run while `pyramid.toml` is unchanged; a folder that cannot be
 //!   written costs the measurement on every run, with a note.
@@ -142,9 +145,118 @@ impl Layout<'_> {
     }
 }
 
-/// Measures every block on level 0's tiles, a tile row at a time.
+/// Grid vertex heights between nodes (cells that are not square).
+struct Strips<'a> {
+    pyramid: &'a Pyramid,
+    cells: usize,
+    per_side: usize,
+    /// Texel coordinates per metre of grid, as the bake's f32 `1 / dx`, `1 / dy`.
+    inv: [f32; 2],
+    /// The grid's spacing, metres.
+    d: f64,
+}
+
+impl Strips<'_> {
+    /// The Catmull-Rom taps and weights at grid index `i` along an axis of `len` nodes.
+    fn taps(&self, i: usize, axis: usize, len: usize) -> ([usize; 4], [f32; 4]) {
+        let u = ((i as f64 * self.d) as f32) * self.inv[axis];
+        let f = u.floor();
+        let at = |k: i64| (f as i64 - 1 + k).clamp(0, len as i64 - 1) as usize;
+        (
+            [at(0), at(1), at(2), at(3)],
+            crate::gpu::warp_zoom::catmull_rom(u - f),
+        )
+    }
+
+    /// Block row `r`'s blocks, from the texel rows under its vertices.
+    fn measure_row(&self, r: usize) -> Result<Vec<(usize, Stats)>> {
+        let [w, h] = self.pyramid.meta.levels[0];
+        let (c, n) = (self.cells, self.cells * self.per_side + 1);
+        let rows: Vec<_> = (r * c..=r * c + c).map(|j| self.taps(j, 1, h)).collect();
+        let y0 = rows[0].0[0];
+        let y1 = rows[c].0[3];
+        let texels = self.pyramid.window(0, 0, y0, w, y1 - y0 + 1)?;
+        let cols: Vec<_> = (0..n).map(|i| self.taps(i, 0, w)).collect();
+        let mut strip = vec![0f32; (c + 1) * n];
+        for (jj, (ty, wy)) in rows.iter().enumerate() {
+            for (i, (tx, wx)) in cols.iter().enumerate() {
+                let mut z = 0.0;
+                for (y, wyb) in ty.iter().zip(wy) {
+                    let row = &texels[(y - y0) * w..];
+                    let line: f32 = tx.iter().zip(wx).map(|(&x, wxa)| wxa * row[x]).sum();
+                    z += wyb * line;
+                }
+                strip[jj * n + i] = z;
+            }
+        }
+        let levels = c.trailing_zeros() as usize + 1;
+        Ok((0..self.per_side)
+            .map(|bx| {
+                let z = |i: usize, j: usize| strip[j * n + bx * c + i];
+                (r * self.per_side + bx, block_stats(c, levels, z))
+            })
+            .collect())
+    }
+
+    /// Block rows `rows`, split among `threads`.
+    fn measure_rows(&self, rows: std::ops::Range<usize>, threads: usize) -> Result<Vec<(usize, Stats)>> {
+        let parts: Vec<Result<Vec<(usize, Stats)>>> = std::thread::scope(|s| {
+            let handles: Vec<_> = (0..threads)
+                .map(|t| {
+                    let rows = rows.clone();
+                    s.spawn(move || {
+                        let mut out = Vec::new();
+                        for r in rows.skip(t).step_by(threads) {
+                            out.extend(self.measure_row(r)?);
+                        }
+                        Ok(out)
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| h.join().expect("a measuring thread does not panic"))
+                .collect()
+        });
+        let mut all = Vec::new();
+        for part in parts {
+            all.extend(part?);
+        }
+        Ok(all)
+    }
+}
+
+/// Measures every block on level 0's tiles.
 pub fn measure(pyramid: &Pyramid, cells: usize, per_side: usize) -> Result<BlockStats> {
     let m = &pyramid.meta;
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if m.dx_m != m.dy_m {
+        let strips = Strips {
+            pyramid,
+            cells,
+            per_side,
+            inv: [(1.0 / m.dx_m) as f32, (1.0 / m.dy_m) as f32],
+            d: m.dx_m.min(m.dy_m),
+        };
+        let mut stats = BlockStats {
+            per_side,
+            cells,
+            delta: vec![[0.0f32; MAX_LEVELS]; per_side * per_side],
+            z_range: vec![(0.0f32, 0.0f32); per_side * per_side],
+        };
+        let mut progress = Progress::new("GeoMipMap blocks", per_side as f64);
+        let batch = 16 * threads;
+        for first in (0..per_side).step_by(batch) {
+            let rows = first..(first + batch).min(per_side);
+            for (k, (d, r)) in strips.measure_rows(rows.clone(), threads)? {
+                stats.delta[k] = d;
+                stats.z_range[k] = r;
+            }
+            progress.advance(rows.len() as f64, &format!("block row {}", rows.end - 1));
+        }
+        progress.finish();
+        return Ok(stats);
+    }
     if !m.tile.is_multiple_of(cells) {
         return Err(Error::value(
             "geomipmap.block",
@@ -162,7 +274,6 @@ pub fn measure(pyramid: &Pyramid, cells: usize, per_side: usize) -> Result<Block
     };
     let last_row = m.levels[0][1] - 1;
     let (_, tiles_y) = m.tiles(0);
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut delta = vec![[0.0f32; MAX_LEVELS]; per_side * per_side];
     let mut z_range = vec![(0.0f32, 0.0f32); per_side * per_side];
     let mut progress = Progress::new("GeoMipMap blocks", tiles_y as f64);

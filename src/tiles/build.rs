@@ -37,6 +37,23 @@ pub struct BuildOptions {
     pub threads: usize,
 }
 
+/// Removes the temporary files (`.NAME.PID.tmp`) a killed build left half written under `dir`,
+/// so a resumed build leaves the folder as a fresh one would.
+fn remove_temporaries(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let (path, name) = (e.path(), e.file_name());
+        let name = name.to_string_lossy();
+        if path.is_dir() {
+            remove_temporaries(&path);
+        } else if name.starts_with('.') && name.ends_with(".tmp") {
+            let _ = std::fs::remove_file(&path);
+        }
+    }
+}
+
 /// What a build did, for the command's report.
 #[derive(Clone, Debug, Serialize)]
 pub struct BuildSummary {
@@ -136,6 +153,7 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
         n => n,
     };
+    remove_temporaries(out);
     let mut progress = Progress::new("tiles", meta.tile_count() as f64);
     let mut written = 0;
     for l in 0..meta.levels.len() {

@@ -139,6 +139,14 @@ impl Pyramid {
         Ok(crate::sketch::bilinear_blend(z, f))
     }
 
+    /// Node (i, j) of level `l` (inside the level), from the recent tiles.
+    pub fn node(&self, l: usize, i: usize, j: usize) -> Result<f32> {
+        let (t, b, side) = (self.meta.tile, self.meta.border, self.side());
+        let (tx, ty) = (i / t, j / t);
+        let heights = self.recent_tile(l, tx, ty)?;
+        Ok(heights[(j - ty * t + b) * side + i - tx * t + b])
+    }
+
     /// Tile (tx, ty) of level `l` from the recent tiles, or read and kept there.
     fn recent_tile(&self, l: usize, tx: usize, ty: usize) -> Result<Arc<Vec<f32>>> {
         let key = (l, tx, ty);

@@ -227,8 +227,10 @@ fn planet_keys(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Option<PlanetKe
         radius: p.radius_m,
         sketch: atlas,
     };
+    // The camera was placed on this ground, so its tile has been read already.
     let ground = planet
         .ground(&scene::detail_of(scene, atlas), geo.lat, geo.lon, 0.01)
+        .ok()?
         .max(atlas.water_m as f64);
     let f = camera.forward;
     Some(PlanetKeys {
