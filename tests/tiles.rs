@@ -416,7 +416,10 @@ fn a_streamed_pyramid_renders_as_the_sketch_in_memory_once_its_tiles_are_residen
         .err()
         .expect("brute force on a pyramid is refused");
     let e = e.to_string();
-    assert!(e.contains("render.mode") && e.contains("bakes the whole sketch"), "{e}");
+    assert!(
+        e.contains("render.mode") && e.contains("bakes the whole sketch"),
+        "{e}"
+    );
 }
 
 /// The bundled Jacksboro heights in `dir` as a sketch of square 30 m cells (its own are
@@ -481,14 +484,24 @@ fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path) {
             assert!(close(x, y), "{name}: block {k} δ_{l}: {x} vs {y}");
         }
         let (ra, rb) = (a.z_range[k], b.z_range[k]);
-        assert!(close(ra.0, rb.0) && close(ra.1, rb.1), "{name}: block {k}: {ra:?} vs {rb:?}");
+        assert!(
+            close(ra.0, rb.0) && close(ra.1, rb.1),
+            "{name}: block {k}: {ra:?} vs {rb:?}"
+        );
     }
-    assert!(a.delta.iter().any(|d| d[1] > 1.0), "{name}: a relief to measure");
+    assert!(
+        a.delta.iter().any(|d| d[1] > 1.0),
+        "{name}: a relief to measure"
+    );
     // Kept beside the tiles, and read back by the next renderer.
     let kept = pyr.join(format!("geomipmap-{}.bin", a.cells + 1));
     assert!(kept.exists(), "{name}");
     let again = Renderer::new(&streamed, Mode::Geomipmap, View::Shaded).unwrap();
-    assert_eq!(again.lod::<Baselines>().unwrap().blocks.delta, b.delta, "{name}");
+    assert_eq!(
+        again.lod::<Baselines>().unwrap().blocks.delta,
+        b.delta,
+        "{name}"
+    );
     drop(again);
 
     let first = s.render(&camera).unwrap();
@@ -504,7 +517,10 @@ fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path) {
     let db = psnr(&last.rgba, &expected.rgba);
     eprintln!("geomipmap, {name} cells: first frame {first_db:.1} dB, resident {db:.1} dB");
     assert!(first_db < 50.0, "{name}: the stand-in frame should differ");
-    assert!(db >= 50.0, "{name}: {db:.1} dB against the sketch in memory");
+    assert!(
+        db >= 50.0,
+        "{name}: {db:.1} dB against the sketch in memory"
+    );
 }
 
 #[test]
@@ -723,6 +739,9 @@ fn a_streamed_planet_draws_as_its_sketch_in_memory_once_resident() {
         let db = psnr(&last.rgba, &expected.rgba);
         eprintln!("planet {mode}: first frame {first_db:.1} dB, resident {db:.1} dB");
         assert!(first_db < 50.0, "{mode}: the stand-in frame should differ");
-        assert!(db >= 50.0, "{mode}: {db:.1} dB against the sketch in memory");
+        assert!(
+            db >= 50.0,
+            "{mode}: {db:.1} dB against the sketch in memory"
+        );
     }
 }

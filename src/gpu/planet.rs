@@ -4,8 +4,8 @@
 //! with an infinite far plane, so a view holds ground from a metre to 20,000 km away without
 //! z-fighting. Owns the colour and depth targets.
 
-use super::stream::AtlasBinding;
 use super::alloc::{Alloc, Buffer, Texture};
+use super::stream::AtlasBinding;
 use super::terrain::{COLOUR, DEPTH, DEPTH_COPY, RasterPipeline};
 use super::{bind, entry, shader_module, storage, uniform};
 use crate::error::Result;

@@ -209,7 +209,8 @@ impl Planet<'_> {
         let mut h = 0.0;
         for (r, wyr) in wy.iter().enumerate() {
             for (c, wxc) in wx.iter().enumerate() {
-                let v = self.texel_value(i.x as i64 - 1 + c as i64, i.y as i64 - 1 + r as i64, l)?;
+                let v =
+                    self.texel_value(i.x as i64 - 1 + c as i64, i.y as i64 - 1 + r as i64, l)?;
                 h += wyr * wxc * v as f64;
             }
         }

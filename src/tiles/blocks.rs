@@ -199,7 +199,11 @@ impl Strips<'_> {
     }
 
     /// Block rows `rows`, split among `threads`.
-    fn measure_rows(&self, rows: std::ops::Range<usize>, threads: usize) -> Result<Vec<(usize, Stats)>> {
+    fn measure_rows(
+        &self,
+        rows: std::ops::Range<usize>,
+        threads: usize,
+    ) -> Result<Vec<(usize, Stats)>> {
         let parts: Vec<Result<Vec<(usize, Stats)>>> = std::thread::scope(|s| {
             let handles: Vec<_> = (0..threads)
                 .map(|t| {
