@@ -447,23 +447,27 @@ fn streamed_geomipmap_measures_the_baked_grids_blocks_and_renders_as_it_once_res
     let dir = scratch("tiles-geomipmap");
     let square = jacksboro_in_metres(&dir);
     let degrees = common::manifest_dir().join("sketches/jacksboro_fault_dem.asc");
-    for (name, sketch) in [("square", square), ("degrees", degrees)] {
+    // Square cells with water over the valleys (the grid's vertices stand on it); degrees dry.
+    for (name, sketch, water) in [("square", square, 450.0), ("degrees", degrees, 0.0)] {
         let pyr = dir.join(format!("pyr-{name}"));
         convert(&sketch, &pyr);
-        streamed_geomipmap_matches(name, &sketch, &pyr);
+        streamed_geomipmap_matches(name, &sketch, &pyr, water);
     }
 }
 
-/// GeoMipMap over `pyr`, converted from `sketch`, against GeoMipMap over `sketch` in memory.
-fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path) {
+/// GeoMipMap over `pyr`, converted from `sketch`, against GeoMipMap over `sketch` in memory, with
+/// the water at `water` metres.
+fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path, water: f64) {
     use terrain::gpu::uniforms::View;
     use terrain::lod::baseline::Baselines;
     use terrain::render::Renderer;
     use terrain::scene::Mode;
     // k = 0: over a pyramid the grid is the sketch at its own spacing; the sketch in memory bakes
     // the same grid. 4 MiB of pages: the first frame stands in.
-    let streamed = jacksboro_scene(pyr, "[geomipmap]\nk = 0\n[stream]\ngpu_mb = 4");
-    let whole = jacksboro_scene(sketch, "[geomipmap]\nk = 0");
+    let mut streamed = jacksboro_scene(pyr, "[geomipmap]\nk = 0\n[stream]\ngpu_mb = 4");
+    let mut whole = jacksboro_scene(sketch, "[geomipmap]\nk = 0");
+    streamed.sketch.water_level_m = water;
+    whole.sketch.water_level_m = water;
     let mut m = Renderer::new(&whole, Mode::Geomipmap, View::Shaded).unwrap();
     let camera = terrain::scene::camera_of(&whole, &m.atlas).unwrap();
     let expected = m.render(&camera).unwrap();
@@ -503,6 +507,23 @@ fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path) {
         "{name}"
     );
     drop(again);
+    // Other water is another grid: the kept figures are not taken for it.
+    let mut lower = streamed.clone();
+    lower.sketch.water_level_m = water - 100.0;
+    let fresh = terrain::tiles::blocks::measure(
+        &Pyramid::open(pyr).unwrap(),
+        a.cells,
+        a.per_side,
+        lower.sketch.water_level_m as f32,
+    )
+    .unwrap();
+    let other = Renderer::new(&lower, Mode::Geomipmap, View::Shaded).unwrap();
+    assert_eq!(
+        other.lod::<Baselines>().unwrap().blocks.delta,
+        fresh.delta,
+        "{name}"
+    );
+    drop(other);
 
     let first = s.render(&camera).unwrap();
     let stats = first.stream.expect("a pyramid streams");

@@ -1,5 +1,6 @@
-//! The baselines: the terrain function baked once per scene on a regular grid, drawn by
-//! GeoMipMapping (blocks, levels, stitching, geomorphing; `crate::geomipmap`) or whole (brute force).
+//! The baselines: the terrain function baked once per scene on a regular grid (or, over a tile
+//! pyramid, read where it is drawn), drawn by GeoMipMapping (blocks, levels, stitching,
+//! geomorphing; `crate::geomipmap`) or whole (brute force).
 //! A frame is one named pass, the terrain draw.
 //!
 //! The bake is the warp & zoom pass run with Φ the identity grid: the same code, hence the same
@@ -179,9 +180,10 @@ const STREAMED_BLOCKS: usize = 1 << 19;
 /// The most indices a streamed GeoMipMap frame draws (4 bytes each, 32 MiB).
 const STREAMED_INDICES: usize = 1 << 23;
 
-/// The grid and its blocks over a tile pyramid: the sketch's own nodes (k = 0), δ and height
-/// ranges measured on its tiles ([`crate::tiles::blocks`]). What the bake would put in the grid
-/// beyond the sketch (octaves, with k > 0 or a negative bias) is refused, since δ would not see it.
+/// The grid and its blocks over a tile pyramid: the sketch at its own spacing (k = 0), δ and
+/// height ranges measured on its tiles ([`crate::tiles::blocks`]) with the vertices on the water
+/// where the sketch dips below it, as the bake's. What the bake would put in the grid beyond the
+/// sketch (octaves, with k > 0 or a negative bias) is refused, since δ would not see it.
 fn streamed_grid(
     s: &Shared,
     pyramid: &crate::tiles::Pyramid,
@@ -218,7 +220,7 @@ fn streamed_grid(
     }
     let grid = grid_of(atlas, 0, cells);
     let per_side = grid.blocks_per_side();
-    let stats = crate::tiles::blocks::block_stats_of(pyramid, cells, per_side)?;
+    let stats = crate::tiles::blocks::block_stats_of(pyramid, cells, per_side, atlas.water_m)?;
     let blocks = Blocks::from_stats(per_side, cells, grid.spacing, stats.delta, stats.z_range);
     Ok((grid, blocks))
 }
@@ -246,8 +248,9 @@ impl Baselines {
         let all = blocks.per_side * blocks.per_side;
         let capacity = match bake {
             Some(_) => (all, all * cells * cells * 6),
+            // An index is slot << slot_shift | vertex: no more slots than 32 bits number.
             None => (
-                all.min(STREAMED_BLOCKS),
+                all.min(STREAMED_BLOCKS).min(1 << (32 - grid.slot_shift())),
                 (all * cells * cells * 6).min(STREAMED_INDICES),
             ),
         };
@@ -334,7 +337,7 @@ impl Baselines {
                 indices <= max_indices
             })
             .collect();
-        if !self.noted {
+        if !self.noted && std::env::var_os("TERRAIN_QUIET").is_none() {
             self.noted = true;
             eprintln!(
                 "note: GeoMipMap sees {} blocks; its buffers hold {} blocks and {} indices, so the \

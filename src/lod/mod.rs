@@ -1,5 +1,6 @@
 //! The level-of-detail schemes behind the one [`Renderer`](crate::render::Renderer): the warped
-//! geometry image, GeoMipMap and brute force over a baked grid, and the ray-marched reference.
+//! geometry image, GeoMipMap and brute force over a baked grid (GeoMipMap over a tile pyramid reads
+//! its vertices per frame), and the ray-marched reference.
 //!
 //! Rules: the renderer owns what every mode shares (device, frame uniforms, atlas buffer, timer,
 //! submission and timing); a scheme owns its passes and buffers and answers the renderer through

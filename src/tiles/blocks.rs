@@ -5,17 +5,18 @@
 //! Rules:
 //! - The grid is GeoMipMap's at k = 0: spacing d = min(dx, dy), vertex (i, j) the bake's
 //!   Catmull-Rom sample of level 0 at texel coordinates (i·d/dx, j·d/dy), taps clamped to the
-//!   level. δ and the range follow [`crate::geomipmap::block_stats`], the rule the baked grid's
-//!   blocks use, so both paths choose the same levels.
-//! - Square cells: every vertex is a node (min(i, W−1), min(j, H−1)), and a block lies inside
-//!   one level-0 tile and its border (blocks start at multiples of their cells, which divide the
-//!   tile), so each tile is read once.
-//! - Other cells: a block row's vertices are sampled from the texel rows under it, read as a
+//!   level, and never below the water's surface (`sketch.water_level_m`). δ and the range follow
+//!   [`crate::geomipmap::block_stats`], the rule the baked grid's blocks use, so both paths
+//!   choose the same levels.
+//! - Square cells, with blocks that divide the tile: every vertex is a node
+//!   (min(i, W−1), min(j, H−1)), and a block lies inside one level-0 tile and its border, so
+//!   each tile is read once.
+//! - Otherwise a block row's vertices are sampled from the texel rows under it, read as a
 //!   window (each tile then about tile·dy / (block·d) times).
 //! - Either way on as many threads as the machine has.
 //! - The figures are written to `geomipmap-<block>.bin` in the pyramid folder (atomically) and
-//!   read back on the next run while `pyramid.toml` is unchanged; a folder that cannot be
-//!   written costs the measurement on every run, with a note.
+//!   read back on the next run while `pyramid.toml` and the water's level are unchanged; a
+//!   folder that cannot be written costs the measurement on every run, with a note.
 //!
 //! Rejected: measuring δ in `terrain tiles` for every block size. The sizes a scene may ask for
 //! (17 to 129 vertices) would cost four passes for the one a user flies, and a pyramid made
@@ -37,21 +38,29 @@ pub struct BlockStats {
     pub z_range: Vec<(f32, f32)>,
 }
 
-const MAGIC: &[u8; 8] = b"TGMMB\x001\n";
+const MAGIC: &[u8; 8] = b"TGMMB\x002\n";
 
-/// The figures of `per_side`² blocks of `cells` cells over `pyramid`'s level 0: from the folder's
-/// file when it matches, else measured (with progress) and kept there.
-pub fn block_stats_of(pyramid: &Pyramid, cells: usize, per_side: usize) -> Result<BlockStats> {
+/// The figures of `per_side`² blocks of `cells` cells over `pyramid`'s level 0 with the water's
+/// surface at `water` metres: from the folder's file when it matches, else measured (with
+/// progress) and kept there.
+pub fn block_stats_of(
+    pyramid: &Pyramid,
+    cells: usize,
+    per_side: usize,
+    water: f32,
+) -> Result<BlockStats> {
     let path = cache_path(pyramid, cells);
-    let key = meta_key(pyramid)?;
+    let key = meta_key(pyramid, water)?;
     if let Some(stats) = std::fs::read(&path)
         .ok()
         .and_then(|b| decode(&b, key, cells, per_side))
     {
         return Ok(stats);
     }
-    let stats = measure(pyramid, cells, per_side)?;
-    if let Err(e) = crate::app::output::write_atomic(&path, &encode(&stats, key)) {
+    let stats = measure(pyramid, cells, per_side, water)?;
+    if let Err(e) = crate::app::output::write_atomic(&path, &encode(&stats, key))
+        && std::env::var_os("TERRAIN_QUIET").is_none()
+    {
         eprintln!("note: GeoMipMap's block figures are measured again next run: {e}");
     }
     Ok(stats)
@@ -61,12 +70,15 @@ fn cache_path(pyramid: &Pyramid, cells: usize) -> PathBuf {
     pyramid.dir.join(format!("geomipmap-{}.bin", cells + 1))
 }
 
-/// A hash of `pyramid.toml`: a pyramid converted again invalidates its figures.
-fn meta_key(pyramid: &Pyramid) -> Result<u64> {
+/// A hash of `pyramid.toml` and the water's level: a pyramid converted again, or other water
+/// (the grid's vertices stand on it), invalidates the figures. The standard library's hasher may
+/// change between Rust releases; a new toolchain then measures once more.
+fn meta_key(pyramid: &Pyramid, water: f32) -> Result<u64> {
     let path = pyramid.dir.join(META);
     let text = std::fs::read(&path).map_err(|e| Error::io(Role::Sketch, &path, e))?;
     let mut h = std::hash::DefaultHasher::new();
     text.hash(&mut h);
+    water.to_bits().hash(&mut h);
     Ok(h.finish())
 }
 
@@ -78,6 +90,8 @@ struct Layout<'a> {
     pyramid: &'a Pyramid,
     cells: usize,
     per_side: usize,
+    /// The water's surface, which the grid's vertices never go below (as the bake's).
+    water: f32,
 }
 
 impl Layout<'_> {
@@ -97,7 +111,7 @@ impl Layout<'_> {
         // Past the level's edge a vertex takes the edge node, as the GPU's clamped reads do.
         let z = |gi: usize, gj: usize| {
             let (i, j) = (gi.min(w - 1), gj.min(h - 1));
-            heights[(j + border - ty * t) * side + i + border - tx * t]
+            heights[(j + border - ty * t) * side + i + border - tx * t].max(self.water)
         };
         let mut out = Vec::new();
         for &r in rows {
@@ -154,6 +168,7 @@ struct Strips<'a> {
     inv: [f32; 2],
     /// The grid's spacing, metres.
     d: f64,
+    water: f32,
 }
 
 impl Strips<'_> {
@@ -186,7 +201,7 @@ impl Strips<'_> {
                     let line: f32 = tx.iter().zip(wx).map(|(&x, wxa)| wxa * row[x]).sum();
                     z += wyb * line;
                 }
-                strip[jj * n + i] = z;
+                strip[jj * n + i] = z.max(self.water);
             }
         }
         let levels = c.trailing_zeros() as usize + 1;
@@ -231,75 +246,61 @@ impl Strips<'_> {
 }
 
 /// Measures every block on level 0's tiles.
-pub fn measure(pyramid: &Pyramid, cells: usize, per_side: usize) -> Result<BlockStats> {
+pub fn measure(pyramid: &Pyramid, cells: usize, per_side: usize, water: f32) -> Result<BlockStats> {
     let m = &pyramid.meta;
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    if m.dx_m != m.dy_m {
+    let mut stats = BlockStats {
+        per_side,
+        cells,
+        delta: vec![[0.0f32; MAX_LEVELS]; per_side * per_side],
+        z_range: vec![(0.0f32, 0.0f32); per_side * per_side],
+    };
+    let mut keep = |all: Vec<(usize, Stats)>| {
+        for (k, (d, r)) in all {
+            stats.delta[k] = d;
+            stats.z_range[k] = r;
+        }
+    };
+    // Between nodes, or blocks that straddle tiles: sampled from texel windows.
+    if m.dx_m != m.dy_m || !m.tile.is_multiple_of(cells) {
         let strips = Strips {
             pyramid,
             cells,
             per_side,
             inv: [(1.0 / m.dx_m) as f32, (1.0 / m.dy_m) as f32],
             d: m.dx_m.min(m.dy_m),
-        };
-        let mut stats = BlockStats {
-            per_side,
-            cells,
-            delta: vec![[0.0f32; MAX_LEVELS]; per_side * per_side],
-            z_range: vec![(0.0f32, 0.0f32); per_side * per_side],
+            water,
         };
         let mut progress = Progress::new("GeoMipMap blocks", per_side as f64);
         let batch = 16 * threads;
         for first in (0..per_side).step_by(batch) {
             let rows = first..(first + batch).min(per_side);
-            for (k, (d, r)) in strips.measure_rows(rows.clone(), threads)? {
-                stats.delta[k] = d;
-                stats.z_range[k] = r;
-            }
+            keep(strips.measure_rows(rows.clone(), threads)?);
             progress.advance(rows.len() as f64, &format!("block row {}", rows.end - 1));
         }
         progress.finish();
-        return Ok(stats);
-    }
-    if !m.tile.is_multiple_of(cells) {
-        return Err(Error::value(
-            "geomipmap.block",
-            format!(
-                "blocks of {cells} cells do not divide {}'s tiles of {}",
-                pyramid.dir.display(),
-                m.tile
-            ),
-        ));
-    }
-    let layout = Layout {
-        pyramid,
-        cells,
-        per_side,
-    };
-    let last_row = m.levels[0][1] - 1;
-    let (_, tiles_y) = m.tiles(0);
-    let mut delta = vec![[0.0f32; MAX_LEVELS]; per_side * per_side];
-    let mut z_range = vec![(0.0f32, 0.0f32); per_side * per_side];
-    let mut progress = Progress::new("GeoMipMap blocks", tiles_y as f64);
-    let mut next = 0;
-    for ty in 0..tiles_y {
-        let rows: Vec<usize> = (next..per_side)
-            .take_while(|&r| layout.tile_of(r, last_row) == ty)
-            .collect();
-        next += rows.len();
-        for (k, (d, r)) in layout.measure_row(ty, &rows, threads)? {
-            delta[k] = d;
-            z_range[k] = r;
+    } else {
+        let layout = Layout {
+            pyramid,
+            cells,
+            per_side,
+            water,
+        };
+        let last_row = m.levels[0][1] - 1;
+        let (_, tiles_y) = m.tiles(0);
+        let mut progress = Progress::new("GeoMipMap blocks", tiles_y as f64);
+        let mut next = 0;
+        for ty in 0..tiles_y {
+            let rows: Vec<usize> = (next..per_side)
+                .take_while(|&r| layout.tile_of(r, last_row) == ty)
+                .collect();
+            next += rows.len();
+            keep(layout.measure_row(ty, &rows, threads)?);
+            progress.advance(1.0, &format!("tile row {ty}"));
         }
-        progress.advance(1.0, &format!("tile row {ty}"));
+        progress.finish();
     }
-    progress.finish();
-    Ok(BlockStats {
-        per_side,
-        cells,
-        delta,
-        z_range,
-    })
+    Ok(stats)
 }
 
 fn encode(s: &BlockStats, key: u64) -> Vec<u8> {

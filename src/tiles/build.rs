@@ -46,7 +46,8 @@ fn remove_temporaries(dir: &Path) {
     for e in entries.flatten() {
         let (path, name) = (e.path(), e.file_name());
         let name = name.to_string_lossy();
-        if path.is_dir() {
+        // Not through a link: only what this folder holds.
+        if e.file_type().is_ok_and(|t| t.is_dir()) {
             remove_temporaries(&path);
         } else if name.starts_with('.') && name.ends_with(".tmp") {
             let _ = std::fs::remove_file(&path);

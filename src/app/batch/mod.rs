@@ -199,6 +199,7 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
     r.forget();
     r.relight(&scene);
     let frame = r.render_settled(&camera)?;
+    let planet = planet_keys(&scene, r.atlas(), &camera)?;
     let output = out_dir.join(format!("{}.png", item.name));
     write_image(&output, frame.width, frame.height, &frame.rgba)?;
     Ok(Snapshot {
@@ -208,7 +209,7 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
             position: camera.eye.to_array(),
             look_at: (camera.eye + camera.forward * 100.0).to_array(),
             fov_y_deg: camera.fov_y.to_degrees(),
-            planet: planet_keys(&scene, r.atlas(), &camera),
+            planet,
         },
         width: frame.width,
         height: frame.height,
@@ -220,26 +221,26 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
 }
 
 /// A planet camera's keys (its altitude above the ground as `[camera]` measures it); `None` off
-/// a planet.
-fn planet_keys(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Option<PlanetKeys> {
-    let (p, geo) = (scene.planet()?, camera.geo?);
+/// a planet. Fails where a streamed sketch's tile under the camera cannot be read.
+fn planet_keys(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<Option<PlanetKeys>> {
+    let (Some(p), Some(geo)) = (scene.planet(), camera.geo) else {
+        return Ok(None);
+    };
     let planet = crate::planet::Planet {
         radius: p.radius_m,
         sketch: atlas,
     };
-    // The camera was placed on this ground, so its tile has been read already.
     let ground = planet
-        .ground(&scene::detail_of(scene, atlas), geo.lat, geo.lon, 0.01)
-        .ok()?
+        .ground(&scene::detail_of(scene, atlas), geo.lat, geo.lon, 0.01)?
         .max(atlas.water_m as f64);
     let f = camera.forward;
-    Some(PlanetKeys {
+    Ok(Some(PlanetKeys {
         lat_deg: geo.lat.to_degrees(),
         lon_deg: geo.lon.to_degrees(),
         altitude_m: camera.eye.z - ground,
         heading_deg: f.x.atan2(f.y).to_degrees().rem_euclid(360.0),
         pitch_deg: f.z.clamp(-1.0, 1.0).asin().to_degrees(),
-    })
+    }))
 }
 
 pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
