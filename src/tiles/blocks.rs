@@ -133,29 +133,11 @@ impl Layout<'_> {
     ) -> Result<Vec<(usize, Stats)>> {
         let (tiles_x, _) = self.pyramid.meta.tiles(0);
         let chunk = tiles_x.div_ceil(threads).max(1);
-        let parts: Vec<Result<Vec<(usize, Stats)>>> = std::thread::scope(|s| {
-            let handles: Vec<_> = (0..tiles_x)
-                .step_by(chunk)
-                .map(|tx0| {
-                    s.spawn(move || {
-                        let mut out = Vec::new();
-                        for tx in tx0..(tx0 + chunk).min(tiles_x) {
-                            out.extend(self.measure_tile(tx, ty, rows)?);
-                        }
-                        Ok(out)
-                    })
-                })
-                .collect();
-            handles
-                .into_iter()
-                .map(|h| h.join().expect("a measuring thread does not panic"))
-                .collect()
-        });
-        let mut all = Vec::new();
-        for part in parts {
-            all.extend(part?);
-        }
-        Ok(all)
+        let parts: Vec<_> = (0..tiles_x)
+            .step_by(chunk)
+            .map(|tx0| tx0..(tx0 + chunk).min(tiles_x))
+            .collect();
+        on_threads(parts, |tx| self.measure_tile(tx, ty, rows))
     }
 }
 
@@ -219,30 +201,43 @@ impl Strips<'_> {
         rows: std::ops::Range<usize>,
         threads: usize,
     ) -> Result<Vec<(usize, Stats)>> {
-        let parts: Vec<Result<Vec<(usize, Stats)>>> = std::thread::scope(|s| {
-            let handles: Vec<_> = (0..threads)
-                .map(|t| {
-                    let rows = rows.clone();
-                    s.spawn(move || {
-                        let mut out = Vec::new();
-                        for r in rows.skip(t).step_by(threads) {
-                            out.extend(self.measure_row(r)?);
-                        }
-                        Ok(out)
-                    })
-                })
-                .collect();
-            handles
-                .into_iter()
-                .map(|h| h.join().expect("a measuring thread does not panic"))
-                .collect()
-        });
-        let mut all = Vec::new();
-        for part in parts {
-            all.extend(part?);
-        }
-        Ok(all)
+        let parts: Vec<_> = (0..threads)
+            .map(|t| rows.clone().skip(t).step_by(threads))
+            .collect();
+        on_threads(parts, |r| self.measure_row(r))
     }
+}
+
+/// `each` over every index of every part, a thread per part, the results gathered.
+fn on_threads<P, F>(parts: Vec<P>, each: F) -> Result<Vec<(usize, Stats)>>
+where
+    P: IntoIterator<Item = usize> + Send,
+    F: Fn(usize) -> Result<Vec<(usize, Stats)>> + Sync,
+{
+    let each = &each;
+    let results: Vec<Result<Vec<(usize, Stats)>>> = std::thread::scope(|s| {
+        let handles: Vec<_> = parts
+            .into_iter()
+            .map(|part| {
+                s.spawn(move || {
+                    let mut out = Vec::new();
+                    for k in part {
+                        out.extend(each(k)?);
+                    }
+                    Ok(out)
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("a measuring thread does not panic"))
+            .collect()
+    });
+    let mut all = Vec::new();
+    for r in results {
+        all.extend(r?);
+    }
+    Ok(all)
 }
 
 /// Measures every block on level 0's tiles.
