@@ -53,6 +53,8 @@ pub struct Grid {
     pub spacing: f64,
     /// World position of vertex (0, 0).
     pub origin: DVec2,
+    /// The baked heights, row by row; empty for a grid over a tile pyramid, whose vertices are
+    /// read on the GPU (so [`Grid::z`] and what reads it are for baked grids).
     pub heights: Vec<f32>,
 }
 

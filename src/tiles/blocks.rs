@@ -141,7 +141,8 @@ impl Layout<'_> {
     }
 }
 
-/// Grid vertex heights between nodes (cells that are not square).
+/// Grid vertex heights sampled between nodes (cells that are not square), or from windows
+/// (blocks that straddle tiles).
 struct Strips<'a> {
     pyramid: &'a Pyramid,
     cells: usize,
