@@ -113,9 +113,9 @@ fn grid_index(g: vec2<u32>) -> u32 {
 
 #ifdef GRID_STREAMED
 // Grid vertex `g` (x, y from the grid's origin, z, split octave) evaluated where it is drawn, as
-// warp_zoom.wgsl bakes it with Φ the identity: a grid over a tile pyramid is the sketch's own
-// nodes (k = 0) with no octaves in it (baseline.rs refuses the rest), so the vertex is the
-// sketch's height there, read through the tile cache, which the read marks.
+// warp_zoom.wgsl bakes it with Φ the identity: a grid over a tile pyramid samples the sketch at
+// its own spacing (k = 0) with no octaves in it (baseline.rs refuses the rest), so the vertex is
+// the sketch's bicubic height there, read through the tile cache, which the read marks.
 fn grid_vertex(g: vec2<u32>) -> vec4<f32> {
     let d = frame.atlas.d_atlas;
     let p = vec2<f32>(min(g, vec2<u32>(frame.mesh.mesh - 1u))) * d;

@@ -93,11 +93,11 @@ fn planet_texel(i_in: i32, j_in: i32, l: u32) -> f32 {
 }
 
 #ifdef STREAMED
-// Node `n_in` of level l (clamped into the level) through the tile cache: (height, fade, level read). The
-// page-table entry of n's tile holds its page, or where it is not resident the page of its
-// finest resident ancestor on level r (filled down by the cache): the node over n there stands
-// in, a point sample, as a coarser level stands in for every streamed read. Marks as `lookup`
-// in atlas.wgsl does (with `want`, a stand-in entry asks for its tile).
+// Node `n_in` of level l (clamped into the level) through the tile cache: (height, fade, level
+// read). The page-table entry of n's tile holds its page, or where it is not resident the page
+// of its finest resident ancestor on level r (filled down by the cache): the node over n there
+// stands in, a point sample, as a coarser level stands in for every streamed read. Marks as
+// `lookup` in atlas.wgsl does (with `want`, a stand-in entry asks for its tile).
 fn page_texel(n_in: vec2<i32>, l: u32, want: bool) -> vec3<f32> {
     // A node halved from an odd-sized finer level may lie one past this level's last.
     let n = min(n_in, vec2<i32>(frame.atlas.level[l].xy) - 1);
