@@ -542,6 +542,16 @@ fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path, water: f64)
         db >= 50.0,
         "{name}: {db:.1} dB against the sketch in memory"
     );
+    drop(s);
+
+    // A budget of 8 blocks draws the 8 nearest and counts the ones it left out.
+    let mut tight = streamed.clone();
+    tight.geomipmap.max_blocks = 8;
+    let mut t = Renderer::new(&tight, Mode::Geomipmap, View::Shaded).unwrap();
+    let frame = t.render(&camera).unwrap();
+    let b = t.lod::<Baselines>().unwrap();
+    assert_eq!(frame.blocks, Some(8), "{name}");
+    assert_eq!(b.dropped + 8, expected.blocks.unwrap(), "{name}");
 }
 
 #[test]

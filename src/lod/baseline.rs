@@ -173,12 +173,11 @@ pub struct Baselines {
     pub precompute_ms: f64,
 }
 
-/// The most blocks a streamed GeoMipMap frame draws (80 bytes each on the GPU, 40 MiB). The
-/// README's view of the 32,768² pyramid sees 472,057 blocks of 33² vertices to its far plane, at
-/// 1.9 M triangles; beyond these the farthest blocks are left out, with a note.
-const STREAMED_BLOCKS: usize = 1 << 19;
-/// The most indices a streamed GeoMipMap frame draws (4 bytes each, 32 MiB).
-const STREAMED_INDICES: usize = 1 << 23;
+/// Indices per block a streamed GeoMipMap frame has room for (`geomipmap.max_blocks` sets the
+/// blocks): a far block at its coarsest level draws 6, a near one hundreds. The README's view of
+/// the 32,768² pyramid draws 472,057 blocks and 5.7 M indices, 12 a block. Never less than room
+/// for 8 blocks at their finest level, so a small budget still draws the nearest ground.
+const INDICES_PER_BLOCK: usize = 16;
 
 /// The grid and its blocks over a tile pyramid: the sketch at its own spacing (k = 0), δ and
 /// height ranges measured on its tiles ([`crate::tiles::blocks`]) with the vertices on the water
@@ -249,10 +248,14 @@ impl Baselines {
         let capacity = match bake {
             Some(_) => (all, all * cells * cells * 6),
             // An index is slot << slot_shift | vertex: no more slots than 32 bits number.
-            None => (
-                all.min(STREAMED_BLOCKS).min(1 << (32 - grid.slot_shift())),
-                (all * cells * cells * 6).min(STREAMED_INDICES),
-            ),
+            None => {
+                let max = scene.geomipmap.max_blocks as usize;
+                (
+                    all.min(max).min(1 << (32 - grid.slot_shift())),
+                    (all * cells * cells * 6)
+                        .min((max * INDICES_PER_BLOCK).max(8 * cells * cells * 6)),
+                )
+            }
         };
         let block_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("blocks"),

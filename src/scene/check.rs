@@ -131,6 +131,12 @@ impl Scene {
         if let Some(k) = g.k {
             within("geomipmap.k", k as f64, 0.0, 6.0)?;
         }
+        within(
+            "geomipmap.max_blocks",
+            g.max_blocks as f64,
+            1.0,
+            2_097_152.0,
+        )?;
         let st = &self.stream;
         within("stream.gpu_mb", st.gpu_mb, 1.0, 65536.0)?;
         within("stream.cpu_mb", st.cpu_mb, 0.0, 1048576.0)?;

@@ -272,6 +272,9 @@ pub struct GeoMipMapSection {
     pub morph: bool,
     /// Vertices per block side: 17, 33, 65 or 129.
     pub block: u32,
+    /// Over a tile pyramid: the most blocks a frame draws (the GPU holds 144 bytes for each,
+    /// its record and 16 indices); past that the farthest are left out.
+    pub max_blocks: u32,
 }
 impl Default for GeoMipMapSection {
     fn default() -> Self {
@@ -281,6 +284,7 @@ impl Default for GeoMipMapSection {
             exact: false,
             morph: true,
             block: 33,
+            max_blocks: 524_288,
         }
     }
 }
