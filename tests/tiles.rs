@@ -749,6 +749,12 @@ fn a_streamed_planet_draws_as_its_sketch_in_memory_once_resident() {
     };
     let whole = common::scene(&text(&tif, ""), dir.clone());
     let streamed = common::scene(&text(&pyr, "[stream]\ngpu_mb = 4"), dir.clone());
+    // A regional pyramid is no planet: refused in one line, as the file it came from is.
+    let (_, _, regional) = jacksboro_pyramid("tiles-planet-regional");
+    let e = terrain::scene::load_atlas(&common::scene(&text(&regional, ""), dir.clone()))
+        .expect_err("a regional pyramid is refused")
+        .to_string();
+    assert!(e.contains("global") && !e.contains('\n'), "{e}");
     for mode in [Mode::Clipmaps, Mode::Reference] {
         let mut m = Renderer::new(&whole, mode, View::Shaded).unwrap();
         let camera = terrain::scene::camera_of(&whole, &m.atlas).unwrap();
