@@ -122,26 +122,9 @@ fn grid_vertex(g: vec2<u32>) -> vec4<f32> {
     let z = atlas_height(p + frame.mesh.mesh_offset, d);
     return vec4<f32>(p, max(z, frame.atlas.water_m), -frame.detail.bias);
 }
-
-// The normals pass's central differences at grid vertex `g`.
-fn grid_normal(g: vec2<u32>) -> vec3<f32> {
-    let hi = vec2<u32>(frame.mesh.mesh - 1u);
-    let ds = grid_vertex(min(g + vec2<u32>(1u, 0u), hi)).xyz - grid_vertex(g - min(vec2<u32>(1u, 0u), g)).xyz;
-    let dt = grid_vertex(min(g + vec2<u32>(0u, 1u), hi)).xyz - grid_vertex(g - min(vec2<u32>(0u, 1u), g)).xyz;
-    let c = cross(ds, dt);
-    let len = length(c);
-    if (len > 0.0) {
-        return c / len;
-    }
-    return vec3<f32>(0.0, 0.0, 1.0);
-}
 #else
 fn grid_vertex(g: vec2<u32>) -> vec4<f32> {
     return detailed[grid_index(g)];
-}
-
-fn grid_normal(g: vec2<u32>) -> vec3<f32> {
-    return vertex_normal(grid_index(g));
 }
 #endif
 
@@ -154,9 +137,13 @@ fn level_normal(g: vec2<u32>, s: u32) -> vec3<f32> {
     // Shading takes the terrain function's normal per pixel; the mesh's is not read.
     return vec3<f32>(0.0, 0.0, 1.0);
 #else
+#ifdef GRID_STREAMED
+    // No normals pass: at s = 1 the differences below are its own.
+#else
     if (s == 1u) {
-        return grid_normal(g);
+        return vertex_normal(grid_index(g));
     }
+#endif
     let hi = vec2<u32>(frame.mesh.mesh - 1u);
     let east = grid_vertex(min(g + vec2<u32>(s, 0u), hi)).xyz;
     let west = grid_vertex(g - min(vec2<u32>(s, 0u), g)).xyz;

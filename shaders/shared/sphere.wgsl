@@ -93,36 +93,14 @@ fn planet_texel(i_in: i32, j_in: i32, l: u32) -> f32 {
 }
 
 #ifdef STREAMED
-// Node `n_in` of level l (clamped into the level) through the tile cache: (height, fade, level
-// read). The page-table entry of n's tile holds its page, or where it is not resident the page
-// of its finest resident ancestor on level r (filled down by the cache): the node over n there
-// stands in, a point sample, as a coarser level stands in for every streamed read. Marks as
-// `lookup` in atlas.wgsl does (with `want`, a stand-in entry asks for its tile).
-fn page_texel(n_in: vec2<i32>, l: u32, want: bool) -> vec3<f32> {
-    // A node halved from an odd-sized finer level may lie one past this level's last.
-    let n = min(n_in, vec2<i32>(frame.atlas.level[l].xy) - 1);
-    let t = vec2<u32>(n) / frame.atlas.tile;
-    let e = table_index(l, t);
-    let page_fade = u32(atlas[e]);
-    let r = u32(atlas[e + 1u]);
-    var node = n;
-    var tile = t;
-    if (r == l) {
-        mark(e, 2u);
-    } else {
-        if (want) {
-            mark(e, 1u);
-        }
-        let level = frame.atlas.level[r];
-        let tiles = vec2<u32>(level.w, (level.y + frame.atlas.tile - 1u) / frame.atlas.tile);
-        node = min(n >> vec2<u32>(r - l), vec2<i32>(level.xy) - 1);
-        tile = min(t >> vec2<u32>(r - l), tiles - 1u);
-        mark(table_index(r, tile), 2u);
-    }
-    let side = frame.atlas.tile + 2u * frame.atlas.border;
-    let c = vec2<u32>(node - vec2<i32>(tile * frame.atlas.tile) + i32(frame.atlas.border));
-    let h = atlas[(page_fade >> 8u) * side * side + c.y * side + c.x];
-    return vec3<f32>(h, f32(page_fade & 255u) / 255.0, f32(r));
+// Node `n` of level l through the tile cache: (height, fade, level read). atlas.wgsl's `lookup`
+// at the node's centre finds its tile's page, or its finest resident ancestor's on level r (and
+// marks them); there the node over n stands in, a point sample.
+fn page_texel(n: vec2<i32>, l: u32, want: bool) -> vec3<f32> {
+    let s = f32(1u << l);
+    let a = lookup((vec2<f32>(n) + 0.5) * s - 0.5, l, want);
+    let node = n >> vec2<u32>(a.level - l);
+    return vec3<f32>(load(a.texels, node.x, node.y), f32(a.page_fade & 255u) / 255.0, f32(a.level));
 }
 #endif
 

@@ -43,6 +43,30 @@ impl AtlasBinding {
         b
     }
 
+    /// Refuses a streamed sketch where a pass reads it in its vertex shader (`what`) and the
+    /// adapter cannot write the tile marks from there (`key`: the scene key to name, `instead`:
+    /// what to do).
+    pub fn check_vertex_marks(
+        &self,
+        ctx: &GpuContext,
+        key: &'static str,
+        what: &str,
+        instead: &str,
+    ) -> Result<()> {
+        let writable = wgpu::Features::VERTEX_WRITABLE_STORAGE;
+        if self.marks.is_none() || ctx.device.features().contains(writable) {
+            return Ok(());
+        }
+        Err(Error::value(
+            key,
+            format!(
+                "{what} reads a tile pyramid in the vertex shader, and {} cannot write the tile \
+                 marks from there: {instead}",
+                ctx.adapter_name()
+            ),
+        ))
+    }
+
     /// Adds the shader flag the binding needs.
     pub fn flag(&self, flags: &mut Vec<&'static str>) {
         if self.marks.is_some() {

@@ -202,21 +202,8 @@ fn streamed_grid(
              measured on the sketch alone: use a bias of 0 or more",
         ));
     }
-    if !s
-        .ctx
-        .device
-        .features()
-        .contains(wgpu::Features::VERTEX_WRITABLE_STORAGE)
-    {
-        return Err(Error::value(
-            "render.mode",
-            format!(
-                "GeoMipMap over a tile pyramid reads the sketch in the vertex shader, and {} \
-                 cannot write the tile marks from there: use warped mode",
-                s.ctx.adapter_name()
-            ),
-        ));
-    }
+    s.atlas_binding
+        .check_vertex_marks(s.ctx, "render.mode", "GeoMipMap", "use warped mode")?;
     let grid = grid_of(atlas, 0, cells);
     let per_side = grid.blocks_per_side();
     let stats = crate::tiles::blocks::block_stats_of(pyramid, cells, per_side, atlas.water_m)?;
@@ -321,9 +308,18 @@ impl Baselines {
     fn fit(&mut self) {
         let sel = &mut self.selection;
         let (max_blocks, max_indices) = self.capacity;
-        let total: usize = sel.gpu.iter().map(|g| self.templates.count(g)).sum();
         self.dropped = 0;
-        if sel.gpu.len() <= max_blocks && total <= max_indices {
+        // A baked grid's buffers hold every block at level 0: nothing to count.
+        let whole = self.blocks.per_side.pow(2) * self.blocks.cells.pow(2) * 6;
+        if sel.gpu.len() <= max_blocks
+            && (max_indices >= whole
+                || sel
+                    .gpu
+                    .iter()
+                    .map(|g| self.templates.count(g))
+                    .sum::<usize>()
+                    <= max_indices)
+        {
             return;
         }
         let mut order: Vec<usize> = (0..sel.gpu.len()).collect();

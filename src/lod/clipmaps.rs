@@ -50,17 +50,12 @@ impl Clipmaps {
             "render.mode",
             "clipmaps draws planet scenes (add [planet])",
         ))?;
-        let vertex_marks = wgpu::Features::VERTEX_WRITABLE_STORAGE;
-        if s.atlas_binding.marks.is_some() && !s.ctx.device.features().contains(vertex_marks) {
-            return Err(Error::value(
-                "sketch.path",
-                format!(
-                    "a planet streamed from a tile pyramid reads it in the vertex shader, and {} \
-                     cannot write the tile marks from there: give the file it was converted from",
-                    s.ctx.adapter_name()
-                ),
-            ));
-        }
+        s.atlas_binding.check_vertex_marks(
+            s.ctx,
+            "sketch.path",
+            "a planet",
+            "give the file it was converted from",
+        )?;
         let rings = Rings::new(p.phi_steps, p.rings_per_level);
         let device = &s.alloc;
         let planet_uniforms = PlanetUniforms::buffer(device);

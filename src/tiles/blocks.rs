@@ -152,6 +152,8 @@ struct Strips<'a> {
     /// The grid's spacing, metres.
     d: f64,
     water: f32,
+    /// Each grid column's taps and weights along x, the same for every row.
+    cols: Vec<([usize; 4], [f32; 4])>,
 }
 
 impl Strips<'_> {
@@ -174,10 +176,9 @@ impl Strips<'_> {
         let y0 = rows[0].0[0];
         let y1 = rows[c].0[3];
         let texels = self.pyramid.window(0, 0, y0, w, y1 - y0 + 1)?;
-        let cols: Vec<_> = (0..n).map(|i| self.taps(i, 0, w)).collect();
         let mut strip = vec![0f32; (c + 1) * n];
         for (jj, (ty, wy)) in rows.iter().enumerate() {
-            for (i, (tx, wx)) in cols.iter().enumerate() {
+            for (i, (tx, wx)) in self.cols.iter().enumerate() {
                 let mut z = 0.0;
                 for (y, wyb) in ty.iter().zip(wy) {
                     let row = &texels[(y - y0) * w..];
@@ -259,14 +260,18 @@ pub fn measure(pyramid: &Pyramid, cells: usize, per_side: usize, water: f32) -> 
     };
     // Between nodes, or blocks that straddle tiles: sampled from texel windows.
     if m.dx_m != m.dy_m || !m.tile.is_multiple_of(cells) {
-        let strips = Strips {
+        let mut strips = Strips {
             pyramid,
             cells,
             per_side,
             inv: [(1.0 / m.dx_m) as f32, (1.0 / m.dy_m) as f32],
             d: m.dx_m.min(m.dy_m),
             water,
+            cols: Vec::new(),
         };
+        strips.cols = (0..cells * per_side + 1)
+            .map(|i| strips.taps(i, 0, m.levels[0][0]))
+            .collect();
         let mut progress = Progress::new("GeoMipMap blocks", per_side as f64);
         let batch = 16 * threads;
         for first in (0..per_side).step_by(batch) {
