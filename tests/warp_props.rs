@@ -2,7 +2,8 @@
 
 use proptest::prelude::*;
 use terrain::scene::WarpMethod;
-use terrain::stage::warp::{LineScratch, Warp, line_mapping, pair_unfolded};
+use terrain::stage::lines::{LineScratch, line_mapping};
+use terrain::stage::warp::{Warp, pair_unfolded};
 
 /// Importance maps of side 2..48 with values log-uniform over 1e-6..1e6.
 fn importance_map() -> impl Strategy<Value = (usize, Vec<f32>)> {

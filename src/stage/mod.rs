@@ -8,6 +8,7 @@ pub mod budget;
 pub mod figures;
 pub mod hold;
 pub mod importance;
+pub mod lines;
 pub mod quality;
 pub mod sketch_map;
 pub mod warp;

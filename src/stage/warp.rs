@@ -66,6 +66,7 @@
 //! mappings, which is why partial relaxation does not help there.
 
 use crate::scene::WarpMethod;
+use crate::stage::lines::{LANES, LaneScratch, LineScratch, lane_mappings, line_mapping};
 
 pub struct Warp {
     n: usize,
@@ -74,11 +75,12 @@ pub struct Warp {
     pub max_log2_step: f32,
     importance: Vec<f32>,
     scratch: LineScratch,
-    line: Vec<f64>,
+    lanes: LaneScratch,
+    lanes_in: Vec<[f32; LANES]>,
+    lanes_out: Vec<[f64; LANES]>,
     // The row pass's output, transposed (column s at [s·n ..]) so the column pass reads lines.
     row_x: Vec<f32>,
     row_importance: Vec<f32>,
-    column_maps: Vec<f64>,
     mean_importance: Vec<f32>,
     mean_map: Vec<f64>,
     /// Columns the guard sent to the mean column warp.
@@ -99,10 +101,11 @@ impl Warp {
             max_log2_step,
             importance: vec![0.0; n * n],
             scratch: LineScratch::new(n),
-            line: vec![0.0; n],
+            lanes: LaneScratch::new(n),
+            lanes_in: vec![[0.0; LANES]; n],
+            lanes_out: vec![[0.0; LANES]; n],
             row_x: vec![0.0; n * n],
             row_importance: vec![0.0; n * n],
-            column_maps: vec![0.0; n * n],
             mean_importance: vec![0.0; n],
             mean_map: vec![0.0; n],
             follows_mean: vec![false; n],
@@ -120,6 +123,36 @@ impl Warp {
     /// Warps the n² grid of spacing `d0` (region-local: texel (i, j) at (i·d0, j·d0)) by
     /// `importance` (n², row-major). The result is in [`Warp::phi`].
     pub fn run(&mut self, importance: &[f32], d0: f32) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the processor has AVX-512F, checked just above.
+                return unsafe { self.run_avx512(importance, d0) };
+            }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the processor has AVX2, checked just above.
+                return unsafe { self.run_avx2(importance, d0) };
+            }
+        }
+        self.run_lanes(importance, d0)
+    }
+
+    /// [`Warp::run`] compiled for AVX-512's eight f64 lanes, one [`LANES`] group to a register.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn run_avx512(&mut self, importance: &[f32], d0: f32) {
+        self.run_lanes(importance, d0)
+    }
+
+    /// [`Warp::run`] compiled for AVX2's four f64 lanes.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn run_avx2(&mut self, importance: &[f32], d0: f32) {
+        self.run_lanes(importance, d0)
+    }
+
+    #[inline(always)]
+    fn run_lanes(&mut self, importance: &[f32], d0: f32) {
         let n = self.n;
         assert_eq!(importance.len(), n * n, "importance map size");
         self.importance.copy_from_slice(importance);
@@ -143,20 +176,16 @@ impl Warp {
         // Column by column, so that the guard's count of folded pairs can stop the pass as soon
         // as most pairs fold: every column then follows the mean, whatever the rest would do.
         let mut folded = 0;
-        for s in 0..n {
-            let line = &self.row_importance[s * n..(s + 1) * n];
-            line_mapping(
-                line,
-                &mut self.scratch,
-                &mut self.column_maps[s * n..(s + 1) * n],
-            );
-            self.column_pass(s, d0);
-            if guarded && s > 0 {
-                self.folded[s - 1] = !pair_unfolded(&self.phi, n, s - 1);
-                folded += usize::from(self.folded[s - 1]);
-                if 2 * folded > n - 1 {
-                    self.all_to_mean(d0);
-                    return;
+        for s0 in (0..n).step_by(LANES) {
+            self.map_columns(s0, d0);
+            for s in s0..(s0 + LANES).min(n) {
+                if guarded && s > 0 {
+                    self.folded[s - 1] = !pair_unfolded(&self.phi, n, s - 1);
+                    folded += usize::from(self.folded[s - 1]);
+                    if 2 * folded > n - 1 {
+                        self.all_to_mean(d0);
+                        return;
+                    }
                 }
             }
         }
@@ -166,6 +195,7 @@ impl Warp {
     }
 
     /// Every column to the mean column warp (near views, where most column pairs fold).
+    #[inline(always)]
     fn all_to_mean(&mut self, d0: f32) {
         self.follows_mean.fill(true);
         for s in 0..self.n {
@@ -174,38 +204,84 @@ impl Warp {
         self.guarded_columns = self.n;
     }
 
+    #[inline(always)]
     fn row_pass(&mut self, d0: f32) {
         let n = self.n;
-        for t in 0..n {
-            let row = &self.importance[t * n..(t + 1) * n];
-            line_mapping(row, &mut self.scratch, &mut self.line);
-            for s in 0..n {
-                let a = self.line[s];
-                self.row_x[s * n + t] = (a * d0 as f64) as f32;
-                self.row_importance[s * n + t] = lerp_at(row, a);
+        for t0 in (0..n).step_by(LANES) {
+            // Lanes past the last row repeat it; their results are not kept.
+            let rows: [&[f32]; LANES] =
+                std::array::from_fn(|l| &self.importance[(t0 + l).min(n - 1) * n..][..n]);
+            for (i, v) in self.lanes_in.iter_mut().enumerate() {
+                for l in 0..LANES {
+                    v[l] = rows[l][i];
+                }
+            }
+            lane_mappings(&self.lanes_in, &mut self.lanes, &mut self.lanes_out);
+            let kept = LANES.min(n - t0);
+            for (s, a) in self.lanes_out.iter().enumerate() {
+                let mut x = [0.0f32; LANES];
+                let mut v = [0.0f32; LANES];
+                for l in 0..LANES {
+                    x[l] = (a[l] * d0 as f64) as f32;
+                    v[l] = lerp_at(rows[l], a[l]);
+                }
+                let at = s * n + t0;
+                if kept == LANES {
+                    // A fixed-size copy: a slice of run-time length calls memmove.
+                    self.row_x[at..][..LANES].copy_from_slice(&x);
+                    self.row_importance[at..][..LANES].copy_from_slice(&v);
+                } else {
+                    self.row_x[at..][..kept].copy_from_slice(&x[..kept]);
+                    self.row_importance[at..][..kept].copy_from_slice(&v[..kept]);
+                }
             }
         }
     }
 
-    /// Column s of Φ from its own column mapping, or from the mean one once the guard says so.
+    /// Columns `s0 ..` of Φ (as many as there are lanes, or to the last column), each from its
+    /// own column mapping.
+    #[inline(always)]
+    fn map_columns(&mut self, s0: usize, d0: f32) {
+        let n = self.n;
+        // Lanes past the last column repeat it; their results are not kept.
+        let column = |l: usize| (s0 + l).min(n - 1) * n;
+        let lines: [&[f32]; LANES] =
+            std::array::from_fn(|l| &self.row_importance[column(l)..][..n]);
+        for (t, v) in self.lanes_in.iter_mut().enumerate() {
+            for l in 0..LANES {
+                v[l] = lines[l][t];
+            }
+        }
+        lane_mappings(&self.lanes_in, &mut self.lanes, &mut self.lanes_out);
+        let xs: [&[f32]; LANES] = std::array::from_fn(|l| &self.row_x[column(l)..][..n]);
+        let kept = LANES.min(n - s0);
+        for (t, b) in self.lanes_out.iter().enumerate() {
+            let mut p = [[0.0f32; 2]; LANES];
+            for l in 0..LANES {
+                p[l] = [lerp_at(xs[l], b[l]), (b[l] * d0 as f64) as f32];
+            }
+            if kept == LANES {
+                self.phi[t * n + s0..][..LANES].copy_from_slice(&p);
+            } else {
+                self.phi[t * n + s0..][..kept].copy_from_slice(&p[..kept]);
+            }
+        }
+    }
+
+    /// Column s of Φ from the mean column mapping (the guard's).
+    #[inline(always)]
     fn column_pass(&mut self, s: usize, d0: f32) {
         let n = self.n;
-        let map = if self.follows_mean[s] {
-            &self.mean_map[..]
-        } else {
-            &self.column_maps[s * n..(s + 1) * n]
-        };
-        let xs = &self.row_x[s * n..(s + 1) * n];
-        for (t, &b) in map.iter().enumerate() {
-            let r = (b as usize).min(n - 2); // b ≥ 0: the cast is floor
-            let f = (b - r as f64) as f32;
-            self.phi[t * n + s] = [xs[r] + (xs[r + 1] - xs[r]) * f, (b * d0 as f64) as f32];
+        let xs = &self.row_x[s * n..][..n];
+        for (t, &b) in self.mean_map.iter().enumerate() {
+            self.phi[t * n + s] = [lerp_at(xs, b), (b * d0 as f64) as f32];
         }
     }
 
     /// Sends the columns beside every folded cell (`folded`, set by the column pass) to the mean
     /// column warp, until no triangle of the mesh is flipped. Each round moves at least one more
     /// column, so it ends.
+    #[inline(always)]
     fn guard(&mut self, d0: f32) {
         let n = self.n;
         loop {
@@ -238,80 +314,11 @@ impl Warp {
     }
 }
 
-/// Scratch for [`line_mapping`], sized for one line.
-#[derive(Clone, Debug)]
-pub struct LineScratch {
-    u: Vec<f64>,
-    segment: Vec<u32>,
-}
-
-impl LineScratch {
-    pub fn new(n: usize) -> LineScratch {
-        LineScratch {
-            u: vec![0.0; n],
-            segment: vec![0; n],
-        }
-    }
-}
-
-/// Fractional source index of each output sample of one line with importance `imp` (its length
-/// is the line's). Non-finite or negative importance counts as 0; a line with no weight stays put.
-///
-/// Branch-free: each segment scatters a mark at its first output, a running sum of the marks is
-/// then every output's segment. A search that walks the segments mispredicts once per segment.
-pub fn line_mapping(imp: &[f32], scratch: &mut LineScratch, out: &mut [f64]) {
-    let n = out.len();
-    let LineScratch { u, segment } = scratch;
-    let weight = |v: f32| {
-        if v.is_finite() && v > 0.0 {
-            v as f64
-        } else {
-            0.0
-        }
-    };
-    u[0] = 0.0;
-    let mut prev = weight(imp[0]);
-    for i in 0..n - 1 {
-        let next = weight(imp[i + 1]);
-        u[i + 1] = u[i] + 0.5 * (prev + next);
-        prev = next;
-    }
-    let total = u[n - 1];
-    if !(total > 0.0 && total.is_finite()) {
-        for (j, o) in out.iter_mut().enumerate() {
-            *o = j as f64;
-        }
-        return;
-    }
-    let to_output = (n - 1) as f64 / total;
-    let step = total / (n - 1) as f64;
-    segment.fill(0);
-    for &ui in &u[1..n - 1] {
-        // The first output at or after u_i (x ≥ 0, so the cast is floor and this is ceil).
-        let x = ui * to_output;
-        let floor = x as usize;
-        let first = (floor + usize::from((floor as f64) < x)).min(n - 1);
-        segment[first] += 1;
-    }
-    let mut seg = 0u32;
-    for (j, o) in out.iter_mut().enumerate() {
-        seg += segment[j];
-        let i = seg as usize;
-        let width = u[i + 1] - u[i];
-        let f = if width > 0.0 {
-            (j as f64 * step - u[i]) / width
-        } else {
-            0.0
-        };
-        *o = i as f64 + f.clamp(0.0, 1.0);
-    }
-    out[0] = 0.0;
-    out[n - 1] = (n - 1) as f64;
-}
-
 /// `values` linearly interpolated at fractional index `a`.
+#[inline(always)]
 fn lerp_at(values: &[f32], a: f64) -> f32 {
-    let i = (a as usize).min(values.len() - 2); // a ≥ 0: the cast is floor
+    // a ≥ 0: the cast is floor; i32, which vectorises (lines are far shorter than 2^31).
+    let i = (a as i32 as usize).min(values.len() - 2);
     let f = (a - i as f64) as f32;
     values[i] + (values[i + 1] - values[i]) * f
 }
@@ -345,6 +352,7 @@ fn limit_gradient(v: &mut [f32], n: usize, factor: f32) {
 }
 
 /// Whether every cell between columns s and s+1 of Φ is sound (see [`cell_turn`]).
+#[inline(always)]
 pub fn pair_unfolded(phi: &[[f32; 2]], n: usize, s: usize) -> bool {
     let mut least = f32::INFINITY;
     for t in 0..n - 1 {
@@ -358,6 +366,7 @@ pub fn pair_unfolded(phi: &[[f32; 2]], n: usize, s: usize) -> bool {
 /// top edges run east, so every row of Φ increases in x as every column increases in y.
 /// Only the sign means anything. f32 suffices: edges are at least 1/(n−1) of a texel long,
 /// coordinates at most n texels.
+#[inline(always)]
 pub fn cell_turn(phi: &[[f32; 2]], n: usize, s: usize, t: usize) -> f32 {
     let (a, b) = (phi[t * n + s], phi[t * n + s + 1]);
     let (c, d) = (phi[(t + 1) * n + s + 1], phi[(t + 1) * n + s]);

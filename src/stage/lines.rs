@@ -1,0 +1,379 @@
+//! Line mappings: the one-dimensional warp that the row and column passes apply to every line
+//! (DESIGN.md's warp): weights `w_i = (I_i + I_{i+1})/2`, positions `u` their running sum scaled to
+//! `n−1`, output sample j interpolated inside the segment holding `u = j`. A mapping gives the
+//! fractional source index of each output sample, monotone, 0 and n−1 at the ends.
+//!
+//! Rules:
+//! - [`line_mapping`] maps one line; it is the reference and serves the guard's mean mapping.
+//! - [`lane_mappings`] maps [`LANES`] lines at once, each lane bit-identical to
+//!   [`line_mapping`]; the warp's passes use it. With AVX2 it runs as intrinsics (`avx2`),
+//!   otherwise as plain Rust (`portable`).
+//! - Non-finite or negative importance counts as 0; a line with no weight stays put.
+//!
+//! Why lanes across lines, measured (`benches/cpu_stage.rs`, jacksboro near, 128², medians of
+//! one session on the 2-core development VM): a line's running sum is a chain of dependent
+//! additions, one per sample, that no vector width shortens, and finding each output's segment
+//! is a data-dependent load. Side by side, eight lines share each step of the chain and each
+//! lookup is one gather. See the figures in [`lane_mappings`].
+
+/// Scratch for [`line_mapping`], sized for one line.
+#[derive(Clone, Debug)]
+pub struct LineScratch {
+    u: Vec<f64>,
+    segment: Vec<u32>,
+}
+
+impl LineScratch {
+    pub fn new(n: usize) -> LineScratch {
+        LineScratch {
+            u: vec![0.0; n],
+            segment: vec![0; n],
+        }
+    }
+}
+
+/// Fractional source index of each output sample of one line with importance `imp` (its length
+/// is the line's). Non-finite or negative importance counts as 0; a line with no weight stays put.
+///
+/// Branch-free: each segment scatters a mark at its first output, a running sum of the marks is
+/// then every output's segment. A search that walks the segments mispredicts once per segment.
+#[inline(always)]
+pub fn line_mapping(imp: &[f32], scratch: &mut LineScratch, out: &mut [f64]) {
+    let n = out.len();
+    let LineScratch { u, segment } = scratch;
+    let weight = |v: f32| {
+        if v.is_finite() && v > 0.0 {
+            v as f64
+        } else {
+            0.0
+        }
+    };
+    u[0] = 0.0;
+    let mut prev = weight(imp[0]);
+    for i in 0..n - 1 {
+        let next = weight(imp[i + 1]);
+        u[i + 1] = u[i] + 0.5 * (prev + next);
+        prev = next;
+    }
+    let total = u[n - 1];
+    if !(total > 0.0 && total.is_finite()) {
+        for (j, o) in out.iter_mut().enumerate() {
+            *o = j as f64;
+        }
+        return;
+    }
+    let to_output = (n - 1) as f64 / total;
+    let step = total / (n - 1) as f64;
+    segment.fill(0);
+    for &ui in &u[1..n - 1] {
+        // The first output at or after u_i (x ≥ 0, so the cast is floor and this is ceil).
+        let x = ui * to_output;
+        let floor = x as usize;
+        let first = (floor + usize::from((floor as f64) < x)).min(n - 1);
+        segment[first] += 1;
+    }
+    let mut seg = 0u32;
+    for (j, o) in out.iter_mut().enumerate() {
+        seg += segment[j];
+        let i = seg as usize;
+        let width = u[i + 1] - u[i];
+        let f = if width > 0.0 {
+            (j as f64 * step - u[i]) / width
+        } else {
+            0.0
+        };
+        *o = i as f64 + f.clamp(0.0, 1.0);
+    }
+    out[0] = 0.0;
+    out[n - 1] = (n - 1) as f64;
+}
+
+/// Lines mapped together by [`lane_mappings`], one per SIMD lane (f64: one AVX-512 register,
+/// two AVX2 ones).
+pub const LANES: usize = 8;
+
+/// Scratch for [`lane_mappings`], sized for lines of one length.
+#[derive(Clone, Debug)]
+pub struct LaneScratch {
+    u: Vec<[f64; LANES]>,
+    start: Vec<[u32; LANES]>,
+}
+
+impl LaneScratch {
+    pub fn new(n: usize) -> LaneScratch {
+        LaneScratch {
+            u: vec![[0.0; LANES]; n],
+            start: vec![[0; LANES]; n],
+        }
+    }
+}
+
+/// [`line_mapping`] of [`LANES`] lines at once: `imp[i][l]` is line l's importance at i and
+/// `out[j][l]` its mapping. Each lane's result is bit-identical to [`line_mapping`]'s: the same
+/// operations in the same order.
+///
+/// Why lanes across lines: a line's running sum is a chain of dependent additions, one per
+/// sample, which no vector width shortens; eight lines side by side share each step of it.
+/// The segment search is the running maximum of the last segment starting at each output (the
+/// count of [`line_mapping`]'s marks, since the first outputs of the segments never decrease),
+/// so the scatter is a plain store per lane and not a read-modify-write.
+#[inline(always)]
+pub fn lane_mappings(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut [[f64; LANES]]) {
+    let n = out.len();
+    assert!(
+        n >= 2 && imp.len() >= n && scratch.u.len() >= n,
+        "lines of {n} samples"
+    );
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor has AVX2, checked just above; the lengths, just before.
+        unsafe { avx2::mappings(imp, scratch, out) };
+        ends(&scratch.u[n - 1], out);
+        return;
+    }
+    portable(imp, scratch, out);
+    ends(&scratch.u[n - 1], out);
+}
+
+/// [`lane_mappings`] without SIMD intrinsics, for processors without AVX2 (and as the record of
+/// what the AVX2 kernel computes). Leaves the ends to [`ends`].
+#[inline(always)]
+fn portable(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut [[f64; LANES]]) {
+    let n = out.len();
+    let LaneScratch { u, start } = scratch;
+    let (u, start) = (&mut u[..n], &mut start[..n]);
+    let weight = |v: f32| {
+        if v.is_finite() && v > 0.0 {
+            v as f64
+        } else {
+            0.0
+        }
+    };
+    u[0] = [0.0; LANES];
+    let mut prev = imp[0].map(weight);
+    for i in 0..n - 1 {
+        let next = imp[i + 1].map(weight);
+        for l in 0..LANES {
+            u[i + 1][l] = u[i][l] + 0.5 * (prev[l] + next[l]);
+        }
+        prev = next;
+    }
+    let total = u[n - 1];
+    let last = (n - 1) as f64;
+    let to_output = total.map(|t| last / t);
+    let step = total.map(|t| t / last);
+    start.fill([0; LANES]);
+    for (i, ui) in u.iter().enumerate().take(n - 1).skip(1) {
+        for l in 0..LANES {
+            // The first output at or after u_i, as line_mapping's marks have it; the min also
+            // keeps a lane with no weight (NaN, infinity) inside the line until it is reset.
+            // i32 casts, which vectorise; x lies in [0, n − 1].
+            let x = (ui[l] * to_output[l]).min(last);
+            let floor = x as i32;
+            let first = (floor + i32::from((floor as f64) < x)) as usize;
+            start[first.min(n - 1)][l] = i as u32;
+        }
+    }
+    let mut seg = [0u32; LANES];
+    for (j, o) in out.iter_mut().enumerate() {
+        for l in 0..LANES {
+            seg[l] = seg[l].max(start[j][l]);
+            let i = (seg[l] as usize).min(n - 2);
+            let width = u[i + 1][l] - u[i][l];
+            let f = if width > 0.0 {
+                (j as f64 * step[l] - u[i][l]) / width
+            } else {
+                0.0
+            };
+            o[l] = i as f64 + f.clamp(0.0, 1.0);
+        }
+    }
+}
+
+/// The ends of each lane's mapping: 0 and n − 1 exactly, or the identity for a line with no
+/// weight (all zero, or a sum that is not finite), which stays put.
+fn ends(total: &[f64; LANES], out: &mut [[f64; LANES]]) {
+    let last = (out.len() - 1) as f64;
+    for (l, &t) in total.iter().enumerate() {
+        if t > 0.0 && t.is_finite() {
+            out[0][l] = 0.0;
+            out[out.len() - 1][l] = last;
+        } else {
+            for (j, o) in out.iter_mut().enumerate() {
+                o[l] = j as f64;
+            }
+        }
+    }
+}
+
+/// [`portable`] in AVX2 intrinsics: four f64 lanes to a register, the two halves of the eight
+/// interleaved so that their chains of additions overlap. The same operations in the same order
+/// (no fused multiply-adds; `ceil` for line_mapping's floor-and-compare, equal on x ≥ 0), so the
+/// results are bit-identical, which `tests` checks.
+///
+/// Why intrinsics: LLVM unrolls the lane loops of [`portable`] and then leaves the segment
+/// lookup scalar, for want of gathers (3.5 µs a group of eight lines of 128 on the development
+/// VM, no faster than eight calls of [`line_mapping`]).
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use super::{LANES, LaneScratch};
+    use std::arch::x86_64::*;
+
+    /// # Safety
+    /// The processor must have AVX2; `imp` and the scratch must hold at least `out.len() ≥ 2`
+    /// samples, and `out.len() · LANES` must fit an i32.
+    #[target_feature(enable = "avx2")]
+    pub unsafe fn mappings(
+        imp: &[[f32; LANES]],
+        scratch: &mut LaneScratch,
+        out: &mut [[f64; LANES]],
+    ) {
+        let n = out.len();
+        debug_assert!(n >= 2 && imp.len() >= n && scratch.u.len() >= n);
+        debug_assert!(scratch.start.len() >= n && n * LANES < i32::MAX as usize);
+        let u = scratch.u.as_mut_ptr().cast::<f64>();
+        let start = scratch.start.as_mut_ptr().cast::<i32>();
+        let imp = imp.as_ptr().cast::<f32>();
+        let out = out.as_mut_ptr().cast::<f64>();
+        let (zero, one, half) = (
+            _mm256_setzero_pd(),
+            _mm256_set1_pd(1.0),
+            _mm256_set1_pd(0.5),
+        );
+        let last = (n - 1) as f64;
+        // SAFETY (all pointer arithmetic below): sample i of lane l is element i·LANES + l, and
+        // i < n, the length of every buffer.
+        unsafe {
+            // Running sums, both halves at once.
+            let mut acc = [zero; 2];
+            let mut prev = [weight(imp), weight(imp.add(4))];
+            _mm256_storeu_pd(u, zero);
+            _mm256_storeu_pd(u.add(4), zero);
+            for i in 1..n {
+                for h in 0..2 {
+                    let next = weight(imp.add(i * LANES + 4 * h));
+                    let w = _mm256_mul_pd(half, _mm256_add_pd(prev[h], next));
+                    acc[h] = _mm256_add_pd(acc[h], w);
+                    _mm256_storeu_pd(u.add(i * LANES + 4 * h), acc[h]);
+                    prev[h] = next;
+                }
+            }
+            let last_v = _mm256_set1_pd(last);
+            let to_output = acc.map(|t| _mm256_div_pd(last_v, t));
+            let step = acc.map(|t| _mm256_div_pd(t, last_v));
+            // Each segment's first output; later (larger) segments overwrite earlier ones.
+            std::ptr::write_bytes(start, 0, n * LANES);
+            let last_i = _mm_set1_epi32(n as i32 - 1);
+            for i in 1..n - 1 {
+                for h in 0..2 {
+                    let ui = _mm256_loadu_pd(u.add(i * LANES + 4 * h));
+                    // min's second operand wins over NaN, as f64::min's non-NaN one does.
+                    let x = _mm256_min_pd(_mm256_mul_pd(ui, to_output[h]), last_v);
+                    let up = _mm256_round_pd::<{ _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC }>(x);
+                    let first = _mm_min_epi32(_mm256_cvttpd_epi32(up), last_i);
+                    let mut f = [0i32; 4];
+                    _mm_storeu_si128(f.as_mut_ptr().cast(), first);
+                    for (l, &fl) in f.iter().enumerate() {
+                        *start.add(fl as usize * LANES + 4 * h + l) = i as i32;
+                    }
+                }
+            }
+            // Each output's segment (the running maximum of the starts) and place in it.
+            let mut seg = [_mm_setzero_si128(); 2];
+            let last_seg = _mm_set1_epi32(n as i32 - 2);
+            let lane = [_mm_setr_epi32(0, 1, 2, 3), _mm_setr_epi32(4, 5, 6, 7)];
+            for j in 0..n {
+                let jf = _mm256_set1_pd(j as f64);
+                for h in 0..2 {
+                    let st = _mm_loadu_si128(start.add(j * LANES + 4 * h).cast());
+                    seg[h] = _mm_max_epi32(seg[h], st);
+                    let i = _mm_min_epi32(seg[h], last_seg);
+                    let at = _mm_add_epi32(_mm_slli_epi32::<3>(i), lane[h]);
+                    let u0 = _mm256_i32gather_pd::<8>(u, at);
+                    let u1 = _mm256_i32gather_pd::<8>(u.add(LANES), at);
+                    let width = _mm256_sub_pd(u1, u0);
+                    let f = _mm256_div_pd(_mm256_sub_pd(_mm256_mul_pd(jf, step[h]), u0), width);
+                    let f = _mm256_and_pd(f, _mm256_cmp_pd::<_CMP_GT_OQ>(width, zero));
+                    // clamp(0, 1): f is finite here; max gives +0 for −0, which adds the same.
+                    let f = _mm256_max_pd(_mm256_min_pd(f, one), zero);
+                    let o = _mm256_add_pd(_mm256_cvtepi32_pd(i), f);
+                    _mm256_storeu_pd(out.add(j * LANES + 4 * h), o);
+                }
+            }
+        }
+    }
+
+    /// Four lanes' weights: the importance where it is finite and positive, else 0.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn weight(p: *const f32) -> __m256d {
+        // SAFETY: the caller's pointer holds four samples.
+        let v = _mm256_cvtps_pd(unsafe { _mm_loadu_ps(p) });
+        let inf = _mm256_set1_pd(f64::INFINITY);
+        let zero = _mm256_setzero_pd();
+        let ok = _mm256_and_pd(
+            _mm256_cmp_pd::<_CMP_GT_OQ>(v, zero),
+            _mm256_cmp_pd::<_CMP_LT_OQ>(v, inf),
+        );
+        _mm256_and_pd(v, ok)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Lines of every kind the stage meets: importance over twelve orders of magnitude, zero
+    /// runs, NaN and infinity, all zero, one spike.
+    fn lines(n: usize) -> Vec<[f32; LANES]> {
+        let mut seed = 0x9e37_79b9u32;
+        let mut rnd = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed as f32 / u32::MAX as f32
+        };
+        (0..n)
+            .map(|i| {
+                let mut v: [f32; LANES] = std::array::from_fn(|_| 10f32.powf(12.0 * rnd() - 6.0));
+                v[1] = if i % 7 < 3 { 0.0 } else { v[1] };
+                v[2] = [f32::NAN, f32::INFINITY, -1.0, 2.0][i % 4];
+                v[3] = 0.0;
+                v[4] = if i == n / 3 { 1e30 } else { 1e-30 };
+                v[5] = 1.0;
+                v
+            })
+            .collect()
+    }
+
+    #[test]
+    fn lanes_equal_line_mapping_bit_for_bit() {
+        for n in [2, 3, 17, 128, 129] {
+            let imp = lines(n);
+            let mut scratch = LaneScratch::new(n);
+            let mut lanes = vec![[0.0; LANES]; n];
+            lane_mappings(&imp, &mut scratch, &mut lanes);
+            let mut plain = vec![[0.0; LANES]; n];
+            portable(&imp, &mut scratch, &mut plain);
+            ends(&scratch.u[n - 1], &mut plain);
+            let mut one = LineScratch::new(n);
+            for l in 0..LANES {
+                let line: Vec<f32> = imp.iter().map(|v| v[l]).collect();
+                let mut want = vec![0.0; n];
+                line_mapping(&line, &mut one, &mut want);
+                for j in 0..n {
+                    assert_eq!(
+                        lanes[j][l].to_bits(),
+                        want[j].to_bits(),
+                        "n {n} lane {l} j {j}"
+                    );
+                    assert_eq!(
+                        plain[j][l].to_bits(),
+                        want[j].to_bits(),
+                        "n {n} lane {l} j {j}"
+                    );
+                }
+            }
+        }
+    }
+}
