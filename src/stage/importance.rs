@@ -228,8 +228,9 @@ impl ImportanceMap {
         }
 
         let h = &map.heights;
-        let mut min_visible = f32::INFINITY;
-        let mut nonfinite = 0;
+        const ACC: usize = 8;
+        let mut min_visible = [f32::INFINITY; ACC];
+        let mut nonfinite = [0u32; ACC];
         let x: &[f32] = &self.x;
         for j in (0..n).step_by(row_step.max(1)) {
             let y = j as f32 * d0f;
@@ -296,21 +297,31 @@ impl ImportanceMap {
             let i_s_row = surface_max.map(|m| &m[j * n..(j + 1) * n]);
             for i in 0..n {
                 let i_s = i_s_row.map_or(i_s_const, |m| m[i].min(i_s_const));
-                let mut v = (out[i] * s_f[i]).min(i_s);
-                if !(v.is_finite() && v >= 0.0) {
-                    nonfinite += 1;
-                    v = 0.0;
+                out[i] = (out[i] * s_f[i]).min(i_s);
+            }
+            // Lanes of counts and minima, so that the loop vectorises: one running f32::min is a
+            // chain the compiler must keep in order (it took 40 % of the map's time).
+            for (out, s_f) in out.chunks_mut(ACC).zip(s_f.chunks(ACC)) {
+                for l in 0..out.len() {
+                    let v = out[l];
+                    let finite = v.is_finite() && v >= 0.0;
+                    let v = if finite { v } else { 0.0 };
+                    out[l] = v;
+                    nonfinite[l] += u32::from(!finite);
+                    let candidate = if s_f[l] >= 0.5 && v > 0.0 {
+                        v
+                    } else {
+                        f32::INFINITY
+                    };
+                    // v is never NaN here, so the order of the minima does not matter.
+                    if candidate < min_visible[l] {
+                        min_visible[l] = candidate;
+                    }
                 }
-                out[i] = v;
-                let candidate = if s_f[i] >= 0.5 && v > 0.0 {
-                    v
-                } else {
-                    f32::INFINITY
-                };
-                min_visible = min_visible.min(candidate);
             }
         }
-        self.nonfinite = nonfinite;
+        self.nonfinite = nonfinite.iter().map(|&c| c as usize).sum();
+        let min_visible = min_visible.into_iter().fold(f32::INFINITY, f32::min);
         self.apply_floor(min_visible, p.floor as f32, row_step.max(1));
     }
 
@@ -322,8 +333,10 @@ impl ImportanceMap {
             return;
         }
         let i_floor = (min_visible * floor).max(f32::MIN_POSITIVE);
-        for v in rows.flatten() {
-            *v = v.max(i_floor);
+        for row in rows {
+            for v in row {
+                *v = v.max(i_floor);
+            }
         }
     }
 

@@ -190,6 +190,30 @@ fn portable(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut [[f64; LA
     }
 }
 
+/// Lane l's value of line `first + l` (lines of `n` samples, one after another in `values`;
+/// lines past the last repeat it) linearly interpolated at fractional index `a[l]`: what
+/// [`line_mapping`]'s callers do with each mapping, for [`LANES`] lines at once.
+#[inline(always)]
+pub fn lerp_lanes(values: &[f32], n: usize, first: usize, a: &[f64; LANES]) -> [f32; LANES] {
+    let lines = values.len() / n;
+    assert!(n >= 2 && lines >= 1, "lines of {n} samples");
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && values.len() < i32::MAX as usize {
+        // SAFETY: the processor has AVX2, checked just above; the lengths, just before.
+        return unsafe { avx2::lerp(values, n, first, a) };
+    }
+    std::array::from_fn(|l| lerp_at(&values[(first + l).min(lines - 1) * n..][..n], a[l]))
+}
+
+/// `values` linearly interpolated at fractional index `a ≥ 0`.
+#[inline(always)]
+pub fn lerp_at(values: &[f32], a: f64) -> f32 {
+    // The cast is floor for a ≥ 0; i32, as the AVX2 kernel has it (lines are far shorter).
+    let i = (a as i32 as usize).min(values.len() - 2);
+    let f = (a - i as f64) as f32;
+    values[i] + (values[i + 1] - values[i]) * f
+}
+
 /// The ends of each lane's mapping: 0 and n − 1 exactly, or the identity for a line with no
 /// weight (all zero, or a sum that is not finite), which stays put.
 fn ends(total: &[f64; LANES], out: &mut [[f64; LANES]]) {
@@ -265,10 +289,10 @@ mod avx2 {
             std::ptr::write_bytes(start, 0, n * LANES);
             let last_i = _mm_set1_epi32(n as i32 - 1);
             for i in 1..n - 1 {
-                for h in 0..2 {
+                for (h, &to_output) in to_output.iter().enumerate() {
                     let ui = _mm256_loadu_pd(u.add(i * LANES + 4 * h));
                     // min's second operand wins over NaN, as f64::min's non-NaN one does.
-                    let x = _mm256_min_pd(_mm256_mul_pd(ui, to_output[h]), last_v);
+                    let x = _mm256_min_pd(_mm256_mul_pd(ui, to_output), last_v);
                     let up = _mm256_round_pd::<{ _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC }>(x);
                     let first = _mm_min_epi32(_mm256_cvttpd_epi32(up), last_i);
                     let mut f = [0i32; 4];
@@ -300,6 +324,43 @@ mod avx2 {
                     _mm256_storeu_pd(out.add(j * LANES + 4 * h), o);
                 }
             }
+        }
+    }
+
+    /// [`super::lerp_lanes`]: the same operations, gathered.
+    ///
+    /// # Safety
+    /// The processor must have AVX2; `values` holds whole lines of `n ≥ 2` samples, at least
+    /// one, and fewer than 2^31 in all.
+    #[target_feature(enable = "avx2")]
+    pub unsafe fn lerp(values: &[f32], n: usize, first: usize, a: &[f64; LANES]) -> [f32; LANES] {
+        let lines = values.len() / n;
+        let line: [i32; LANES] = std::array::from_fn(|l| ((first + l).min(lines - 1) * n) as i32);
+        // SAFETY: every index is a line's start plus at most n − 1.
+        unsafe {
+            let base = _mm256_loadu_si256(line.as_ptr().cast());
+            let (a0, a1) = (
+                _mm256_loadu_pd(a.as_ptr()),
+                _mm256_loadu_pd(a.as_ptr().add(4)),
+            );
+            let i = _mm256_set_m128i(_mm256_cvttpd_epi32(a1), _mm256_cvttpd_epi32(a0));
+            let i = _mm256_min_epi32(i, _mm256_set1_epi32(n as i32 - 2));
+            let f0 = _mm256_cvtpd_ps(_mm256_sub_pd(
+                a0,
+                _mm256_cvtepi32_pd(_mm256_castsi256_si128(i)),
+            ));
+            let f1 = _mm256_cvtpd_ps(_mm256_sub_pd(
+                a1,
+                _mm256_cvtepi32_pd(_mm256_extracti128_si256::<1>(i)),
+            ));
+            let f = _mm256_set_m128(f1, f0);
+            let at = _mm256_add_epi32(base, i);
+            let v0 = _mm256_i32gather_ps::<4>(values.as_ptr(), at);
+            let v1 = _mm256_i32gather_ps::<4>(values.as_ptr().add(1), at);
+            let v = _mm256_add_ps(v0, _mm256_mul_ps(_mm256_sub_ps(v1, v0), f));
+            let mut out = [0.0f32; LANES];
+            _mm256_storeu_ps(out.as_mut_ptr(), v);
+            out
         }
     }
 
@@ -344,6 +405,54 @@ mod tests {
                 v
             })
             .collect()
+    }
+
+    fn mapping(imp: &[f32]) -> Vec<f64> {
+        let mut out = vec![0.0; imp.len()];
+        line_mapping(imp, &mut LineScratch::new(imp.len()), &mut out);
+        out
+    }
+
+    #[test]
+    fn uniform_importance_is_the_identity() {
+        let m = mapping(&[3.0; 9]);
+        assert!(
+            m.iter()
+                .enumerate()
+                .all(|(j, &a)| (a - j as f64).abs() < 1e-12)
+        );
+    }
+
+    #[test]
+    fn a_heavy_segment_takes_its_share_of_outputs() {
+        // Weights 1, 1, 7 (the last segment's average is (1+13)/2=7): it gets 7/9 of 4 outputs.
+        let m = mapping(&[1.0, 1.0, 1.0, 13.0]);
+        // u = [0, 1, 2, 9]; output j sits at u = j·3.
+        assert!((m[1] - 2.0 - 1.0 / 7.0).abs() < 1e-12, "{m:?}");
+        assert!((m[2] - 2.0 - 4.0 / 7.0).abs() < 1e-12, "{m:?}");
+        assert_eq!((m[0], m[3]), (0.0, 3.0));
+    }
+
+    #[test]
+    fn lerp_lanes_equals_lerp_at_bit_for_bit() {
+        let n = 19;
+        let values: Vec<f32> = (0..3 * n)
+            .map(|i| ((i * 37) % 23) as f32 * 1.7 - 9.0)
+            .collect();
+        for first in 0..3 {
+            let a: [f64; LANES] =
+                std::array::from_fn(|l| [0.0, 0.3, 5.5, 17.99, 18.0, 7.25, 1.0, 12.5][l]);
+            let got = lerp_lanes(&values, n, first, &a);
+            for l in 0..LANES {
+                // Lines past the last repeat it.
+                let line = &values[(first + l).min(2) * n..][..n];
+                assert_eq!(
+                    got[l].to_bits(),
+                    lerp_at(line, a[l]).to_bits(),
+                    "line {first}+{l}"
+                );
+            }
+        }
     }
 
     #[test]

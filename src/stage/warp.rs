@@ -66,7 +66,9 @@
 //! mappings, which is why partial relaxation does not help there.
 
 use crate::scene::WarpMethod;
-use crate::stage::lines::{LANES, LaneScratch, LineScratch, lane_mappings, line_mapping};
+use crate::stage::lines::{
+    LANES, LaneScratch, LineScratch, lane_mappings, lerp_at, lerp_lanes, line_mapping,
+};
 
 pub struct Warp {
     n: usize,
@@ -178,14 +180,20 @@ impl Warp {
         let mut folded = 0;
         for s0 in (0..n).step_by(LANES) {
             self.map_columns(s0, d0);
-            for s in s0..(s0 + LANES).min(n) {
-                if guarded && s > 0 {
-                    self.folded[s - 1] = !pair_unfolded(&self.phi, n, s - 1);
-                    folded += usize::from(self.folded[s - 1]);
-                    if 2 * folded > n - 1 {
-                        self.all_to_mean(d0);
-                        return;
-                    }
+            if !guarded {
+                continue;
+            }
+            // The pairs left of each new column; eight at once where they are all inside.
+            let sound = (s0 >= 1 && s0 + LANES <= n).then(|| pairs_unfolded(&self.phi, n, s0 - 1));
+            for s in s0.max(1)..(s0 + LANES).min(n) {
+                self.folded[s - 1] = !match sound {
+                    Some(sound) => sound[s - s0],
+                    None => pair_unfolded(&self.phi, n, s - 1),
+                };
+                folded += usize::from(self.folded[s - 1]);
+                if 2 * folded > n - 1 {
+                    self.all_to_mean(d0);
+                    return;
                 }
             }
         }
@@ -198,8 +206,9 @@ impl Warp {
     #[inline(always)]
     fn all_to_mean(&mut self, d0: f32) {
         self.follows_mean.fill(true);
-        for s in 0..self.n {
-            self.column_pass(s, d0);
+        let (n, mean) = (self.n, &self.mean_map);
+        for s0 in (0..n).step_by(LANES) {
+            store_columns(&mut self.phi, &self.row_x, n, s0, d0, |t| [mean[t]; LANES]);
         }
         self.guarded_columns = self.n;
     }
@@ -209,22 +218,16 @@ impl Warp {
         let n = self.n;
         for t0 in (0..n).step_by(LANES) {
             // Lanes past the last row repeat it; their results are not kept.
-            let rows: [&[f32]; LANES] =
-                std::array::from_fn(|l| &self.importance[(t0 + l).min(n - 1) * n..][..n]);
             for (i, v) in self.lanes_in.iter_mut().enumerate() {
-                for l in 0..LANES {
-                    v[l] = rows[l][i];
+                for (l, x) in v.iter_mut().enumerate() {
+                    *x = self.importance[(t0 + l).min(n - 1) * n + i];
                 }
             }
             lane_mappings(&self.lanes_in, &mut self.lanes, &mut self.lanes_out);
             let kept = LANES.min(n - t0);
             for (s, a) in self.lanes_out.iter().enumerate() {
-                let mut x = [0.0f32; LANES];
-                let mut v = [0.0f32; LANES];
-                for l in 0..LANES {
-                    x[l] = (a[l] * d0 as f64) as f32;
-                    v[l] = lerp_at(rows[l], a[l]);
-                }
+                let x = a.map(|a| (a * d0 as f64) as f32);
+                let v = lerp_lanes(&self.importance, n, t0, a);
                 let at = s * n + t0;
                 if kept == LANES {
                     // A fixed-size copy: a slice of run-time length calls memmove.
@@ -253,19 +256,8 @@ impl Warp {
             }
         }
         lane_mappings(&self.lanes_in, &mut self.lanes, &mut self.lanes_out);
-        let xs: [&[f32]; LANES] = std::array::from_fn(|l| &self.row_x[column(l)..][..n]);
-        let kept = LANES.min(n - s0);
-        for (t, b) in self.lanes_out.iter().enumerate() {
-            let mut p = [[0.0f32; 2]; LANES];
-            for l in 0..LANES {
-                p[l] = [lerp_at(xs[l], b[l]), (b[l] * d0 as f64) as f32];
-            }
-            if kept == LANES {
-                self.phi[t * n + s0..][..LANES].copy_from_slice(&p);
-            } else {
-                self.phi[t * n + s0..][..kept].copy_from_slice(&p[..kept]);
-            }
-        }
+        let maps = &self.lanes_out;
+        store_columns(&mut self.phi, &self.row_x, n, s0, d0, |t| maps[t]);
     }
 
     /// Column s of Φ from the mean column mapping (the guard's).
@@ -314,13 +306,29 @@ impl Warp {
     }
 }
 
-/// `values` linearly interpolated at fractional index `a`.
+/// Columns `s0 ..` of Φ (as many as there are lanes, or to the last column): each lane's
+/// row-warped x (`row_x`, column-major) interpolated at `b(t)`, its column mapping's output t.
 #[inline(always)]
-fn lerp_at(values: &[f32], a: f64) -> f32 {
-    // a ≥ 0: the cast is floor; i32, which vectorises (lines are far shorter than 2^31).
-    let i = (a as i32 as usize).min(values.len() - 2);
-    let f = (a - i as f64) as f32;
-    values[i] + (values[i + 1] - values[i]) * f
+fn store_columns(
+    phi: &mut [[f32; 2]],
+    row_x: &[f32],
+    n: usize,
+    s0: usize,
+    d0: f32,
+    b: impl Fn(usize) -> [f64; LANES],
+) {
+    let kept = LANES.min(n - s0);
+    for t in 0..n {
+        let b = b(t);
+        let x = lerp_lanes(row_x, n, s0, &b);
+        let p: [[f32; 2]; LANES] = std::array::from_fn(|l| [x[l], (b[l] * d0 as f64) as f32]);
+        if kept == LANES {
+            // A fixed-size copy: a slice of run-time length calls memmove.
+            phi[t * n + s0..][..LANES].copy_from_slice(&p);
+        } else {
+            phi[t * n + s0..][..kept].copy_from_slice(&p[..kept]);
+        }
+    }
 }
 
 /// Raises every value to at least `factor` × each 4-neighbour's (an L1 chamfer in log space).
@@ -361,6 +369,28 @@ pub fn pair_unfolded(phi: &[[f32; 2]], n: usize, s: usize) -> bool {
     least > 0.0
 }
 
+/// [`pair_unfolded`] for the [`LANES`] pairs of columns `s ..= s + LANES − 1`, side by side.
+#[inline(always)]
+pub fn pairs_unfolded(phi: &[[f32; 2]], n: usize, s: usize) -> [bool; LANES] {
+    let mut least = [f32::INFINITY; LANES];
+    let row = |t: usize| -> &[[f32; 2]; LANES + 1] {
+        phi[t * n + s..][..LANES + 1]
+            .try_into()
+            .expect("LANES + 1 points")
+    };
+    for t in 0..n - 1 {
+        let (lo, hi) = (row(t), row(t + 1));
+        for l in 0..LANES {
+            let turn = turn_of(lo[l], lo[l + 1], hi[l + 1], hi[l]);
+            // Never NaN for finite Φ; a NaN leaves the pair as it was, as f32::min would.
+            if turn < least[l] {
+                least[l] = turn;
+            }
+        }
+    }
+    least.map(|t| t > 0.0)
+}
+
 /// Positive when cell (s, t) is sound: neither of its two triangles (split along the diagonal
 /// from (s, t) to (s+1, t+1), as the mesh is drawn) is flipped or degenerate, and its bottom and
 /// top edges run east, so every row of Φ increases in x as every column increases in y.
@@ -368,8 +398,17 @@ pub fn pair_unfolded(phi: &[[f32; 2]], n: usize, s: usize) -> bool {
 /// coordinates at most n texels.
 #[inline(always)]
 pub fn cell_turn(phi: &[[f32; 2]], n: usize, s: usize, t: usize) -> f32 {
-    let (a, b) = (phi[t * n + s], phi[t * n + s + 1]);
-    let (c, d) = (phi[(t + 1) * n + s + 1], phi[(t + 1) * n + s]);
+    turn_of(
+        phi[t * n + s],
+        phi[t * n + s + 1],
+        phi[(t + 1) * n + s + 1],
+        phi[(t + 1) * n + s],
+    )
+}
+
+/// [`cell_turn`] of the cell with corners a (s, t), b (s+1, t), c (s+1, t+1), d (s, t+1).
+#[inline(always)]
+fn turn_of(a: [f32; 2], b: [f32; 2], c: [f32; 2], d: [f32; 2]) -> f32 {
     let turn = |p: [f32; 2], q: [f32; 2], r: [f32; 2]| {
         (q[0] - p[0]) * (r[1] - q[1]) - (q[1] - p[1]) * (r[0] - q[0])
     };
@@ -399,30 +438,81 @@ pub fn cell_area(phi: &[[f32; 2]], n: usize, s: usize, t: usize) -> f64 {
 mod tests {
     use super::*;
 
+    /// Importance over twelve orders of magnitude, from a seed.
+    fn random_map(n: usize, seed: u32) -> Vec<f32> {
+        let mut x = seed.max(1);
+        (0..n * n)
+            .map(|_| {
+                x ^= x << 13;
+                x ^= x >> 17;
+                x ^= x << 5;
+                10f32.powf(12.0 * (x as f32 / u32::MAX as f32) - 6.0)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_plain_warp_maps_every_row_then_every_column() {
+        // 37 leaves a lane group part-filled at the end of both passes.
+        for (n, seed) in [(37, 1), (128, 7)] {
+            let imp = random_map(n, seed);
+            let mut warp = Warp::new(n, WarpMethod::Plain, 0.0);
+            warp.run(&imp, 2.5);
+            // The definition, one line at a time.
+            let (mut row_x, mut row_imp) = (vec![0.0f32; n * n], vec![0.0f32; n * n]);
+            for t in 0..n {
+                let row = &imp[t * n..(t + 1) * n];
+                for (s, &a) in mapping(row).iter().enumerate() {
+                    row_x[s * n + t] = (a * 2.5) as f32;
+                    row_imp[s * n + t] = lerp_at(row, a);
+                }
+            }
+            for s in 0..n {
+                let xs = &row_x[s * n..(s + 1) * n];
+                for (t, &b) in mapping(&row_imp[s * n..(s + 1) * n]).iter().enumerate() {
+                    let want = [lerp_at(xs, b), (b * 2.5) as f32];
+                    let got = warp.phi[t * n + s];
+                    assert_eq!(
+                        got.map(f32::to_bits),
+                        want.map(f32::to_bits),
+                        "n {n} ({s}, {t})"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn pairs_side_by_side_agree_with_one_pair() {
+        let n = 40;
+        // A grid whose rows 5 and 17 are shaken in x by up to ±0.6 of a cell: the columns
+        // where neighbours cross fold, the others do not.
+        let shake = random_map(n, 3);
+        let phi: Vec<[f32; 2]> = (0..n * n)
+            .map(|k| {
+                let (s, t) = (k % n, k / n);
+                let dx = if t == 5 || t == 17 {
+                    shake[k].log10() / 10.0
+                } else {
+                    0.0
+                };
+                [s as f32 + dx, t as f32]
+            })
+            .collect();
+        let folded = (0..n - 1).filter(|&s| !pair_unfolded(&phi, n, s)).count();
+        assert!(folded > 0 && folded < n - 1, "some folds: {folded}");
+        for s in 0..n - LANES {
+            let side = pairs_unfolded(&phi, n, s);
+            for (l, &sound) in side.iter().enumerate() {
+                assert_eq!(sound, pair_unfolded(&phi, n, s + l), "pair {}", s + l);
+            }
+        }
+    }
+
     fn mapping(imp: &[f32]) -> Vec<f64> {
         let mut out = vec![0.0; imp.len()];
         line_mapping(imp, &mut LineScratch::new(imp.len()), &mut out);
         out
-    }
-
-    #[test]
-    fn uniform_importance_is_the_identity() {
-        let m = mapping(&[3.0; 9]);
-        assert!(
-            m.iter()
-                .enumerate()
-                .all(|(j, &a)| (a - j as f64).abs() < 1e-12)
-        );
-    }
-
-    #[test]
-    fn a_heavy_segment_takes_its_share_of_outputs() {
-        // Weights 1, 1, 7 (the last segment's average is (1+13)/2=7): it gets 7/9 of 4 outputs.
-        let m = mapping(&[1.0, 1.0, 1.0, 13.0]);
-        // u = [0, 1, 2, 9]; output j sits at u = j·3.
-        assert!((m[1] - 2.0 - 1.0 / 7.0).abs() < 1e-12, "{m:?}");
-        assert!((m[2] - 2.0 - 4.0 / 7.0).abs() < 1e-12, "{m:?}");
-        assert_eq!((m[0], m[3]), (0.0, 3.0));
     }
 
     #[test]
