@@ -2,11 +2,12 @@
 //! so that each segment gets output room in proportion to its importance (DESIGN.md's definition).
 //!
 //! Rules:
-//! - One line: weights `w_i = (I_i + I_{i+1})/2`, positions `u` their running sum scaled to `n−1`,
-//!   output sample j interpolated inside the segment holding `u = j`. A line's result is a
-//!   *mapping*: the fractional source index of each output sample, monotone, 0 and n−1 at the ends.
+//! - One line's warp is a *mapping* (`stage::lines`): the fractional source index of each output
+//!   sample, monotone, 0 and n−1 at the ends.
 //! - The row pass warps x along each row and resamples importance the same way; the column pass
-//!   warps each column of the row-warped image by that resampled importance.
+//!   warps each column of the row-warped image by that resampled importance. Both map eight
+//!   lines at a time (`lines::lane_mappings`) and interpolate eight at a time
+//!   (`lines::lerp_lanes`).
 //! - `Plain` stops there: the paper's method. Where neighbouring columns want very different column
 //!   warps and the rows under them were warped differently too, cells fold.
 //! - `Guarded` (the default) keeps both triangles of every cell counter-clockwise and every row of Φ
@@ -18,24 +19,29 @@
 //!   two rows of equal y and cannot fold, so the loop ends; the other columns keep their own warp.
 //!   When most column pairs fold at the start (near views), all columns go to `b̄` at once: the
 //!   rounds end there anyway on such views (measured on the three near demo scenes). The columns
-//!   are mapped, passed and checked one by one, so that this is decided as soon as it is certain:
-//!   on jacksboro near the guarded warp took 459 µs mapping every column first.
+//!   are mapped, passed and checked eight at a time, so that this is decided as soon as it is
+//!   certain: on jacksboro near the guarded warp took 459 µs mapping every column first (when
+//!   lines were mapped one by one).
 //!   Measured alternative: moving columns toward `b̄` by halves (λ = ½, ¼, …) took twice the
 //!   instructions for the same share of cells within [0.5, 2] (`warp` on the six demo scenes).
 //! - An optional limit on the importance gradient (`max_log2_step`) raises low importance next to
 //!   high, in log space, before warping: fewer folds to guard, at the cost of spreading cells.
 //! - All buffers are allocated once in [`Warp::new`]; a frame allocates nothing.
 //!
-//! Rejected alternative, measured: two threads (rayon's pool, `join` over halves of the rows, of
-//! the column mappings and of Φ's rows, the row pass written row-major and transposed). On the
-//! jacksboro near view the guarded warp took 511 µs against 459 µs on one thread, the plain warp
-//! 321 against 314 µs; from high up 398 against 389 µs (`benches/cpu_stage.rs`, medians, one
-//! session, 2-core VM): at 128² each half is tens of microseconds, which waking a pool thread
-//! and the transpose eat.
+//! Speed (`benches/cpu_stage.rs`, jacksboro near, 128², criterion medians of one session on the
+//! 2-core development VM): lines side by side took the guarded warp from 225 to 96 µs and the
+//! plain one from 190 to 83 µs (the AVX2 line mappings 190 → 94 µs plain, the gathered
+//! interpolations → 83 µs, eight fold checks at once 109 → 96 µs guarded). `run` is built for
+//! AVX-512 and AVX2 and chosen at run time: without that, the calls into the AVX2 kernels are not
+//! inlined and the guarded warp takes 163 µs; AVX2 alone gives 101 µs.
 //!
-//! Rejected alternative, measured: building the warp for AVX2 as well (chosen at run time, as
-//! the importance does): 338 against 347 µs guarded, 309 against 310 µs plain on jacksboro near.
-//! Its loops wait on running sums and scattered loads, not on the width of the vectors.
+//! Rejected alternative, measured: two threads. Rayon's `join` over halves of the rows, of the
+//! column mappings and of Φ's rows (the row pass written row-major and transposed) took 511 µs
+//! against 459 µs on one thread (guarded, jacksboro near, when lines were mapped one by one).
+//! Handing 50 µs of work to a second thread on this VM costs more than it saves: a worker parked
+//! between frames (thread::park, woken by unpark) made two halves of 50 µs take 152 µs against
+//! 100 µs on one thread, a scoped thread spawned per frame 116 µs; a worker that never sleeps
+//! would hold a core for the whole flight.
 //!
 //! Rejected alternatives: extra row/column passes over the warped image (the grid is no longer
 //! axis-aligned, and a second pass can fold what the first left intact) and always smoothing the
