@@ -105,6 +105,7 @@ fn warp_writes_its_figures_and_statistics() {
         "cells_visible",
         "ratio_within_0_5_2",
         "ratio_within_0_5_1",
+        "demand_met",
         "flipped_cells",
         "nonfinite",
         "cpu_stage_us",

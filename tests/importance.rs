@@ -158,4 +158,11 @@ fn uniform_importance_gives_the_budget_ratio_everywhere() {
         &ratios[..4]
     );
     assert_eq!(r.quality.ratio_within_0_5_2, 1.0);
+    // Each cell stands for 1/ratio² demanded cells.
+    let met = (n / (n - 1.0)).powi(2);
+    assert!(
+        (r.quality.demand_met - met).abs() < 1e-4,
+        "{}",
+        r.quality.demand_met
+    );
 }

@@ -5,6 +5,10 @@
 //! cell's two edges along that direction; demanded `ρ_d = k·I(centre)`, I sampled bilinearly from the
 //! importance map, with `k` fixing the total demand to the `(n−1)²` cells there are. A cell is
 //! visible when `S_f ≥ 0.5` at its centre; it is flipped when its signed area is ≤ 0.
+//!
+//! `demand_met` weighs the ratio's shares: counted by cells, a spread of ratios leans above 1
+//! even when the view gets exactly its demand (a cell of ratio r stands for 1/r² demanded cells),
+//! so a share within [½, 1] means little without how many cells the view got for its demand.
 
 use crate::stage::importance::ImportanceMap;
 use crate::stage::warp::cell_area;
@@ -29,6 +33,9 @@ pub struct Quality {
     pub ratio_within_0_5_2: f64,
     pub ratio_within_0_5_1: f64,
     pub ratio_median: f64,
+    /// The visible cells over the cells their importance demands (`Σ 1/r²` over them): 1 when
+    /// the view gets as many cells as it asks for, less when cells went where nothing shows.
+    pub demand_met: f64,
     pub flipped_cells: usize,
     pub nonfinite: usize,
     pub histogram: Vec<Bin>,
@@ -86,6 +93,13 @@ pub fn measure(
 
 fn summarise(mut visible: Vec<f32>, flipped_cells: usize, nonfinite: usize) -> Quality {
     let count = visible.len();
+    // A cell of ratio r stands where its importance asks for 1/r² cells (ρ_d² over ρ_o²).
+    let demanded: f64 = visible.iter().map(|&r| (r as f64).powi(-2)).sum();
+    let demand_met = if count == 0 {
+        1.0
+    } else {
+        count as f64 / demanded
+    };
     let frac = |lo: f32, hi: f32| {
         if count == 0 {
             return 1.0;
@@ -117,6 +131,7 @@ fn summarise(mut visible: Vec<f32>, flipped_cells: usize, nonfinite: usize) -> Q
         ratio_within_0_5_2: within_0_5_2,
         ratio_within_0_5_1: within_0_5_1,
         ratio_median,
+        demand_met,
         flipped_cells,
         nonfinite,
         histogram,

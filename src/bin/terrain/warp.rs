@@ -106,8 +106,9 @@ pub fn run(a: Args) -> Result<()> {
     }
     let q = &r.quality;
     println!(
-        "{} visible cells: {:.1} % with ratio in [0.5, 2], {:.1} % in [0.5, 1]; {} flipped, {} non-finite; CPU stage {:.0} µs (sketch map {:.0}, importance {:.0}, warp {:.0})",
+        "{} visible cells ({:.3}× their demand): {:.1} % with ratio in [0.5, 2], {:.1} % in [0.5, 1]; {} flipped, {} non-finite; CPU stage {:.0} µs (sketch map {:.0}, importance {:.0}, warp {:.0})",
         q.cells_visible,
+        q.demand_met,
         100.0 * q.ratio_within_0_5_2,
         100.0 * q.ratio_within_0_5_1,
         q.flipped_cells,

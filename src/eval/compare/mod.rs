@@ -386,6 +386,7 @@ fn ratio_histogram(
         cells_visible: q.cells_visible,
         ratio_within_0_5_2: q.ratio_within_0_5_2,
         ratio_within_0_5_1: q.ratio_within_0_5_1,
+        demand_met: q.demand_met,
         histogram: q.histogram,
     })
 }

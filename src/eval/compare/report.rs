@@ -219,6 +219,7 @@ pub struct RatioReport {
     pub cells_visible: usize,
     pub ratio_within_0_5_2: f64,
     pub ratio_within_0_5_1: f64,
+    pub demand_met: f64,
     pub histogram: Vec<Bin>,
 }
 
