@@ -13,10 +13,11 @@
 //! Why lanes across lines: a line's running sum is a chain of dependent additions, one per
 //! sample, that no vector width shortens, and finding each output's segment is a data-dependent
 //! load. Side by side, eight lines share each step of the chain and each lookup is one gather.
-//! Measured (`benches/cpu_stage.rs`, jacksboro near, 128², criterion medians of one session on
-//! the 2-core development VM): one line at a time took 470 ns a line (63 % of the plain warp's
-//! 190 µs); eight lanes as plain Rust 3.5 µs a group (LLVM leaves the lookups scalar), no better;
-//! the AVX2 kernel took the plain warp from 163 to 94 µs.
+//! Measured on the 2-core development VM, jacksboro near at 128²: one line at a time took about
+//! 470 ns a line (`perf` put 63 % of the plain warp's 190 µs in it); eight lanes as plain Rust
+//! took 3.5 µs a group of eight in a throwaway criterion benchmark (LLVM leaves the lookups
+//! scalar), no better; the AVX2 kernel took the plain warp from 163 to 94 µs
+//! (`benches/cpu_stage.rs`, `warp_plain`, medians).
 
 /// Scratch for [`line_mapping`], sized for one line.
 #[derive(Clone, Debug)]
@@ -123,12 +124,13 @@ impl LaneScratch {
 pub fn lane_mappings(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut [[f64; LANES]]) {
     let n = out.len();
     assert!(
-        n >= 2 && imp.len() >= n && scratch.u.len() >= n,
+        n >= 2 && imp.len() >= n && scratch.u.len() >= n && scratch.start.len() >= n,
         "lines of {n} samples"
     );
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor has AVX2, checked just above; the lengths, just before.
+    if std::arch::is_x86_feature_detected!("avx2") && n <= i32::MAX as usize / LANES {
+        // SAFETY: the processor has AVX2 and the lines' indices fit an i32, checked just
+        // above; the lengths, just before.
         unsafe { avx2::mappings(imp, scratch, out) };
         ends(&scratch.u[n - 1], out);
         return;
@@ -197,21 +199,23 @@ fn portable(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut [[f64; LA
 /// [`line_mapping`]'s callers do with each mapping, for [`LANES`] lines at once.
 #[inline(always)]
 pub fn lerp_lanes(values: &[f32], n: usize, first: usize, a: &[f64; LANES]) -> [f32; LANES] {
+    assert!(n >= 2 && values.len() >= n, "lines of {n} samples");
     let lines = values.len() / n;
-    assert!(n >= 2 && lines >= 1, "lines of {n} samples");
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && values.len() < i32::MAX as usize {
-        // SAFETY: the processor has AVX2, checked just above; the lengths, just before.
+        // SAFETY: the processor has AVX2 and the indices fit an i32, checked just above; a
+        // whole line, just before.
         return unsafe { avx2::lerp(values, n, first, a) };
     }
     std::array::from_fn(|l| lerp_at(&values[(first + l).min(lines - 1) * n..][..n], a[l]))
 }
 
-/// `values` linearly interpolated at fractional index `a ≥ 0`.
+/// `values` linearly interpolated at fractional index `a` (a mapping's, in [0, len − 1]; outside
+/// it the end segments extend, and NaN gives NaN).
 #[inline(always)]
 pub fn lerp_at(values: &[f32], a: f64) -> f32 {
-    // The cast is floor for a ≥ 0; i32, as the AVX2 kernel has it (lines are far shorter).
-    let i = (a as i32 as usize).min(values.len() - 2);
+    // The cast is floor for a ≥ 0 and saturates below (0) and above.
+    let i = (a as usize).min(values.len() - 2);
     let f = (a - i as f64) as f32;
     values[i] + (values[i + 1] - values[i]) * f
 }
@@ -238,7 +242,7 @@ fn ends(total: &[f64; LANES], out: &mut [[f64; LANES]]) {
 /// results are bit-identical, which `tests` checks.
 ///
 /// Why intrinsics: LLVM unrolls the lane loops of [`portable`] and then leaves the segment
-/// lookup scalar, for want of gathers (3.5 µs a group of eight lines of 128 on the development
+/// lookup scalar, for want of gathers (about 3.5 µs a group of eight lines of 128 on the development
 /// VM, no faster than eight calls of [`line_mapping`]).
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
@@ -329,24 +333,31 @@ mod avx2 {
         }
     }
 
-    /// [`super::lerp_lanes`]: the same operations, gathered.
+    /// [`super::lerp_lanes`]: the same operations, gathered. `a` is clamped to [0, n − 2] before
+    /// it becomes an index, which is what `lerp_at`'s saturating cast and min give (NaN: 0).
     ///
     /// # Safety
-    /// The processor must have AVX2; `values` holds whole lines of `n ≥ 2` samples, at least
-    /// one, and fewer than 2^31 in all.
+    /// The processor must have AVX2; `values` holds at least one line of `n ≥ 2` samples and
+    /// fewer than 2^31 in all.
     #[target_feature(enable = "avx2")]
     pub unsafe fn lerp(values: &[f32], n: usize, first: usize, a: &[f64; LANES]) -> [f32; LANES] {
         let lines = values.len() / n;
         let line: [i32; LANES] = std::array::from_fn(|l| ((first + l).min(lines - 1) * n) as i32);
-        // SAFETY: every index is a line's start plus at most n − 1.
+        // SAFETY: every index is a line's start plus at most n − 1 (i ≤ n − 2, then i + 1).
         unsafe {
             let base = _mm256_loadu_si256(line.as_ptr().cast());
             let (a0, a1) = (
                 _mm256_loadu_pd(a.as_ptr()),
                 _mm256_loadu_pd(a.as_ptr().add(4)),
             );
-            let i = _mm256_set_m128i(_mm256_cvttpd_epi32(a1), _mm256_cvttpd_epi32(a0));
-            let i = _mm256_min_epi32(i, _mm256_set1_epi32(n as i32 - 2));
+            // min's second operand wins over NaN, and max's: NaN becomes 0, as `as usize` has it.
+            let (top, zero) = (_mm256_set1_pd((n - 2) as f64), _mm256_setzero_pd());
+            let clamp = |a| _mm256_max_pd(_mm256_min_pd(top, a), zero);
+            let (i0, i1) = (
+                _mm256_cvttpd_epi32(clamp(a0)),
+                _mm256_cvttpd_epi32(clamp(a1)),
+            );
+            let i = _mm256_set_m128i(i1, i0);
             let f0 = _mm256_cvtpd_ps(_mm256_sub_pd(
                 a0,
                 _mm256_cvtepi32_pd(_mm256_castsi256_si128(i)),
@@ -438,33 +449,53 @@ mod tests {
     #[test]
     fn lerp_lanes_equals_lerp_at_bit_for_bit() {
         let n = 19;
-        let values: Vec<f32> = (0..3 * n)
+        // Three whole lines and part of a fourth, which no lane reads.
+        let values: Vec<f32> = (0..3 * n + 5)
             .map(|i| ((i * 37) % 23) as f32 * 1.7 - 9.0)
             .collect();
-        for first in 0..3 {
-            let a: [f64; LANES] =
-                std::array::from_fn(|l| [0.0, 0.3, 5.5, 17.99, 18.0, 7.25, 1.0, 12.5][l]);
-            let got = lerp_lanes(&values, n, first, &a);
-            for l in 0..LANES {
-                // Lines past the last repeat it.
-                let line = &values[(first + l).min(2) * n..][..n];
-                assert_eq!(
-                    got[l].to_bits(),
-                    lerp_at(line, a[l]).to_bits(),
-                    "line {first}+{l}"
-                );
+        let inside = [0.0, 0.3, 5.5, 17.99, 18.0, 7.25, 1.0, 12.5];
+        // Outside a mapping's range: the end segments extend, NaN stays NaN, nothing is read
+        // outside the lane's line.
+        let outside = [
+            -0.5,
+            -3.0,
+            18.5,
+            1e12,
+            f64::NAN,
+            f64::INFINITY,
+            -f64::INFINITY,
+            3e9,
+        ];
+        for a in [inside, outside] {
+            for first in 0..4 {
+                let got = lerp_lanes(&values, n, first, &a);
+                for l in 0..LANES {
+                    // Lines past the last repeat it.
+                    let want = lerp_at(&values[(first + l).min(2) * n..][..n], a[l]);
+                    let at = format!("line {first}+{l} at {}", a[l]);
+                    assert_eq!(got[l].is_nan(), want.is_nan(), "{at}");
+                    if !want.is_nan() {
+                        assert_eq!(got[l].to_bits(), want.to_bits(), "{at}");
+                    }
+                }
             }
         }
     }
 
     #[test]
     fn lanes_equal_line_mapping_bit_for_bit() {
+        // One scratch for every length, larger than most, used twice for each: what a line
+        // leaves behind must not reach the next.
+        let mut scratch = LaneScratch::new(129);
         for n in [2, 3, 17, 128, 129] {
-            let imp = lines(n);
-            let mut scratch = LaneScratch::new(n);
             let mut lanes = vec![[0.0; LANES]; n];
+            let mut before: Vec<[f32; LANES]> = lines(n);
+            before.reverse();
+            lane_mappings(&before, &mut scratch, &mut lanes);
+            let imp = lines(n);
             lane_mappings(&imp, &mut scratch, &mut lanes);
             let mut plain = vec![[0.0; LANES]; n];
+            portable(&before, &mut scratch, &mut plain);
             portable(&imp, &mut scratch, &mut plain);
             ends(&scratch.u[n - 1], &mut plain);
             let mut one = LineScratch::new(n);
@@ -473,16 +504,9 @@ mod tests {
                 let mut want = vec![0.0; n];
                 line_mapping(&line, &mut one, &mut want);
                 for j in 0..n {
-                    assert_eq!(
-                        lanes[j][l].to_bits(),
-                        want[j].to_bits(),
-                        "n {n} lane {l} j {j}"
-                    );
-                    assert_eq!(
-                        plain[j][l].to_bits(),
-                        want[j].to_bits(),
-                        "n {n} lane {l} j {j}"
-                    );
+                    let at = format!("n {n} lane {l} j {j}");
+                    assert_eq!(lanes[j][l].to_bits(), want[j].to_bits(), "{at}");
+                    assert_eq!(plain[j][l].to_bits(), want[j].to_bits(), "{at}");
                 }
             }
         }

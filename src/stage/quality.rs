@@ -137,3 +137,21 @@ fn summarise(mut visible: Vec<f32>, flipped_cells: usize, nonfinite: usize) -> Q
         histogram,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn demand_met_counts_what_each_cell_stands_for() {
+        // A cell of ratio 1 stands for one demanded cell, one of ratio 2 for a quarter: two
+        // cells where 1.25 are asked for. (The mean of r² would say 2.5; of r, 1.5.)
+        let q = summarise(vec![1.0, 2.0], 0, 0);
+        assert!(
+            (q.demand_met - 2.0 / 1.25).abs() < 1e-12,
+            "{}",
+            q.demand_met
+        );
+        assert_eq!(summarise(Vec::new(), 0, 0).demand_met, 1.0);
+    }
+}

@@ -28,12 +28,15 @@
 //!   high, in log space, before warping: fewer folds to guard, at the cost of spreading cells.
 //! - All buffers are allocated once in [`Warp::new`]; a frame allocates nothing.
 //!
-//! Speed (`benches/cpu_stage.rs`, jacksboro near, 128², criterion medians of one session on the
-//! 2-core development VM): lines side by side took the guarded warp from 225 to 96 µs and the
-//! plain one from 190 to 83 µs (the AVX2 line mappings 190 → 94 µs plain, the gathered
-//! interpolations → 83 µs, eight fold checks at once 109 → 96 µs guarded). `run` is built for
-//! AVX-512 and AVX2 and chosen at run time: without that, the calls into the AVX2 kernels are not
-//! inlined and the guarded warp takes 163 µs; AVX2 alone gives 101 µs.
+//! Speed (`benches/cpu_stage.rs`, jacksboro near, 128², criterion medians on the 2-core
+//! development VM). Side by side with the warp that mapped one line at a time (commit 99bf083),
+//! run alternately in one session: guarded 206 → 97 µs, plain 174 → 83 µs. The steps, each
+//! build measured after the one before in another session: the AVX2 line mappings took the plain
+//! warp from 163 µs (lanes as plain Rust) to 94 µs and the guarded one from 174 to 123 µs; the
+//! gathered interpolations 94 → 83 µs plain, 123 → 109 µs guarded; eight fold checks at once
+//! 109 → 97 µs guarded. `run` is built for AVX-512 and AVX2 and chosen at run time: without that,
+//! the calls into the AVX2 kernels are not inlined and the guarded warp takes 163 µs; AVX2 alone
+//! gives 101 µs.
 //!
 //! Rejected alternative, measured: two threads. Rayon's `join` over halves of the rows, of the
 //! column mappings and of Φ's rows (the row pass written row-major and transposed) took 511 µs
@@ -181,8 +184,9 @@ impl Warp {
             }
             line_mapping(&self.mean_importance, &mut self.scratch, &mut self.mean_map);
         }
-        // Column by column, so that the guard's count of folded pairs can stop the pass as soon
-        // as most pairs fold: every column then follows the mean, whatever the rest would do.
+        // Eight columns at a time, so that the guard's count of folded pairs (kept in column
+        // order) can stop the pass as soon as most pairs fold: every column then follows the
+        // mean, whatever the rest would do.
         let mut folded = 0;
         for s0 in (0..n).step_by(LANES) {
             self.map_columns(s0, d0);
@@ -457,32 +461,121 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn the_plain_warp_maps_every_row_then_every_column() {
-        // 37 leaves a lane group part-filled at the end of both passes.
-        for (n, seed) in [(37, 1), (128, 7)] {
-            let imp = random_map(n, seed);
-            let mut warp = Warp::new(n, WarpMethod::Plain, 0.0);
-            warp.run(&imp, 2.5);
-            // The definition, one line at a time.
-            let (mut row_x, mut row_imp) = (vec![0.0f32; n * n], vec![0.0f32; n * n]);
-            for t in 0..n {
-                let row = &imp[t * n..(t + 1) * n];
-                for (s, &a) in mapping(row).iter().enumerate() {
-                    row_x[s * n + t] = (a * 2.5) as f32;
-                    row_imp[s * n + t] = lerp_at(row, a);
+    /// The warp as it was written before lanes (99bf083): one line at a time, columns mapped,
+    /// passed and checked one by one. Returns Φ and the columns on the mean.
+    fn one_line_at_a_time(imp: &[f32], n: usize, d0: f32, guarded: bool) -> (Vec<[f32; 2]>, usize) {
+        let (mut row_x, mut row_imp) = (vec![0.0f32; n * n], vec![0.0f32; n * n]);
+        for t in 0..n {
+            let row = &imp[t * n..(t + 1) * n];
+            for (s, &a) in mapping(row).iter().enumerate() {
+                row_x[s * n + t] = (a * d0 as f64) as f32;
+                row_imp[s * n + t] = lerp_at(row, a);
+            }
+        }
+        let mut mean = vec![0.0f32; n];
+        for s in 0..n {
+            for (m, &v) in mean.iter_mut().zip(&row_imp[s * n..(s + 1) * n]) {
+                *m += v;
+            }
+        }
+        let mean_map = mapping(&mean);
+        let maps: Vec<Vec<f64>> = (0..n)
+            .map(|s| mapping(&row_imp[s * n..(s + 1) * n]))
+            .collect();
+        let mut phi = vec![[0.0f32; 2]; n * n];
+        let mut on_mean = vec![false; n];
+        let pass = |phi: &mut Vec<[f32; 2]>, s: usize, map: &[f64]| {
+            for (t, &b) in map.iter().enumerate() {
+                phi[t * n + s] = [
+                    lerp_at(&row_x[s * n..(s + 1) * n], b),
+                    (b * d0 as f64) as f32,
+                ];
+            }
+        };
+        let mut folded = vec![false; n];
+        let mut count = 0;
+        for s in 0..n {
+            pass(&mut phi, s, &maps[s]);
+            if guarded && s > 0 {
+                folded[s - 1] = !pair_unfolded(&phi, n, s - 1);
+                count += usize::from(folded[s - 1]);
+                if 2 * count > n - 1 {
+                    (0..n).for_each(|s| pass(&mut phi, s, &mean_map));
+                    return (phi, n);
                 }
             }
-            for s in 0..n {
-                let xs = &row_x[s * n..(s + 1) * n];
-                for (t, &b) in mapping(&row_imp[s * n..(s + 1) * n]).iter().enumerate() {
-                    let want = [lerp_at(xs, b), (b * 2.5) as f32];
-                    let got = warp.phi[t * n + s];
-                    assert_eq!(
-                        got.map(f32::to_bits),
-                        want.map(f32::to_bits),
-                        "n {n} ({s}, {t})"
-                    );
+        }
+        if !guarded {
+            return (phi, 0);
+        }
+        loop {
+            let mut changed = vec![false; n];
+            for s in (0..n - 1).filter(|&s| folded[s]) {
+                for c in s.saturating_sub(1)..=(s + 2).min(n - 1) {
+                    changed[c] = !on_mean[c];
+                }
+            }
+            if !changed.contains(&true) {
+                break;
+            }
+            for s in (0..n).filter(|&s| changed[s]) {
+                on_mean[s] = true;
+                pass(&mut phi, s, &mean_map);
+            }
+            for s in (0..n - 1).filter(|&s| changed[s] || changed[s + 1]) {
+                folded[s] = !pair_unfolded(&phi, n, s);
+            }
+        }
+        (phi, on_mean.iter().filter(|&&m| m).count())
+    }
+
+    #[test]
+    fn lanes_warp_exactly_as_one_line_at_a_time() {
+        // Each map takes one path of the guarded warp: random importance folds most pairs (all
+        // columns to the mean at once), a bump on a slope folds a few (guard rounds), importance
+        // that is a product of a row and a column profile never folds.
+        let bump = |n: usize| -> Vec<f32> {
+            // Tuned by trial to fold some columns but not most: 28 of 37, 78 of 128.
+            let width = if n < 64 { 0.001 } else { 0.002 };
+            (0..n * n)
+                .map(|k| {
+                    let (x, y) = ((k % n) as f32 / n as f32, (k / n) as f32 / n as f32);
+                    let d2 = (x - 0.4).powi(2) + (y - 0.6).powi(2);
+                    1.0 + 3.0 * y + 25.0 * (-d2 / width).exp()
+                })
+                .collect()
+        };
+        let product = |n: usize| -> Vec<f32> {
+            (0..n * n)
+                .map(|k| (1.0 + (k % n) as f32).sqrt() * (2.0 + ((k / n) as f32 * 0.3).sin()))
+                .collect()
+        };
+        // 37 leaves a lane group part-filled at the end of both passes.
+        for n in [37, 128] {
+            for (name, imp, on_mean) in [
+                ("random", random_map(n, 7), Some(n)),
+                ("bump", bump(n), None),
+                ("product", product(n), Some(0)),
+            ] {
+                for method in [WarpMethod::Plain, WarpMethod::Guarded] {
+                    let guarded = method == WarpMethod::Guarded;
+                    let (want, want_on_mean) = one_line_at_a_time(&imp, n, 2.5, guarded);
+                    let mut warp = Warp::new(n, method, 0.0);
+                    warp.run(&imp, 2.5);
+                    for (k, (got, want)) in warp.phi.iter().zip(&want).enumerate() {
+                        let (got, want) = (got.map(f32::to_bits), want.map(f32::to_bits));
+                        assert_eq!(got, want, "{name} n {n} {method:?} vertex {k}");
+                    }
+                    if guarded {
+                        assert_eq!(warp.guarded_columns, want_on_mean, "{name} n {n}");
+                        match on_mean {
+                            Some(m) => assert_eq!(want_on_mean, m, "{name} n {n}"),
+                            None => assert!(
+                                want_on_mean > 0 && want_on_mean < n,
+                                "{name} n {n}: {want_on_mean} columns on the mean"
+                            ),
+                        }
+                    }
                 }
             }
         }
