@@ -18,6 +18,11 @@
 //! took 3.5 µs a group of eight in a throwaway criterion benchmark (LLVM leaves the lookups
 //! scalar), no better; the AVX2 kernel took the plain warp from 163 to 94 µs
 //! (`benches/cpu_stage.rs`, `warp_plain`, medians).
+//!
+//! Why intrinsics and not a SIMD crate: what pays here is the gather. `wide` has none, and lanes
+//! without gathers measured no faster (above). A dispatching crate such as `pulp` would take over
+//! the run-time choice of instruction set, which is a few lines here (as in the importance), but
+//! not the gathers' raw pointers, so the kernel would stay `unsafe` either way.
 
 /// Scratch for [`line_mapping`], sized for one line.
 #[derive(Clone, Debug)]
