@@ -176,10 +176,10 @@ fn portable(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut [[f64; LA
         for l in 0..LANES {
             // The first output at or after u_i, as line_mapping's marks have it; the min also
             // keeps a lane with no weight (NaN, infinity) inside the line until it is reset.
-            // i32 casts, which vectorise; x lies in [0, n − 1].
+            // x lies in [0, n − 1], so the cast is floor and this is ceil.
             let x = (ui[l] * to_output[l]).min(last);
-            let floor = x as i32;
-            let first = (floor + i32::from((floor as f64) < x)) as usize;
+            let floor = x as usize;
+            let first = floor + usize::from((floor as f64) < x);
             start[first.min(n - 1)][l] = i as u32;
         }
     }
