@@ -399,7 +399,7 @@ mod avx2 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// Lines of every kind the stage meets: importance over twelve orders of magnitude, zero
@@ -425,7 +425,8 @@ mod tests {
             .collect()
     }
 
-    fn mapping(imp: &[f32]) -> Vec<f64> {
+    /// One line's mapping, with a scratch of its own.
+    pub(crate) fn mapping(imp: &[f32]) -> Vec<f64> {
         let mut out = vec![0.0; imp.len()];
         line_mapping(imp, &mut LineScratch::new(imp.len()), &mut out);
         out

@@ -227,26 +227,15 @@ impl Warp {
     fn row_pass(&mut self, d0: f32) {
         let n = self.n;
         for t0 in (0..n).step_by(LANES) {
-            // Lanes past the last row repeat it; their results are not kept.
-            for (i, v) in self.lanes_in.iter_mut().enumerate() {
-                for (l, x) in v.iter_mut().enumerate() {
-                    *x = self.importance[(t0 + l).min(n - 1) * n + i];
-                }
-            }
+            side_by_side(&self.importance, n, t0, &mut self.lanes_in);
             lane_mappings(&self.lanes_in, &mut self.lanes, &mut self.lanes_out);
             let kept = LANES.min(n - t0);
             for (s, a) in self.lanes_out.iter().enumerate() {
                 let x = a.map(|a| (a * d0 as f64) as f32);
                 let v = lerp_lanes(&self.importance, n, t0, a);
                 let at = s * n + t0;
-                if kept == LANES {
-                    // A fixed-size copy: a slice of run-time length calls memmove.
-                    self.row_x[at..][..LANES].copy_from_slice(&x);
-                    self.row_importance[at..][..LANES].copy_from_slice(&v);
-                } else {
-                    self.row_x[at..][..kept].copy_from_slice(&x[..kept]);
-                    self.row_importance[at..][..kept].copy_from_slice(&v[..kept]);
-                }
+                store_kept(&mut self.row_x[at..], &x, kept);
+                store_kept(&mut self.row_importance[at..], &v, kept);
             }
         }
     }
@@ -256,15 +245,7 @@ impl Warp {
     #[inline(always)]
     fn map_columns(&mut self, s0: usize, d0: f32) {
         let n = self.n;
-        // Lanes past the last column repeat it; their results are not kept.
-        let column = |l: usize| (s0 + l).min(n - 1) * n;
-        let lines: [&[f32]; LANES] =
-            std::array::from_fn(|l| &self.row_importance[column(l)..][..n]);
-        for (t, v) in self.lanes_in.iter_mut().enumerate() {
-            for l in 0..LANES {
-                v[l] = lines[l][t];
-            }
-        }
+        side_by_side(&self.row_importance, n, s0, &mut self.lanes_in);
         lane_mappings(&self.lanes_in, &mut self.lanes, &mut self.lanes_out);
         let maps = &self.lanes_out;
         store_columns(&mut self.phi, &self.row_x, n, s0, d0, |t| maps[t]);
@@ -332,12 +313,31 @@ fn store_columns(
         let b = b(t);
         let x = lerp_lanes(row_x, n, s0, &b);
         let p: [[f32; 2]; LANES] = std::array::from_fn(|l| [x[l], (b[l] * d0 as f64) as f32]);
-        if kept == LANES {
-            // A fixed-size copy: a slice of run-time length calls memmove.
-            phi[t * n + s0..][..LANES].copy_from_slice(&p);
-        } else {
-            phi[t * n + s0..][..kept].copy_from_slice(&p[..kept]);
+        store_kept(&mut phi[t * n + s0..], &p, kept);
+    }
+}
+
+/// Lines `first ..` of `buf` (lines of `n` samples, one after another) side by side:
+/// `lanes[i][l]` is sample i of line `first + l`. Lanes past the last line repeat it; their
+/// results are not kept.
+#[inline(always)]
+fn side_by_side(buf: &[f32], n: usize, first: usize, lanes: &mut [[f32; LANES]]) {
+    let lines: [&[f32]; LANES] = std::array::from_fn(|l| &buf[(first + l).min(n - 1) * n..][..n]);
+    for (i, v) in lanes.iter_mut().enumerate() {
+        for l in 0..LANES {
+            v[l] = lines[l][i];
         }
+    }
+}
+
+/// The first `kept` lanes of `v` to the start of `dst`.
+#[inline(always)]
+fn store_kept<T: Copy>(dst: &mut [T], v: &[T; LANES], kept: usize) {
+    if kept == LANES {
+        // A fixed-size copy: a slice of run-time length calls memmove.
+        dst[..LANES].copy_from_slice(v);
+    } else {
+        dst[..kept].copy_from_slice(&v[..kept]);
     }
 }
 
@@ -447,6 +447,7 @@ pub fn cell_area(phi: &[[f32; 2]], n: usize, s: usize, t: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::stage::lines::tests::mapping;
 
     /// Importance over twelve orders of magnitude, from a seed.
     fn random_map(n: usize, seed: u32) -> Vec<f32> {
@@ -606,12 +607,6 @@ mod tests {
                 assert_eq!(sound, pair_unfolded(&phi, n, s + l), "pair {}", s + l);
             }
         }
-    }
-
-    fn mapping(imp: &[f32]) -> Vec<f64> {
-        let mut out = vec![0.0; imp.len()];
-        line_mapping(imp, &mut LineScratch::new(imp.len()), &mut out);
-        out
     }
 
     #[test]
