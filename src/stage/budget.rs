@@ -62,7 +62,7 @@ impl Budget {
 
     /// The mesh for a frame whose importance (per metre, on a map of spacing `d0`) is `importance`.
     pub fn update(&mut self, importance: &[f32], d0: f64) -> u32 {
-        let cells: f64 = importance.iter().map(|&i| (i as f64 * d0).powi(2)).sum();
+        let cells = cells_demanded(importance, d0);
         self.demanded_cells = if cells.is_finite() { cells } else { 0.0 };
         let demand = self.demanded_cells.sqrt().ceil() + 1.0;
         let fits = |k: usize| self.rungs[k] as f64 >= demand;
@@ -76,6 +76,26 @@ impl Budget {
         self.current = Some(k);
         self.rungs[k]
     }
+}
+
+/// `Σ (I·d0)²`, summed in eight lanes: one running f64 sum is a chain of dependent additions,
+/// 5 % of the stage's time (jacksboro near: the stage took 167 µs with it, 161 µs in lanes,
+/// `benches/cpu_stage.rs`).
+fn cells_demanded(importance: &[f32], d0: f64) -> f64 {
+    const LANES: usize = 8;
+    let mut sums = [0f64; LANES];
+    let chunks = importance.chunks_exact(LANES);
+    let rest: f64 = chunks
+        .remainder()
+        .iter()
+        .map(|&i| (i as f64 * d0).powi(2))
+        .sum();
+    for c in chunks {
+        for (s, &i) in sums.iter_mut().zip(c) {
+            *s += (i as f64 * d0).powi(2);
+        }
+    }
+    sums.iter().sum::<f64>() + rest
 }
 
 #[cfg(test)]
