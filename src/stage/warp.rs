@@ -84,7 +84,8 @@ pub struct Warp {
     pub method: WarpMethod,
     /// Largest log2 step of importance between 4-neighbours; 0: no limit.
     pub max_log2_step: f32,
-    importance: Vec<f32>,
+    /// The importance after `max_log2_step`'s limit (empty without one).
+    limited: Vec<f32>,
     scratch: LineScratch,
     lanes: LaneScratch,
     lanes_in: Vec<[f32; LANES]>,
@@ -110,7 +111,11 @@ impl Warp {
             n,
             method,
             max_log2_step,
-            importance: vec![0.0; n * n],
+            limited: if max_log2_step > 0.0 {
+                vec![0.0; n * n]
+            } else {
+                Vec::new()
+            },
             scratch: LineScratch::new(n),
             lanes: LaneScratch::new(n),
             lanes_in: vec![[0.0; LANES]; n],
@@ -166,11 +171,17 @@ impl Warp {
     fn run_lanes(&mut self, importance: &[f32], d0: f32) {
         let n = self.n;
         assert_eq!(importance.len(), n * n, "importance map size");
-        self.importance.copy_from_slice(importance);
         if self.max_log2_step > 0.0 {
-            limit_gradient(&mut self.importance, n, (-self.max_log2_step).exp2());
+            // Taken out of self for the row pass, which borrows self mutably.
+            let mut limited = std::mem::take(&mut self.limited);
+            limited.resize(n * n, 0.0);
+            limited.copy_from_slice(importance);
+            limit_gradient(&mut limited, n, (-self.max_log2_step).exp2());
+            self.row_pass(&limited, d0);
+            self.limited = limited;
+        } else {
+            self.row_pass(importance, d0);
         }
-        self.row_pass(d0);
         self.follows_mean.fill(false);
         self.guarded_columns = 0;
         let guarded = self.method == WarpMethod::Guarded;
@@ -239,15 +250,15 @@ impl Warp {
     }
 
     #[inline(always)]
-    fn row_pass(&mut self, d0: f32) {
+    fn row_pass(&mut self, importance: &[f32], d0: f32) {
         let n = self.n;
         for t0 in (0..n).step_by(LANES) {
-            side_by_side(&self.importance, n, t0, &mut self.lanes_in);
+            side_by_side(importance, n, t0, &mut self.lanes_in);
             lane_mappings(&self.lanes_in, &mut self.lanes, &mut self.lanes_out);
             let kept = LANES.min(n - t0);
             for (s, a) in self.lanes_out.iter().enumerate() {
                 let x = a.map(|a| (a * d0 as f64) as f32);
-                let v = lerp_lanes(&self.importance, n, t0, a);
+                let v = lerp_lanes(importance, n, t0, a);
                 let at = s * n + t0;
                 store_kept(&mut self.row_x[at..], &x, kept);
                 store_kept(&mut self.row_importance[at..], &v, kept);
