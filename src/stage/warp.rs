@@ -38,13 +38,23 @@
 //! the calls into the AVX2 kernels are not inlined and the guarded warp takes 163 µs; AVX2 alone
 //! gives 101 µs.
 //!
+//! Since then (side by side with commit 9b07df8): the all-mean pass interpolates columns put side
+//! by side instead of gathering (guarded 93 → 83 µs near), and the importance is read in place
+//! unless `max_log2_step` limits it (a 64 KiB copy a frame). Measured and rejected: the row pass
+//! gathering its importance from the group's lines side by side (4 KiB, in L1) instead of from
+//! the map (64 KiB): 83.6 against 84.5 µs, within the noise.
+//!
 //! Rejected alternative, measured: two threads. Rayon's `join` over halves of the rows, of the
 //! column mappings and of Φ's rows (the row pass written row-major and transposed) took 511 µs
 //! against 459 µs on one thread (guarded, jacksboro near, when lines were mapped one by one).
 //! Handing 50 µs of work to a second thread on this VM costs more than it saves: a worker parked
 //! between frames (thread::park, woken by unpark) made two halves of 50 µs take 152 µs against
 //! 100 µs on one thread, a scoped thread spawned per frame 116 µs; a worker that never sleeps
-//! would hold a core for the whole flight.
+//! would hold a core for the whole flight. Nor does waking the worker early pay: woken as the
+//! frame starts, so that its wake-up (4 µs median) overlaps the main thread's first work, and
+//! joined by spinning, two halves took 91 µs against 94 µs for the whole on one thread (medians
+//! of 500 frames 2 ms apart), and 5.8 ms at the 90th percentile, where the VM left the worker
+//! unscheduled (a standalone program, not in the repository).
 //!
 //! Rejected alternatives: extra row/column passes over the warped image (the grid is no longer
 //! axis-aligned, and a second pass can fold what the first left intact) and always smoothing the
