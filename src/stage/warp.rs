@@ -38,9 +38,10 @@
 //! the calls into the AVX2 kernels are not inlined and the guarded warp takes 163 µs; AVX2 alone
 //! gives 101 µs.
 //!
-//! Since then (side by side with commit 9b07df8): the all-mean pass interpolates columns put side
-//! by side instead of gathering (guarded 93 → 83 µs near), and the importance is read in place
-//! unless `max_log2_step` limits it (a 64 KiB copy a frame). Measured and rejected: the row pass
+//! Since then the all-mean pass interpolates columns put side by side instead of gathering, and
+//! the importance is read in place unless `max_log2_step` limits it (a 64 KiB copy a frame):
+//! both together took the guarded warp on jacksboro near from 93 to 83 µs, side by side with
+//! commit 9b07df8. Measured and rejected: the row pass
 //! gathering its importance from the group's lines side by side (4 KiB, in L1) instead of from
 //! the map (64 KiB): 83.6 against 84.5 µs, within the noise.
 //!
