@@ -26,11 +26,11 @@
 //! 9b07df8, 41 µs now, run alternately. The two steps, each measured in runs of its own: each row
 //! loop indexes buffers sliced to the row's length (an index into a buffer of unknown length is
 //! checked, and a checked loop stays scalar: 54 → 43 µs), and a frustum plane with the whole row
-//! inside is skipped (43 → 40 µs). Measured and
-//! rejected: one fused pass over eight texels at a time, every factor kept in `[f32; 8]` arrays
-//! (LLVM left it scalar: 188 µs); two fewer divisions per texel (`0.05·d` for `0.05/(1/d)`, a
-//! product for `/FADE`): 43 µs either way, as the loop is bound by its other arithmetic, and the
-//! bits would change. Two threads do not pay on this 2-core VM (`stage::warp`'s module doc).
+//! inside is skipped (43 → 40 µs). Measured and rejected: one fused pass over eight texels at a
+//! time, every factor kept in `[f32; 8]` arrays (LLVM left it scalar: 188 µs); two fewer
+//! divisions per texel (`0.05·d` for `0.05/(1/d)`, a product for `/FADE`): 43 µs either way, as
+//! the loop is bound by its other arithmetic, and the bits would change. Two threads do not pay
+//! on this 2-core VM (`stage::warp`'s module doc).
 
 use crate::camera::Camera;
 use crate::stage::sketch_map::SketchMap;
@@ -433,8 +433,8 @@ fn slope_x(row: &[f32], d0: f32, out: &mut [f32]) {
 
 /// Whether every texel of a row (x in [0, `x_max`], heights in `h`) is surely on the inner side
 /// of a plane, `n·(x, y, z) + d ≥ 0` with `d` at the row's y: its least value over the row's box,
-/// less a bound on the f32 rounding of the per-texel sum (a few ulps of its terms, taken
-/// 30× wide), is positive. The texels' smoothsteps are then exactly 1.
+/// less an allowance for the f32 rounding of the per-texel sum (about 50 times the few ulps of
+/// its terms that rounding can cost), is positive. The texels' smoothsteps are then exactly 1.
 fn row_inside(pn: Vec3, d: f32, x_max: f32, (h_lo, h_hi): (f32, f32)) -> bool {
     let (a, c, d) = (pn.x as f64, pn.z as f64, d as f64);
     let (x_max, h_lo, h_hi) = (x_max as f64, h_lo as f64, h_hi as f64);

@@ -41,9 +41,9 @@
 //! Since then the all-mean pass interpolates columns put side by side instead of gathering, and
 //! the importance is read in place unless `max_log2_step` limits it (a 64 KiB copy a frame):
 //! both together took the guarded warp on jacksboro near from 93 to 83 µs, side by side with
-//! commit 9b07df8. Measured and rejected: the row pass
-//! gathering its importance from the group's lines side by side (4 KiB, in L1) instead of from
-//! the map (64 KiB): 83.6 against 84.5 µs, within the noise.
+//! commit 9b07df8. Measured and rejected: the row pass gathering its importance from the group's
+//! lines side by side (4 KiB, in L1) instead of from the map (64 KiB): 83.6 against 84.5 µs,
+//! within the noise.
 //!
 //! Rejected alternative, measured: two threads. Rayon's `join` over halves of the rows, of the
 //! column mappings and of Φ's rows (the row pass written row-major and transposed) took 511 µs
@@ -95,7 +95,8 @@ pub struct Warp {
     pub method: WarpMethod,
     /// Largest log2 step of importance between 4-neighbours; 0: no limit.
     pub max_log2_step: f32,
-    /// The importance after `max_log2_step`'s limit (empty without one).
+    /// The importance after `max_log2_step`'s limit: empty without one, sized in `new` or on the
+    /// first frame that limits (if the limit is set after `new`).
     limited: Vec<f32>,
     scratch: LineScratch,
     lanes: LaneScratch,
