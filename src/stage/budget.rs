@@ -81,7 +81,7 @@ impl Budget {
 /// `Σ (I·d0)²`, summed in eight lanes: one running f64 sum is a chain of dependent additions
 /// (jacksboro near, `benches/cpu_stage.rs`, in runs of their own: the stage took 167 µs with it,
 /// 161 µs in lanes).
-fn cells_demanded(importance: &[f32], d0: f64) -> f64 {
+pub fn cells_demanded(importance: &[f32], d0: f64) -> f64 {
     const LANES: usize = 8;
     let mut sums = [0f64; LANES];
     let chunks = importance.chunks_exact(LANES);

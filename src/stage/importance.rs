@@ -547,13 +547,7 @@ mod tests {
     /// is within a metre to a micrometre of zero either way, where the rounding bound decides.
     #[test]
     fn a_skipped_plane_gives_every_texel_of_its_row_one() {
-        let mut seed = 0x2545_f491u32;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            seed as f32 / u32::MAX as f32
-        };
+        let mut next = crate::stage::lines::tests::uniform(0x2545_f491);
         let (n, d0) = (64, 30.0f32);
         let x: Vec<f32> = (0..n).map(|i| i as f32 * d0).collect();
         let (mut skipped, mut kept) = (0, 0);

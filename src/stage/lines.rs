@@ -49,13 +49,6 @@ impl LineScratch {
 pub fn line_mapping(imp: &[f32], scratch: &mut LineScratch, out: &mut [f64]) {
     let n = out.len();
     let LineScratch { u, segment } = scratch;
-    let weight = |v: f32| {
-        if v.is_finite() && v > 0.0 {
-            v as f64
-        } else {
-            0.0
-        }
-    };
     u[0] = 0.0;
     let mut prev = weight(imp[0]);
     for i in 0..n - 1 {
@@ -96,6 +89,16 @@ pub fn line_mapping(imp: &[f32], scratch: &mut LineScratch, out: &mut [f64]) {
     out[n - 1] = (n - 1) as f64;
 }
 
+/// A sample's weight in the running sum: its importance where finite and positive, else 0.
+#[inline(always)]
+fn weight(v: f32) -> f64 {
+    if v.is_finite() && v > 0.0 {
+        v as f64
+    } else {
+        0.0
+    }
+}
+
 /// Lines mapped together by [`lane_mappings`], one per SIMD lane (f64: one AVX-512 register,
 /// two AVX2 ones).
 pub const LANES: usize = 8;
@@ -118,10 +121,8 @@ impl LaneScratch {
 
 /// [`line_mapping`] of [`LANES`] lines at once: `imp[i][l]` is line l's importance at i and
 /// `out[j][l]` its mapping. Each lane's result is bit-identical to [`line_mapping`]'s: the same
-/// operations in the same order.
+/// operations in the same order (why lanes across lines: the module doc).
 ///
-/// Why lanes across lines: a line's running sum is a chain of dependent additions, one per
-/// sample, which no vector width shortens; eight lines side by side share each step of it.
 /// The segment search is the running maximum of the last segment starting at each output (the
 /// count of [`line_mapping`]'s marks, since the first outputs of the segments never decrease),
 /// so the scatter is a plain store per lane and not a read-modify-write.
@@ -151,13 +152,6 @@ fn portable(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut [[f64; LA
     let n = out.len();
     let LaneScratch { u, start } = scratch;
     let (u, start) = (&mut u[..n], &mut start[..n]);
-    let weight = |v: f32| {
-        if v.is_finite() && v > 0.0 {
-            v as f64
-        } else {
-            0.0
-        }
-    };
     u[0] = [0.0; LANES];
     let mut prev = imp[0].map(weight);
     for i in 0..n - 1 {
@@ -219,10 +213,17 @@ pub fn lerp_lanes(values: &[f32], n: usize, first: usize, a: &[f64; LANES]) -> [
 /// it the end segments extend, and NaN gives NaN).
 #[inline(always)]
 pub fn lerp_at(values: &[f32], a: f64) -> f32 {
-    // The cast is floor for a ≥ 0 and saturates below (0) and above.
-    let i = (a as usize).min(values.len() - 2);
-    let f = (a - i as f64) as f32;
+    let (i, f) = lerp_weight(a, values.len());
     values[i] + (values[i + 1] - values[i]) * f
+}
+
+/// The segment and the weight of its upper end that [`lerp_at`] takes at `a` on a line of `len`
+/// samples, for callers that interpolate several lines at one `a`.
+#[inline(always)]
+pub fn lerp_weight(a: f64, len: usize) -> (usize, f32) {
+    // The cast is floor for a ≥ 0 and saturates below (0) and above.
+    let i = (a as usize).min(len - 2);
+    (i, (a - i as f64) as f32)
 }
 
 /// The ends of each lane's mapping: 0 and n − 1 exactly, or the identity for a line with no
@@ -405,13 +406,7 @@ pub(crate) mod tests {
     /// Lines of every kind the stage meets: importance over twelve orders of magnitude, zero
     /// runs, NaN and infinity, all zero, one spike.
     fn lines(n: usize) -> Vec<[f32; LANES]> {
-        let mut seed = 0x9e37_79b9u32;
-        let mut rnd = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            seed as f32 / u32::MAX as f32
-        };
+        let mut rnd = uniform(0x9e37_79b9);
         (0..n)
             .map(|i| {
                 let mut v: [f32; LANES] = std::array::from_fn(|_| 10f32.powf(12.0 * rnd() - 6.0));
@@ -423,6 +418,17 @@ pub(crate) mod tests {
                 v
             })
             .collect()
+    }
+
+    /// Numbers in [0, 1] from a seed (xorshift32; 0 is taken as 1), for the stage's tests.
+    pub(crate) fn uniform(seed: u32) -> impl FnMut() -> f32 {
+        let mut x = seed.max(1);
+        move || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x as f32 / u32::MAX as f32
+        }
     }
 
     /// One line's mapping, with a scratch of its own.

@@ -10,6 +10,7 @@
 //! even when the view gets exactly its demand (a cell of ratio r stands for 1/r² demanded cells),
 //! so a share within [½, 1] means little without how many cells the view got for its demand.
 
+use crate::stage::budget::cells_demanded;
 use crate::stage::importance::ImportanceMap;
 use crate::stage::warp::cell_area;
 use serde::Serialize;
@@ -50,8 +51,8 @@ pub fn measure(
     imp: &ImportanceMap,
     ratios: &mut Vec<f32>,
 ) -> Quality {
-    let sum_sq: f64 = imp.importance.iter().map(|&v| (v as f64).powi(2)).sum();
-    let k = (n - 1) as f64 / (d0 * sum_sq.sqrt());
+    // k scales the demand, Σ (I·d0)² cells (the budget's), to the (n − 1)² cells there are.
+    let k = (n - 1) as f64 / cells_demanded(&imp.importance, d0).sqrt();
     let len = |a: [f32; 2], b: [f32; 2]| ((b[0] - a[0]) as f64).hypot((b[1] - a[1]) as f64);
     let mut nonfinite = phi
         .iter()

@@ -87,7 +87,7 @@
 
 use crate::scene::WarpMethod;
 use crate::stage::lines::{
-    LANES, LaneScratch, LineScratch, lane_mappings, lerp_at, lerp_lanes, line_mapping,
+    LANES, LaneScratch, LineScratch, lane_mappings, lerp_at, lerp_lanes, lerp_weight, line_mapping,
 };
 
 pub struct Warp {
@@ -248,9 +248,7 @@ impl Warp {
             side_by_side(&self.row_x, n, s0, &mut self.lanes_in);
             let kept = LANES.min(n - s0);
             for (t, &b) in self.mean_map.iter().enumerate() {
-                // lerp_at's index and weight, the same for every lane.
-                let i = (b as usize).min(n - 2);
-                let f = (b - i as f64) as f32;
+                let (i, f) = lerp_weight(b, n);
                 let (lo, hi) = (self.lanes_in[i], self.lanes_in[i + 1]);
                 let y = (b * d0 as f64) as f32;
                 let p: [[f32; 2]; LANES] =
@@ -485,19 +483,12 @@ pub fn cell_area(phi: &[[f32; 2]], n: usize, s: usize, t: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::stage::lines::tests::mapping;
+    use crate::stage::lines::tests::{mapping, uniform};
 
     /// Importance over twelve orders of magnitude, from a seed.
     fn random_map(n: usize, seed: u32) -> Vec<f32> {
-        let mut x = seed.max(1);
-        (0..n * n)
-            .map(|_| {
-                x ^= x << 13;
-                x ^= x >> 17;
-                x ^= x << 5;
-                10f32.powf(12.0 * (x as f32 / u32::MAX as f32) - 6.0)
-            })
-            .collect()
+        let mut rnd = uniform(seed);
+        (0..n * n).map(|_| 10f32.powf(12.0 * rnd() - 6.0)).collect()
     }
 
     /// The warp as it was written before lanes (99bf083): one line at a time, columns mapped,
