@@ -48,11 +48,15 @@ fn compare_reports_every_setting_with_every_column_filled() {
     assert_eq!(code, 0, "{err}");
     assert!(stdout.contains("frame time to 30 dB"), "{stdout}");
 
-    let scene =
+    let mut scene =
         terrain::scene::Scene::load(&manifest_dir().join("sketches/gaussian.toml")).unwrap();
+    (scene.camera.width, scene.camera.height) = (64, 64);
+    // As the run had it: the sweep's warped rows depend on the mesh the view asks for.
+    scene.warp.hold = false;
     let atlas = terrain::scene::load_atlas(&scene).unwrap();
+    let camera = terrain::scene::camera_of(&scene, &atlas).unwrap();
     let modes = [Mode::Warped, Mode::Geomipmap, Mode::Bruteforce];
-    let settings = default_sweep(&modes, &atlas);
+    let settings = default_sweep(&modes, &scene, &atlas, &camera).unwrap();
     let csv = std::fs::read_to_string(dir.join("report.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(lines[0], CSV_COLUMNS.join(","));
@@ -231,7 +235,9 @@ fn scene_settings_are_in_the_default_sweep() {
             terrain::scene::Scene::load(&manifest_dir().join(format!("sketches/{name}.toml")))
                 .unwrap();
         let atlas = terrain::scene::load_atlas(&scene).unwrap();
-        let sweep = default_sweep(&[Mode::Warped, Mode::Geomipmap, Mode::Bruteforce], &atlas);
+        let camera = terrain::scene::camera_of(&scene, &atlas).unwrap();
+        let modes = [Mode::Warped, Mode::Geomipmap, Mode::Bruteforce];
+        let sweep = default_sweep(&modes, &scene, &atlas, &camera).unwrap();
         for m in [Mode::Warped, Mode::Geomipmap, Mode::Bruteforce] {
             let s: Setting = Setting::of_scene(m, &scene, &atlas).unwrap();
             assert!(sweep.contains(&s), "{name}: {s:?} not swept");
@@ -302,4 +308,48 @@ fn compare_sweeps_a_planets_clipmaps() {
         assert_eq!(err.trim_end().lines().count(), 1, "{err}");
         assert!(err.contains("--modes") && err.contains(cause), "{err}");
     }
+}
+
+/// The warped sweep climbs the budget's ladder to the mesh the view asks for, without a row that
+/// repeats another's mesh, then lowers `quad_px` past it; a larger image asks for a larger mesh,
+/// so its ladder reaches further.
+#[test]
+fn the_warped_sweep_spans_the_budgets_the_view_asks_for() {
+    let mut scene =
+        terrain::scene::Scene::load(&manifest_dir().join("sketches/jacksboro.toml")).unwrap();
+    let atlas = terrain::scene::load_atlas(&scene).unwrap();
+    let mut below_own = Vec::new();
+    for size in [128, 512] {
+        (scene.camera.width, scene.camera.height) = (size, size);
+        let camera = terrain::scene::camera_of(&scene, &atlas).unwrap();
+        let sweep = default_sweep(&[Mode::Warped], &scene, &atlas, &camera).unwrap();
+        let rows: Vec<(f64, u32)> = sweep
+            .iter()
+            .map(|s| match *s {
+                Setting::Warped { quad_px, mesh } => (quad_px, mesh),
+                other => panic!("not warped: {other:?}"),
+            })
+            .collect();
+        let own = (scene.warp.quad_px, scene.warp.mesh);
+        let k = rows
+            .iter()
+            .position(|&r| r == own)
+            .expect("the scene's own setting");
+        // The ladder: the scene's quad_px, meshes rising by at most a third, from the smallest.
+        assert_eq!(rows[0], (own.0, scene.warp.min_mesh), "{rows:?}");
+        for w in rows[..k].windows(2) {
+            assert_eq!(w[1].0, own.0, "{rows:?}");
+            assert!(w[1].1 > w[0].1 && w[1].1 * 3 <= w[0].1 * 4, "{rows:?}");
+        }
+        // Past the view's own mesh: smaller quad_px at the largest bound, so more triangles.
+        assert_eq!(rows.len(), k + 4, "{rows:?}");
+        for w in rows[k..].windows(2) {
+            assert!(w[1].0 < w[0].0 && w[1].1 == 1024, "{rows:?}");
+        }
+        below_own.push(k);
+    }
+    assert!(
+        below_own[1] > below_own[0] + 2,
+        "512² asks for more: {below_own:?}"
+    );
 }

@@ -141,11 +141,11 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
     let atlas = scene::load_atlas(&scene)?;
     let camera = scene::camera_of(&scene, &atlas)?;
-    let settings = o
-        .settings
-        .clone()
-        .unwrap_or_else(|| sweep::default_sweep(&o.modes, &atlas));
     check_modes(&scene, &o.modes)?;
+    let settings = match &o.settings {
+        Some(s) => s.clone(),
+        None => sweep::default_sweep(&o.modes, &scene, &atlas, &camera)?,
+    };
     let storage_bytes = settings
         .iter()
         .map(|s| crate::render::needs(&s.apply(&scene), s.mode(), &atlas).storage_bytes)

@@ -1,20 +1,40 @@
 //! The quality settings `compare` sweeps, one per report row.
 //!
-//! Default sweep: warped over mesh 64², 96², 128², 192², 256², 384², 512², 1024² at `quad_px` 2
-//! (from GeoMipMap's triangle counts up: 4k to 2M triangles), and `quad_px` 1 and 4 at mesh 512²; GeoMipMap over τ 0.5, 1, 2, 4, 8 px at blocks of 17, 33 and 65 vertices; brute force
-//! over grid spacings d_atlas/2^K for K = 0 up to the finest the device and the vertex budget
-//! allow ([`default_k`]); on a planet, clipmaps over φ steps 128, 256, 512, 1024 at 20 rings per
-//! level, rings per level 10 and 40 at 512 φ steps (the paper's n and m, 8× and 4× triangles end
-//! to end), and the paper's triangles split the other ways: 256 × 40 and 128 × 80.
+//! Default sweep:
+//! - warped over the budgets where GeoMipMap competes: the mesh bound on the budget's ladder
+//!   (`stage::budget`, rungs about 2^(1/4) apart from `warp.min_mesh`, so triangles about half
+//!   an octave apart) up to the mesh the view asks for at the scene's `quad_px`, then the scene's
+//!   own setting (that mesh, drawn as the view sizes it), then `quad_px` halved in half-octave
+//!   steps three times at mesh 1024² (2×, 4×, 8× the view's triangles). Without `warp.budget`
+//!   the ladder runs to the scene's mesh and 1024², and `quad_px` is not swept.
+//! - GeoMipMap over τ 0.5, 1, 2, 4, 8 px at blocks of 17, 33 and 65 vertices;
+//! - brute force over grid spacings d_atlas/2^K for K = 0 up to the finest the device and the
+//!   vertex budget allow ([`default_k`]);
+//! - on a planet, clipmaps over φ steps 128, 256, 512, 1024 at 20 rings per level, rings per
+//!   level 10 and 40 at 512 φ steps (the paper's n and m, 8× and 4× triangles end to end), and the
+//!   paper's triangles split the other ways: 256 × 40 and 128 × 80.
 //!
-//! Rejected alternative: the full product of `quad_px` and mesh size. `quad_px` scales the view
-//! importance everywhere alike, and the warp normalises importance to the mesh it has, so it
-//! changes Φ only where the surface bound `I_s` or the floor clip the importance; three of its
-//! values at one mesh size show that at a third of the cost.
+//! Rejected alternative: a fixed list of mesh bounds (64² … 1024² at `quad_px` 2, and `quad_px`
+//! 1 and 4 at 512²), the sweep until stop 30. Every bound above the view's own demand draws the
+//! same mesh: on the bundled views at 256², four of its ten warped rows repeated one another
+//! (92,450 triangles on gaussian and hills), while the lowest row (7,938 triangles) lay above
+//! GeoMipMap's lowest (6,343) and the steps between 8k and 92k were an octave of triangles
+//! apart, too coarse to tell whether warped beats GeoMipMap between them.
+//! Rejected too: the full product of `quad_px` and mesh size. `quad_px` scales the view
+//! importance everywhere alike, and the warp normalises importance to the mesh it has, so under
+//! a bound that binds it changes Φ only where the surface bound `I_s` or the floor clip the
+//! importance.
 
+use crate::camera::Camera;
+use crate::error::Result;
 use crate::lod::baseline::default_k;
 use crate::scene::{Mode, Scene};
 use crate::sketch::Atlas;
+use crate::stage::CpuStage;
+use crate::stage::budget::Budget;
+
+/// The largest mesh bound the sweep draws: 2M triangles.
+const MAX_MESH: u32 = 1024;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Setting {
@@ -113,19 +133,18 @@ impl Setting {
     }
 }
 
-/// The default sweep of `modes` over `atlas`.
-pub fn default_sweep(modes: &[Mode], atlas: &Atlas) -> Vec<Setting> {
+/// The default sweep of `modes` for `scene` seen by `camera` (the image size of the comparison):
+/// the warped rows depend on the mesh this view asks for.
+pub fn default_sweep(
+    modes: &[Mode],
+    scene: &Scene,
+    atlas: &Atlas,
+    camera: &Camera,
+) -> Result<Vec<Setting>> {
     let mut out = Vec::new();
     for &mode in modes {
         match mode {
-            Mode::Warped => {
-                for mesh in [64, 96, 128, 192, 256, 384, 512, 1024] {
-                    out.push(Setting::Warped { quad_px: 2.0, mesh });
-                }
-                for quad_px in [1.0, 4.0] {
-                    out.push(Setting::Warped { quad_px, mesh: 512 });
-                }
-            }
+            Mode::Warped => out.extend(warped_sweep(scene, atlas, camera)?),
             Mode::Geomipmap => {
                 for block in [17, 33, 65] {
                     for tau in [0.5, 1.0, 2.0, 4.0, 8.0] {
@@ -161,5 +180,49 @@ pub fn default_sweep(modes: &[Mode], atlas: &Atlas) -> Vec<Setting> {
             Mode::Reference => {}
         }
     }
-    out
+    Ok(out)
+}
+
+/// The warped rows (the module doc's rule).
+fn warped_sweep(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<Vec<Setting>> {
+    let w = &scene.warp;
+    let own = Setting::Warped {
+        quad_px: w.quad_px,
+        mesh: w.mesh,
+    };
+    let view = if w.budget {
+        view_mesh(scene, atlas, camera)?
+    } else {
+        w.mesh
+    };
+    let top = view.min(w.mesh);
+    let bound = MAX_MESH.max(w.mesh);
+    let rungs = Budget::new(w.min_mesh, bound).rungs().to_vec();
+    let at = |mesh| Setting::Warped {
+        quad_px: w.quad_px,
+        mesh,
+    };
+    let mut out: Vec<Setting> = rungs.iter().filter(|&&m| m < top).map(|&m| at(m)).collect();
+    out.push(own);
+    if !w.budget {
+        out.extend(rungs.iter().filter(|&&m| m > w.mesh).map(|&m| at(m)));
+    } else if view < bound {
+        // Three thousandths: the labels stay short (1.414, 1, 0.707 for quad_px 2).
+        let q = |k: i32| (w.quad_px * 2f64.powf(-0.5 * k as f64) * 1e3).round() / 1e3;
+        out.extend((1..=3).map(|k| Setting::Warped {
+            quad_px: q(k),
+            mesh: bound,
+        }));
+    }
+    Ok(out)
+}
+
+/// The mesh side the view asks for at the scene's `quad_px`, up to [`MAX_MESH`].
+fn view_mesh(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<u32> {
+    let mut s = scene.clone();
+    s.warp.mesh = MAX_MESH.max(s.warp.mesh);
+    let detail = crate::scene::detail_of(&s, atlas);
+    let mut stage = CpuStage::new(&s, &detail)?;
+    stage.run(atlas, camera);
+    Ok(stage.mesh)
 }
