@@ -2,8 +2,8 @@
 //!
 //! Default sweep:
 //! - warped over the budgets where GeoMipMap competes: the mesh bound on the budget's ladder
-//!   (`stage::budget`, rungs about 2^(1/4) apart from `warp.min_mesh`, so triangles about half
-//!   an octave apart) up to the mesh the view asks for at the scene's `quad_px`, then the scene's
+//!   (`stage::budget`, rungs about 2^(1/4) apart from 16², so triangles about half an octave
+//!   apart) up to the mesh the view asks for at the scene's `quad_px`, then the scene's
 //!   own setting (that mesh, drawn as the view sizes it), then `quad_px` halved in half-octave
 //!   steps three times at mesh 1024² (2×, 4×, 8× the view's triangles). Without `warp.budget`
 //!   the ladder runs to the scene's mesh and 1024², and `quad_px` is not swept.
@@ -35,6 +35,9 @@ use crate::stage::budget::Budget;
 
 /// The largest mesh bound the sweep draws: 2M triangles.
 const MAX_MESH: u32 = 1024;
+/// The smallest: 450 triangles, below GeoMipMap's fewest on the bundled views from high up (512
+/// and 874 at 256²), where the budget's own smallest (`warp.min_mesh`, 32) would start at 1,922.
+const MIN_MESH: u32 = 16;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Setting {
@@ -197,7 +200,7 @@ fn warped_sweep(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<Vec<Set
     };
     let top = view.min(w.mesh);
     let bound = MAX_MESH.max(w.mesh);
-    let rungs = Budget::new(w.min_mesh, bound).rungs().to_vec();
+    let rungs = Budget::new(MIN_MESH, bound).rungs().to_vec();
     let at = |mesh| Setting::Warped {
         quad_px: w.quad_px,
         mesh,
