@@ -310,46 +310,47 @@ fn compare_sweeps_a_planets_clipmaps() {
     }
 }
 
-/// The warped sweep climbs the budget's ladder to the mesh the view asks for, without a row that
-/// repeats another's mesh, then lowers `quad_px` past it; a larger image asks for a larger mesh,
-/// so its ladder reaches further.
+/// The warped sweep climbs the budget's ladder in fixed meshes up to 8 triangles a pixel, without
+/// repeating the mesh the scene's own setting draws; a larger image climbs further.
 #[test]
-fn the_warped_sweep_spans_the_budgets_the_view_asks_for() {
+fn the_warped_sweep_spans_the_budgets_where_geomipmap_competes() {
     let mut scene =
         terrain::scene::Scene::load(&manifest_dir().join("sketches/jacksboro.toml")).unwrap();
     let atlas = terrain::scene::load_atlas(&scene).unwrap();
-    let mut below_own = Vec::new();
-    for size in [128, 512] {
+    let mut fixed_rows = Vec::new();
+    for size in [128u32, 512] {
         (scene.camera.width, scene.camera.height) = (size, size);
         let camera = terrain::scene::camera_of(&scene, &atlas).unwrap();
         let sweep = default_sweep(&[Mode::Warped], &scene, &atlas, &camera).unwrap();
-        let rows: Vec<(f64, u32)> = sweep
+        let own = Setting::of_scene(Mode::Warped, &scene, &atlas).unwrap();
+        assert_eq!(sweep.last(), Some(&own), "{sweep:?}");
+        let meshes: Vec<u32> = sweep[..sweep.len() - 1]
             .iter()
             .map(|s| match *s {
-                Setting::Warped { quad_px, mesh } => (quad_px, mesh),
-                other => panic!("not warped: {other:?}"),
+                Setting::Warped {
+                    quad_px,
+                    mesh,
+                    budget: false,
+                } if quad_px == scene.warp.quad_px => mesh,
+                other => panic!("not a fixed warped mesh: {other:?}"),
             })
             .collect();
-        let own = (scene.warp.quad_px, scene.warp.mesh);
-        let k = rows
-            .iter()
-            .position(|&r| r == own)
-            .expect("the scene's own setting");
-        // The ladder: the scene's quad_px, meshes rising by at most a half, from 16².
-        assert_eq!(rows[0], (own.0, 16), "{rows:?}");
-        for w in rows[..k].windows(2) {
-            assert_eq!(w[1].0, own.0, "{rows:?}");
-            assert!(w[1].1 > w[0].1 && w[1].1 * 2 <= w[0].1 * 3, "{rows:?}");
+        assert_eq!(meshes[0], 16, "{meshes:?}");
+        // Rungs rise by at most a half (a skipped rung: the own setting's mesh).
+        for w in meshes.windows(2) {
+            assert!(w[1] > w[0] && w[1] * 2 <= w[0] * 3, "{meshes:?}");
         }
-        // Past the view's own mesh: smaller quad_px at the largest bound, so more triangles.
-        assert_eq!(rows.len(), k + 4, "{rows:?}");
-        for w in rows[k..].windows(2) {
-            assert!(w[1].0 < w[0].0 && w[1].1 == 1024, "{rows:?}");
-        }
-        below_own.push(k);
+        let last = *meshes.last().unwrap() as f64;
+        let pixels = (size * size) as f64;
+        assert!(2.0 * (last - 1.0).powi(2) <= 8.0 * pixels, "{meshes:?}");
+        assert!(
+            2.0 * (last * 1.35 - 1.0).powi(2) > 8.0 * pixels,
+            "stops early: {meshes:?}"
+        );
+        fixed_rows.push(meshes.len());
     }
     assert!(
-        below_own[1] > below_own[0] + 2,
-        "512² asks for more: {below_own:?}"
+        fixed_rows[1] >= fixed_rows[0] + 3,
+        "512² climbs further: {fixed_rows:?}"
     );
 }

@@ -195,7 +195,7 @@ fn streamed_grid(
             "over a tile pyramid GeoMipMap's grid is the sketch's own nodes: k = 0",
         ));
     }
-    if s.detail.octaves > 0 && scene.detail.bias < 0.0 {
+    if s.detail.octaves > 0 && s.detail.bias < 0.0 {
         return Err(Error::value(
             "detail.bias",
             "a negative bias puts octaves into GeoMipMap's grid, whose δ over a tile pyramid is \

@@ -145,7 +145,9 @@ pub fn detail_of(scene: &Scene, atlas: &Atlas) -> Detail {
         }),
         gain: d.gain,
         seed: d.seed,
-        bias: d.bias,
+        bias: d
+            .bias
+            .unwrap_or_else(|| crate::scene::default_bias(scene, atlas)),
         d_atlas: atlas.d_atlas(),
         // Anchored to the sketch, so the same sketch anywhere on Earth has the same detail.
         lattice_origin_m: atlas.origin,

@@ -112,7 +112,9 @@ impl Scene {
             within("detail.amplitude_m", a, 0.0, 1e5)?;
         }
         within("detail.gain", d.gain, 0.0, 1.0)?;
-        within("detail.bias", d.bias, -4.0, 8.0)?;
+        if let Some(b) = d.bias {
+            within("detail.bias", b, -4.0, 8.0)?;
+        }
         let w = &self.warp;
         open_range("warp.quad_px", w.quad_px, 0.0, 1e4)?;
         within("warp.mesh", w.mesh as f64, 2.0, 4096.0)?;

@@ -88,9 +88,14 @@ impl CpuStage {
                 floor: imp.floor,
                 backface_floor: imp.backface_floor,
                 reach_m: detail.reach_m(),
-                error: imp
-                    .error
-                    .then(|| ErrorTerm::new(detail, imp.error_px, imp.error_flat_share)),
+                error: imp.error.then(|| {
+                    ErrorTerm::new(
+                        detail,
+                        imp.error_px,
+                        imp.error_flat_share,
+                        scene.sketch.water_level_m as f32,
+                    )
+                }),
             },
             budget: scene
                 .warp

@@ -1,12 +1,10 @@
 //! The quality settings `compare` sweeps, one per report row.
 //!
 //! Default sweep:
-//! - warped over the budgets where GeoMipMap competes: the mesh bound on the budget's ladder
-//!   (`stage::budget`, rungs about 2^(1/4) apart from 16², so triangles about half an octave
-//!   apart) up to the mesh the view asks for at the scene's `quad_px`, then the scene's
-//!   own setting (that mesh, drawn as the view sizes it), then `quad_px` halved in half-octave
-//!   steps three times at mesh 1024² (2×, 4×, 8× the view's triangles). Without `warp.budget`
-//!   the ladder runs to the scene's mesh and 1024², and `quad_px` is not swept.
+//! - warped over the budgets where GeoMipMap competes: meshes of fixed size (`warp.budget`
+//!   off) on the budget's ladder (`stage::budget`: rungs about 2^(1/4) apart from 16², so
+//!   triangles about half an octave apart) up to 8 triangles a pixel, and the scene's own
+//!   setting, the mesh its view asks for (the rung it draws is not repeated as a fixed row).
 //! - GeoMipMap over τ 0.5, 1, 2, 4, 8 px at blocks of 17, 33 and 65 vertices;
 //! - brute force over grid spacings d_atlas/2^K for K = 0 up to the finest the device and the
 //!   vertex budget allow ([`default_k`]);
@@ -14,16 +12,21 @@
 //!   level 10 and 40 at 512 φ steps (the paper's n and m, 8× and 4× triangles end to end), and the
 //!   paper's triangles split the other ways: 256 × 40 and 128 × 80.
 //!
-//! Rejected alternative: a fixed list of mesh bounds (64² … 1024² at `quad_px` 2, and `quad_px`
-//! 1 and 4 at 512²), the sweep until stop 30. Every bound above the view's own demand draws the
-//! same mesh: on the bundled views at 256², four of its ten warped rows repeated one another
-//! (92,450 triangles on gaussian and hills), while the lowest row (7,938 triangles) lay above
-//! GeoMipMap's lowest (6,343) and the steps between 8k and 92k were an octave of triangles
-//! apart, too coarse to tell whether warped beats GeoMipMap between them.
-//! Rejected too: the full product of `quad_px` and mesh size. `quad_px` scales the view
-//! importance everywhere alike, and the warp normalises importance to the mesh it has, so under
-//! a bound that binds it changes Φ only where the surface bound `I_s` or the floor clip the
-//! importance.
+//! Rejected alternatives:
+//! - A fixed list of mesh bounds (64² … 1024² at `quad_px` 2, and `quad_px` 1 and 4 at 512²),
+//!   the sweep until stop 30. Every bound above the view's own demand draws the same mesh: on
+//!   the bundled views at 256², four of its ten warped rows repeated one another (92,450
+//!   triangles on gaussian and hills), while the lowest row (7,938 triangles) lay above
+//!   GeoMipMap's lowest (6,343) and the steps between 8k and 92k were an octave of triangles
+//!   apart, too coarse to tell whether warped beats GeoMipMap between them.
+//! - Bounds up to the view's own mesh, then `quad_px` ÷√2, ÷2, ÷2√2 above it. With the
+//!   geometric-error term the view asks for much less than `quad_px` alone would (jacksboro-high
+//!   at 256²: 32², 1,922 triangles), and lowering `quad_px` raises only the part of the
+//!   importance the error term does not set: its rows jumped from 1,922 to 7,938 to 40,898
+//!   triangles.
+//! - The full product of `quad_px` and mesh size. `quad_px` scales the view importance
+//!   everywhere alike, and the warp normalises importance to the mesh it has, so at a fixed mesh
+//!   it changes Φ only where the surface bound `I_s` or the floor clip the importance.
 
 use crate::camera::Camera;
 use crate::error::Result;
@@ -33,17 +36,22 @@ use crate::sketch::Atlas;
 use crate::stage::CpuStage;
 use crate::stage::budget::Budget;
 
-/// The largest mesh bound the sweep draws: 2M triangles.
+/// The largest mesh the sweep draws: 2M triangles.
 const MAX_MESH: u32 = 1024;
+/// The most triangles a pixel the sweep draws: GeoMipMap's τ = 0.5 reaches 6.4 on the bundled
+/// views at 256².
+const MAX_TRIANGLES_PER_PX: f64 = 8.0;
 /// The smallest: 450 triangles, below GeoMipMap's fewest on the bundled views from high up (512
 /// and 874 at 256²), where the budget's own smallest (`warp.min_mesh`, 32) would start at 1,922.
 const MIN_MESH: u32 = 16;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Setting {
+    /// `budget`: the mesh the view asks for, up to `mesh` (`warp.budget`); else `mesh` itself.
     Warped {
         quad_px: f64,
         mesh: u32,
+        budget: bool,
     },
     GeoMipMap {
         tau: f64,
@@ -75,7 +83,16 @@ impl Setting {
 
     pub fn label(&self) -> String {
         match *self {
-            Setting::Warped { quad_px, mesh } => format!("quad_px={quad_px} mesh={mesh}"),
+            Setting::Warped {
+                quad_px,
+                mesh,
+                budget: true,
+            } => format!("quad_px={quad_px} mesh={mesh}"),
+            Setting::Warped {
+                quad_px,
+                mesh,
+                budget: false,
+            } => format!("quad_px={quad_px} mesh={mesh} fixed"),
             Setting::GeoMipMap { tau, block } => format!("tau={tau} block={block}"),
             Setting::BruteForce { k } => format!("K={k}"),
             Setting::Clipmaps {
@@ -89,9 +106,14 @@ impl Setting {
     pub fn apply(&self, scene: &Scene) -> Scene {
         let mut s = scene.clone();
         match *self {
-            Setting::Warped { quad_px, mesh } => {
+            Setting::Warped {
+                quad_px,
+                mesh,
+                budget,
+            } => {
                 s.warp.quad_px = quad_px;
                 s.warp.mesh = mesh;
+                s.warp.budget = budget;
             }
             Setting::GeoMipMap { tau, block } => {
                 s.geomipmap.tau = tau;
@@ -116,6 +138,7 @@ impl Setting {
             Mode::Warped => Setting::Warped {
                 quad_px: scene.warp.quad_px,
                 mesh: scene.warp.mesh,
+                budget: scene.warp.budget,
             },
             Mode::Geomipmap => Setting::GeoMipMap {
                 tau: scene.geomipmap.tau,
@@ -192,31 +215,26 @@ fn warped_sweep(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<Vec<Set
     let own = Setting::Warped {
         quad_px: w.quad_px,
         mesh: w.mesh,
+        budget: w.budget,
     };
-    let view = if w.budget {
-        view_mesh(scene, atlas, camera)?
+    let drawn = if w.budget {
+        view_mesh(scene, atlas, camera)?.min(w.mesh)
     } else {
         w.mesh
     };
-    let top = view.min(w.mesh);
-    let bound = MAX_MESH.max(w.mesh);
-    let rungs = Budget::new(MIN_MESH, bound).rungs().to_vec();
-    let at = |mesh| Setting::Warped {
-        quad_px: w.quad_px,
-        mesh,
-    };
-    let mut out: Vec<Setting> = rungs.iter().filter(|&&m| m < top).map(|&m| at(m)).collect();
+    let pixels = camera.width as f64 * camera.height as f64;
+    let fits = |m: u32| 2.0 * (m as f64 - 1.0).powi(2) <= MAX_TRIANGLES_PER_PX * pixels;
+    let mut out: Vec<Setting> = Budget::new(MIN_MESH, MAX_MESH)
+        .rungs()
+        .iter()
+        .filter(|&&m| m != drawn && (m == MIN_MESH || fits(m)))
+        .map(|&mesh| Setting::Warped {
+            quad_px: w.quad_px,
+            mesh,
+            budget: false,
+        })
+        .collect();
     out.push(own);
-    if !w.budget {
-        out.extend(rungs.iter().filter(|&&m| m > w.mesh).map(|&m| at(m)));
-    } else if view < bound {
-        // Three thousandths: the labels stay short (1.414, 1, 0.707 for quad_px 2).
-        let q = |k: i32| (w.quad_px * 2f64.powf(-0.5 * k as f64) * 1e3).round() / 1e3;
-        out.extend((1..=3).map(|k| Setting::Warped {
-            quad_px: q(k),
-            mesh: bound,
-        }));
-    }
     Ok(out)
 }
 
