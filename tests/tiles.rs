@@ -361,7 +361,10 @@ fn jacksboro_text(sketch: &Path, extra: &str) -> String {
         .replace("width = 512", "width = 128")
         .replace("height = 512", "height = 128")
         .replace("gain = 0.45", "gain = 0.45\nbias = 0.0");
-    assert!(text.contains("bias = 0.0"), "the bundled scene's [detail] changed");
+    assert!(
+        text.contains("bias = 0.0"),
+        "the bundled scene's [detail] changed"
+    );
     format!("{text}\n{extra}\n")
 }
 
