@@ -467,6 +467,8 @@ impl ImportanceMap {
 /// The largest second derivative of the sketch map's heights along a row (1/m): |h_xx|, |h_yy|
 /// and |h_xy| from the rows `down` and `up` `rows_apart` rows apart around it (1 at the map's
 /// edge, where one of them is the row itself and `h_yy` is taken as 0), one-sided at the ends.
+// The loop indexes each texel's neighbours; an iterator over `out` would hide them.
+#[allow(clippy::needless_range_loop)]
 #[inline(always)]
 fn sketch_curvature(
     [down, row, up]: [&[f32]; 3],
