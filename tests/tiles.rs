@@ -417,6 +417,23 @@ fn a_streamed_pyramid_renders_as_the_sketch_in_memory_once_its_tiles_are_residen
             "{mode}: {db:.1} dB against the sketch in memory"
         );
     }
+    // Without `detail.bias` a pyramid's is 0 and the sketch in memory's −1 (docs/scene.md); a
+    // negative bias would put octaves into GeoMipMap's grid, whose δ the tiles do not see.
+    let unset = |sketch: &Path| {
+        let text = jacksboro_text(sketch, "[stream]\ngpu_mb = 4").replace("bias = 0.0", "");
+        common::scene(&text, common::manifest_dir().join("sketches"))
+    };
+    let bias = |s: &terrain::scene::Scene| {
+        let atlas = terrain::scene::load_atlas(s).unwrap();
+        terrain::scene::detail_of(s, &atlas).bias
+    };
+    assert_eq!((bias(&unset(&pyr)), bias(&unset(&asc))), (0.0, -1.0));
+    let mut negative = streamed.clone();
+    negative.detail.bias = Some(-1.0);
+    let e = Renderer::new(&negative, Mode::Geomipmap, View::Shaded)
+        .err()
+        .expect("a negative bias over a pyramid is refused in GeoMipMap");
+    assert!(e.to_string().contains("detail.bias"), "{e}");
     // Brute force bakes the whole sketch: refused in one line, naming the mode.
     let e = Renderer::new(&streamed, Mode::Bruteforce, View::Shaded)
         .err()

@@ -16,14 +16,15 @@
 //!   `I = min(I_v, max(I_g, β·I_v))`, `I_g = √(κ·f_px / (8·τ_e·d))` — the sample density at
 //!   which linear interpolation misses a surface of curvature κ by τ_e pixels on screen
 //!   (`δ = κ s²/8` at spacing s). κ = the sketch map's largest second difference (|h_xx|, |h_yy|,
-//!   |h_xy|, one-sided at the map's edges) + the detail's curvature at spacing `1/I_v`: the octaves
+//!   |h_xy|, one-sided at the map's edges, of the heights raised to the water's level) + the
+//!   detail's curvature at spacing `1/I_v`: the octaves
 //!   that are geometry there (DESIGN.md's split octave with the scene's bias) weighted by
 //!   `0.31·w_k·(2π f_k)²`, 0.31 the noise's RMS; a prefix sum over octaves makes it one log2 and
 //!   a lookup per texel.
 //! - Computed in f32 relative to the region's corner; world-scale values never enter the loop.
 //!
 //! Speed (`benches/cpu_stage.rs`, `importance`, jacksboro near, 128², medians): 55 µs at commit
-//! 9b07df8, 41 µs now, run alternately. The two steps, each measured in runs of its own: each row
+//! 9b07df8, 41 µs at stop 30 (both without the geometric-error term), run alternately. The two steps, each measured in runs of its own: each row
 //! loop indexes buffers sliced to the row's length (an index into a buffer of unknown length is
 //! checked, and a checked loop stays scalar: 54 → 43 µs), and a frustum plane with the whole row
 //! inside is skipped (43 → 40 µs). Measured and rejected: one fused pass over eight texels at a
@@ -32,8 +33,8 @@
 //! the loop is bound by its other arithmetic, and the bits would change. Two threads do not pay
 //! on this 2-core VM (`stage::warp`'s module doc).
 //!
-//! The geometric-error term (on by default since stop 31) costs 34 µs of it: 75 µs with it, 41
-//! without (same runs). As first written it cost 152 µs (193 µs): `f32::log2` is a library call
+//! The geometric-error term (on by default since stop 31) costs 34–36 µs of it: 75–77 µs with
+//! it on the near and high views, 41 without. As first written it cost 152 µs (193 µs): `f32::log2` is a library call
 //! per texel, so the octave level is now an exponent plus a quintic (`log2_approx`, to 2·10⁻⁵,
 //! 193 → 121 µs); the sketch's curvature was a call per texel compiled without AVX2, now inlined
 //! with the row's ends apart so that its loop vectorises (121 → 80 µs); the octave prefix is a
@@ -69,15 +70,15 @@ pub struct ErrorTerm {
     /// β: the least share of I_v left on flat ground.
     pub flat_share: f64,
     /// `prefix[k]`: the detail's curvature (1/m) of octaves 1..=k, all fully geometry; past the
-    /// last octave, the last value. A fixed size, so that the lookup needs no bounds check and
-    /// vectorises as a gather.
+    /// last octave, the last value. A fixed size, so that the lookup needs no bounds check.
     prefix: [f32; PREFIX],
     /// The detail's octaves (at most `PREFIX − 2`).
     octaves: usize,
     d_atlas: f64,
     bias: f64,
     /// The water's level: the drawn surface is the sketch or the water, whichever is higher, so
-    /// the shore is a crease and the water flat.
+    /// the sketch's part of κ sees the shore as a crease and the water as flat (the octaves'
+    /// part is added there all the same).
     water_m: f32,
 }
 
@@ -130,8 +131,8 @@ impl ErrorTerm {
     /// The detail's curvature at octave level `o` (≥ 0, as [`ErrorTerm::octave`] gives it).
     #[inline(always)]
     pub fn curvature_at(&self, o: f32) -> f32 {
-        // o ≥ 0, so the cast is floor; past the last octave the prefix is flat.
-        let o = o.min(self.octaves as f32);
+        // Within [0, octaves], so the cast is floor; past the last octave the prefix is flat.
+        let o = o.clamp(0.0, self.octaves as f32);
         let whole = (o as u32 as usize).min(PREFIX - 2);
         let (p0, p1) = (self.prefix[whole], self.prefix[whole + 1]);
         p0 + (p1 - p0) * (o - whole as f32)
@@ -140,7 +141,7 @@ impl ErrorTerm {
 
 /// log2 of a positive f32 to within 2·10⁻⁵: the exponent, plus a quintic in the mantissa m in
 /// [1, 2) fitted to log2 m at Chebyshev nodes. 0 and subnormals give about −127, infinity 128,
-/// and NaN is left to the caller.
+/// a negative x log2 |x|, and NaN is left to the caller.
 #[inline(always)]
 fn log2_approx(x: f32) -> f32 {
     let bits = x.to_bits();
@@ -576,17 +577,42 @@ mod tests {
             error: None,
         };
         let bounds = (atlas.origin, atlas.max_corner());
-        let (mut dispatched, mut baseline) = (ImportanceMap::new(128), ImportanceMap::new(128));
-        dispatched.update(&map, bounds, &camera, None, &p);
-        baseline.rows(&map, bounds, &camera, None, &p, 1);
-        let bits = |m: &ImportanceMap| m.importance.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&dispatched), bits(&baseline));
-        assert!(
-            dispatched
-                .importance
-                .iter()
-                .any(|&v| v != dispatched.importance[0])
-        );
+        let detail = crate::detail::Detail {
+            octaves: 12,
+            amplitude_m: 8.0,
+            gain: 0.45,
+            seed: 7,
+            bias: -1.0,
+            d_atlas: atlas.d_atlas(),
+            lattice_origin_m: atlas.origin,
+        };
+        // Without and with the geometric-error term (the default), water over part of the hills.
+        let error = ErrorTerm::new(&detail, 0.5, 0.125, atlas.min_m + 20.0);
+        for p in [
+            p.clone(),
+            ImportanceParams {
+                error: Some(error),
+                ..p
+            },
+        ] {
+            let (mut dispatched, mut baseline) = (ImportanceMap::new(128), ImportanceMap::new(128));
+            dispatched.update(&map, bounds, &camera, None, &p);
+            baseline.rows(&map, bounds, &camera, None, &p, 1);
+            let bits =
+                |m: &ImportanceMap| m.importance.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(
+                bits(&dispatched),
+                bits(&baseline),
+                "error term: {}",
+                p.error.is_some()
+            );
+            assert!(
+                dispatched
+                    .importance
+                    .iter()
+                    .any(|&v| v != dispatched.importance[0])
+            );
+        }
     }
 
     /// The vectorised log2 keeps its bound from 10⁻³⁰ to 10³⁰, and the error term's curvature
@@ -597,8 +623,7 @@ mod tests {
         let mut worst = 0.0f64;
         let mut x = 1e-30f64;
         while x < 1e30 {
-            for v in [x, x * (1.0 + 1e-7), x.next_down()] {
-                let v = v as f32;
+            for v in [x as f32, (x * (1.0 + 1e-6)) as f32, (x as f32).next_down()] {
                 worst = worst.max((log2_approx(v) as f64 - (v as f64).log2()).abs());
             }
             x *= 1.0137;

@@ -1,6 +1,7 @@
 //! The acceptance summary (`summary.md`): per mode, the least frame time reaching the targets
 //! ([`TARGET_PSNR_DB`], [`TARGET_SSE_PX`]), and each mode's best error at the common budget — the
-//! slowest of the modes' fastest rows, so every mode has a row within it.
+//! slowest of the modes' fastest rows, so every mode has a row within it; and, where both ran,
+//! the warped mode against GeoMipMap row by row ([`Dominance`]).
 
 use super::report::{PSNR_CAP_DB, Row, TARGET_PSNR_DB, TARGET_SSE_PX};
 use serde::Serialize;
@@ -25,6 +26,62 @@ pub struct ModeSummary {
 pub struct Summary {
     pub budget_ms: f64,
     pub modes: Vec<ModeSummary>,
+    /// Warped against GeoMipMap row by row, when both ran.
+    pub dominance: Option<Dominance>,
+}
+
+/// For each GeoMipMap row: is there a warped row with no more triangles and no more mean
+/// screen-space error (triangles do not depend on the machine), and one with no more frame time
+/// and no less PSNR? A row-by-row check and not a comparison of curves: a warped row must exist
+/// at or below GeoMipMap's cost, so the sweep's spacing counts.
+#[derive(Clone, Debug, Serialize)]
+pub struct Dominance {
+    pub geomipmap_rows: usize,
+    pub matched_on_triangles: usize,
+    pub matched_on_time: usize,
+    /// The GeoMipMap rows not matched on triangles and error.
+    pub misses: Vec<Miss>,
+}
+
+/// A GeoMipMap row no warped row matches on triangles and error, and the least mean error of a
+/// warped row within its triangles (`None`: no warped row has so few).
+#[derive(Clone, Debug, Serialize)]
+pub struct Miss {
+    pub setting: String,
+    pub triangles: u64,
+    pub sse_mean_px: f64,
+    pub warped_sse_px: Option<f64>,
+}
+
+/// [`Dominance`] of `rows`; `None` unless both modes have rows.
+pub fn dominance(rows: &[Row]) -> Option<Dominance> {
+    let warped: Vec<&Row> = rows_of(rows, "warped").collect();
+    let gmm: Vec<&Row> = rows_of(rows, "geomipmap").collect();
+    if warped.is_empty() || gmm.is_empty() {
+        return None;
+    }
+    let mut d = Dominance {
+        geomipmap_rows: gmm.len(),
+        matched_on_triangles: 0,
+        matched_on_time: 0,
+        misses: Vec::new(),
+    };
+    for g in gmm {
+        let within = || warped.iter().filter(|w| w.triangles <= g.triangles);
+        if within().any(|w| w.sse_mean_px <= g.sse_mean_px) {
+            d.matched_on_triangles += 1;
+        } else {
+            d.misses.push(Miss {
+                setting: g.setting.clone(),
+                triangles: g.triangles,
+                sse_mean_px: g.sse_mean_px,
+                warped_sse_px: within().map(|w| w.sse_mean_px).reduce(f64::min),
+            });
+        }
+        let on_time = |w: &&&Row| w.frame_ms <= g.frame_ms && w.psnr_db >= g.psnr_db;
+        d.matched_on_time += usize::from(warped.iter().any(|w| on_time(&w)));
+    }
+    Some(d)
 }
 
 fn rows_of<'a>(rows: &'a [Row], m: &'a str) -> impl Iterator<Item = &'a Row> + 'a {
@@ -73,6 +130,7 @@ pub fn summarise(rows: &[Row]) -> Summary {
     Summary {
         budget_ms: budget,
         modes,
+        dominance: dominance(rows),
     }
 }
 
@@ -100,6 +158,27 @@ pub fn summary_markdown(title: &str, s: &Summary) -> String {
             opt(m.psnr_at_budget_db, 1, "dB"),
             opt(m.sse_at_budget_px, 2, "px"),
         );
+    }
+    if let Some(d) = &s.dominance {
+        let _ = write!(
+            out,
+            "\nWarped against GeoMipMap, row by row: {} of {} GeoMipMap rows have a warped row with \
+             no more triangles and no more mean screen-space error; {} of {} one with no more \
+             frame time and no less PSNR.\n",
+            d.matched_on_triangles, d.geomipmap_rows, d.matched_on_time, d.geomipmap_rows
+        );
+        for m in &d.misses {
+            let best = m
+                .warped_sse_px
+                .map_or("no warped row has so few".into(), |e| {
+                    format!("warped's best {e:.2} px")
+                });
+            let _ = writeln!(
+                out,
+                "- {}: {} triangles at {:.2} px; {best}",
+                m.setting, m.triangles, m.sse_mean_px
+            );
+        }
     }
     out
 }
@@ -131,5 +210,42 @@ mod tests {
             md.contains("not reached") && md.contains("| a | 20.0 ms (20)"),
             "{md}"
         );
+        assert!(s.dominance.is_none(), "no warped or GeoMipMap rows");
+    }
+
+    /// Each GeoMipMap row is matched only by a warped row at or below its triangles (or frame
+    /// time) with at most its error (or at least its PSNR); the misses name the best warped error
+    /// within the row's triangles.
+    #[test]
+    fn dominance_matches_each_geomipmap_row_by_a_cheaper_warped_row() {
+        let at = |mode: &str, triangles: u64, ms: f64, db: f64, px: f64| Row {
+            triangles,
+            ..row(mode, ms, db, px)
+        };
+        let rows = vec![
+            at("warped", 1000, 10.0, 25.0, 1.0),
+            at("warped", 4000, 20.0, 30.0, 0.5),
+            // Matched by the 1000-triangle row on both counts.
+            at("geomipmap", 1500, 12.0, 24.0, 1.2),
+            // Less error than any warped row with as few triangles (0.5 px needs 4000), and
+            // faster than every warped row as good.
+            at("geomipmap", 3000, 15.0, 28.0, 0.8),
+            // Fewer triangles than any warped row.
+            at("geomipmap", 500, 30.0, 20.0, 2.0),
+        ];
+        let d = dominance(&rows).unwrap();
+        assert_eq!(
+            (d.geomipmap_rows, d.matched_on_triangles, d.matched_on_time),
+            (3, 1, 2)
+        );
+        let misses: Vec<_> = d
+            .misses
+            .iter()
+            .map(|m| (m.triangles, m.warped_sse_px))
+            .collect();
+        assert_eq!(misses, [(3000, Some(1.0)), (500, None)]);
+        let md = summary_markdown("t", &summarise(&rows));
+        assert!(md.contains("1 of 3 GeoMipMap rows"), "{md}");
+        assert!(md.contains("no warped row has so few"), "{md}");
     }
 }
