@@ -546,6 +546,19 @@ fn backface(cos: f32, floor: f32) -> f32 {
 mod tests {
     use super::*;
 
+    /// The bundled scenes' detail (8 m, gain 0.45) at the default bias, over `d_atlas`.
+    fn bundled_detail(d_atlas: f64, lattice_origin_m: DVec2) -> crate::detail::Detail {
+        crate::detail::Detail {
+            octaves: 12,
+            amplitude_m: 8.0,
+            gain: 0.45,
+            seed: 7,
+            bias: -1.0,
+            d_atlas,
+            lattice_origin_m,
+        }
+    }
+
     /// The AVX2 build of the row loops gives the baseline build's values, bit for bit (on a
     /// processor without AVX2 both are the baseline).
     #[test]
@@ -577,15 +590,7 @@ mod tests {
             error: None,
         };
         let bounds = (atlas.origin, atlas.max_corner());
-        let detail = crate::detail::Detail {
-            octaves: 12,
-            amplitude_m: 8.0,
-            gain: 0.45,
-            seed: 7,
-            bias: -1.0,
-            d_atlas: atlas.d_atlas(),
-            lattice_origin_m: atlas.origin,
-        };
+        let detail = bundled_detail(atlas.d_atlas(), atlas.origin);
         // Without and with the geometric-error term (the default), water over part of the hills.
         let error = ErrorTerm::new(&detail, 0.5, 0.125, atlas.min_m + 20.0);
         for p in [
@@ -629,15 +634,7 @@ mod tests {
             x *= 1.0137;
         }
         assert!(worst < 2e-5, "log2 off by {worst}");
-        let detail = crate::detail::Detail {
-            octaves: 12,
-            amplitude_m: 8.0,
-            gain: 0.45,
-            seed: 7,
-            bias: -1.0,
-            d_atlas: 30.0,
-            lattice_origin_m: glam::DVec2::ZERO,
-        };
+        let detail = bundled_detail(30.0, DVec2::ZERO);
         let e = ErrorTerm::new(&detail, 0.5, 0.125, f32::NEG_INFINITY);
         let mut s = 1e-4f64;
         while s < 1e3 {
