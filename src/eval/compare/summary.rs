@@ -78,8 +78,10 @@ pub fn dominance(rows: &[Row]) -> Option<Dominance> {
                 warped_sse_px: within().map(|w| w.sse_mean_px).reduce(f64::min),
             });
         }
-        let on_time = |w: &&&Row| w.frame_ms <= g.frame_ms && w.psnr_db >= g.psnr_db;
-        d.matched_on_time += usize::from(warped.iter().any(|w| on_time(&w)));
+        let on_time = warped
+            .iter()
+            .any(|w| w.frame_ms <= g.frame_ms && w.psnr_db >= g.psnr_db);
+        d.matched_on_time += usize::from(on_time);
     }
     Some(d)
 }
