@@ -36,6 +36,8 @@ struct VsOut {
     @location(6) grid: vec2<f32>,
     @location(7) height: f32,
     @location(8) sketch_height: f32,
+    // The view depth for the position copy (see terrain.wgsl's VsOut).
+    @location(9) view_w: f32,
 }
 
 fn at(i: u32) -> vec3<f32> {
@@ -83,6 +85,7 @@ fn planet_vs(@builtin(vertex_index) i: u32) -> VsOut {
     let air = planet_scatter(frame.camera.eye, -to_eye / dist, dist);
     var out: VsOut;
     out.clip = frame.camera.view_proj * vec4<f32>(p.xyz, 1.0);
+    out.view_w = out.clip.w;
     out.local = p.xyz;
     out.normal = normal;
     let v = hemisphere[i];
@@ -150,7 +153,7 @@ fn planet_fs(in: VsOut) -> FragOut {
     } else if (frame.camera.view == VIEW_NORMALS) {
         colour = n * 0.5 + 0.5;
     } else if (frame.camera.view == VIEW_COVERAGE) {
-        return frag_out(vec3<f32>(1.0), in.clip.z);
+        return frag_out(vec3<f32>(1.0), in.view_w);
     }
-    return frag_out(colour * in.through + in.inscatter, in.clip.z);
+    return frag_out(colour * in.through + in.inscatter, in.view_w);
 }

@@ -68,6 +68,9 @@ struct VsOut {
     @location(4) inscatter: vec3<f32>,
     @location(5) through: vec3<f32>,
     @location(6) spacing: f32,
+    // The view depth (clip w, metres along the view direction), for the position copy: exact to
+    // f32's relative precision, where the rasteriser's depth is not (see raster.wgsl).
+    @location(7) view_w: f32,
 }
 
 // A vertex at `p` (frame metres) with its clip position and the air between it and the eye;
@@ -85,6 +88,7 @@ fn vertex_out(p: vec3<f32>, n: vec3<f32>, split: f32, grid: vec2<f32>, spacing: 
     out.inscatter = air.inscatter;
     out.through = air.through;
     out.spacing = spacing;
+    out.view_w = out.clip.w;
     return out;
 }
 
@@ -218,7 +222,7 @@ fn depth_fs(in: VsOut) -> @location(1) vec4<f32> {
     if (!on_sketch(in.local.xy, 1e-3 * frame.atlas.d_atlas)) {
         discard;
     }
-    return depth_bytes(in.clip.z);
+    return depth_bytes(in.view_w);
 }
 #endif
 
@@ -296,7 +300,7 @@ fn terrain_fs(in: VsOut) -> FragOut {
     } else if (frame.camera.view == VIEW_NORMALS) {
         colour = n * 0.5 + 0.5;
     } else if (frame.camera.view == VIEW_COVERAGE) {
-        return frag_out(vec3<f32>(1.0), in.clip.z);
+        return frag_out(vec3<f32>(1.0), in.view_w);
     }
 #ifdef IMPORTANCE_VIEW
     let texel = (in.local.xy - frame.mesh.phi_offset) / frame.mesh.d0;
@@ -305,5 +309,5 @@ fn terrain_fs(in: VsOut) -> FragOut {
     let t = clamp(log2(v / frame.mesh.importance_max) / 12.0 + 1.0, 0.0, 1.0);
     colour = mix(vec3<f32>(0.27, 0.0, 0.33), vec3<f32>(0.99, 0.9, 0.14), t);
 #endif
-    return frag_out(colour * in.through + in.inscatter, in.clip.z);
+    return frag_out(colour * in.through + in.inscatter, in.view_w);
 }

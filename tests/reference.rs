@@ -135,3 +135,39 @@ fn meshes_stay_within_pixels_of_the_reference() {
         );
     }
 }
+
+/// From 20 km up, the mesh modes' positions (recovered from each pixel's view depth) lie where
+/// the reference's are, to a small fraction of a pixel's footprint. Recovered from the
+/// rasteriser's depth on llvmpipe's GL path (depth through −1..1), they lay a third of a pixel
+/// off whatever the mesh, and the screen-space error could not tell a coarse mesh from a fine one.
+#[test]
+fn mesh_positions_hold_from_20_km_up() {
+    let scene = bundled(
+        "jacksboro-high",
+        &["warp.budget=false", "warp.mesh=256", "geomipmap.tau=0.25"],
+    );
+    let mut reference = Renderer::new(&scene, Mode::Reference, View::Shaded).unwrap();
+    let camera = terrain::scene::camera_of(&scene, &reference.atlas).unwrap();
+    reference.render(&camera).unwrap();
+    let truth = reference.read_positions(&camera).unwrap();
+    let footprint = camera.eye.z * 2.0 * camera.tan_half_y() / camera.height as f64;
+    for mode in [Mode::Warped, Mode::Geomipmap] {
+        let mut r = Renderer::with_positions(&scene, mode, View::Shaded, true).unwrap();
+        r.render(&camera).unwrap();
+        let p = r.read_positions(&camera).unwrap();
+        let (mut sum, mut count) = (0.0, 0usize);
+        for (a, b) in p.iter().zip(&truth) {
+            if a[3] > 0.5 && b[3] > 0.5 {
+                sum += ((a[0] - b[0]) as f64).hypot((a[1] - b[1]) as f64);
+                count += 1;
+            }
+        }
+        let mean = sum / count.max(1) as f64;
+        eprintln!(
+            "{mode:?}: {count} pixels, mean horizontal distance {mean:.2} m ({:.4} of a {footprint:.0} m footprint)",
+            mean / footprint
+        );
+        assert!(count > 128 * 100, "{mode:?}: {count} ground pixels");
+        assert!(mean < 0.05 * footprint, "{mode:?}: {mean} m");
+    }
+}

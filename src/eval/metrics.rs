@@ -23,6 +23,14 @@
 //! one does (a silhouette), the distance to the nearest pixel where the other shows ground. A
 //! pixel with no match in the window counts as `window` pixels.
 //!
+//! Where the reference shows that ground is found to a fraction of a pixel: from the nearest
+//! pixel, one step of Newton's method on the reference's ground position as a function of the
+//! pixel (its 2×2 Jacobian by differences with the neighbouring ground pixels), the step held
+//! within a pixel each way. Rejected: the nearest pixel alone. It counts every error under half a
+//! pixel as 0 and every one just over as 1; from 20 km up (jacksboro-high at 256²) GeoMipMap's
+//! rows from 12k to 59k triangles all measured 0.000 px and warped's 0.000–0.002, so which mode
+//! won a row was decided by which pixels happened to round.
+//!
 //! Rejected alternative: projecting the mode's point onto the reference surface vertically. It
 //! needs the terrain function on the CPU per pixel and says nothing at silhouettes.
 
@@ -137,18 +145,23 @@ pub fn screen_space_error(
             let mut best = window as f64;
             if m && r {
                 let p = mode[y * width + x];
-                let mut nearest = f64::INFINITY;
+                let mut nearest = (f64::INFINITY, 0, 0);
                 for v in y0..=y1 {
                     for u in x0..=x1 {
                         let q = reference[v * width + u];
                         if q[3] > 0.5 {
                             let d = ((q[0] - p[0]) as f64).hypot((q[1] - p[1]) as f64);
-                            if d < nearest {
-                                nearest = d;
-                                best = (u as f64 - x as f64).hypot(v as f64 - y as f64);
+                            if d < nearest.0 {
+                                nearest = (d, u, v);
                             }
                         }
                     }
+                }
+                let (d, u, v) = nearest;
+                if d.is_finite() {
+                    let (du, dv) = subpixel(reference, width, height, (u, v), p);
+                    let at = (u as f64 + du - x as f64).hypot(v as f64 + dv - y as f64);
+                    best = at.min(window as f64);
                 }
             } else {
                 // A silhouette: the nearest pixel where the other image shows ground.
@@ -165,6 +178,55 @@ pub fn screen_space_error(
         }
     }
     summarise(errors)
+}
+
+/// The offset (each within ±1 pixel) from pixel `at` of the reference to where its ground position
+/// would be `p`'s (horizontally): one Newton step with the Jacobian of the position by pixel,
+/// from central differences where both neighbours show ground, one-sided where one does. (0, 0)
+/// where neither does along an axis or the Jacobian is singular (ground seen edge-on).
+fn subpixel(
+    reference: &[[f32; 4]],
+    width: usize,
+    height: usize,
+    at: (usize, usize),
+    p: [f32; 4],
+) -> (f64, f64) {
+    let xy = |u: usize, v: usize| {
+        let q = reference[v * width + u];
+        (q[3] > 0.5).then(|| [q[0] as f64, q[1] as f64])
+    };
+    let (u, v) = at;
+    let Some(c) = xy(u, v) else {
+        return (0.0, 0.0);
+    };
+    // The derivative along one axis: `before` and `after` are the neighbours, when in the image.
+    let slope = |before: Option<[f64; 2]>, after: Option<[f64; 2]>| match (before, after) {
+        (Some(b), Some(a)) => Some([0.5 * (a[0] - b[0]), 0.5 * (a[1] - b[1])]),
+        (None, Some(a)) => Some([a[0] - c[0], a[1] - c[1]]),
+        (Some(b), None) => Some([c[0] - b[0], c[1] - b[1]]),
+        (None, None) => None,
+    };
+    let ju = slope(
+        u.checked_sub(1).and_then(|u| xy(u, v)),
+        (u + 1 < width).then(|| xy(u + 1, v)).flatten(),
+    );
+    let jv = slope(
+        v.checked_sub(1).and_then(|v| xy(u, v)),
+        (v + 1 < height).then(|| xy(u, v + 1)).flatten(),
+    );
+    let (Some(ju), Some(jv)) = (ju, jv) else {
+        return (0.0, 0.0);
+    };
+    let det = ju[0] * jv[1] - ju[1] * jv[0];
+    let scale = (ju[0].hypot(ju[1]) * jv[0].hypot(jv[1])).max(f64::MIN_POSITIVE);
+    // Columns within a thousandth of parallel: the step along them is not determined.
+    if !(det.abs() > 1e-3 * scale) {
+        return (0.0, 0.0);
+    }
+    let (ex, ey) = (p[0] as f64 - c[0], p[1] as f64 - c[1]);
+    let du = (ex * jv[1] - ey * jv[0]) / det;
+    let dv = (ju[0] * ey - ju[1] * ex) / det;
+    (du.clamp(-1.0, 1.0), dv.clamp(-1.0, 1.0))
 }
 
 fn summarise(mut errors: Vec<f64>) -> ScreenError {
@@ -199,13 +261,20 @@ mod tests {
 
     /// A ground plane seen so that pixel (x, y) shows ground point (x·10, y·7), sky above row 4.
     fn plane(w: usize, h: usize, shift: (i64, i64)) -> Vec<[f32; 4]> {
+        ground(w, h, (shift.0 as f64, shift.1 as f64), 0.0)
+    }
+
+    /// [`plane`] shifted by any amount, and sheared: pixel (x, y) shows (x·10 + y·`shear`, y·7),
+    /// so that the ground's axes need not be the pixels'.
+    fn ground(w: usize, h: usize, shift: (f64, f64), shear: f64) -> Vec<[f32; 4]> {
         (0..w * h)
             .map(|k| {
-                let (x, y) = ((k % w) as i64 - shift.0, (k / w) as i64 - shift.1);
-                if y < 4 {
+                let (i, j) = ((k % w) as f64, (k / w) as f64);
+                let (x, y) = (i - shift.0, j - shift.1);
+                if j < 4.0 {
                     [0.0; 4]
                 } else {
-                    [x as f32 * 10.0, y as f32 * 7.0, 0.0, 1.0]
+                    [(x * 10.0 + y * shear) as f32, (y * 7.0) as f32, 0.0, 1.0]
                 }
             })
             .collect()
@@ -240,6 +309,35 @@ mod tests {
                 e.mean_px > 0.8 * want && e.mean_px <= want + 1e-9,
                 "shift {shift:?}: mean {}",
                 e.mean_px
+            );
+        }
+    }
+
+    #[test]
+    fn a_shift_of_a_fraction_of_a_pixel_is_measured_to_that_fraction() {
+        let (w, h) = (48, 40);
+        let reference = ground(w, h, (0.0, 0.0), 3.0);
+        // Under half a pixel (the nearest pixel alone says 0), and past it (it says 2 for 1.6).
+        for shift in [(0.3, 0.2), (-0.25, 0.0), (1.6, 0.0), (0.7, -1.3)] {
+            // The shifted ground inside a block away from the borders and the horizon; the
+            // reference's own elsewhere, where the error is 0.
+            let shifted = ground(w, h, shift, 3.0);
+            let mut mode = reference.clone();
+            let block = (12..28, 12..36);
+            for y in block.0.clone() {
+                for x in block.1.clone() {
+                    mode[y * w + x] = shifted[y * w + x];
+                }
+            }
+            let e = screen_space_error(&mode, &reference, w, 8);
+            let want = f64::hypot(shift.0, shift.1);
+            let share = (16 * 24) as f64 / e.pixels as f64;
+            assert!(
+                (e.max_px - want).abs() < 1e-3 && (e.mean_px - want * share).abs() < 1e-3 * want,
+                "shift {shift:?}: max {} mean {}, want {want} and {}",
+                e.max_px,
+                e.mean_px,
+                want * share
             );
         }
     }

@@ -248,13 +248,15 @@ impl ColourReadback {
     }
 }
 
-/// Each pixel's ground position from its reversed-Z depth (its f32 bits in an Rgba8Unorm copy,
-/// low byte first): the pixel centre
-/// unprojected in f64 with `view_proj` (metres from its origin), w = 1; sky (depth 0) is all 0.
+/// Each pixel's ground position from its view depth (clip w, metres: its f32 bits in an
+/// Rgba8Unorm copy, low byte first, as `raster.wgsl` writes them): the pixel centre at
+/// reversed-Z depth `near / w`, computed and unprojected in f64 with `view_proj` (metres from its
+/// origin), w = 1; sky (depth 0) is all 0.
 pub fn positions_from_depth(
     ctx: &GpuContext,
     depth: &wgpu::Texture,
     view_proj: glam::DMat4,
+    near: f64,
 ) -> Result<Vec<[f32; 4]>> {
     let (width, height) = (depth.width(), depth.height());
     let padded = padded_row(width);
@@ -283,15 +285,16 @@ pub fn positions_from_depth(
         for y in 0..height as usize {
             let row = &bytes[y * padded as usize..][..width as usize * 4];
             for (x, b) in row.chunks_exact(4).enumerate() {
-                let d = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-                if d <= 0.0 {
+                let w = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+                // Sky, and anything but a finite depth in front of the eye.
+                if !(w > 0.0 && w.is_finite()) {
                     out.push([0.0; 4]);
                     continue;
                 }
                 let ndc = glam::DVec4::new(
                     (x as f64 + 0.5) / width as f64 * 2.0 - 1.0,
                     1.0 - (y as f64 + 0.5) / height as f64 * 2.0,
-                    d as f64,
+                    near / w as f64,
                     1.0,
                 );
                 let p = inverse * ndc;

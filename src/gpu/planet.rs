@@ -156,7 +156,7 @@ impl PlanetPass {
                 "positions were not asked for when the renderer was built",
             ))?;
         let view_proj = super::uniforms::view_proj(camera, super::uniforms::frame_origin(camera));
-        super::frame_io::positions_from_depth(ctx, depth, view_proj)
+        super::frame_io::positions_from_depth(ctx, depth, view_proj, camera.near)
     }
 
     /// Records the sky and the rings of `span` with their fill.

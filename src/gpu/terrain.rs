@@ -309,7 +309,7 @@ impl TerrainPass {
                 "positions were not asked for when the renderer was built",
             )
         })?;
-        super::frame_io::positions_from_depth(ctx, depth, view_proj)
+        super::frame_io::positions_from_depth(ctx, depth, view_proj, camera.near)
     }
 
     /// The warped variant draws a `mesh`² quad mesh this frame (at most the size it was built
