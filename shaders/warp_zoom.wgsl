@@ -1,5 +1,5 @@
 // Warp & zoom: Φ (n², from the CPU stage) upsampled bilinearly to the mesh size, the height
-// sampled from the atlas at Φ (bicubic, at the mip level of the local spacing), the split octave
+// sampled from the atlas at Φ (bicubic, at pyramid level −o), the split octave
 // from the largest distance to the four neighbours, and noise octaves added as displacement up to
 // it (octave ⌊o⌋+1 shared with the bump by g_k). Output: the detailed geometry image,
 // (x, y, z, split octave) per vertex, metres from the frame origin.
@@ -46,8 +46,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         max(distance(p, mesh_xy(ij + vec2<i32>(1, 0))), distance(p, mesh_xy(ij - vec2<i32>(1, 0)))),
         max(distance(p, mesh_xy(ij + vec2<i32>(0, 1))), distance(p, mesh_xy(ij - vec2<i32>(0, 1)))),
     );
-    var z = atlas_height(p, d_max);
     let o = log2(frame.atlas.d_atlas / max(d_max, 1e-6)) - frame.detail.bias;
+    // The sketch is split where the octaves are: its pyramid level is −o, the spacing d_max
+    // moved by the bias (see sketch_spacing in the Rust twin).
+    var z = atlas_height(p, d_max * exp2(frame.detail.bias));
 #ifdef DETAIL
     let last = min(frame.detail.octaves, u32(max(ceil(o), 0.0)));
     for (var k = 1u; k <= last; k++) {
