@@ -1,8 +1,9 @@
 // Warp & zoom: Φ (n², from the CPU stage) upsampled bilinearly to the mesh size, the height
-// sampled from the atlas at Φ (bicubic, at pyramid level −o), the split octave
-// from the largest distance to the four neighbours, and noise octaves added as displacement up to
-// it (octave ⌊o⌋+1 shared with the bump by g_k). Output: the detailed geometry image,
-// (x, y, z, split octave) per vertex, metres from the frame origin.
+// sampled from the atlas at Φ (bicubic, at pyramid level −o), the split octave o
+// from the largest distance to the four neighbours (no finer than the pixel octave at the vertex),
+// and noise octaves added as displacement up to it (octave ⌊o⌋+1 shared with the bump by g_k).
+// Output: the detailed geometry image, (x, y, z, split octave) per vertex, metres from the frame
+// origin.
 // Rust twin: src/gpu/warp_zoom.rs (`vertex_cpu`).
 
 #import frame
@@ -46,10 +47,20 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         max(distance(p, mesh_xy(ij + vec2<i32>(1, 0))), distance(p, mesh_xy(ij - vec2<i32>(1, 0)))),
         max(distance(p, mesh_xy(ij + vec2<i32>(0, 1))), distance(p, mesh_xy(ij - vec2<i32>(0, 1)))),
     );
-    let o = log2(frame.atlas.d_atlas / max(d_max, 1e-6)) - frame.detail.bias;
-    // The sketch is split where the octaves are: its pyramid level is −o, the spacing d_max
-    // moved by the bias (see sketch_spacing in the Rust twin).
-    var z = atlas_height(p, d_max * exp2(frame.detail.bias));
+    var o = log2(frame.atlas.d_atlas / max(d_max, 1e-6)) - frame.detail.bias;
+    // The sketch is split where the octaves are: its pyramid level is −o (see sketch_spacing in
+    // the Rust twin).
+    var z = atlas_height(p, frame.atlas.d_atlas * exp2(-o));
+    // No finer than the pixel octave at the vertex: the reference's surface holds no more
+    // (split_octave_in_view in the Rust twin). A bake has no camera (pixel_scale 0).
+    if (frame.camera.pixel_scale > 0.0) {
+        let footprint = distance(vec3<f32>(p, z), frame.camera.eye) * frame.camera.pixel_scale;
+        let o_px = log2(frame.atlas.d_atlas / max(footprint, 1e-6));
+        if (o_px < o) {
+            o = o_px;
+            z = atlas_height(p, frame.atlas.d_atlas * exp2(-o));
+        }
+    }
 #ifdef DETAIL
     let last = min(frame.detail.octaves, u32(max(ceil(o), 0.0)));
     for (var k = 1u; k <= last; k++) {
