@@ -74,7 +74,7 @@ struct VsOut {
 }
 
 // A vertex at `p` (frame metres) with its clip position and the air between it and the eye;
-// `spacing` is the distance at which the mesh samples the sketch there (metres).
+// `spacing` is the mesh spacing its split octave stands for there (metres, see mesh_spacing).
 fn vertex_out(p: vec3<f32>, n: vec3<f32>, split: f32, grid: vec2<f32>, spacing: f32) -> VsOut {
     let to_eye = frame.camera.eye - p;
     let dist = max(length(to_eye), 1e-3);
@@ -92,8 +92,10 @@ fn vertex_out(p: vec3<f32>, n: vec3<f32>, split: f32, grid: vec2<f32>, spacing: 
     return out;
 }
 
-// The spacing at which the geometry image sampled the sketch, from its split octave
-// (o = log2(d_atlas / spacing) − bias in warp_zoom.wgsl).
+// The spacing the split octave stands for (o = log2(d_atlas / spacing) − bias in
+// warp_zoom.wgsl): the mesh's own, or, where the mesh is finer than its pixels and the split
+// octave stops at the pixel octave, the spacing whose octaves a pixel shows (then
+// `shading_normal` takes the terrain function's normal, as the reference's).
 fn mesh_spacing(split: f32) -> f32 {
     return frame.atlas.d_atlas * exp2(-(split + frame.detail.bias));
 }

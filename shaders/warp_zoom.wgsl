@@ -48,19 +48,18 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         max(distance(p, mesh_xy(ij + vec2<i32>(0, 1))), distance(p, mesh_xy(ij - vec2<i32>(0, 1)))),
     );
     var o = log2(frame.atlas.d_atlas / max(d_max, 1e-6)) - frame.detail.bias;
+    // No finer than the pixel octave at the vertex: the reference's surface holds no more
+    // (split_octave_in_view in the Rust twin). A bake has no camera (pixel_scale 0). The
+    // distance is taken to the nearest height the sketch can have there, so that the sketch is
+    // read once, at its final level (a streamed read marks its tiles as wanted).
+    if (frame.camera.pixel_scale > 0.0) {
+        let nearest = vec3<f32>(p, min(frame.camera.eye.z, frame.atlas.max_m));
+        let footprint = distance(nearest, frame.camera.eye) * frame.camera.pixel_scale;
+        o = min(o, log2(frame.atlas.d_atlas / max(footprint, 1e-6)));
+    }
     // The sketch is split where the octaves are: its pyramid level is −o (see sketch_spacing in
     // the Rust twin).
     var z = atlas_height(p, frame.atlas.d_atlas * exp2(-o));
-    // No finer than the pixel octave at the vertex: the reference's surface holds no more
-    // (split_octave_in_view in the Rust twin). A bake has no camera (pixel_scale 0).
-    if (frame.camera.pixel_scale > 0.0) {
-        let footprint = distance(vec3<f32>(p, z), frame.camera.eye) * frame.camera.pixel_scale;
-        let o_px = log2(frame.atlas.d_atlas / max(footprint, 1e-6));
-        if (o_px < o) {
-            o = o_px;
-            z = atlas_height(p, frame.atlas.d_atlas * exp2(-o));
-        }
-    }
 #ifdef DETAIL
     let last = min(frame.detail.octaves, u32(max(ceil(o), 0.0)));
     for (var k = 1u; k <= last; k++) {

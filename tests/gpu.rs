@@ -89,7 +89,9 @@ fn gpu_warp_and_zoom_matches_its_cpu_twin() {
                     worst_xy.max((g[0] - cpu[0]).abs().max((g[1] - cpu[1]).abs()) as f64 / extent);
                 // The split octave is log2 of d_atlas / d_max: the rounding of Φ above, a few
                 // ulps of the region's extent, moves it by that over d_max (where the warp
-                // crowds vertices a metre apart, a region 25 km wide: a few thousandths).
+                // crowds vertices a metre apart, a region 25 km wide: a few thousandths). Where
+                // the split octave stops at the pixel octave, d_max below is the spacing it stands
+                // for, larger than the mesh's: the allowance is then smaller, not larger.
                 let d_max = r.atlas.d_atlas() * (-(cpu[3] as f64 + r.detail.bias)).exp2();
                 let allowed = 1e-3 + 8.0 * f32::EPSILON as f64 * extent / (d_max * 2f64.ln());
                 assert!(

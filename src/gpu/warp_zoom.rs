@@ -191,21 +191,25 @@ pub fn sketch_spacing(d_atlas: f32, o: f32) -> f32 {
     d_atlas * (-o).exp2()
 }
 
-/// The split octave of a vertex at `p` (frame metres; `z` its sketch height) whose mesh gives
-/// `o`: no finer than the pixel octave there, `log2(d_atlas / footprint)`, as the reference's
-/// surface holds no octave finer than its pixel. A mesh finer than the pixels (far ground, a
-/// dense mesh from high up) otherwise carried octaves the reference does not draw, and its
-/// normals aliased them: at 256² from 20 km up (jacksboro-high) warped's PSNR fell from 50.5 dB
-/// at 92,450 triangles to 44.4 dB at 428,738 while its screen-space error went on falling; with
-/// the stop it climbs to 51.1 and 57.5 dB (the near view, where it never binds, is unchanged).
-/// `None` for a bake, which has no camera (`pixel_scale` 0): its grid is drawn from anywhere.
-pub fn split_octave_in_view(f: &FrameUniforms, p: Vec2, z: f32, o: f32) -> Option<f32> {
+/// The split octave of a vertex at `p` (frame metres) whose mesh gives `o`: no finer than the
+/// pixel octave there, `log2(d_atlas / footprint)`, as the reference's surface holds no octave
+/// finer than its pixel. A mesh finer than the pixels (far ground, a dense mesh from high up)
+/// otherwise carried octaves the reference does not draw, and its normals aliased them: at 256²
+/// from 20 km up (jacksboro-high) warped's PSNR fell from 50.5 dB at 92,450 triangles to 44.4 dB
+/// at 428,738 while its screen-space error went on falling; with the stop it climbs to 51.1 and
+/// 57.5 dB (the near view, where it never binds, is unchanged). The footprint is taken at the
+/// nearest height the sketch can have under `p` (the eye's, below the sketch's highest), so the
+/// stop never binds more than it should and the sketch is read once, at the final level: a
+/// streamed pyramid marks every tile it reads as wanted. A bake has no camera (`pixel_scale` 0)
+/// and no stop.
+pub fn split_octave_in_view(f: &FrameUniforms, p: Vec2, o: f32) -> f32 {
     if f.camera.pixel_scale <= 0.0 {
-        return None;
+        return o;
     }
-    let footprint = p.extend(z).distance(Vec3::from(f.camera.eye)) * f.camera.pixel_scale;
-    let o_px = (f.atlas.d_atlas / footprint.max(1e-6)).log2();
-    (o_px < o).then_some(o_px)
+    let eye = Vec3::from(f.camera.eye);
+    let nearest = p.extend(eye.z.min(f.atlas.max_m));
+    let footprint = nearest.distance(eye) * f.camera.pixel_scale;
+    o.min((f.atlas.d_atlas / footprint.max(1e-6)).log2())
 }
 
 /// The CPU twin of one invocation of `warp_zoom.wgsl`: vertex `ij` of the detailed geometry image.
@@ -221,12 +225,12 @@ pub fn vertex_cpu(
     let d_max = d(IVec2::X)
         .max(d(-IVec2::X))
         .max(d(IVec2::Y).max(d(-IVec2::Y)));
-    let mut o = (f.atlas.d_atlas / d_max.max(1e-6)).log2() - f.detail.bias;
+    let o = split_octave_in_view(
+        f,
+        p,
+        (f.atlas.d_atlas / d_max.max(1e-6)).log2() - f.detail.bias,
+    );
     let mut z = atlas_height(f, atlas, p, sketch_spacing(f.atlas.d_atlas, o));
-    if let Some(o_px) = split_octave_in_view(f, p, z, o) {
-        o = o_px;
-        z = atlas_height(f, atlas, p, sketch_spacing(f.atlas.d_atlas, o));
-    }
     if detail {
         let last = f.detail.octaves.min(o.ceil().max(0.0) as u32);
         for k in 1..=last {
