@@ -219,8 +219,9 @@ fn subpixel(
     };
     let det = ju[0] * jv[1] - ju[1] * jv[0];
     let scale = (ju[0].hypot(ju[1]) * jv[0].hypot(jv[1])).max(f64::MIN_POSITIVE);
-    // Columns within a thousandth of parallel: the step along them is not determined.
-    if !(det.abs() > 1e-3 * scale) {
+    // Columns within a thousandth of parallel (or NaN): the step along them is not determined.
+    let determined = det.abs() > 1e-3 * scale;
+    if !determined {
         return (0.0, 0.0);
     }
     let (ex, ey) = (p[0] as f64 - c[0], p[1] as f64 - c[1]);

@@ -197,7 +197,7 @@ pub fn sketch_spacing(d_atlas: f32, o: f32) -> f32 {
 /// otherwise carried octaves the reference does not draw, and its normals aliased them: at 256²
 /// from 20 km up (jacksboro-high) warped's PSNR fell from 50.5 dB at 92,450 triangles to 44.4 dB
 /// at 428,738 while its screen-space error went on falling; with the stop it climbs to 51.1 and
-/// 57.5 dB (the near view, where it never binds, is unchanged). The footprint is taken at the
+/// 57.6 dB (the near view, where it never binds, is unchanged). The footprint is taken at the
 /// nearest height the sketch can have under `p` (the eye's, below the sketch's highest), so the
 /// stop never binds more than it should and the sketch is read once, at the final level: a
 /// streamed pyramid marks every tile it reads as wanted. A bake has no camera (`pixel_scale` 0)
