@@ -43,14 +43,16 @@ pub struct Dominance {
     pub misses: Vec<Miss>,
 }
 
-/// A GeoMipMap row no warped row matches on triangles and error, and the least mean error of a
-/// warped row within its triangles (`None`: no warped row has so few).
+/// A GeoMipMap row no warped row matches on triangles and error, the least mean error of a
+/// warped row within its triangles (`None`: no warped row has so few), and the fewest triangles
+/// of a warped row with no more error (`None`: none has so little): by how much warped misses.
 #[derive(Clone, Debug, Serialize)]
 pub struct Miss {
     pub setting: String,
     pub triangles: u64,
     pub sse_mean_px: f64,
     pub warped_sse_px: Option<f64>,
+    pub warped_triangles_needed: Option<u64>,
 }
 
 /// [`Dominance`] of `rows`; `None` unless both modes have rows.
@@ -76,6 +78,11 @@ pub fn dominance(rows: &[Row]) -> Option<Dominance> {
                 triangles: g.triangles,
                 sse_mean_px: g.sse_mean_px,
                 warped_sse_px: within().map(|w| w.sse_mean_px).reduce(f64::min),
+                warped_triangles_needed: warped
+                    .iter()
+                    .filter(|w| w.sse_mean_px <= g.sse_mean_px)
+                    .map(|w| w.triangles)
+                    .min(),
             });
         }
         let on_time = warped
@@ -175,9 +182,18 @@ pub fn summary_markdown(title: &str, s: &Summary) -> String {
                 .map_or("no warped row has so few".into(), |e| {
                     format!("warped's best {e:.2} px")
                 });
+            let needed = m.warped_triangles_needed.map_or(
+                "; no warped row has as little error".into(),
+                |t| {
+                    format!(
+                        "; warped reaches it at {t} triangles ({:.2}×)",
+                        t as f64 / m.triangles.max(1) as f64
+                    )
+                },
+            );
             let _ = writeln!(
                 out,
-                "- {}: {} triangles at {:.2} px; {best}",
+                "- {}: {} triangles at {:.2} px; {best}{needed}",
                 m.setting, m.triangles, m.sse_mean_px
             );
         }
@@ -243,11 +259,17 @@ mod tests {
         let misses: Vec<_> = d
             .misses
             .iter()
-            .map(|m| (m.triangles, m.warped_sse_px))
+            .map(|m| (m.triangles, m.warped_sse_px, m.warped_triangles_needed))
             .collect();
-        assert_eq!(misses, [(3000, Some(1.0)), (500, None)]);
+        // The 3000-triangle row's 0.8 px takes warped 4000 triangles; the 500-triangle row's
+        // 2.0 px, 1000.
+        assert_eq!(
+            misses,
+            [(3000, Some(1.0), Some(4000)), (500, None, Some(1000))]
+        );
         let md = summary_markdown("t", &summarise(&rows));
         assert!(md.contains("1 of 3 GeoMipMap rows"), "{md}");
         assert!(md.contains("no warped row has so few"), "{md}");
+        assert!(md.contains("at 4000 triangles (1.33×)"), "{md}");
     }
 }
