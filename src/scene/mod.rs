@@ -148,18 +148,20 @@ pub const FINEST_WAVELENGTH_M: f64 = 0.1;
 /// own nodes and its δ, measured on the sketch alone, would not see an octave a negative bias
 /// puts into it; 0.5 on a planet.
 ///
-/// Why −1, with the geometric-error term (`importance.error`) that came on with it, against the
-/// old defaults (0.5, no error term); `terrain compare --size 256 --modes warped,geomipmap`,
-/// llvmpipe, each against GeoMipMap's rows of the same run, since its bake follows the bias
-/// too: GeoMipMap rows matched by a warped row with no more triangles and no more mean
-/// screen-space error went from 6 to 10 of 15 on jacksboro, 7 to 12 on gaussian, 4 to 7 on
-/// hills and 5 to 12 on jacksboro-high. Along the paths (held) the warped mode's PSNR rose
+/// Why −1, with the geometric-error term (`importance.error`) that came on with it:
+/// `terrain compare --size 256 --modes warped,geomipmap --repeat 1 --path-frames 0`, llvmpipe,
+/// each against GeoMipMap's rows of the same run, since its bake follows the bias too. GeoMipMap
+/// rows matched by a warped row with no more triangles and no more mean screen-space error, of
+/// the 75 on the five bundled views (the error to a fraction of a pixel, the sketch at level
+/// −o): 46 at −1 with the term, 43 without it, 37 at 0 with it, 44 at −2. (First chosen against
+/// the old defaults, 0.5 without the term, with the whole-pixel error, which from high up was
+/// noise.) Along the paths (held) the warped mode's PSNR rose
 /// (jacksboro 30.2 → 30.8 dB, gaussian 22.2 → 26.2 dB) and its LOD change per frame stayed far
 /// below the swimming goals (0.071 → 0.087 and 0.254 → 0.242 levels). Sampling an octave at its
 /// own wavelength aliases between vertices, but the vertices are then exact, and that outweighs
-/// it in every figure measured. A bias of 0 (the Nyquist octave) with the error term matched 10
-/// and 11 rows, and on the jacksboro path gave 28.9 dB: the error term then finds the ground
-/// flatter and asks for a third of the triangles.
+/// it in every figure measured. A bias of 0 (the Nyquist octave) with the error term gave 28.9 dB
+/// on the jacksboro path: the error term then finds the ground flatter and asks for a third of
+/// the triangles.
 /// Rejected for planets: the clipmap rings slide with the nadir every frame, and from 2 m a bias
 /// of −1 swims 3.02 levels a frame at the default rings against 2.74 (up to twice as much at
 /// other ring settings), for +1.5 dB.
