@@ -258,9 +258,11 @@ fn ends(total: &[f64; LANES], out: &mut [[f64; LANES]]) {
 
 /// [`portable`] in x86 intrinsics. With AVX2 (`mappings`), four f64 lanes to a register, the two
 /// halves of the eight interleaved so that their chains of additions overlap; with AVX-512F
-/// (`mappings_avx512`), the eight in one register and each gather one instruction: the warp
-/// (jacksboro near, 128², `benches/cpu_stage.rs`) 83 → 81 µs guarded, 75 → 72 µs plain, and
-/// 92 → 87 µs and 77 → 70 µs high, against the AVX2 kernel. The same operations in the same order
+/// (`mappings_avx512`), the eight in one register and each gather one instruction. Measured
+/// with `benches/cpu_stage.rs` (128², medians), each build after the one before in one session:
+/// the AVX-512 mappings took the guarded warp 83 → 81 µs on jacksboro near and 92 → 87 µs from
+/// high up; gathering `lerp_avx512`'s pairs then took them to 73 and 81 µs, and the plain warp
+/// 72 → 62 µs on both. The same operations in the same order
 /// (no fused multiply-adds; `ceil` for line_mapping's floor-and-compare, equal on x ≥ 0), so the
 /// results are bit-identical, which `tests` checks.
 ///
