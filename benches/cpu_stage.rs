@@ -1,5 +1,5 @@
-//! The CPU stage at 128²: sketch map, importance and warp, each alone and together, on the bundled
-//! jacksboro scene near the ground (the hardest view for the warp) and from high up.
+//! The CPU stage at 128²: sketch map, importance and warp, each alone and together, on every
+//! bundled view: jacksboro, gaussian and hills near the ground and from high up.
 //!
 //! `cargo bench --bench cpu_stage`; criterion prints the median of each. `stage` is a frame that
 //! warps anew, `stage_held` one that keeps the held warp (`warp.hold`, a still camera).
@@ -67,8 +67,16 @@ fn bench_scene(c: &mut Criterion, name: &str) {
 }
 
 fn cpu_stage(c: &mut Criterion) {
-    bench_scene(c, "jacksboro");
-    bench_scene(c, "jacksboro-high");
+    for scene in [
+        "jacksboro",
+        "jacksboro-high",
+        "gaussian",
+        "gaussian-high",
+        "hills",
+        "hills-high",
+    ] {
+        bench_scene(c, scene);
+    }
 }
 
 criterion_group!(benches, cpu_stage);
