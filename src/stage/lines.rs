@@ -7,7 +7,7 @@
 //! - [`line_mapping`] maps one line; it is the reference and serves the guard's mean mapping.
 //! - [`lane_mappings`] maps [`LANES`] lines at once, each lane bit-identical to
 //!   [`line_mapping`]; the warp's passes use it. With AVX-512F or AVX2 it runs as intrinsics
-//!   (`avx2`), otherwise as plain Rust (`portable`).
+//!   (`x86`), otherwise as plain Rust (`portable`).
 //! - Non-finite or negative importance counts as 0; a line with no weight stays put.
 //!
 //! Why lanes across lines: a line's running sum is a chain of dependent additions, one per
@@ -134,7 +134,7 @@ pub fn lane_mappings(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut 
         "lines of {n} samples"
     );
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f") && n <= i32::MAX as usize / LANES {
+    if crate::stage::simd::avx512() && n <= i32::MAX as usize / LANES {
         // SAFETY: the processor has AVX-512F and the lines' indices fit an i32, checked just
         // above; the lengths, just before.
         unsafe { x86::mappings_avx512(imp, scratch, out) };
@@ -142,7 +142,7 @@ pub fn lane_mappings(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut 
         return;
     }
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && n <= i32::MAX as usize / LANES {
+    if crate::stage::simd::avx2() && n <= i32::MAX as usize / LANES {
         // SAFETY: the processor has AVX2 and the lines' indices fit an i32, checked just
         // above; the lengths, just before.
         unsafe { x86::mappings(imp, scratch, out) };
@@ -210,12 +210,12 @@ pub fn lerp_lanes(values: &[f32], n: usize, first: usize, a: &[f64; LANES]) -> [
     let lines = values.len() / n;
     #[cfg(target_arch = "x86_64")]
     if values.len() < i32::MAX as usize {
-        if std::arch::is_x86_feature_detected!("avx512f") {
+        if crate::stage::simd::avx512() {
             // SAFETY: the processor has AVX-512F and the indices fit an i32, checked just
             // above; a whole line, just before.
             return unsafe { x86::lerp_avx512(values, n, first, a) };
         }
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if crate::stage::simd::avx2() {
             // SAFETY: as above, with AVX2.
             return unsafe { x86::lerp(values, n, first, a) };
         }
@@ -362,8 +362,8 @@ mod x86 {
     /// The same operations in the same order, so the same bits.
     ///
     /// # Safety
-    /// As [`mappings`], with AVX-512F.
-    #[target_feature(enable = "avx512f")]
+    /// As [`mappings`], with AVX-512F as well.
+    #[target_feature(enable = "avx512f,avx2")]
     pub unsafe fn mappings_avx512(
         imp: &[[f32; LANES]],
         scratch: &mut LaneScratch,
@@ -458,8 +458,8 @@ mod x86 {
     /// 64-bit element and then parted, so one gather of eight elements instead of two.
     ///
     /// # Safety
-    /// As [`lerp`], with AVX-512F.
-    #[target_feature(enable = "avx512f")]
+    /// As [`lerp`], with AVX-512F as well.
+    #[target_feature(enable = "avx512f,avx2")]
     pub unsafe fn lerp_avx512(
         values: &[f32],
         n: usize,
@@ -623,19 +623,25 @@ pub(crate) mod tests {
         ];
         for a in [inside, outside] {
             for first in 0..4 {
-                let got = lerp_lanes(&values, n, first, &a);
-                // The AVX2 gathers too, where the dispatch took AVX-512 (else they are `got`).
-                let mut avx2 = got;
+                // Every build the processor can run, each called directly.
+                let mut builds = vec![lerp_lanes(&values, n, first, &a)];
                 #[cfg(target_arch = "x86_64")]
-                if std::arch::is_x86_feature_detected!("avx2") {
-                    // SAFETY: the processor has AVX2; `values` holds whole lines.
-                    avx2 = unsafe { x86::lerp(&values, n, first, &a) };
+                {
+                    use crate::stage::simd;
+                    if simd::avx2() {
+                        // SAFETY: the processor has AVX2; `values` holds whole lines.
+                        builds.push(unsafe { x86::lerp(&values, n, first, &a) });
+                    }
+                    if simd::avx512() {
+                        // SAFETY: as above, with AVX-512F.
+                        builds.push(unsafe { x86::lerp_avx512(&values, n, first, &a) });
+                    }
                 }
                 for l in 0..LANES {
                     // Lines past the last repeat it.
                     let want = lerp_at(&values[(first + l).min(2) * n..][..n], a[l]);
                     let at = format!("line {first}+{l} at {}", a[l]);
-                    for got in [got, avx2] {
+                    for got in &builds {
                         assert_eq!(got[l].is_nan(), want.is_nan(), "{at}");
                         if !want.is_nan() {
                             assert_eq!(got[l].to_bits(), want.to_bits(), "{at}");
@@ -662,14 +668,28 @@ pub(crate) mod tests {
             portable(&before, &mut scratch, &mut plain);
             portable(&imp, &mut scratch, &mut plain);
             ends(&scratch.u[n - 1], &mut plain);
-            // The AVX2 kernel too, where the dispatch took AVX-512 (else it is `lanes`).
-            let mut avx2 = lanes.clone();
+            // Each kernel the processor can run, called directly, after the other lines.
+            let mut kernels = vec![];
             #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the processor has AVX2; every buffer holds n samples.
-                unsafe { x86::mappings(&before, &mut scratch, &mut avx2) };
-                unsafe { x86::mappings(&imp, &mut scratch, &mut avx2) };
-                ends(&scratch.u[n - 1], &mut avx2);
+            {
+                use crate::stage::simd;
+                type Kernel = unsafe fn(&[[f32; LANES]], &mut LaneScratch, &mut [[f64; LANES]]);
+                let runnable: [(&str, bool, Kernel); 2] = [
+                    ("AVX2", simd::avx2(), x86::mappings),
+                    ("AVX-512", simd::avx512(), x86::mappings_avx512),
+                ];
+                for (name, runs, kernel) in runnable {
+                    if !runs {
+                        eprintln!("skipped: the processor cannot run the {name} kernel");
+                        continue;
+                    }
+                    let mut out = vec![[0.0; LANES]; n];
+                    // SAFETY: the processor runs this kernel; every buffer holds n samples.
+                    unsafe { kernel(&before, &mut scratch, &mut out) };
+                    unsafe { kernel(&imp, &mut scratch, &mut out) };
+                    ends(&scratch.u[n - 1], &mut out);
+                    kernels.push((name, out));
+                }
             }
             let mut one = LineScratch::new(n);
             for l in 0..LANES {
@@ -680,7 +700,9 @@ pub(crate) mod tests {
                     let at = format!("n {n} lane {l} j {j}");
                     assert_eq!(lanes[j][l].to_bits(), want[j].to_bits(), "{at}");
                     assert_eq!(plain[j][l].to_bits(), want[j].to_bits(), "{at}");
-                    assert_eq!(avx2[j][l].to_bits(), want[j].to_bits(), "AVX2 {at}");
+                    for (name, out) in &kernels {
+                        assert_eq!(out[j][l].to_bits(), want[j].to_bits(), "{name} {at}");
+                    }
                 }
             }
         }

@@ -10,6 +10,7 @@ pub mod hold;
 pub mod importance;
 pub mod lines;
 pub mod quality;
+pub mod simd;
 pub mod sketch_map;
 pub mod warp;
 

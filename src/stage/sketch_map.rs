@@ -18,6 +18,7 @@
 
 use crate::camera::Camera;
 use crate::sketch::Atlas;
+use crate::stage::simd;
 use glam::DVec2;
 
 #[derive(Clone, Debug)]
@@ -175,8 +176,10 @@ pub struct Resampler {
 /// taps touch (a contiguous loop), then takes the taps along x from that. Taking all four texels
 /// per output sample instead cost 108 µs per 128² map against 42 µs (`benches/cpu_stage.rs`,
 /// `sketch_map`, jacksboro near, medians). The row scratch grows to its span once. Gathering
-/// the taps along x eight at a time (AVX2 intrinsics, the same bits) measured 24.1–24.4 µs
-/// against 24.4–24.7 µs for this loop, alternately in one session: within the noise, not kept.
+/// the taps along x eight at a time with AVX2 (each texel apart, the same bits) measured
+/// 24.1–24.4 µs against 24.4–24.7 µs for this loop, alternately in one session: within the
+/// noise, not kept. With AVX-512F, each output's two texels gathered as one 64-bit element
+/// (`x86::taps`) pays: 22.6 → 17.3 µs.
 pub fn resample(
     atlas: &Atlas,
     origin: DVec2,
@@ -230,9 +233,13 @@ fn sample_row(
     vertical.clear();
     vertical.extend(r0.iter().zip(r1).map(|(&a, &b)| a + (b - a) * fy));
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f") && vertical.len() < i32::MAX as usize {
+    if simd::avx512()
+        && (2..i32::MAX as usize).contains(&vertical.len())
+        && row.len() <= tx.index.len().min(tx.frac.len())
+    {
         let taps = (&tx.index[..row.len()], &tx.frac[..row.len()]);
-        // SAFETY: the processor has AVX-512F and the indices fit an i32, checked just above.
+        // SAFETY: the processor has AVX-512F and AVX2, the row holds at least one pair and its
+        // indices fit an i32, and there are as many taps as outputs, checked just above.
         unsafe { x86::taps(vertical, taps, lo, row, blend) };
         return;
     }
@@ -265,17 +272,21 @@ fn taps(
 
 /// The taps along x in AVX-512F: eight outputs at a time, each one's two texels (side by side
 /// in the row) gathered as one 64-bit element and then parted. The same operations in the same
-/// order as [`sample_row`]'s scalar loop, so the same bits (`tests`). With the scalar loop the
-/// sketch map took 22.6 µs (jacksboro near, 128², `benches/cpu_stage.rs`, `sketch_map`); that
-/// loop built for AVX2 or AVX-512 by the compiler took 31 µs.
+/// order as [`taps`], so the same bits (`tests`). With [`taps`] the sketch map took 22.6 µs
+/// (jacksboro near, 128², `benches/cpu_stage.rs`, `sketch_map`), 17.3 µs with this; [`taps`]
+/// built for AVX2 or AVX-512 by the compiler took 31 µs.
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use std::arch::x86_64::*;
 
     /// # Safety
-    /// The processor must have AVX-512F; `vertical` holds fewer than 2^31 samples; `index` and
-    /// `frac` as many as `row`.
-    #[target_feature(enable = "avx512f")]
+    /// The processor must have AVX-512F and AVX2; `vertical` holds at least 2 and fewer than
+    /// 2^31 samples; `index` and `frac` as many as `row`. Each pair read is clamped into
+    /// `vertical`, so taps that do not increase along x (which [`Taps::fill`] never gives) read
+    /// wrong texels but none outside it.
+    ///
+    /// [`Taps::fill`]: super::Taps
+    #[target_feature(enable = "avx512f,avx2")]
     pub unsafe fn taps(
         vertical: &[f32],
         (index, frac): (&[u32], &[f32]),
@@ -368,7 +379,7 @@ mod tests {
     #[test]
     fn every_build_of_the_taps_gives_the_same_bits() {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
+        if simd::avx512() {
             let mut next = crate::stage::lines::tests::uniform(0x1b87_3593);
             for n in [128usize, 37] {
                 let lo = 11;
@@ -394,7 +405,9 @@ mod tests {
             }
             return;
         }
-        eprintln!("skipped: the processor has no AVX-512F");
+        eprintln!(
+            "skipped: the processor lacks AVX-512F or AVX2, so the scalar taps are all it runs"
+        );
     }
 
     #[test]

@@ -155,11 +155,11 @@ impl Warp {
     pub fn run(&mut self, importance: &[f32], d0: f32) {
         #[cfg(target_arch = "x86_64")]
         {
-            if std::arch::is_x86_feature_detected!("avx512f") {
+            if crate::stage::simd::avx512() {
                 // SAFETY: the processor has AVX-512F, checked just above.
                 return unsafe { self.run_avx512(importance, d0) };
             }
-            if std::arch::is_x86_feature_detected!("avx2") {
+            if crate::stage::simd::avx2() {
                 // SAFETY: the processor has AVX2, checked just above.
                 return unsafe { self.run_avx2(importance, d0) };
             }
@@ -169,7 +169,7 @@ impl Warp {
 
     /// [`Warp::run`] compiled for AVX-512's eight f64 lanes, one [`LANES`] group to a register.
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,avx2")]
     unsafe fn run_avx512(&mut self, importance: &[f32], d0: f32) {
         self.run_lanes(importance, d0)
     }
