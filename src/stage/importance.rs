@@ -276,7 +276,7 @@ impl ImportanceMap {
     ) {
         #[cfg(target_arch = "x86_64")]
         if crate::stage::simd::avx512() {
-            // SAFETY: the processor has AVX-512F, checked just above.
+            // SAFETY: the processor has AVX-512F and AVX2 (`simd::avx512`), checked just above.
             unsafe { self.rows_avx512(map, atlas_bounds, camera, surface_max, p, row_step) };
             return;
         }

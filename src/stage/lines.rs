@@ -135,8 +135,8 @@ pub fn lane_mappings(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut 
     );
     #[cfg(target_arch = "x86_64")]
     if crate::stage::simd::avx512() && n <= i32::MAX as usize / LANES {
-        // SAFETY: the processor has AVX-512F and the lines' indices fit an i32, checked just
-        // above; the lengths, just before.
+        // SAFETY: the processor has AVX-512F and AVX2 and the lines' indices fit an i32,
+        // checked just above; the lengths, just before.
         unsafe { x86::mappings_avx512(imp, scratch, out) };
         ends(&scratch.u[n - 1], out);
         return;
@@ -211,8 +211,8 @@ pub fn lerp_lanes(values: &[f32], n: usize, first: usize, a: &[f64; LANES]) -> [
     #[cfg(target_arch = "x86_64")]
     if values.len() < i32::MAX as usize {
         if crate::stage::simd::avx512() {
-            // SAFETY: the processor has AVX-512F and the indices fit an i32, checked just
-            // above; a whole line, just before.
+            // SAFETY: the processor has AVX-512F and AVX2 and the indices fit an i32, checked
+            // just above; a whole line, just before.
             return unsafe { x86::lerp_avx512(values, n, first, a) };
         }
         if crate::stage::simd::avx2() {

@@ -18,7 +18,6 @@
 
 use crate::camera::Camera;
 use crate::sketch::Atlas;
-use crate::stage::simd;
 use glam::DVec2;
 
 #[derive(Clone, Debug)]
@@ -233,7 +232,7 @@ fn sample_row(
     vertical.clear();
     vertical.extend(r0.iter().zip(r1).map(|(&a, &b)| a + (b - a) * fy));
     #[cfg(target_arch = "x86_64")]
-    if simd::avx512()
+    if crate::stage::simd::avx512()
         && (2..i32::MAX as usize).contains(&vertical.len())
         && row.len() <= tx.index.len().min(tx.frac.len())
     {
@@ -379,7 +378,7 @@ mod tests {
     #[test]
     fn every_build_of_the_taps_gives_the_same_bits() {
         #[cfg(target_arch = "x86_64")]
-        if simd::avx512() {
+        if crate::stage::simd::avx512() {
             let mut next = crate::stage::lines::tests::uniform(0x1b87_3593);
             for n in [128usize, 37] {
                 let lo = 11;
@@ -396,7 +395,7 @@ mod tests {
                     let start: Vec<f32> = (0..n).map(|_| 900.0 * next()).collect();
                     let (mut want, mut got) = (start.clone(), start);
                     taps(&vertical, (&index, &frac), lo, &mut want, blend);
-                    // SAFETY: the processor has AVX-512F; lengths as the function asks.
+                    // SAFETY: the processor has AVX-512F and AVX2; lengths as the function asks.
                     unsafe { x86::taps(&vertical, (&index, &frac), lo, &mut got, blend) };
                     let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                     assert_eq!(bits(&got), bits(&want), "n {n} blend {blend:?}");

@@ -156,7 +156,7 @@ impl Warp {
         #[cfg(target_arch = "x86_64")]
         {
             if crate::stage::simd::avx512() {
-                // SAFETY: the processor has AVX-512F, checked just above.
+                // SAFETY: the processor has AVX-512F and AVX2 (`simd::avx512`), checked just above.
                 return unsafe { self.run_avx512(importance, d0) };
             }
             if crate::stage::simd::avx2() {
