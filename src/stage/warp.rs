@@ -43,9 +43,18 @@
 //! both together took the guarded warp on jacksboro near from 93 to 83 µs, side by side with
 //! commit 9b07df8. Stop 33: the fold check of eight column pairs stops at the first block of 16
 //! rows after which all eight have folded (near views): 86.6 → 82.9 µs near, 94.4 → 92.0 µs high,
-//! one build after the other. Measured and rejected: the row pass gathering its importance from the group's
-//! lines side by side (4 KiB, in L1) instead of from the map (64 KiB): 83.6 against 84.5 µs,
-//! within the noise.
+//! one build after the other. Also measured in stop 33 and rejected: `side_by_side` as an 8×8
+//! AVX transpose in registers (eight whole loads, unpacks, shuffles and lane swaps), which made
+//! the guarded warp slower, 74 → 84 µs near; and plain comparisons in place of f32::min in
+//! `turn_of`, within the noise. Measured and rejected before: the row pass gathering its
+//! importance from the group's lines side by side (4 KiB, in L1) instead of from the map
+//! (64 KiB): 83.6 against 84.5 µs, within the noise.
+//!
+//! Where the time goes on near views: finding that more than half of the column pairs fold
+//! takes mapping 9 of the 16 groups of columns, 33 µs of the guarded warp's 74 (a build that
+//! sent every column to the mean at once, made only to measure this, took 41.5 µs). No exact
+//! test decides it sooner (a fold is known only from Φ), and a guess would change the warp
+//! wherever it guessed wrong.
 //!
 //! Rejected alternative, measured: two threads. Rayon's `join` over halves of the rows, of the
 //! column mappings and of Φ's rows (the row pass written row-major and transposed) took 511 µs
