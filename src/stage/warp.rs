@@ -46,8 +46,8 @@
 //! one build after the other. Also measured in stop 33 and rejected: `side_by_side` as an 8×8
 //! AVX transpose in registers (eight whole loads, unpacks, shuffles and lane swaps), which made
 //! the guarded warp slower, 74 → 84 µs near; the row pass two groups of rows at a time, so that
-//! each column's stores fill a cache line (71–73 against 72–76 µs near, alternately, within the
-//! noise); and plain comparisons in place of f32::min in `turn_of`, within the noise. Measured
+//! each column's stores fill a cache line (73–76 µs against 71–72 µs near, 77–84 against 80–81
+//! high, run alternately: no gain); and plain comparisons in place of f32::min in `turn_of`, within the noise. Measured
 //! and rejected before: the row pass gathering its
 //! importance from the group's lines side by side (4 KiB, in L1) instead of from the map
 //! (64 KiB): 83.6 against 84.5 µs, within the noise.
