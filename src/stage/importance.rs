@@ -143,9 +143,7 @@ impl ErrorTerm {
         let (p0, p1) = (self.prefix[whole], self.prefix[whole + 1]);
         p0 + (p1 - p0) * (o - whole as f32)
     }
-}
 
-impl ErrorTerm {
     /// Adds the detail's curvature at each octave level of `octave` (each ≥ 0, as
     /// [`ErrorTerm::octave`] gives it) to `out`: [`ErrorTerm::curvature_at`] summed segment by
     /// segment, `prefix[k₀] + Σ_k (prefix[k+1] − prefix[k])·clamp(o − k, 0, 1)` over the octaves
@@ -159,9 +157,9 @@ impl ErrorTerm {
     fn add_curvature_row(&self, octave: &[f32], out: &mut [f32]) {
         let n = octave.len();
         let out = &mut out[..n];
-        // Lanes of minima and maxima, so that the reduction vectorises.
-        // Levels are never NaN (`octave` gives 0 for NaN), so plain comparisons do: f32::min and
-        // max's NaN blends, over chunks of varying length, took a tenth of the importance map.
+        // Lanes of minima and maxima, so that the reduction vectorises. Levels are never NaN
+        // (`octave` gives 0 for NaN), so plain comparisons do: f32::min and max's NaN blends,
+        // over chunks of varying length, took a tenth of the importance map.
         const ACC: usize = 16;
         let (mut lo, mut hi) = ([f32::INFINITY; ACC], [0.0f32; ACC]);
         let chunks = octave.chunks_exact(ACC);
