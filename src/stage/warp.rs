@@ -17,11 +17,17 @@
 //!   column mapping `b̄`, that of the row-warped importance summed across columns, and repeats until
 //!   nothing folds. A cell between two columns that both follow `b̄` is a convex trapezoid between
 //!   two rows of equal y and cannot fold, so the loop ends; the other columns keep their own warp.
-//!   When most column pairs fold at the start (near views), all columns go to `b̄` at once: the
-//!   rounds end there anyway on such views (measured on the three near demo scenes). The columns
-//!   are mapped, passed and checked eight at a time, so that this is decided as soon as it is
-//!   certain: on jacksboro near the guarded warp took 459 µs mapping every column first (when
-//!   lines were mapped one by one).
+//!   When more than an eighth of the column pairs fold at the start ([`fallback_pairs`]: 16 of
+//!   127; near views), all columns go to `b̄` at once, because the rounds end there or nearly
+//!   there anyway. The census (`cargo run --release --example fold_census`: 527 cameras, the
+//!   bundled views, 40 along each bundled flight, 240 at random over the three sketches): from 16
+//!   folded pairs on, the rounds alone left every column on `b̄` on 348 of 375 cameras and at
+//!   least 107 everywhere; the shortcut at 16 pairs changed 17 cameras, the share of visible
+//!   cells in [½, 1] by +0.002 points on the mean (−2.3 … +2.0 on one camera), in [½, 2] never
+//!   lower; at 8 pairs it sent up to 69 more columns to `b̄`. The columns are mapped, passed and
+//!   checked eight at a time, so that this is decided as soon as it is certain: on jacksboro
+//!   near the guarded warp took 459 µs mapping every column first (when lines were mapped one by
+//!   one).
 //!   Measured alternative: moving columns toward `b̄` by halves (λ = ½, ¼, …) took twice the
 //!   instructions for the same share of cells within [0.5, 2] (`warp` on the six demo scenes).
 //! - An optional limit on the importance gradient (`max_log2_step`) raises low importance next to
@@ -53,10 +59,13 @@
 //! (64 KiB): 83.6 against 84.5 µs, within the noise.
 //!
 //! Where the time goes on near views: finding that more than half of the column pairs fold
-//! takes mapping 9 of the 16 groups of columns, 33 µs of the guarded warp's 74 (a build that
-//! sent every column to the mean at once, made only to measure this, took 41.5 µs). No exact
-//! test decides it sooner (a fold is known only from Φ), and a guess would change the warp
-//! wherever it guessed wrong.
+//! (the shortcut's threshold until stop 34) took mapping 9 of the 16 groups of columns, 33 µs of
+//! the guarded warp's 74 (a build that sent every column to the mean at once, made only to
+//! measure this, took 41.5 µs). No exact test decides it sooner (a fold is known only from Φ),
+//! and a guess would change the warp wherever it guessed wrong; the threshold of an eighth,
+//! reached after about three groups, took the guarded warp from 78 to 55 µs on jacksboro and
+//! gaussian near, 85 to 60 on hills (`terrain warp sketches/S.toml --out-dir D --json
+//! --no-figures --repeat 400`, alternately, twice each).
 //!
 //! Rejected alternative, measured: two threads. Rayon's `join` over halves of the rows, of the
 //! column mappings and of Φ's rows (the row pass written row-major and transposed) took 511 µs
@@ -128,6 +137,16 @@ pub struct Warp {
     pub phi: Vec<[f32; 2]>,
     /// Columns the guard sent to the mean column warp in the last frame.
     pub guarded_columns: usize,
+    /// Folded column pairs at which the guard sends every column to the mean at once
+    /// ([`fallback_pairs`] of n); `usize::MAX`: only the guard's rounds.
+    pub fallback_pairs: usize,
+}
+
+/// The folded column pairs, of n − 1, at which every column goes to the mean column warp at once:
+/// more than an eighth. From there the guard's rounds end with all or nearly all columns on the
+/// mean anyway (the module doc's census), so searching further is wasted.
+pub fn fallback_pairs(n: usize) -> usize {
+    (n.max(2) - 1).div_ceil(8).max(1)
 }
 
 impl Warp {
@@ -154,6 +173,7 @@ impl Warp {
             folded: vec![false; n],
             phi: vec![[0.0; 2]; n * n],
             guarded_columns: 0,
+            fallback_pairs: fallback_pairs(n),
         }
     }
 
@@ -237,7 +257,7 @@ impl Warp {
                     None => pair_unfolded(&self.phi, n, s - 1),
                 };
                 folded += usize::from(self.folded[s - 1]);
-                if 2 * folded > n - 1 {
+                if folded >= self.fallback_pairs {
                     self.all_to_mean(d0);
                     return;
                 }
@@ -550,7 +570,7 @@ mod tests {
             if guarded && s > 0 {
                 folded[s - 1] = !pair_unfolded(&phi, n, s - 1);
                 count += usize::from(folded[s - 1]);
-                if 2 * count > n - 1 {
+                if count >= fallback_pairs(n) {
                     (0..n).for_each(|s| pass(&mut phi, s, &mean_map));
                     return (phi, n);
                 }
