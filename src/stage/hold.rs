@@ -37,12 +37,14 @@ pub const SHARE: f32 = 0.05;
 /// since the rows' AVX2 build), and the demand varies smoothly from row to row.
 pub const ROW_STEP: usize = 4;
 
+/// The importance the held Φ was made for is the stage's importance map itself, which only a
+/// frame that warps anew updates (`CpuStage::run`), so it is not copied (64 KiB at 128²).
 #[derive(Clone, Debug)]
 pub struct Hold {
     /// Largest drift of the demand, in octaves (log2 of the ratio), that a texel may show.
     pub drift: f32,
-    /// The importance the held Φ was made for; empty when nothing is held.
-    made_for: Vec<f32>,
+    /// Whether a Φ is held.
+    holding: bool,
     /// Frames that kept the held warp since the last one warped anew.
     pub held_frames: u32,
 }
@@ -51,15 +53,16 @@ impl Hold {
     pub fn new(drift: f64) -> Hold {
         Hold {
             drift: drift as f32,
-            made_for: Vec::new(),
+            holding: false,
             held_frames: 0,
         }
     }
 
-    /// Whether the held Φ still serves `now`, the importance of this frame over the held region
-    /// computed on every [`ROW_STEP`]-th row ([`ImportanceMap::update_rows`]).
-    pub fn serves(&self, now: &ImportanceMap) -> bool {
-        if self.made_for.len() != now.importance.len() {
+    /// Whether the held Φ, made for `made_for`, still serves `now`, the importance of this frame
+    /// over the held region computed on every [`ROW_STEP`]-th row
+    /// ([`ImportanceMap::update_rows`]).
+    pub fn serves(&self, now: &ImportanceMap, made_for: &ImportanceMap) -> bool {
+        if !self.holding || made_for.importance.len() != now.importance.len() {
             return false;
         }
         let n = now.n;
@@ -68,7 +71,10 @@ impl Hold {
         let (mut wanted, mut drifted) = (0f64, 0f64);
         for j in (0..n).step_by(ROW_STEP) {
             let row = j * n..(j + 1) * n;
-            let (i_now, i_made) = (&now.importance[row.clone()], &self.made_for[row.clone()]);
+            let (i_now, i_made) = (
+                &now.importance[row.clone()],
+                &made_for.importance[row.clone()],
+            );
             let (mut w, mut d) = (0f32, 0f32);
             for ((&a, &b), &f) in i_now.iter().zip(i_made).zip(&now.frustum[row]) {
                 let cells = if f >= 0.5 { a * a } else { 0.0 };
@@ -84,18 +90,17 @@ impl Hold {
 
     /// Whether a warp is held (one was made since the last [`Hold::forget`]).
     pub fn is_holding(&self) -> bool {
-        !self.made_for.is_empty()
+        self.holding
     }
 
-    /// Remembers `imp` as the importance the new Φ was made for.
-    pub fn made(&mut self, imp: &ImportanceMap) {
-        self.made_for.clear();
-        self.made_for.extend_from_slice(&imp.importance);
+    /// A new Φ was made, for the stage's importance map as it is now.
+    pub fn made(&mut self) {
+        self.holding = true;
         self.held_frames = 0;
     }
 
     pub fn forget(&mut self) {
-        self.made_for.clear();
+        self.holding = false;
         self.held_frames = 0;
     }
 }

@@ -153,7 +153,7 @@ impl CpuStage {
                     &self.params,
                     ROW_STEP,
                 );
-                let serves = h.serves(&self.probe);
+                let serves = h.serves(&self.probe, &self.importance);
                 h.held_frames += u32::from(serves);
                 serves
             }
@@ -171,7 +171,7 @@ impl CpuStage {
                 self.mesh = b.update(&self.importance.importance, self.sketch_map.spacing);
             }
             if let Some(h) = &mut self.hold {
-                h.made(&self.importance);
+                h.made();
             }
         }
         let t3 = Instant::now();
