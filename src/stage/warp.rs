@@ -58,6 +58,12 @@
 //! importance from the group's lines side by side (4 KiB, in L1) instead of from the map
 //! (64 KiB): 83.6 against 84.5 µs, within the noise.
 //!
+//! Stop 34: the fold check of eight pairs in AVX-512F (`x86::pairs_unfolded`), each row's points
+//! parted into x and y lanes: guarded warp 80.4–81.0 → 70.3–73.5 µs on gaussian high, 85.3–86.1
+//! → 77.2–78.8 on hills high, 51.1–51.5 → 49.2–50.4 on jacksboro near (run alternately, twice);
+//! and the last group's partial store a cold call apart (LLVM had merged `store_kept`'s two
+//! branches into one memcpy call per group): 51.3–51.6 → 50.8 µs near.
+//!
 //! Where the time goes on near views: finding that more than half of the column pairs fold
 //! (the shortcut's threshold until stop 34) took mapping 9 of the 16 groups of columns, 33 µs of
 //! the guarded warp's 74 (a build that sent every column to the mean at once, made only to
@@ -460,6 +466,22 @@ pub fn pair_unfolded(phi: &[[f32; 2]], n: usize, s: usize) -> bool {
 /// [`pair_unfolded`] for the [`LANES`] pairs of columns `s ..= s + LANES − 1`, side by side.
 #[inline(always)]
 pub fn pairs_unfolded(phi: &[[f32; 2]], n: usize, s: usize) -> [bool; LANES] {
+    // Every point the pairs read, so that the kernel's reads are in bounds.
+    assert!(
+        s + LANES < n && phi.len() >= n * n,
+        "pairs {s}.. of {n} columns"
+    );
+    #[cfg(target_arch = "x86_64")]
+    if crate::stage::simd::avx512() {
+        // SAFETY: the processor has AVX-512F and AVX2; the points, checked just above.
+        return unsafe { x86::pairs_unfolded(phi, n, s) };
+    }
+    pairs_unfolded_lanes(phi, n, s)
+}
+
+/// [`pairs_unfolded`] as plain Rust (and the record of what the AVX-512 kernel computes).
+#[inline(always)]
+fn pairs_unfolded_lanes(phi: &[[f32; 2]], n: usize, s: usize) -> [bool; LANES] {
     let mut least = [f32::INFINITY; LANES];
     let row = |t: usize| -> &[[f32; 2]; LANES + 1] {
         phi[t * n + s..][..LANES + 1]
@@ -485,6 +507,77 @@ pub fn pairs_unfolded(phi: &[[f32; 2]], n: usize, s: usize) -> [bool; LANES] {
         }
     }
     least.map(|t| t > 0.0)
+}
+
+/// [`pairs_unfolded_lanes`] in AVX-512F: each row's eight points and the eight beside them,
+/// loaded whole and parted into x and y, so that the eight turns are plain vector arithmetic; the
+/// interleaved points left the lane loop to shuffles, and the check took 16 µs of the guarded
+/// warp's 85 on gaussian high (a build that skipped it, made only to measure this: 69 µs). The
+/// same operations in the same order, `f32::min`'s choice of the number over NaN included: the
+/// same results. Measured and rejected: the check made in `store_columns` from the points in
+/// registers as they are stored (arrays shifted by a lane, left to LLVM): 85 → 120 µs.
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use super::LANES;
+    use std::arch::x86_64::*;
+
+    /// # Safety
+    /// The processor must have AVX-512F and AVX2; `phi` holds n rows of n points and
+    /// `s + LANES < n`.
+    #[target_feature(enable = "avx512f,avx2")]
+    pub unsafe fn pairs_unfolded(phi: &[[f32; 2]], n: usize, s: usize) -> [bool; LANES] {
+        debug_assert!(s + LANES < n && phi.len() >= n * n);
+        let base = phi.as_ptr().cast::<f32>();
+        let parting = _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 9, 11, 13, 15);
+        // Row t's points s.. (`left`) and s + 1.. (`right`), each as (x, y) lanes.
+        // SAFETY: both spans, 16 floats from point s or s + 1 of row t < n, end at or before
+        // point s + LANES of that row, inside Φ.
+        let row = |t: usize| unsafe {
+            let at = base.add(2 * (t * n + s));
+            let part = |v: __m512| {
+                let v = _mm512_permutexvar_ps(parting, v);
+                let hi = _mm512_extractf64x4_pd::<1>(_mm512_castps_pd(v));
+                (_mm512_castps512_ps256(v), _mm256_castpd_ps(hi))
+            };
+            (part(_mm512_loadu_ps(at)), part(_mm512_loadu_ps(at.add(2))))
+        };
+        // f32::min: the number where one operand is NaN.
+        let min = |a: __m256, b: __m256| {
+            let m = _mm256_min_ps(a, b);
+            _mm256_blendv_ps(m, a, _mm256_cmp_ps::<_CMP_UNORD_Q>(b, b))
+        };
+        let zero = _mm256_setzero_ps();
+        let mut least = _mm256_set1_ps(f32::INFINITY);
+        let mut lo = row(0);
+        const BLOCK: usize = 16;
+        'blocks: for t0 in (0..n - 1).step_by(BLOCK) {
+            for t in t0..(t0 + BLOCK).min(n - 1) {
+                let hi = row(t + 1);
+                // Corners a (s, t), b (s+1, t), c (s+1, t+1), d (s, t+1), as turn_of's.
+                let ((ax, ay), (bx, by)) = lo;
+                let ((dx, dy), (cx, cy)) = hi;
+                let turn = |px, py, qx, qy, rx, ry| {
+                    let u = _mm256_mul_ps(_mm256_sub_ps(qx, px), _mm256_sub_ps(ry, qy));
+                    let v = _mm256_mul_ps(_mm256_sub_ps(qy, py), _mm256_sub_ps(rx, qx));
+                    _mm256_sub_ps(u, v)
+                };
+                let abc = turn(ax, ay, bx, by, cx, cy);
+                let cda = turn(cx, cy, dx, dy, ax, ay);
+                let t_min = min(
+                    min(min(abc, cda), _mm256_sub_ps(bx, ax)),
+                    _mm256_sub_ps(cx, dx),
+                );
+                // `if turn < least { least = turn }`: min_ps keeps its second operand on NaN.
+                least = _mm256_min_ps(t_min, least);
+                lo = hi;
+            }
+            if _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(least, zero)) == 0 {
+                break 'blocks;
+            }
+        }
+        let sound = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(least, zero));
+        std::array::from_fn(|l| sound & (1 << l) != 0)
+    }
 }
 
 /// Positive when cell (s, t) is sound: neither of its two triangles (split along the diagonal
@@ -686,6 +779,71 @@ mod tests {
                 assert_eq!(sound, pair_unfolded(&phi, n, s + l), "pair {}", s + l);
             }
         }
+    }
+
+    /// The AVX-512 pair check gives what the lanes and the one-pair check give, on grids folded
+    /// in some rows and not others, with NaN points and with folds only after the first block of
+    /// rows (which the block exit must not skip).
+    #[test]
+    fn every_build_of_the_pair_check_agrees() {
+        for (n, seed, nan) in [
+            (40, 3, false),
+            (40, 5, true),
+            (128, 9, false),
+            (128, 11, true),
+        ] {
+            let shake = random_map(n, seed);
+            let phi: Vec<[f32; 2]> = (0..n * n)
+                .map(|k| {
+                    let (s, t) = (k % n, k / n);
+                    let dx = if t == 5 || t == 17 || t == n - 3 {
+                        shake[k].log10() / 10.0
+                    } else {
+                        0.0
+                    };
+                    let y = t as f32 + 0.3 * (s as f32 * 0.7).sin();
+                    if nan && (k % 97 == 13 || k % 89 == 2) {
+                        [f32::NAN, y]
+                    } else {
+                        [s as f32 + dx, y]
+                    }
+                })
+                .collect();
+            let folded = (0..n - 1).filter(|&s| !pair_unfolded(&phi, n, s)).count();
+            assert!(folded > 0 && folded < n - 1, "n {n}: some folds: {folded}");
+            for s in 0..n - LANES {
+                let lanes = pairs_unfolded_lanes(&phi, n, s);
+                for (l, &sound) in lanes.iter().enumerate() {
+                    assert_eq!(sound, pair_unfolded(&phi, n, s + l), "n {n} pair {}", s + l);
+                }
+                #[cfg(target_arch = "x86_64")]
+                if crate::stage::simd::avx512() {
+                    // SAFETY: the processor has AVX-512F and AVX2; s + LANES < n.
+                    let wide = unsafe { x86::pairs_unfolded(&phi, n, s) };
+                    assert_eq!(wide, lanes, "n {n} pairs from {s}");
+                } else {
+                    eprintln!(
+                        "skipped: the processor has no AVX-512F, the lanes alone are checked"
+                    );
+                }
+            }
+        }
+    }
+
+    /// One flipped triangle whose cell's other corner is NaN: f32::min keeps the flipped turn
+    /// over the NaN one, so the pair is folded in every build (a bare vminps would keep the NaN
+    /// and then the positive edge, and call it sound).
+    #[test]
+    fn a_flip_beside_a_nan_corner_folds_its_pair() {
+        let n = 16;
+        let mut phi: Vec<[f32; 2]> = (0..n * n)
+            .map(|k| [(k % n) as f32, (k / n) as f32])
+            .collect();
+        phi[3 * n + 3] = [3.0, 4.5]; // b of cell (2, 3): its triangle a, b, c turns clockwise
+        phi[4 * n + 2] = [f32::NAN, 4.0]; // d of cell (2, 3)
+        assert!(!pair_unfolded(&phi, n, 2));
+        assert!(!pairs_unfolded_lanes(&phi, n, 0)[2]);
+        assert!(!pairs_unfolded(&phi, n, 0)[2]);
     }
 
     #[test]
