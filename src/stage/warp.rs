@@ -61,8 +61,10 @@
 //! Stop 34: the fold check of eight pairs in AVX-512F (`x86::pairs_unfolded`), each row's points
 //! parted into x and y lanes: guarded warp 80.4–81.0 → 70.3–73.5 µs on gaussian high, 85.3–86.1
 //! → 77.2–78.8 on hills high, 51.1–51.5 → 49.2–50.4 on jacksboro near (run alternately, twice);
-//! and the last group's partial store a cold call apart (LLVM had merged `store_kept`'s two
-//! branches into one memcpy call per group): 51.3–51.6 → 50.8 µs near.
+//! and the all-mean pass's last partial store a cold call apart (`store_kept_apart`: LLVM had
+//! merged the two branches into one memcpy call per group): 51.3–51.6 → 50.8 µs near. The same
+//! in the row pass and `store_columns` made the plain warp slower, 63 → 64 µs, so they keep
+//! `store_kept`.
 //!
 //! Where the time goes on near views: finding that more than half of the column pairs fold
 //! (the shortcut's threshold until stop 34) took mapping 9 of the 16 groups of columns, 33 µs of
@@ -292,7 +294,7 @@ impl Warp {
                 let y = (b * d0 as f64) as f32;
                 let p: [[f32; 2]; LANES] =
                     std::array::from_fn(|l| [lo[l] + (hi[l] - lo[l]) * f, y]);
-                store_kept(&mut self.phi[t * n + s0..], &p, kept);
+                store_kept_apart(&mut self.phi[t * n + s0..], &p, kept);
             }
         }
         self.guarded_columns = n;
@@ -409,9 +411,20 @@ fn side_by_side(buf: &[f32], n: usize, first: usize, lanes: &mut [[f32; LANES]])
 #[inline(always)]
 fn store_kept<T: Copy>(dst: &mut [T], v: &[T; LANES], kept: usize) {
     if kept == LANES {
-        // A fixed-size assignment. The last group's copy of run-time length is a call apart:
-        // inline, LLVM merged the two branches into one memcpy of `kept` lanes, called for
-        // every group (5 % of the guarded warp on jacksboro near).
+        // A fixed-size copy: a slice of run-time length calls memmove.
+        dst[..LANES].copy_from_slice(v);
+    } else {
+        dst[..kept].copy_from_slice(&v[..kept]);
+    }
+}
+
+/// [`store_kept`] for `all_to_mean`, with the last group's copy of run-time length a call apart:
+/// inline, LLVM merged the two branches there into one memcpy of `kept` lanes, called for every
+/// group (5 % of the guarded warp on jacksboro near). In the row pass and `store_columns` the
+/// merged copy is the faster (this form took the plain warp 63 → 64 µs).
+#[inline(always)]
+fn store_kept_apart<T: Copy>(dst: &mut [T], v: &[T; LANES], kept: usize) {
+    if kept == LANES {
         let dst: &mut [T; LANES] = (&mut dst[..LANES]).try_into().expect("LANES values");
         *dst = *v;
     } else {
