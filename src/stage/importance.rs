@@ -105,6 +105,9 @@ impl ErrorTerm {
         flat_share: f64,
         water_m: f32,
     ) -> ErrorTerm {
+        // The curvature's water clamp is a plain comparison, which a NaN level would poison (the
+        // scene checks the level).
+        debug_assert!(!water_m.is_nan(), "water level NaN");
         let octaves = (detail.octaves as usize).min(PREFIX - 2);
         let mut prefix = [0.0f32; PREFIX];
         for k in 1..PREFIX {

@@ -43,6 +43,9 @@ impl StageTimes {
 
 pub struct CpuStage {
     pub sketch_map: SketchMap,
+    /// The importance the last warp was made for: only a frame that warps anew updates it, and
+    /// the held warp's drift check compares against it (`stage::hold`). A caller that updates it
+    /// must [`CpuStage::forget`] before the next run.
     pub importance: ImportanceMap,
     /// The importance on a sample of rows, for a held warp's drift check.
     probe: ImportanceMap,
