@@ -25,10 +25,10 @@
 //!   least 107 everywhere; the shortcut at 16 pairs changed 17 cameras, the share of visible
 //!   cells in [½, 1] by +0.002 points on the mean (from −2.3 to +2.0 on single cameras), in
 //!   [½, 2] never lower; at 8 pairs it sent up to 69 more columns to `b̄`. On the bundled views,
-//!   their `compare` paths and the bundled flight it changed no Φ. The columns are mapped, passed and
-//!   checked eight at a time, so that this is decided as soon as it is certain: on jacksboro
-//!   near the guarded warp took 459 µs mapping every column first (when lines were mapped one by
-//!   one).
+//!   their `compare` paths and the bundled flight it changed no Φ. The columns are mapped,
+//!   passed and checked eight at a time, so that this is decided as soon as it is certain: on
+//!   jacksboro near the guarded warp took 459 µs mapping every column first (when lines were
+//!   mapped one by one).
 //!   Measured alternative: moving columns toward `b̄` by halves (λ = ½, ¼, …) took twice the
 //!   instructions for the same share of cells within [0.5, 2] (`warp` on the six demo scenes).
 //! - An optional limit on the importance gradient (`max_log2_step`) raises low importance next to
@@ -725,7 +725,8 @@ mod tests {
         // that is a product of a row and a column profile never folds.
         let bump = |n: usize| -> Vec<f32> {
             // Tuned by trial to fold a few pairs, under the shortcut's threshold (4 of 36, 10 of
-            // 127), so that the rounds run: they end with 28 of 37 and 78 of 128 columns on the mean.
+            // 127), so that the rounds run: they end with 28 of 37 and 78 of 128 columns on the
+            // mean.
             let width = if n < 64 { 0.001 } else { 0.002 };
             (0..n * n)
                 .map(|k| {
