@@ -108,6 +108,8 @@ pub const LANES: usize = 8;
 pub struct LaneScratch {
     u: Vec<[f64; LANES]>,
     start: Vec<[u32; LANES]>,
+    /// The AVX-512 kernel's `(u_i, u_{i+1})` of the last segment starting at each output.
+    ends_u: Vec<[[f64; 2]; LANES]>,
 }
 
 impl LaneScratch {
@@ -115,6 +117,7 @@ impl LaneScratch {
         LaneScratch {
             u: vec![[0.0; LANES]; n],
             start: vec![[0; LANES]; n],
+            ends_u: vec![[[0.0; 2]; LANES]; n],
         }
     }
 }
@@ -158,7 +161,7 @@ pub fn lane_mappings(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut 
 #[inline(always)]
 fn portable(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut [[f64; LANES]]) {
     let n = out.len();
-    let LaneScratch { u, start } = scratch;
+    let LaneScratch { u, start, .. } = scratch;
     let (u, start) = (&mut u[..n], &mut start[..n]);
     u[0] = [0.0; LANES];
     let mut prev = imp[0].map(weight);
@@ -258,7 +261,8 @@ fn ends(total: &[f64; LANES], out: &mut [[f64; LANES]]) {
 
 /// [`portable`] in x86 intrinsics. With AVX2 (`mappings`), four f64 lanes to a register, the two
 /// halves of the eight interleaved so that their chains of additions overlap; with AVX-512F
-/// (`mappings_avx512`), the eight in one register and each gather one instruction. Measured
+/// (`mappings_avx512`), the eight in one register and each segment's ends scattered beside its
+/// index instead of gathered per output (its doc has the measurement). Measured
 /// with `benches/cpu_stage.rs` (128², medians), each build after the one before in one session:
 /// the AVX-512 mappings took the guarded warp 83 → 81 µs on jacksboro near and 92 → 87 µs from
 /// high up; gathering `lerp_avx512`'s pairs then took them to 73 and 81 µs, and the plain warp
@@ -358,8 +362,20 @@ mod x86 {
         }
     }
 
-    /// [`mappings`] with AVX-512F: the eight lanes in one register, each gather one instruction.
-    /// The same operations in the same order, so the same bits.
+    /// [`mappings`] with AVX-512F: the eight lanes in one register. The same operations in the
+    /// same order, so the same bits.
+    ///
+    /// No gathers: each segment's scatter stores its two ends `(u_i, u_{i+1})`, side by side,
+    /// beside its index, and the output loop carries them forward in registers, taking the new
+    /// pair in the lanes where a later segment starts (the running maximum's lanes that grow).
+    /// Each output then loads two registers of pairs and parts them, where [`mappings`] gathers
+    /// `u` twice. On this VM (AMD EPYC, AVX-512) `perf` put 36 % of the kernel on the two gathers.
+    /// Side by side with the gathering kernel (`benches/cpu_stage.rs`, 128², medians, run
+    /// alternately, twice): plain warp 62–68 → 54–57 µs, guarded 48.5–50.3 → 44.0–44.5 on
+    /// jacksboro near and 75–77 → 67.7–68.3 on hills high. Measured and rejected on the way:
+    /// the ends scattered with `vscatterdpd` (guarded 50 → 57.5 µs near, 76 → 91 high: scatters
+    /// are slow on this processor), and the two ends as two scalar stores of their own each
+    /// (1–3 µs faster than gathering; the pairs store one 128-bit half each).
     ///
     /// # Safety
     /// As [`mappings`], with AVX-512F as well.
@@ -372,6 +388,7 @@ mod x86 {
         let n = out.len();
         debug_assert!(n >= 2 && imp.len() >= n && scratch.u.len() >= n);
         debug_assert!(scratch.start.len() >= n && n * LANES < i32::MAX as usize);
+        debug_assert!(scratch.ends_u.len() >= n);
         let u = scratch.u.as_mut_ptr().cast::<f64>();
         let start = scratch.start.as_mut_ptr().cast::<i32>();
         let imp = imp.as_ptr().cast::<f32>();
@@ -405,28 +422,54 @@ mod x86 {
             let step = _mm512_div_pd(acc, last_v);
             std::ptr::write_bytes(start, 0, n * LANES);
             let last_i = _mm256_set1_epi32(n as i32 - 1);
+            let ends_u = scratch.ends_u.as_mut_ptr().cast::<f64>();
+            let mut ui = _mm512_loadu_pd(u.add(LANES));
             for i in 1..n - 1 {
-                let ui = _mm512_loadu_pd(u.add(i * LANES));
+                let next = _mm512_loadu_pd(u.add((i + 1) * LANES));
                 let x = _mm512_min_pd(_mm512_mul_pd(ui, to_output), last_v);
                 let up = _mm512_roundscale_pd::<{ _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC }>(x);
                 let first = _mm256_min_epi32(_mm512_cvttpd_epi32(up), last_i);
                 let mut f = [0i32; LANES];
                 _mm256_storeu_si256(f.as_mut_ptr().cast(), first);
-                for (l, &fl) in f.iter().enumerate() {
-                    *start.add(fl as usize * LANES + l) = i as i32;
+                // Lane l's pair (u_i, u_{i+1}) is the 128-bit block l/2 of `even` (l even) or
+                // `odd`.
+                let even = _mm512_castpd_ps(_mm512_unpacklo_pd(ui, next));
+                let odd = _mm512_castpd_ps(_mm512_unpackhi_pd(ui, next));
+                let at = |l: usize| f[l] as usize * LANES + l;
+                for l in 0..LANES {
+                    *start.add(at(l)) = i as i32;
                 }
+                let put = |l: usize, v: __m128| _mm_storeu_ps(ends_u.add(2 * at(l)).cast(), v);
+                put(0, _mm512_extractf32x4_ps::<0>(even));
+                put(1, _mm512_extractf32x4_ps::<0>(odd));
+                put(2, _mm512_extractf32x4_ps::<1>(even));
+                put(3, _mm512_extractf32x4_ps::<1>(odd));
+                put(4, _mm512_extractf32x4_ps::<2>(even));
+                put(5, _mm512_extractf32x4_ps::<2>(odd));
+                put(6, _mm512_extractf32x4_ps::<3>(even));
+                put(7, _mm512_extractf32x4_ps::<3>(odd));
+                ui = next;
             }
-            let mut seg = _mm256_setzero_si256();
+            let mut seg = _mm512_setzero_si512();
             let last_seg = _mm256_set1_epi32(n as i32 - 2);
-            let lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+            // Segment 0's ends, until a later segment starts. A lane takes a stored pair only
+            // where its segment grows, so pairs left over from earlier lines are never read.
+            let mut u0 = zero;
+            let mut u1 = _mm512_loadu_pd(u.add(LANES));
+            let (lower, upper) = (
+                _mm512_setr_epi64(0, 2, 4, 6, 8, 10, 12, 14),
+                _mm512_setr_epi64(1, 3, 5, 7, 9, 11, 13, 15),
+            );
             for j in 0..n {
                 let jf = _mm512_set1_pd(j as f64);
-                let st = _mm256_loadu_si256(start.add(j * LANES).cast());
-                seg = _mm256_max_epi32(seg, st);
-                let i = _mm256_min_epi32(seg, last_seg);
-                let at = _mm256_add_epi32(_mm256_slli_epi32::<3>(i), lane);
-                let u0 = _mm512_i32gather_pd::<8>(at, u);
-                let u1 = _mm512_i32gather_pd::<8>(at, u.add(LANES));
+                let st = _mm512_zextsi256_si512(_mm256_loadu_si256(start.add(j * LANES).cast()));
+                let new = _mm512_cmpgt_epi32_mask(st, seg) as __mmask8;
+                seg = _mm512_max_epi32(seg, st);
+                let a = _mm512_loadu_pd(ends_u.add(j * 2 * LANES));
+                let b = _mm512_loadu_pd(ends_u.add(j * 2 * LANES + LANES));
+                u0 = _mm512_mask_mov_pd(u0, new, _mm512_permutex2var_pd(a, lower, b));
+                u1 = _mm512_mask_mov_pd(u1, new, _mm512_permutex2var_pd(a, upper, b));
+                let i = _mm256_min_epi32(_mm512_castsi512_si256(seg), last_seg);
                 let width = _mm512_sub_pd(u1, u0);
                 let f = _mm512_div_pd(_mm512_sub_pd(_mm512_mul_pd(jf, step), u0), width);
                 let f = _mm512_maskz_mov_pd(_mm512_cmp_pd_mask::<_CMP_GT_OQ>(width, zero), f);
