@@ -232,6 +232,11 @@ fn sample_row(
     vertical.clear();
     vertical.extend(r0.iter().zip(r1).map(|(&a, &b)| a + (b - a) * fy));
     #[cfg(target_arch = "x86_64")]
+    if crate::stage::simd::avx512() {
+        // Texels past the span, never a tap's, so that the last taps' windows lie inside too.
+        vertical.resize(vertical.len() + x86::WINDOW, 0.0);
+    }
+    #[cfg(target_arch = "x86_64")]
     if crate::stage::simd::avx512()
         && (2..i32::MAX as usize).contains(&vertical.len())
         && row.len() <= tx.index.len().min(tx.frac.len())
@@ -275,14 +280,20 @@ fn taps(
 /// (jacksboro near, 128², `benches/cpu_stage.rs`, `sketch_map`), 17.3 µs with this; [`taps`]
 /// built for AVX2 or AVX-512 by the compiler took 31 µs.
 ///
-/// Where the eight taps' pairs lie within 32 texels of the first (a level's texels are at least
-/// half the spacing, so a step is at most two texels), they come from two loads and two permutes
-/// instead of a gather; elsewhere (the row's end, a region coarser than the coarsest level) from
-/// the gather. Side by side with the gather alone, run alternately twice: 18.0 → 15.0 µs
-/// jacksboro near, 16.7 → 14.7 gaussian near, 9.4 → 7.9 hills near, 16.6 → 14.9 hills high.
+/// Where the eight taps' pairs lie within [`x86::WINDOW`] (32) texels of the first (a level's
+/// texels are at least half the spacing, so a step is at most about two texels), they come from
+/// two loads and two permutes instead of a gather; elsewhere (a region coarser than the coarsest
+/// level) from the gather. The row of texels is padded by a window, so that the row's last taps
+/// take the loads too. Side by side with the gather alone, run alternately twice (sketch map,
+/// medians): 17.5–17.6 → 13.0–13.5 µs jacksboro near, 16.3–16.6 → 12.2 gaussian near, 9.4–9.5 →
+/// 7.1–7.3 hills near, 16.4–16.9 → 12.2–12.7 hills high. Windows of 16 texels without the padding
+/// left the row's last blocks and a wider step to the gather: 15.0 µs on jacksboro near.
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use std::arch::x86_64::*;
+
+    /// Texels loaded at once for eight taps' pairs.
+    pub const WINDOW: usize = 32;
 
     /// # Safety
     /// The processor must have AVX-512F and AVX2; `vertical` holds at least 2 and fewer than
@@ -321,11 +332,14 @@ mod x86 {
                 );
                 let k0 = _mm256_cvtsi256_si32(k) as usize;
                 let k7 = _mm256_extract_epi32::<7>(k) as usize;
-                let (v0, v1) = if k7 + 1 < k0 + 2 * L && k0 + 4 * L <= vertical.len() {
-                    // The eight pairs lie in 32 texels from the first: two loads and two
-                    // permutes in place of a gather.
+                let (v0, v1) = if k7 + 1 < k0 + WINDOW && k0 + WINDOW <= vertical.len() {
+                    // The eight pairs lie in the WINDOW texels from the first: two loads and
+                    // two permutes in place of a gather.
                     let window = vertical.as_ptr().add(k0);
-                    let (w0, w1) = (_mm512_loadu_ps(window), _mm512_loadu_ps(window.add(2 * L)));
+                    let (w0, w1) = (
+                        _mm512_loadu_ps(window),
+                        _mm512_loadu_ps(window.add(WINDOW / 2)),
+                    );
                     let rel =
                         _mm512_castsi256_si512(_mm256_sub_epi32(k, _mm256_set1_epi32(k0 as i32)));
                     let v0 = _mm512_permutex2var_ps(w0, rel, w1);
