@@ -12,15 +12,17 @@
 //!
 //! Why lanes across lines: a line's running sum is a chain of dependent additions, one per
 //! sample, that no vector width shortens, and finding each output's segment is a data-dependent
-//! load. Side by side, eight lines share each step of the chain and each lookup is one gather.
+//! load. Side by side, eight lines share each step of the chain and each lookup is one gather
+//! (with AVX2) or one carried pair (with AVX-512: `x86::mappings_avx512`).
 //! Measured on the 2-core development VM, jacksboro near at 128²: one line at a time took about
 //! 470 ns a line (`perf` put 63 % of the plain warp's 190 µs in it); eight lanes as plain Rust
 //! took 3.5 µs a group of eight in a throwaway criterion benchmark (LLVM leaves the lookups
 //! scalar), no better; the AVX2 kernel took the plain warp from 163 to 94 µs
 //! (`benches/cpu_stage.rs`, `warp_plain`, medians).
 //!
-//! Why intrinsics and not a SIMD crate: what pays here is the gather. `wide` has none, and lanes
-//! without gathers measured no faster (above). A dispatching crate such as `pulp` would take over
+//! Why intrinsics and not a SIMD crate: what pays here is the lookup by lane, a gather or a
+//! scatter of single lanes. `wide` has neither, and lanes without them measured no faster
+//! (above). A dispatching crate such as `pulp` would take over
 //! the run-time choice of instruction set, which is a few lines here (as in the importance), but
 //! not the gathers' raw pointers, so the kernel would stay `unsafe` either way.
 
@@ -108,7 +110,8 @@ pub const LANES: usize = 8;
 pub struct LaneScratch {
     u: Vec<[f64; LANES]>,
     start: Vec<[u32; LANES]>,
-    /// The AVX-512 kernel's `(u_i, u_{i+1})` of the last segment starting at each output.
+    /// The AVX-512 kernel's `(u_i, u_{i+1})` of the last segment starting at each output; empty
+    /// where the processor lacks AVX-512F.
     ends_u: Vec<[[f64; 2]; LANES]>,
 }
 
@@ -117,7 +120,11 @@ impl LaneScratch {
         LaneScratch {
             u: vec![[0.0; LANES]; n],
             start: vec![[0; LANES]; n],
-            ends_u: vec![[[0.0; 2]; LANES]; n],
+            ends_u: if crate::stage::simd::avx512() {
+                vec![[[0.0; 2]; LANES]; n]
+            } else {
+                Vec::new()
+            },
         }
     }
 }
@@ -138,8 +145,9 @@ pub fn lane_mappings(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut 
     );
     #[cfg(target_arch = "x86_64")]
     if crate::stage::simd::avx512() && n <= i32::MAX as usize / LANES {
+        assert!(scratch.ends_u.len() >= n, "lines of {n} samples");
         // SAFETY: the processor has AVX-512F and AVX2 and the lines' indices fit an i32,
-        // checked just above; the lengths, just before.
+        // checked just above; the lengths, just before and above.
         unsafe { x86::mappings_avx512(imp, scratch, out) };
         ends(&scratch.u[n - 1], out);
         return;
@@ -374,8 +382,8 @@ mod x86 {
     /// alternately, twice): plain warp 62–68 → 54–57 µs, guarded 48.5–50.3 → 44.0–44.5 on
     /// jacksboro near and 75–77 → 67.7–68.3 on hills high. Measured and rejected on the way:
     /// the ends scattered with `vscatterdpd` (guarded 50 → 57.5 µs near, 76 → 91 high: scatters
-    /// are slow on this processor), and the two ends as two scalar stores of their own each
-    /// (1–3 µs faster than gathering; the pairs store one 128-bit half each).
+    /// are slow on this processor), and each end as a scalar store of its own (1–3 µs faster
+    /// than gathering; a pair is one 128-bit store).
     ///
     /// # Safety
     /// As [`mappings`], with AVX-512F as well.
@@ -400,7 +408,8 @@ mod x86 {
         );
         let last = (n - 1) as f64;
         // SAFETY (all pointer arithmetic below): sample i of lane l is element i·LANES + l, and
-        // i < n, the length of every buffer.
+        // i < n, the length of every buffer; in `ends_u` its pair is f64s 2(i·LANES + l) and one
+        // more, below the 2·n·LANES there.
         unsafe {
             let weight = |p: *const f32| {
                 let v = _mm512_cvtps_pd(_mm256_loadu_ps(p));
@@ -453,7 +462,7 @@ mod x86 {
             let mut seg = _mm512_setzero_si512();
             let last_seg = _mm256_set1_epi32(n as i32 - 2);
             // Segment 0's ends, until a later segment starts. A lane takes a stored pair only
-            // where its segment grows, so pairs left over from earlier lines are never read.
+            // where its segment grows, so pairs left over from earlier lines are masked off.
             let mut u0 = zero;
             let mut u1 = _mm512_loadu_pd(u.add(LANES));
             let (lower, upper) = (

@@ -178,7 +178,8 @@ pub struct Resampler {
 /// the taps along x eight at a time with AVX2 (each texel apart, the same bits) measured
 /// 24.1–24.4 µs against 24.4–24.7 µs for this loop, alternately in one session: within the
 /// noise, not kept. With AVX-512F, each output's two texels gathered as one 64-bit element
-/// (`x86::taps`) pays: 22.6 → 17.3 µs.
+/// (`x86::taps`) pays: 22.6 → 17.3 µs; taken from windows of 32 texels by permutes where eight
+/// outputs' texels fit one, 17.5 → 13.3 µs.
 pub fn resample(
     atlas: &Atlas,
     origin: DVec2,
@@ -231,20 +232,18 @@ fn sample_row(
     let r1 = &level.data[(y + 1) * w + lo..(y + 1) * w + hi];
     vertical.clear();
     vertical.extend(r0.iter().zip(r1).map(|(&a, &b)| a + (b - a) * fy));
-    #[cfg(target_arch = "x86_64")]
-    if crate::stage::simd::avx512() {
-        // Texels past the span, never a tap's, so that the last taps' windows lie inside too.
-        vertical.resize(vertical.len() + x86::WINDOW, 0.0);
-    }
+    let span = vertical.len();
     #[cfg(target_arch = "x86_64")]
     if crate::stage::simd::avx512()
-        && (2..i32::MAX as usize).contains(&vertical.len())
+        && (2..i32::MAX as usize - x86::WINDOW).contains(&span)
         && row.len() <= tx.index.len().min(tx.frac.len())
     {
+        // Texels past the span, never a tap's, so that the last taps' windows lie inside too.
+        vertical.resize(span + x86::WINDOW, 0.0);
         let taps = (&tx.index[..row.len()], &tx.frac[..row.len()]);
-        // SAFETY: the processor has AVX-512F and AVX2, the row holds at least one pair and its
+        // SAFETY: the processor has AVX-512F and AVX2, the span holds at least one pair and its
         // indices fit an i32, and there are as many taps as outputs, checked just above.
-        unsafe { x86::taps(vertical, taps, lo, row, blend) };
+        unsafe { x86::taps((vertical, span), taps, lo, row, blend) };
         return;
     }
     taps(vertical, (&tx.index, &tx.frac), lo, row, blend);
@@ -275,7 +274,7 @@ fn taps(
 }
 
 /// The taps along x in AVX-512F: eight outputs at a time, each one's two texels (side by side
-/// in the row) gathered as one 64-bit element and then parted. The same operations in the same
+/// in the row) gathered as one 64-bit element and then parted, or permuted out of a window. The same operations in the same
 /// order as [`taps`], so the same bits (`tests`). With [`taps`] the sketch map took 22.6 µs
 /// (jacksboro near, 128², `benches/cpu_stage.rs`, `sketch_map`), 17.3 µs with this; [`taps`]
 /// built for AVX2 or AVX-512 by the compiler took 31 µs.
@@ -295,16 +294,19 @@ mod x86 {
     /// Texels loaded at once for eight taps' pairs.
     pub const WINDOW: usize = 32;
 
+    /// The row of texels is `padded[..span]`; the texels after it are read in windows but
+    /// never used.
+    ///
     /// # Safety
-    /// The processor must have AVX-512F and AVX2; `vertical` holds at least 2 and fewer than
-    /// 2^31 samples; `index` and `frac` as many as `row`. Each pair read is clamped into
-    /// `vertical`, so taps that do not increase along x (which [`Taps::fill`] never gives) read
-    /// wrong texels but none outside it.
+    /// The processor must have AVX-512F and AVX2; `span` is at least 2, at most `padded`'s
+    /// length, which is below 2^31; `index` and `frac` as many as `row`. Each pair read is
+    /// clamped into the span, so taps that do not increase along x (which [`Taps::fill`] never
+    /// gives) read wrong texels but none outside it.
     ///
     /// [`Taps::fill`]: super::Taps
     #[target_feature(enable = "avx512f,avx2")]
     pub unsafe fn taps(
-        vertical: &[f32],
+        (padded, span): (&[f32], usize),
         (index, frac): (&[u32], &[f32]),
         lo: usize,
         row: &mut [f32],
@@ -312,18 +314,18 @@ mod x86 {
     ) {
         const L: usize = 8;
         let n = row.len();
-        debug_assert!(index.len() == n && frac.len() == n && vertical.len() >= 2);
+        debug_assert!(index.len() == n && frac.len() == n && span >= 2 && padded.len() >= span);
         let whole = n / L * L;
         let (lo_v, top) = (
             _mm256_set1_epi32(lo as i32),
-            _mm256_set1_epi32(vertical.len() as i32 - 2),
+            _mm256_set1_epi32(span as i32 - 2),
         );
         let parting = _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 9, 11, 13, 15);
         let t = _mm256_set1_ps(blend.unwrap_or(0.0));
         for i in (0..whole).step_by(L) {
             // SAFETY: i + L ≤ n, the length of `index`, `frac` and `row`; each pair's first
-            // texel is clamped to len − 2 (taps increase along x, so it never binds), so the
-            // pair lies inside `vertical`.
+            // texel is clamped to span − 2 (taps increase along x, so it never binds), so the
+            // pair lies inside the span; a window's loads are checked to lie inside `padded`.
             unsafe {
                 let k = _mm256_loadu_si256(index.as_ptr().add(i).cast());
                 let k = _mm256_min_epi32(
@@ -332,10 +334,10 @@ mod x86 {
                 );
                 let k0 = _mm256_cvtsi256_si32(k) as usize;
                 let k7 = _mm256_extract_epi32::<7>(k) as usize;
-                let (v0, v1) = if k7 + 1 < k0 + WINDOW && k0 + WINDOW <= vertical.len() {
+                let (v0, v1) = if k7 + 1 < k0 + WINDOW && k0 + WINDOW <= padded.len() {
                     // The eight pairs lie in the WINDOW texels from the first: two loads and
                     // two permutes in place of a gather.
-                    let window = vertical.as_ptr().add(k0);
+                    let window = padded.as_ptr().add(k0);
                     let (w0, w1) = (
                         _mm512_loadu_ps(window),
                         _mm512_loadu_ps(window.add(WINDOW / 2)),
@@ -348,7 +350,7 @@ mod x86 {
                     (_mm512_castps512_ps256(v0), _mm512_castps512_ps256(v1))
                 } else {
                     let pairs =
-                        _mm512_castpd_ps(_mm512_i32gather_pd::<4>(k, vertical.as_ptr().cast()));
+                        _mm512_castpd_ps(_mm512_i32gather_pd::<4>(k, padded.as_ptr().cast()));
                     let parted = _mm512_permutexvar_ps(parting, pairs);
                     (
                         _mm512_castps512_ps256(parted),
@@ -368,7 +370,7 @@ mod x86 {
             }
         }
         let rest = (&index[whole..], &frac[whole..]);
-        super::taps(vertical, rest, lo, &mut row[whole..], blend);
+        super::taps(&padded[..span], rest, lo, &mut row[whole..], blend);
     }
 }
 
@@ -412,36 +414,60 @@ mod tests {
     }
 
     /// The AVX-512 taps give the scalar loop's bits: rows of 128 and of 37 (a remainder past
-    /// the last eight), written and blended, with repeated and clamped taps, close enough for
-    /// the windowed path and too far apart for it.
+    /// the last eight), written and blended, each with its row of texels ending at the last
+    /// tap's pair and with it padded as `sample_row` pads it (NaN padding, which must not
+    /// show). The taps: random steps of up to 1.3 texels (every window fits), up to 6 (some do
+    /// not), and blocks placed by hand with eight taps' pairs over 30, 31, 32 and 33 texels (the
+    /// window holds 32) and on one pair.
     #[test]
     fn every_build_of_the_taps_gives_the_same_bits() {
         #[cfg(target_arch = "x86_64")]
         if crate::stage::simd::avx512() {
             let mut next = crate::stage::lines::tests::uniform(0x1b87_3593);
-            // Steps of up to 1.3 texels: eight taps within 32 texels, the windowed path but at
-            // the row's end; up to 6: the gathered path too.
-            for (n, step) in [(128usize, 1.3), (37, 1.3), (128, 6.0)] {
-                let lo = 11;
-                let len = (step * n as f32) as usize;
-                let vertical: Vec<f32> = (0..len + 2).map(|_| 4000.0 * next() - 200.0).collect();
+            let mut random = |n: usize, step: f32| {
                 let mut c = 0.0f32;
-                let (index, frac): (Vec<u32>, Vec<f32>) = (0..n)
+                (0..n)
                     .map(|_| {
-                        c = (c + step * next()).min(len as f32);
-                        let i = (c as usize).min(len);
-                        ((i + lo) as u32, c - i as f32)
+                        c += step * next();
+                        (c as u32, c.fract())
                     })
-                    .unzip();
+                    .collect::<Vec<_>>()
+            };
+            let mut by_hand = vec![];
+            let mut k0 = 0;
+            // The last tap's offset: pairs over 30, 31, 32 and 33 texels, then eight taps on
+            // one pair.
+            for last in [28, 29, 30, 31, 0] {
+                for (l, d) in [0, 1, 1, 2, 5, 9, 20, last].into_iter().enumerate() {
+                    let d = if last == 0 { 0 } else { d };
+                    by_hand.push((k0 + d, 0.25 + l as f32 / 16.0));
+                }
+                k0 += last + 1;
+            }
+            let cases = [random(128, 1.3), random(37, 1.3), random(128, 6.0), by_hand];
+            let mut next = crate::stage::lines::tests::uniform(0x2c1b_3c6d);
+            for (case, tapped) in cases.iter().enumerate() {
+                let n = tapped.len();
+                let lo = 11;
+                let (index, frac): (Vec<u32>, Vec<f32>) =
+                    tapped.iter().map(|&(k, f)| (k + lo as u32, f)).unzip();
+                let span = index[n - 1] as usize - lo + 2;
+                let vertical: Vec<f32> = (0..span).map(|_| 4000.0 * next() - 200.0).collect();
+                let mut padded = vertical.clone();
+                padded.resize(span + x86::WINDOW, f32::NAN);
                 for blend in [None, Some(0.37)] {
                     let start: Vec<f32> = (0..n).map(|_| 900.0 * next()).collect();
-                    let (mut want, mut got) = (start.clone(), start);
+                    let mut want = start.clone();
                     taps(&vertical, (&index, &frac), lo, &mut want, blend);
-                    // SAFETY: the processor has AVX-512F and AVX2; lengths as the function asks.
-                    unsafe { x86::taps(&vertical, (&index, &frac), lo, &mut got, blend) };
-                    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-                    assert_eq!(bits(&got), bits(&want), "n {n} blend {blend:?}");
-                    assert!(got.iter().any(|&v| v != got[0]));
+                    for row in [&vertical, &padded] {
+                        let mut got = start.clone();
+                        // SAFETY: the processor has AVX-512F and AVX2; lengths as it asks.
+                        unsafe { x86::taps((row, span), (&index, &frac), lo, &mut got, blend) };
+                        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                        let at = format!("case {case} blend {blend:?} padded {}", row.len());
+                        assert_eq!(bits(&got), bits(&want), "{at}");
+                        assert!(got.iter().any(|&v| v != got[0]), "{at}");
+                    }
                 }
             }
             return;
