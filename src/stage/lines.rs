@@ -279,8 +279,8 @@ fn ends(total: &[f64; LANES], out: &mut [[f64; LANES]]) {
 /// results are bit-identical, which `tests` checks.
 ///
 /// Why intrinsics: LLVM unrolls the lane loops of [`portable`] and then leaves the segment
-/// lookup scalar, for want of gathers (about 3.5 µs a group of eight lines of 128 on the development
-/// VM, no faster than eight calls of [`line_mapping`]).
+/// lookup scalar, for want of gathers (about 3.5 µs a group of eight lines of 128 on the
+/// development VM, no faster than eight calls of [`line_mapping`]).
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use super::{LANES, LaneScratch};

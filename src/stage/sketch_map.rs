@@ -275,9 +275,9 @@ fn taps(
 
 /// The taps along x in AVX-512F: eight outputs at a time, each one's two texels (side by side
 /// in the row) gathered as one 64-bit element and then parted, or permuted out of a window. The
-/// same operations in the same order as [`taps`], so the same bits (`tests`). With [`taps`] the sketch map took 22.6 µs
-/// (jacksboro near, 128², `benches/cpu_stage.rs`, `sketch_map`), 17.3 µs with this; [`taps`]
-/// built for AVX2 or AVX-512 by the compiler took 31 µs.
+/// same operations in the same order as [`taps`], so the same bits (`tests`). With [`taps`] the
+/// sketch map took 22.6 µs (jacksboro near, 128², `benches/cpu_stage.rs`, `sketch_map`), 17.3 µs
+/// with the gather alone; [`taps`] built for AVX2 or AVX-512 by the compiler took 31 µs.
 ///
 /// Where the eight taps' pairs lie within [`x86::WINDOW`] (32) texels of the first (a level's
 /// texels are at least half the spacing, so a step is at most about two texels), they come from
