@@ -67,6 +67,13 @@
 //! in the row pass and `store_columns` made the plain warp slower, 63 → 64 µs, so they keep
 //! `store_kept`.
 //!
+//! Stop 35, measured and rejected for the row pass's interpolation of the importance (run
+//! alternately with the build before, guarded warp): the importance's two samples carried
+//! forward inside the mapping kernel, as it carries u's segment ends, instead of gathered
+//! (43.7–44.6 against 43.7–44.2 µs near: the extra scatter ate the gathers saved); and taken from
+//! the lines side by side by two permutes where the eight lanes' segments lie within three
+//! samples (slower: 43.1–45.0 → 44.9–45.7 µs near, 65.2–65.7 → 67.7–69.7 hills high).
+//!
 //! Where the time goes on near views: finding that more than half of the column pairs fold
 //! (the shortcut's threshold until stop 34) took mapping 9 of the 16 groups of columns, 33 µs of
 //! the guarded warp's 74 (a build that sent every column to the mean at once, made only to
