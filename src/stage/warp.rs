@@ -837,18 +837,19 @@ mod tests {
         }
     }
 
-    /// One flipped triangle whose cell's other corner is NaN: f32::min keeps the flipped turn
-    /// over the NaN one, so the pair is folded in every build (a bare vminps would keep the NaN
-    /// and then the positive edge, and call it sound).
+    /// The shortcut's threshold: more than an eighth of the n − 1 column pairs, and the least
+    /// such count.
     #[test]
     fn the_shortcut_takes_more_than_an_eighth_of_the_pairs() {
         for (n, pairs) in [(128, 16), (129, 17), (9, 2), (8, 1), (2, 1), (37, 5)] {
             assert_eq!(fallback_pairs(n), pairs, "n {n}");
-            // more than an eighth of the n − 1 pairs, and the least such count
             assert!(8 * pairs > n - 1 && 8 * (pairs - 1) < n, "n {n}");
         }
     }
 
+    /// One flipped triangle whose cell's other corner is NaN: f32::min keeps the flipped turn
+    /// over the NaN one, so the pair is folded in every build (a bare vminps would keep the NaN
+    /// and then the positive edge, and call it sound).
     #[test]
     fn a_flip_beside_a_nan_corner_folds_its_pair() {
         let n = 16;
