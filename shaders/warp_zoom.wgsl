@@ -1,5 +1,5 @@
 // Warp & zoom: Φ (n², from the CPU stage) upsampled bilinearly to the mesh size, the height
-// sampled from the atlas at Φ (bicubic, at pyramid level −o), the split octave o
+// sampled from the atlas at Φ (bicubic, at the pyramid level of the vertex's pixel), the split octave o
 // from the largest distance to the four neighbours (no finer than the pixel octave at the vertex),
 // and noise octaves added as displacement up to it (octave ⌊o⌋+1 shared with the bump by g_k).
 // Output: the detailed geometry image, (x, y, z, split octave) per vertex, metres from the frame
@@ -48,6 +48,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         max(distance(p, mesh_xy(ij + vec2<i32>(0, 1))), distance(p, mesh_xy(ij - vec2<i32>(0, 1)))),
     );
     var o = log2(frame.atlas.d_atlas / max(d_max, 1e-6)) - frame.detail.bias;
+    // The sketch's pyramid level is −o_sketch: without a camera (a bake), −o; with one, its
+    // pixel octave's, the level the reference reads there (sketch_spacing in the Rust twin).
+    var o_sketch = o;
     // No finer than the pixel octave at the vertex: the reference's surface holds no more
     // (split_octave_in_view in the Rust twin). A bake has no camera (pixel_scale 0). The
     // distance is taken to the nearest height the sketch can have there, so that the sketch is
@@ -55,11 +58,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (frame.camera.pixel_scale > 0.0) {
         let nearest = vec3<f32>(p, min(frame.camera.eye.z, frame.atlas.max_m));
         let footprint = distance(nearest, frame.camera.eye) * frame.camera.pixel_scale;
-        o = min(o, log2(frame.atlas.d_atlas / max(footprint, 1e-6)));
+        o_sketch = log2(frame.atlas.d_atlas / max(footprint, 1e-6));
+        o = min(o, o_sketch);
     }
-    // The sketch is split where the octaves are: its pyramid level is −o (see sketch_spacing in
-    // the Rust twin).
-    var z = atlas_height(p, frame.atlas.d_atlas * exp2(-o));
+    var z = atlas_height(p, frame.atlas.d_atlas * exp2(-o_sketch));
 #ifdef DETAIL
     let last = min(frame.detail.octaves, u32(max(ceil(o), 0.0)));
     for (var k = 1u; k <= last; k++) {

@@ -177,39 +177,64 @@ fn octave_local(o: &super::uniforms::OctaveGpu, local: Vec2) -> f32 {
     gradient_noise(frame.lattice + c.as_ivec2(), q - c, frame.seed).0
 }
 
-/// The spacing whose pyramid level the sketch is sampled at, for a vertex of split octave `o`:
-/// level −o (clamped to the pyramid), so that the split octave's bias moves the sketch's levels as
-/// it moves the octaves (the sketch is the octaves below the first, one a level). Sampled at the
-/// vertex's own spacing instead (level log2(d_max / d_atlas), whatever the bias), each vertex sat
-/// on the sketch smoothed over its own cell, below every ridge and above every valley the mesh
-/// could have drawn: at 256² jacksboro-high's 3,042-triangle mesh erred 0.179 px against
-/// GeoMipMap's 0.113 px at 3,286 triangles, and on jacksboro near warped matched 10 of
-/// GeoMipMap's 15 rows; at the default bias of −1, 0.135 px and 15 of 15. Sampling the finest
-/// level (no prefilter) gave 0.122 px and the same 15, but a tile pyramid then streams its finest
-/// tiles under every vertex.
+/// The spacing whose pyramid level the sketch is sampled at, for a vertex whose sketch octave is
+/// `o` ([`sketch_octave_in_view`]): level −o, clamped to the pyramid.
 pub fn sketch_spacing(d_atlas: f32, o: f32) -> f32 {
     d_atlas * (-o).exp2()
 }
 
-/// The split octave of a vertex at `p` (frame metres) whose mesh gives `o`: no finer than the
-/// pixel octave there, `log2(d_atlas / footprint)`, as the reference's surface holds no octave
-/// finer than its pixel. A mesh finer than the pixels (far ground, a dense mesh from high up)
-/// otherwise carried octaves the reference does not draw, and its normals aliased them: at 256²
-/// from 20 km up (jacksboro-high) warped's PSNR fell from 50.5 dB at 92,450 triangles to 44.4 dB
-/// at 428,738 while its screen-space error went on falling; with the stop it climbs to 51.1 and
-/// 57.6 dB (the near view, where it never binds, is unchanged). The footprint is taken at the
-/// nearest height the sketch can have under `p` (the eye's, below the sketch's highest), so the
-/// stop never binds more than it should and the sketch is read once, at the final level: a
-/// streamed pyramid marks every tile it reads as wanted. A bake has no camera (`pixel_scale` 0)
-/// and no stop.
-pub fn split_octave_in_view(f: &FrameUniforms, p: Vec2, o: f32) -> f32 {
+/// The octave whose pyramid level a vertex at `p` reads the sketch at, for a split octave `o`
+/// before its stop at the pixel octave: with a camera, the pixel octave `log2(d_atlas /
+/// footprint)`, the level the reference's surface reads there, so that each vertex lies on the
+/// surface the picture is compared with; a bake has no camera and reads level −o.
+///
+/// Measured (`terrain compare sketches/S.toml --out-dir D --modes warped --repeat 1
+/// --path-frames 0` at 256², the triangles warped needs for each GeoMipMap row's mean
+/// screen-space error, geometric mean over the 15 rows, interpolated along warped's ladder):
+/// - at the vertex's own spacing (until stop 32), every vertex sat on the sketch smoothed over its
+///   cell, below each ridge the mesh could draw: jacksboro-high's 3,042-triangle mesh erred
+///   0.179 px against GeoMipMap's 0.113 px at 3,286 triangles;
+/// - at level −o (stop 32 to 36: the split octave's level, one level finer at the default bias),
+///   0.135 px; 1.47× GeoMipMap's triangles on jacksboro-high, 0.36 on jacksboro, 0.41 on
+///   gaussian, 0.16 on gaussian-high, 0.74 on hills;
+/// - at the pixel octave, 1.18, 0.34, 0.40, 0.13 and 0.71 (without the sub-texel curvature of
+///   `stage::importance`). PSNR at the same meshes rose by up to 0.6 dB on the near views and
+///   fell by up to 1.1 dB on jacksboro-high between 3,042 and 12,482 triangles, where the mesh's
+///   facets, still shaded there, point-sample more relief. Along the jacksboro and gaussian paths
+///   the LOD change per frame and the PSNR stayed within 0.001 levels and 0.02 dB: near the
+///   ground the split octave already stops at the pixel octave.
+/// - the finest level (no prefilter at all) gave 0.122 px at 3,042 triangles, but a tile pyramid
+///   then streams its finest tiles under every vertex; at the pixel octave it streams the tiles
+///   the shading of distant ground reads (`shaders/terrain.wgsl`, `shading_normal`) anyway.
+pub fn sketch_octave_in_view(f: &FrameUniforms, p: Vec2, o: f32) -> f32 {
+    pixel_octave(f, p).unwrap_or(o)
+}
+
+/// The pixel octave at `p`, `log2(d_atlas / footprint)`, the footprint taken at the nearest
+/// height the sketch can have under `p` (the eye's, below the sketch's highest); none without a
+/// camera (`pixel_scale` 0, a bake).
+fn pixel_octave(f: &FrameUniforms, p: Vec2) -> Option<f32> {
     if f.camera.pixel_scale <= 0.0 {
-        return o;
+        return None;
     }
     let eye = Vec3::from(f.camera.eye);
     let nearest = p.extend(eye.z.min(f.atlas.max_m));
     let footprint = nearest.distance(eye) * f.camera.pixel_scale;
-    o.min((f.atlas.d_atlas / footprint.max(1e-6)).log2())
+    Some((f.atlas.d_atlas / footprint.max(1e-6)).log2())
+}
+
+/// The split octave of a vertex at `p` (frame metres) whose mesh gives `o`: no finer than the
+/// pixel octave there ([`pixel_octave`]), as the reference's surface holds no octave finer than
+/// its pixel. A mesh finer than the pixels (far ground, a dense mesh from high up) otherwise
+/// carried octaves the reference does not draw, and its normals aliased them: at 256² from 20 km
+/// up (jacksboro-high) warped's PSNR fell from 50.5 dB at 92,450 triangles to 44.4 dB at 428,738
+/// while its screen-space error went on falling; with the stop it climbs to 51.1 and 57.6 dB (the
+/// near view, where it never binds, is unchanged). Taking the footprint at the nearest height
+/// the sketch can have keeps the stop from binding more than it should, and reads the sketch once,
+/// at its final level: a streamed pyramid marks every tile it reads as wanted. A bake has no
+/// camera and no stop.
+pub fn split_octave_in_view(f: &FrameUniforms, p: Vec2, o: f32) -> f32 {
+    pixel_octave(f, p).map_or(o, |px| o.min(px))
 }
 
 /// The CPU twin of one invocation of `warp_zoom.wgsl`: vertex `ij` of the detailed geometry image.
@@ -225,12 +250,10 @@ pub fn vertex_cpu(
     let d_max = d(IVec2::X)
         .max(d(-IVec2::X))
         .max(d(IVec2::Y).max(d(-IVec2::Y)));
-    let o = split_octave_in_view(
-        f,
-        p,
-        (f.atlas.d_atlas / d_max.max(1e-6)).log2() - f.detail.bias,
-    );
-    let mut z = atlas_height(f, atlas, p, sketch_spacing(f.atlas.d_atlas, o));
+    let o_mesh = (f.atlas.d_atlas / d_max.max(1e-6)).log2() - f.detail.bias;
+    let o = split_octave_in_view(f, p, o_mesh);
+    let o_sketch = sketch_octave_in_view(f, p, o_mesh);
+    let mut z = atlas_height(f, atlas, p, sketch_spacing(f.atlas.d_atlas, o_sketch));
     if detail {
         let last = f.detail.octaves.min(o.ceil().max(0.0) as u32);
         for k in 1..=last {

@@ -20,7 +20,19 @@
 //!   detail's curvature at spacing `1/I_v`: the octaves
 //!   that are geometry there (DESIGN.md's split octave with the scene's bias) weighted by
 //!   `0.31·w_k·(2π f_k)²`, 0.31 the noise's RMS; a prefix sum over octaves makes it one log2 per
-//!   texel and a sum over the few octaves of its row.
+//!   texel and a sum over the few octaves of its row. Where the sketch map is coarser than the
+//!   atlas, + the sketch's curvature the map cannot see at that spacing ([`SubTexel`]: the
+//!   levels' mean curvature at `1/I_v` less at the map's spacing, `Atlas::level_curvature`).
+//!   Measured (`terrain compare sketches/S.toml --out-dir D --modes warped --repeat 1
+//!   --path-frames 0`, 256², the triangles warped needs for each GeoMipMap row's mean
+//!   screen-space error, geometric mean over the 15 rows): jacksboro-high 1.47 → 1.33× GeoMipMap's,
+//!   jacksboro 0.362 → 0.365, the synthetic sketches unchanged. From 20 km up the map's texels
+//!   are three of the DEM's, whose mean curvature doubles at each finer level, so the map called
+//!   flat the plateaus whose drainage the mesh then missed; the term without it did worse there
+//!   than no term at all (1.08×). Rejected: the same curvature as a constant everywhere (it
+//!   added to the near views too, where the map is as fine as the sketch), and I_g's contrast
+//!   halved (`√(I_g·I_v)`, the density that least mean error asks for): jacksboro-high 1.17×,
+//!   but jacksboro 0.38 and gaussian-high 0.17 (0.16).
 //! - Computed in f32 relative to the region's corner; world-scale values never enter the loop.
 //!
 //! Speed (`benches/cpu_stage.rs`, `importance`, jacksboro near, 128², medians): 55 µs at commit
@@ -96,6 +108,60 @@ pub struct ErrorTerm {
     /// the sketch's part of κ sees the shore as a crease and the water as flat (the octaves'
     /// part is added there all the same).
     water_m: f32,
+    /// The mean curvature of each of the sketch's pyramid levels (`Atlas::level_curvature`, NaN
+    /// where a level is not in memory); empty until [`ErrorTerm::set_sketch_levels`].
+    sketch_levels: Vec<f32>,
+}
+
+/// The most segments of a [`SubTexel`]: one per pyramid level between the atlas and the sketch
+/// map (a sketch of 2^24 texels a side has 24).
+const SUB_TEXEL_SEGMENTS: usize = 24;
+
+/// The sketch's curvature that a sketch map coarser than the atlas cannot see, as a function of
+/// a texel's octave level o (as [`ErrorTerm::octave`] gives it), for one frame's map spacing d0.
+/// A texel whose sample spacing s lies between the atlas's spacing and d0 meets the curvature of
+/// the sketch at its own spacing, and the map holds only that at d0: the difference is taken at
+/// its mean over the atlas (`C(s) − C(d0)`, C the levels' mean curvature, linear between
+/// levels), since the map cannot say where it lies. Piecewise linear in o: segment j adds
+/// `delta·clamp((o − start)·inv_width, 0, 1)`.
+#[derive(Clone, Copy, Debug)]
+struct SubTexel {
+    /// (start, end, inv_width, delta) in o, one per segment.
+    segments: [[f32; 4]; SUB_TEXEL_SEGMENTS],
+    count: usize,
+}
+
+impl SubTexel {
+    const NONE: SubTexel = SubTexel {
+        segments: [[0.0; 4]; SUB_TEXEL_SEGMENTS],
+        count: 0,
+    };
+
+    /// Adds the curvature to `out` for the row's octave levels `octave`, whose least and
+    /// greatest are `(lo, hi)`: a pass over the row for each segment the row's levels cross, a
+    /// constant for the segments they all lie beyond.
+    #[inline(always)]
+    fn add_row(&self, (lo, hi): (f32, f32), octave: &[f32], out: &mut [f32]) {
+        let out = &mut out[..octave.len()];
+        let mut past = 0.0;
+        for &[start, end, inv_width, delta] in &self.segments[..self.count] {
+            if hi <= start {
+                continue;
+            }
+            if lo >= end {
+                past += delta;
+                continue;
+            }
+            for (v, &o) in out.iter_mut().zip(octave) {
+                *v += delta * ((o - start) * inv_width).clamp(0.0, 1.0);
+            }
+        }
+        if past > 0.0 {
+            for v in out.iter_mut() {
+                *v += past;
+            }
+        }
+    }
 }
 
 impl ErrorTerm {
@@ -127,7 +193,64 @@ impl ErrorTerm {
             d_atlas: detail.d_atlas,
             bias: detail.bias,
             water_m,
+            sketch_levels: Vec::new(),
         }
+    }
+
+    /// The sketch's pyramid levels' mean curvature (`Atlas::level_curvature` at this term's water
+    /// level), so that a sketch map coarser than the atlas counts the curvature it cannot see
+    /// ([`SubTexel`]). Without it the term counts only what the map holds.
+    pub fn set_sketch_levels(&mut self, curvature: &[f64]) {
+        self.sketch_levels = curvature.iter().map(|&c| c as f32).collect();
+    }
+
+    /// The water's level the term was made with.
+    pub fn water_m(&self) -> f32 {
+        self.water_m
+    }
+
+    /// Whether [`ErrorTerm::set_sketch_levels`] has been given the levels.
+    pub fn has_sketch_levels(&self) -> bool {
+        !self.sketch_levels.is_empty()
+    }
+
+    /// The [`SubTexel`] curvature for a sketch map of spacing `d0`: none where the map is as fine
+    /// as the atlas, or without the levels.
+    fn sub_texel(&self, d0: f64) -> SubTexel {
+        let mut sub = SubTexel::NONE;
+        let levels = &self.sketch_levels;
+        // The map's level, and the finest level held in memory.
+        let top = (d0 / self.d_atlas).log2().min(levels.len() as f64 - 1.0);
+        let Some(first) = levels.iter().position(|c| c.is_finite()) else {
+            return sub;
+        };
+        if top.is_nan() || top <= first as f64 {
+            return sub;
+        }
+        let c = |l: f64| -> f64 {
+            let i = (l.floor() as usize).min(levels.len() - 1);
+            let j = (i + 1).min(levels.len() - 1);
+            let (a, b) = (f64::from(levels[i]), f64::from(levels[j]));
+            a + (b - a) * (l - i as f64)
+        };
+        // Level l stands for the octave level o = −bias − l (o = log2(d_atlas / s) − bias).
+        let mut l = first as f64;
+        while l < top && sub.count < SUB_TEXEL_SEGMENTS {
+            let next = (l.floor() + 1.0).min(top);
+            let delta = (c(l) - c(next)).max(0.0);
+            if delta.is_finite() && delta > 0.0 {
+                let (start, end) = (-self.bias - next, -self.bias - l);
+                sub.segments[sub.count] = [
+                    start as f32,
+                    end as f32,
+                    (1.0 / (next - l)) as f32,
+                    delta as f32,
+                ];
+                sub.count += 1;
+            }
+            l = next;
+        }
+        sub
     }
 
     /// The detail's curvature (1/m) at sample spacing `1 / samples_per_m`: octave k counts with
@@ -136,14 +259,16 @@ impl ErrorTerm {
         self.curvature_at(self.octave(samples_per_m))
     }
 
-    /// The octave level o at sample spacing `1 / samples_per_m`, at least 0 (and 0 for NaN):
+    /// The octave level o at sample spacing `1 / samples_per_m` (0 for NaN; below 0 where the
+    /// spacing is coarser than the first octave's, which [`ErrorTerm::curvature_at`] and
+    /// [`SubTexel`] tell apart):
     /// `log2` to 2·10⁻⁵ of an octave in operations that vectorise. `f32::log2` is a library
     /// call per texel: with it the error term took the importance map (jacksboro near, 128²)
     /// from 41 to 193 µs.
     #[inline(always)]
     pub fn octave(&self, samples_per_m: f32) -> f32 {
         let x = self.d_atlas as f32 * samples_per_m;
-        let o = (log2_approx(x) - self.bias as f32).max(0.0);
+        let o = log2_approx(x) - self.bias as f32;
         if x.is_nan() { 0.0 } else { o }
     }
 
@@ -157,8 +282,8 @@ impl ErrorTerm {
         p0 + (p1 - p0) * (o - whole as f32)
     }
 
-    /// Adds the detail's curvature at each octave level of `octave` (each ≥ 0, as
-    /// [`ErrorTerm::octave`] gives it) to `out`: [`ErrorTerm::curvature_at`] summed segment by
+    /// Adds the detail's curvature at each octave level of `octave` (as [`ErrorTerm::octave`]
+    /// gives them; `range` their least and greatest, [`octave_range`]) to `out`: [`ErrorTerm::curvature_at`] summed segment by
     /// segment, `prefix[k₀] + Σ_k (prefix[k+1] − prefix[k])·clamp(o − k, 0, 1)` over the octaves
     /// between the row's least and greatest level (k₀ the least's whole part), so that it
     /// vectorises. The same value to a few ulps (`the_row_curvature_follows_the_lookup`).
@@ -167,31 +292,12 @@ impl ErrorTerm {
     /// over the row. A lookup in the prefix per texel stayed scalar (LLVM does not gather from
     /// it): with it the importance map took 72 µs, with this 68 µs (jacksboro near, 128²).
     #[inline(always)]
-    fn add_curvature_row(&self, octave: &[f32], out: &mut [f32]) {
+    fn add_curvature_row(&self, range: (f32, f32), octave: &[f32], out: &mut [f32]) {
         let n = octave.len();
         let out = &mut out[..n];
-        // Lanes of minima and maxima, so that the reduction vectorises. Levels are never NaN
-        // (`octave` gives 0 for NaN), so plain comparisons do: f32::min and max's NaN blends,
-        // over chunks of varying length, took a tenth of the importance map.
-        const ACC: usize = 16;
-        let (mut lo, mut hi) = ([f32::INFINITY; ACC], [0.0f32; ACC]);
-        let chunks = octave.chunks_exact(ACC);
-        let rest = chunks.remainder();
-        for chunk in chunks {
-            let chunk: &[f32; ACC] = chunk.try_into().expect("a whole chunk");
-            for l in 0..ACC {
-                let o = chunk[l];
-                lo[l] = if o < lo[l] { o } else { lo[l] };
-                hi[l] = if o > hi[l] { o } else { hi[l] };
-            }
-        }
-        for &o in rest {
-            lo[0] = if o < lo[0] { o } else { lo[0] };
-            hi[0] = if o > hi[0] { o } else { hi[0] };
-        }
+        // A level below 0 counts as 0: no octave is geometry there.
         let top = self.octaves as f32;
-        let lo = lo.into_iter().fold(f32::INFINITY, f32::min).clamp(0.0, top);
-        let hi = hi.into_iter().fold(0.0, f32::max).clamp(0.0, top);
+        let (lo, hi) = (range.0.clamp(0.0, top), range.1.clamp(0.0, top));
         // Within [0, octaves], so the casts are floor and ceil's integer part.
         let first = (lo as usize).min(PREFIX - 2);
         let last = (hi.ceil() as usize).min(self.octaves);
@@ -207,6 +313,33 @@ impl ErrorTerm {
             }
         }
     }
+}
+
+/// The least and greatest of a row's octave levels (never NaN: [`ErrorTerm::octave`] gives 0 for
+/// NaN). Lanes of minima and maxima, so that the reduction vectorises; plain comparisons, as
+/// f32::min and max's NaN blends, over chunks of varying length, took a tenth of the importance
+/// map.
+#[inline(always)]
+fn octave_range(octave: &[f32]) -> (f32, f32) {
+    const ACC: usize = 16;
+    let (mut lo, mut hi) = ([f32::INFINITY; ACC], [f32::NEG_INFINITY; ACC]);
+    let chunks = octave.chunks_exact(ACC);
+    let rest = chunks.remainder();
+    for chunk in chunks {
+        let chunk: &[f32; ACC] = chunk.try_into().expect("a whole chunk");
+        for l in 0..ACC {
+            let o = chunk[l];
+            lo[l] = if o < lo[l] { o } else { lo[l] };
+            hi[l] = if o > hi[l] { o } else { hi[l] };
+        }
+    }
+    for &o in rest {
+        lo[0] = if o < lo[0] { o } else { lo[0] };
+        hi[0] = if o > hi[0] { o } else { hi[0] };
+    }
+    let lo = lo.into_iter().fold(f32::INFINITY, f32::min);
+    let hi = hi.into_iter().fold(f32::NEG_INFINITY, f32::max);
+    (lo, hi)
 }
 
 /// log2 of a positive f32 to within 2·10⁻⁵: the exponent, plus a quintic in the mantissa m in
@@ -391,6 +524,7 @@ impl ImportanceMap {
             *x = i as f32 * d0f;
         }
 
+        let sub_texel = p.error.as_ref().map_or(SubTexel::NONE, |e| e.sub_texel(d0));
         let h = &map.heights;
         const ACC: usize = 16;
         let mut min_visible = [f32::INFINITY.to_bits(); ACC];
@@ -476,7 +610,9 @@ impl ImportanceMap {
                 for i in 0..n {
                     octave[i] = e.octave(out[i]);
                 }
-                e.add_curvature_row(octave, curvature);
+                let range = octave_range(octave);
+                e.add_curvature_row(range, octave, curvature);
+                sub_texel.add_row(range, octave, curvature);
                 for i in 0..n {
                     let i_v = out[i];
                     let i_g = (curvature[i] * k_error * inv_dist[i].min(inv_d_min)).sqrt();
@@ -701,6 +837,56 @@ mod tests {
         }
     }
 
+    /// The sub-texel curvature: the sketch's mean curvature at the texel's spacing less the
+    /// map's, linear between levels, none past the map's level or the atlas's, none for a map as
+    /// fine as the atlas, and only the levels held in memory. A segment's sign, width or offset
+    /// wrong (or the bias's sign) breaks the values at whole and half levels.
+    #[test]
+    fn the_sub_texel_curvature_is_what_the_map_cannot_see() {
+        let d_atlas = 30.0;
+        let mut e = ErrorTerm::new(&bundled_detail(d_atlas, DVec2::ZERO), 0.5, 0.125, 0.0);
+        let c = [8e-3, 4e-3, 2e-3, 1e-3, 5e-4];
+        e.set_sketch_levels(&c);
+        // The texel's spacing at pyramid level l (fractional): its samples per metre.
+        let per_m = |l: f64| (1.0 / (d_atlas * l.exp2())) as f32;
+        let at = |e: &ErrorTerm, d0: f64, l: f64| {
+            let octave = [e.octave(per_m(l))];
+            let mut out = [0.0f32];
+            e.sub_texel(d0)
+                .add_row(octave_range(&octave), &octave, &mut out);
+            out[0]
+        };
+        let close = |got: f32, want: f64| (f64::from(got) - want).abs() <= 1e-4 * want + 1e-7;
+        // The map at level 2 (4·d_atlas): C(l) − C(2) from level 0 to 2.
+        let d0 = 4.0 * d_atlas;
+        for (l, want) in [
+            (-1.5, 6e-3),
+            (0.0, 6e-3),
+            (0.5, 4e-3),
+            (1.0, 2e-3),
+            (1.5, 1e-3),
+            (2.0, 0.0),
+            (3.0, 0.0),
+        ] {
+            let got = at(&e, d0, l);
+            assert!(close(got, want), "level {l}: {got} vs {want}");
+        }
+        // The map at level 2.5: C(2.5) = 1.5e-3.
+        let got = at(&e, 2f64.powf(2.5) * d_atlas, 1.0);
+        assert!(close(got, 2.5e-3), "map at 2.5, level 1: {got}");
+        // A map as fine as the atlas, or finer: nothing to add.
+        for d0 in [d_atlas, 0.5 * d_atlas] {
+            assert_eq!(at(&e, d0, 0.0), 0.0);
+        }
+        // A streamed pyramid without its two finest levels: only from level 2 on.
+        e.set_sketch_levels(&[f64::NAN, f64::NAN, 2e-3, 1e-3, 5e-4]);
+        let got = at(&e, 16.0 * d_atlas, 0.0);
+        assert!(close(got, 1.5e-3), "streamed: {got}");
+        // Without the levels, nothing.
+        let plain = ErrorTerm::new(&bundled_detail(d_atlas, DVec2::ZERO), 0.5, 0.125, 0.0);
+        assert_eq!(at(&plain, d0, 0.0), 0.0);
+    }
+
     /// The AVX2 build of the row loops gives the baseline build's values, bit for bit (on a
     /// processor without AVX2 both are the baseline).
     #[test]
@@ -799,7 +985,9 @@ mod tests {
             s *= 1.07;
         }
         assert_eq!(e.octave(f32::NAN), 0.0);
-        assert_eq!(e.octave(0.0), 0.0);
+        // No samples: far below the first octave, and no octave's curvature.
+        assert!(e.octave(0.0) < -100.0);
+        assert_eq!(e.detail_curvature(0.0), 0.0);
         assert_eq!(e.detail_curvature(f32::INFINITY), e.curvature_at(12.0));
     }
 
@@ -820,6 +1008,8 @@ mod tests {
                 .collect(),
             (0..128).map(|_| 11.5 + next()).collect(),
             vec![0.0; 128],
+            // Levels below 0 (spacings coarser than the first octave's) count as 0.
+            (0..128).map(|_| 2.0 - 6.0 * next()).collect(),
             // 37 texels: two chunks of sixteen and a rest of five holding the least and the
             // greatest level, which the rest's own comparisons must find.
             (0..37)
@@ -830,7 +1020,7 @@ mod tests {
             let n = octave.len();
             let sketch: Vec<f32> = (0..n).map(|_| 1e-3 * next()).collect();
             let mut got = sketch.clone();
-            e.add_curvature_row(octave, &mut got);
+            e.add_curvature_row(octave_range(octave), octave, &mut got);
             for i in 0..n {
                 let want = sketch[i] + e.curvature_at(octave[i]);
                 assert!(
