@@ -25,14 +25,18 @@
 //!   levels' mean curvature at `1/I_v` less at the map's spacing, `Atlas::level_curvature`).
 //!   Measured (`terrain compare sketches/S.toml --out-dir D --modes warped --repeat 1
 //!   --path-frames 0`, 256², the triangles warped needs for each GeoMipMap row's mean
-//!   screen-space error, geometric mean over the 15 rows): jacksboro-high 1.47 → 1.33× GeoMipMap's,
+//!   screen-space error, geometric mean over the 15 rows; measured alone, before the sketch at
+//!   the vertex's pixel level and the 2 % margin): jacksboro-high 1.47 → 1.33× GeoMipMap's,
 //!   jacksboro 0.362 → 0.365, the synthetic sketches unchanged. From 20 km up the map's texels
 //!   are three of the DEM's, whose mean curvature doubles at each finer level, so the map called
 //!   flat the plateaus whose drainage the mesh then missed; the term without it did worse there
 //!   than no term at all (1.08×). Rejected: the same curvature as a constant everywhere (it
 //!   added to the near views too, where the map is as fine as the sketch), and I_g's contrast
-//!   halved (`√(I_g·I_v)`, the density that least mean error asks for): jacksboro-high 1.17×,
-//!   but jacksboro 0.38 and gaussian-high 0.17 (0.16).
+//!   halved, `I = I_v·clamp(√(I_g/I_v), β, 1)` (the density that least *mean* error asks for,
+//!   `√(I_g·I_v)`, where I_g equalises the error): with this term and the 2 % margin it took
+//!   jacksboro-high from 1.03 to 0.94× and hills from 0.69 to 0.67, but jacksboro from 0.34 to
+//!   0.36 (15 to 14 of 15 rows) and gaussian from 0.38 to 0.40; ¾ of the contrast, 0.98 and
+//!   0.67, jacksboro 0.34 (14 of 15), gaussian-high 0.13 → 0.15.
 //! - Computed in f32 relative to the region's corner; world-scale values never enter the loop.
 //!
 //! Speed (`benches/cpu_stage.rs`, `importance`, jacksboro near, 128², medians): 55 µs at commit

@@ -53,6 +53,36 @@ pub struct Miss {
     pub sse_mean_px: f64,
     pub warped_sse_px: Option<f64>,
     pub warped_triangles_needed: Option<u64>,
+    /// The triangles at which warped's error reaches the row's between its rows: log-log
+    /// interpolation between the two warped rows of its least-error front (by triangles) around
+    /// the row's error. The sweep's rungs are about 1.4× apart, so `warped_triangles_needed`
+    /// alone reads a miss by a few per cent as up to 1.4×.
+    pub warped_triangles_interpolated: Option<f64>,
+}
+
+/// The triangles at which `warped`'s error, interpolated log-log between the rows of its front
+/// (each row with less error than every row with fewer triangles), reaches `sse_px`; `None`
+/// where no row has so little error, or where the fewest-triangle row already does.
+fn interpolated_triangles(warped: &[&Row], sse_px: f64) -> Option<f64> {
+    let mut by_triangles: Vec<(f64, f64)> = warped
+        .iter()
+        .filter(|w| w.triangles > 0 && w.sse_mean_px > 0.0)
+        .map(|w| (w.triangles as f64, w.sse_mean_px))
+        .collect();
+    by_triangles.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.total_cmp(&a.1)));
+    let mut front: Vec<(f64, f64)> = Vec::new();
+    for p in by_triangles {
+        if front.last().is_none_or(|last| p.1 < last.1) {
+            front.push(p);
+        }
+    }
+    front.windows(2).find_map(|w| {
+        let ((t0, e0), (t1, e1)) = (w[0], w[1]);
+        (e0 > sse_px && sse_px >= e1).then(|| {
+            let f = (e0.ln() - sse_px.ln()) / (e0.ln() - e1.ln());
+            (t0.ln() + f * (t1.ln() - t0.ln())).exp()
+        })
+    })
 }
 
 /// [`Dominance`] of `rows`; `None` unless both modes have rows.
@@ -83,6 +113,7 @@ pub fn dominance(rows: &[Row]) -> Option<Dominance> {
                     .filter(|w| w.sse_mean_px <= g.sse_mean_px)
                     .map(|w| w.triangles)
                     .min(),
+                warped_triangles_interpolated: interpolated_triangles(&warped, g.sse_mean_px),
             });
         }
         let on_time = warped
@@ -191,9 +222,15 @@ pub fn summary_markdown(title: &str, s: &Summary) -> String {
                     )
                 },
             );
+            let between = m.warped_triangles_interpolated.map_or(String::new(), |t| {
+                format!(
+                    "; between its rows, at {t:.0} ({:.2}×)",
+                    t / m.triangles.max(1) as f64
+                )
+            });
             let _ = writeln!(
                 out,
-                "- {}: {} triangles at {:.2} px; {best}{needed}",
+                "- {}: {} triangles at {:.2} px; {best}{needed}{between}",
                 m.setting, m.triangles, m.sse_mean_px
             );
         }
@@ -271,5 +308,39 @@ mod tests {
         assert!(md.contains("1 of 3 GeoMipMap rows"), "{md}");
         assert!(md.contains("no warped row has so few"), "{md}");
         assert!(md.contains("at 4000 triangles (1.33×)"), "{md}");
+        // Between the rungs: 0.8 px lies 0.32 of the way from 1 to 0.5 px in log, so at
+        // 1000·4^0.32 triangles; the 500-triangle row's 2 px, below warped's first row: none.
+        let between: Vec<_> = d
+            .misses
+            .iter()
+            .map(|m| m.warped_triangles_interpolated)
+            .collect();
+        let t = between[0].expect("interpolated");
+        assert!((t - 1562.5).abs() < 0.5, "{t}");
+        assert_eq!(between[1], None);
+        assert!(
+            md.contains("between its rows, at 156") && md.contains("(0.52×)"),
+            "{md}"
+        );
+    }
+
+    /// The interpolation follows warped's front: a row with more triangles and more error than
+    /// one before it is passed over, and an error below every row's has no answer.
+    #[test]
+    fn the_interpolated_triangles_follow_the_front() {
+        let at = |triangles: u64, px: f64| Row {
+            triangles,
+            ..row("warped", 1.0, 30.0, px)
+        };
+        let rows = [at(100, 2.0), at(400, 1.0), at(800, 1.5), at(1600, 0.25)];
+        let warped: Vec<&Row> = rows.iter().collect();
+        // 0.5 px: half-way in log between 1 px at 400 and 0.25 px at 1600: 800 triangles (the
+        // 800-triangle row's 1.5 px is not on the front; taken, it would give another answer).
+        let t = interpolated_triangles(&warped, 0.5).expect("on the front");
+        assert!((t - 800.0).abs() < 1e-6, "{t}");
+        let t = interpolated_triangles(&warped, 1.0).expect("a row's own error");
+        assert!((t - 400.0).abs() < 1e-6, "{t}");
+        assert_eq!(interpolated_triangles(&warped, 0.1), None);
+        assert_eq!(interpolated_triangles(&warped, 3.0), None);
     }
 }
