@@ -49,7 +49,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     );
     var o = log2(frame.atlas.d_atlas / max(d_max, 1e-6)) - frame.detail.bias;
     // The sketch's pyramid level is −o_sketch: without a camera (a bake), −o; with one, its
-    // pixel octave's, the level the reference reads there (sketch_spacing in the Rust twin).
+    // pixel octave's, the reference's level there or finer (sketch_octave_in_view in the Rust
+    // twin).
     var o_sketch = o;
     // No finer than the pixel octave at the vertex: the reference's surface holds no more
     // (split_octave_in_view in the Rust twin). A bake has no camera (pixel_scale 0). The

@@ -185,12 +185,15 @@ pub fn sketch_spacing(d_atlas: f32, o: f32) -> f32 {
 
 /// The octave whose pyramid level a vertex at `p` reads the sketch at, for a split octave `o`
 /// before its stop at the pixel octave: with a camera, the pixel octave `log2(d_atlas /
-/// footprint)`, the level the reference's surface reads there, so that each vertex lies on the
-/// surface the picture is compared with; a bake has no camera and reads level −o.
+/// footprint)` ([`pixel_octave`]), so that each vertex lies on the surface the picture is
+/// compared with, at the reference's level there or finer (the footprint is taken at the nearest
+/// height the sketch can have, never farther than the reference's hit); a bake has no camera and
+/// reads level −o.
 ///
 /// Measured (`terrain compare sketches/S.toml --out-dir D --modes warped --repeat 1
 /// --path-frames 0` at 256², the triangles warped needs for each GeoMipMap row's mean
-/// screen-space error, geometric mean over the 15 rows, interpolated along warped's ladder):
+/// screen-space error, geometric mean over `report.csv`'s fixed rows, interpolated along
+/// warped's ladder):
 /// - at the vertex's own spacing (until stop 32), every vertex sat on the sketch smoothed over its
 ///   cell, below each ridge the mesh could draw: jacksboro-high's 3,042-triangle mesh erred
 ///   0.179 px against GeoMipMap's 0.113 px at 3,286 triangles;
@@ -269,5 +272,39 @@ impl WarpZoomPass {
     /// The detailed geometry image, keeping nothing else (the bake's Φ is dropped).
     pub fn into_detailed(self) -> Buffer {
         self.detailed
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bytemuck::Zeroable;
+
+    /// A bake (no camera) reads the sketch at −o and keeps o; a view reads it at the vertex's
+    /// pixel octave whatever the mesh's spacing, while the split octave stops there.
+    #[test]
+    fn a_view_reads_the_sketch_at_the_pixel_octave() {
+        let mut f = FrameUniforms::zeroed();
+        f.atlas.d_atlas = 30.0;
+        f.atlas.max_m = 500.0;
+        let p = Vec2::new(1000.0, 0.0);
+        for o in [-2.0, 0.5, 4.0] {
+            assert_eq!(sketch_octave_in_view(&f, p, o), o);
+            assert_eq!(split_octave_in_view(&f, p, o), o);
+        }
+        f.camera.eye = [0.0, 0.0, 2000.0];
+        f.camera.pixel_scale = 1e-3;
+        // The nearest height the sketch can have under p is its highest, 500 m: 1500 m below
+        // the eye and 1000 m across.
+        let footprint = 1000f32.hypot(1500.0) * 1e-3;
+        let px = (30.0 / footprint).log2();
+        for o in [-2.0, 0.5, 4.0, 12.0] {
+            assert!((sketch_octave_in_view(&f, p, o) - px).abs() < 1e-5, "{o}");
+            assert!(
+                (split_octave_in_view(&f, p, o) - o.min(px)).abs() < 1e-5,
+                "{o}"
+            );
+        }
+        assert!((sketch_spacing(30.0, px) - footprint).abs() < 1e-3 * footprint);
     }
 }

@@ -402,8 +402,9 @@ impl Atlas {
     /// The mean curvature of each pyramid level, 1/m: the largest of its second differences
     /// (|h_xx|, |h_yy|, |h_xy|, the heights raised to `water_m`) at its own spacing, as the
     /// importance's geometric-error term takes them from the sketch map, averaged over the level.
-    /// NaN for a level not held in memory (a streamed pyramid's finest). At most about 256²
-    /// texels of a level are visited, so a sketch of any size costs the same.
+    /// NaN for a level not held in memory (a streamed pyramid's finest). Every k-th texel of a
+    /// level is visited, k its larger side ÷ 256 rounded down (fewer than 512² texels), so a
+    /// sketch of any size costs about the same.
     ///
     /// Natural terrain is rough at every scale: on the bundled DEM the mean doubles with each
     /// finer level (0.56·10⁻³ at 320 m, 1.1·10⁻³ at 160 m, 2.0·10⁻³ at 80 m), so a sketch map

@@ -25,8 +25,9 @@
 //!   levels' mean curvature at `1/I_v` less at the map's spacing, `Atlas::level_curvature`).
 //!   Measured (`terrain compare sketches/S.toml --out-dir D --modes warped --repeat 1
 //!   --path-frames 0`, 256², the triangles warped needs for each GeoMipMap row's mean
-//!   screen-space error, geometric mean over the 15 rows; measured alone, before the sketch at
-//!   the vertex's pixel level and the 2 % margin): jacksboro-high 1.47 → 1.33× GeoMipMap's,
+//!   screen-space error, geometric mean over `report.csv`'s fixed rows against the GeoMipMap
+//!   rows of one run; measured alone, before the sketch at the vertex's pixel level and the 2 %
+//!   margin): jacksboro-high 1.47 → 1.33× GeoMipMap's,
 //!   jacksboro 0.362 → 0.365, the synthetic sketches unchanged. From 20 km up the map's texels
 //!   are three of the DEM's, whose mean curvature doubles at each finer level, so the map called
 //!   flat the plateaus whose drainage the mesh then missed; the term without it did worse there
@@ -74,19 +75,19 @@
 
 use crate::camera::Camera;
 use crate::stage::sketch_map::SketchMap;
+use glam::{DVec2, Vec3};
 
 /// The frustum factor's margin beyond a texel's reach and the detail's, as a share of the
 /// texel's distance to the eye: the room the upsampled mesh's cells take past the texels. 5 %
 /// until stop 36, chosen without a measurement; from high up that spent cells on ground a
 /// kilometre outside the view. Measured with `terrain compare sketches/S.toml --out-dir D --modes
 /// warped --repeat 1 --path-frames 0` (256², the triangles warped needs for each GeoMipMap row's
-/// mean screen-space error, geometric mean over the 15 rows): 5 % → 2 % took jacksboro-high
-/// from 1.10 to 1.03× GeoMipMap's, gaussian 0.40 → 0.38, hills 0.71 → 0.69, jacksboro 0.342 →
+/// mean screen-space error, geometric mean over `report.csv`'s fixed rows): 5 % → 2 % took
+/// jacksboro-high from 1.10 to 1.03× GeoMipMap's, gaussian 0.40 → 0.38, hills 0.71 → 0.69, jacksboro 0.342 →
 /// 0.341, gaussian-high unchanged; 1 % gave the same within 0.01, and cost jacksboro one of its
 /// 15 rows. Along the jacksboro and gaussian paths the LOD change per frame stayed within
 /// 0.006 levels and the PSNR rose by 0.04 and 0.13 dB.
 const MARGIN_SHARE: f32 = 0.02;
-use glam::{DVec2, Vec3};
 
 #[derive(Clone, Debug)]
 pub struct ImportanceParams {
@@ -139,7 +140,11 @@ const SUB_TEXEL_SEGMENTS: usize = 24;
 /// the sketch at its own spacing, and the map holds only that at d0: the difference is taken at
 /// its mean over the atlas (`C(s) − C(d0)`, C the levels' mean curvature, linear between
 /// levels), since the map cannot say where it lies. Piecewise linear in o: segment j adds
-/// `delta·clamp((o − start)·inv_width, 0, 1)`.
+/// `delta·clamp((o − start)·inv_width, 0, 1)`. Each segment adds only an increase of C toward
+/// the finer level (a finer level less curved than the one above it adds nothing), so the term
+/// is never negative; on natural terrain C grows at every finer level and the two agree. A
+/// streamed pyramid counts only the levels it holds in memory, so a sketch larger than memory
+/// seen from high up gets less of the term than it would held whole.
 #[derive(Clone, Copy, Debug)]
 struct SubTexel {
     /// (start, end, inv_width, delta) in o, one per segment.
@@ -288,7 +293,8 @@ impl ErrorTerm {
         if x.is_nan() { 0.0 } else { o }
     }
 
-    /// The detail's curvature at octave level `o` (≥ 0, as [`ErrorTerm::octave`] gives it).
+    /// The detail's curvature at octave level `o` (a level below 0 counts as 0: no octave is
+    /// geometry there).
     #[inline(always)]
     pub fn curvature_at(&self, o: f32) -> f32 {
         // Within [0, octaves], so the cast is floor; past the last octave the prefix is flat.
@@ -898,6 +904,27 @@ mod tests {
         e.set_sketch_levels(&[f64::NAN, f64::NAN, 2e-3, 1e-3, 5e-4]);
         let got = at(&e, 16.0 * d_atlas, 0.0);
         assert!(close(got, 1.5e-3), "streamed: {got}");
+        // A row whose levels span every segment gives each texel what it gives alone (the row's
+        // passes and the constant for the segments the whole row lies beyond).
+        e.set_sketch_levels(&c);
+        let d0 = 8.0 * d_atlas;
+        // A row finer than the map's two coarser segments takes them as one constant.
+        for levels in [
+            (0..37).map(|i| 3.6 - 0.1 * i as f64).collect::<Vec<f64>>(),
+            (0..21).map(|i| 0.5 - 0.05 * i as f64).collect(),
+        ] {
+            let octave: Vec<f32> = levels.iter().map(|&l| e.octave(per_m(l))).collect();
+            let mut row = vec![0.0f32; octave.len()];
+            e.sub_texel(d0)
+                .add_row(octave_range(&octave), &octave, &mut row);
+            for (&l, &got) in levels.iter().zip(&row) {
+                let want = at(&e, d0, l);
+                assert!(
+                    (got - want).abs() <= 1e-6 * want + 1e-9,
+                    "level {l}: {got} vs {want}"
+                );
+            }
+        }
         // Without the levels, nothing.
         let plain = ErrorTerm::new(&bundled_detail(d_atlas, DVec2::ZERO), 0.5, 0.125, 0.0);
         assert_eq!(at(&plain, d0, 0.0), 0.0);
@@ -935,12 +962,34 @@ mod tests {
         };
         let bounds = (atlas.origin, atlas.max_corner());
         let detail = bundled_detail(atlas.d_atlas(), atlas.origin);
-        // Without and with the geometric-error term (the default), water over part of the hills.
+        // Without and with the geometric-error term (the default), water over part of the hills,
+        // and without octaves (whose curvature here asks for more than I_v everywhere), without
+        // and with the sketch's levels, so that the sub-texel curvature's segments run and count.
         let error = ErrorTerm::new(&detail, 0.5, 0.125, atlas.min_m + 20.0);
+        let bare = crate::detail::Detail {
+            octaves: 0,
+            ..detail.clone()
+        };
+        let error_bare = ErrorTerm::new(&bare, 0.5, 0.125, atlas.min_m + 20.0);
+        let mut with_levels = error_bare.clone();
+        with_levels.set_sketch_levels(&[8e-3, 4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1.2e-4, 6e-5]);
+        assert!(
+            with_levels.sub_texel(map.spacing).count > 0,
+            "the map is coarser than the atlas"
+        );
+        let mut importance = Vec::new();
         for p in [
             p.clone(),
             ImportanceParams {
                 error: Some(error),
+                ..p.clone()
+            },
+            ImportanceParams {
+                error: Some(error_bare),
+                ..p.clone()
+            },
+            ImportanceParams {
+                error: Some(with_levels),
                 ..p
             },
         ] {
@@ -969,7 +1018,18 @@ mod tests {
                     .iter()
                     .any(|&v| v != dispatched.importance[0])
             );
+            importance.push(dispatched.importance);
         }
+        // The levels reach the map: the sub-texel curvature raises the error term's importance.
+        let raised = importance[3]
+            .iter()
+            .zip(&importance[2])
+            .filter(|(a, b)| a > b)
+            .count();
+        assert!(
+            raised > 1000,
+            "{raised} texels raised by the sketch's levels"
+        );
     }
 
     /// The vectorised log2 keeps its bound from 10⁻³⁰ to 10³⁰, and the error term's curvature

@@ -41,6 +41,20 @@ pub struct Dominance {
     pub matched_on_time: usize,
     /// The GeoMipMap rows not matched on triangles and error.
     pub misses: Vec<Miss>,
+    /// Over every GeoMipMap row that warped's error reaches: the triangles warped needs for the
+    /// row's error between its rows ([`Miss::warped_triangles_interpolated`]; where warped's
+    /// fewest-triangle row already has no more error, that row's triangles, a bound), as a
+    /// multiple of the row's. `None` where warped reaches no row's error.
+    pub need: Option<Need>,
+}
+
+/// [`Dominance::need`]: its least, its greatest and its geometric mean, over `rows` rows.
+#[derive(Clone, Debug, Serialize)]
+pub struct Need {
+    pub least: f64,
+    pub greatest: f64,
+    pub geometric_mean: f64,
+    pub rows: usize,
 }
 
 /// A GeoMipMap row no warped row matches on triangles and error, the least mean error of a
@@ -97,7 +111,33 @@ pub fn dominance(rows: &[Row]) -> Option<Dominance> {
         matched_on_triangles: 0,
         matched_on_time: 0,
         misses: Vec::new(),
+        need: None,
     };
+    let fewest = warped
+        .iter()
+        .filter(|w| w.triangles > 0)
+        .min_by_key(|w| w.triangles);
+    let needs: Vec<f64> = gmm
+        .iter()
+        .filter(|g| g.triangles > 0)
+        .filter_map(|g| {
+            let t = interpolated_triangles(&warped, g.sse_mean_px).or_else(|| {
+                fewest
+                    .filter(|w| w.sse_mean_px <= g.sse_mean_px)
+                    .map(|w| w.triangles as f64)
+            })?;
+            Some(t / g.triangles as f64)
+        })
+        .collect();
+    if !needs.is_empty() {
+        let log_mean = needs.iter().map(|r| r.ln()).sum::<f64>() / needs.len() as f64;
+        d.need = Some(Need {
+            least: needs.iter().copied().fold(f64::INFINITY, f64::min),
+            greatest: needs.iter().copied().fold(0.0, f64::max),
+            geometric_mean: log_mean.exp(),
+            rows: needs.len(),
+        });
+    }
     for g in gmm {
         let within = || warped.iter().filter(|w| w.triangles <= g.triangles);
         if within().any(|w| w.sse_mean_px <= g.sse_mean_px) {
@@ -207,6 +247,15 @@ pub fn summary_markdown(title: &str, s: &Summary) -> String {
              frame time and no less PSNR.\n",
             d.matched_on_triangles, d.geomipmap_rows, d.matched_on_time, d.geomipmap_rows
         );
+        if let Some(n) = &d.need {
+            let _ = writeln!(
+                out,
+                "Triangles warped needs for each GeoMipMap row's error, between its rows \
+                 (log-log), as a multiple of the row's: {:.2}–{:.2}×, geometric mean {:.3} over \
+                 {} rows.",
+                n.least, n.greatest, n.geometric_mean, n.rows
+            );
+        }
         for m in &d.misses {
             let best = m
                 .warped_sse_px
@@ -320,6 +369,23 @@ mod tests {
         assert_eq!(between[1], None);
         assert!(
             md.contains("between its rows, at 156") && md.contains("(0.52×)"),
+            "{md}"
+        );
+        // Every row's need: 1000/1500 (warped's fewest row already as good), 1562.5/3000,
+        // 1000/500.
+        let n = d.need.as_ref().expect("a need");
+        let want = (1000.0 / 1500.0 * 1562.5 / 3000.0 * 2.0f64).powf(1.0 / 3.0);
+        assert_eq!(n.rows, 3);
+        assert!(
+            (n.least - 1562.5 / 3000.0).abs() < 1e-4 && n.greatest == 2.0,
+            "{n:?}"
+        );
+        assert!(
+            (n.geometric_mean - want).abs() < 1e-4,
+            "{n:?} against {want}"
+        );
+        assert!(
+            md.contains("0.52–2.00×, geometric mean 0.886 over 3 rows"),
             "{md}"
         );
     }
