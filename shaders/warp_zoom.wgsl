@@ -1,7 +1,8 @@
 // Warp & zoom: Φ (n², from the CPU stage) upsampled bilinearly to the mesh size, the height
-// sampled from the atlas at Φ (bicubic, at the pyramid level of the vertex's pixel), the split octave o
-// from the largest distance to the four neighbours (no finer than the pixel octave at the vertex),
-// and noise octaves added as displacement up to it (octave ⌊o⌋+1 shared with the bump by g_k).
+// sampled from the atlas at Φ (bicubic, at the pyramid level of the vertex's pixel), the split
+// octave o from the largest distance to the four neighbours (no finer than the pixel octave at
+// the vertex), and noise octaves added as displacement up to it (octave ⌊o⌋+1 shared with the
+// bump by g_k).
 // Output: the detailed geometry image, (x, y, z, split octave) per vertex, metres from the frame
 // origin.
 // Rust twin: src/gpu/warp_zoom.rs (`vertex_cpu`).

@@ -27,8 +27,8 @@
 //!   --path-frames 0`, 256², the triangles warped needs for each GeoMipMap row's mean
 //!   screen-space error, geometric mean over `report.csv`'s fixed rows against the GeoMipMap
 //!   rows of one run; measured alone, before the sketch at the vertex's pixel level and the 2 %
-//!   margin): jacksboro-high 1.47 → 1.33× GeoMipMap's,
-//!   jacksboro 0.362 → 0.365, the synthetic sketches unchanged. From 20 km up the map's texels
+//!   margin): jacksboro-high 1.47 → 1.33× GeoMipMap's, jacksboro 0.362 → 0.365, the synthetic
+//!   sketches unchanged. From 20 km up the map's texels
 //!   are three of the DEM's, whose mean curvature doubles at each finer level, so the map called
 //!   flat the plateaus whose drainage the mesh then missed; the term without it did worse there
 //!   than no term at all (1.08×). Rejected: the same curvature as a constant everywhere (it
@@ -83,9 +83,9 @@ use glam::{DVec2, Vec3};
 /// kilometre outside the view. Measured with `terrain compare sketches/S.toml --out-dir D --modes
 /// warped --repeat 1 --path-frames 0` (256², the triangles warped needs for each GeoMipMap row's
 /// mean screen-space error, geometric mean over `report.csv`'s fixed rows): 5 % → 2 % took
-/// jacksboro-high from 1.10 to 1.03× GeoMipMap's, gaussian 0.40 → 0.38, hills 0.71 → 0.69, jacksboro 0.342 →
-/// 0.341, gaussian-high unchanged; 1 % gave the same within 0.01, and cost jacksboro one of its
-/// 15 rows. Along the jacksboro and gaussian paths the LOD change per frame stayed within
+/// jacksboro-high from 1.10 to 1.03× GeoMipMap's, gaussian 0.40 → 0.38, hills 0.71 → 0.69,
+/// jacksboro 0.342 → 0.341, gaussian-high unchanged; 1 % gave the same within 0.01, and cost
+/// jacksboro one of its 15 rows. Along the jacksboro and gaussian paths the LOD change per frame stayed within
 /// 0.006 levels and the PSNR rose by 0.04 and 0.13 dB.
 const MARGIN_SHARE: f32 = 0.02;
 
@@ -305,8 +305,9 @@ impl ErrorTerm {
     }
 
     /// Adds the detail's curvature at each octave level of `octave` (as [`ErrorTerm::octave`]
-    /// gives them; `range` their least and greatest, [`octave_range`]) to `out`: [`ErrorTerm::curvature_at`] summed segment by
-    /// segment, `prefix[k₀] + Σ_k (prefix[k+1] − prefix[k])·clamp(o − k, 0, 1)` over the octaves
+    /// gives them; `range` their least and greatest, [`octave_range`]) to `out`:
+    /// [`ErrorTerm::curvature_at`] summed segment by segment,
+    /// `prefix[k₀] + Σ_k (prefix[k+1] − prefix[k])·clamp(o − k, 0, 1)` over the octaves
     /// between the row's least and greatest level (k₀ the least's whole part), so that it
     /// vectorises. The same value to a few ulps (`the_row_curvature_follows_the_lookup`).
     ///
