@@ -225,14 +225,12 @@ impl ErrorTerm {
         self.sketch_levels = curvature.iter().map(|&c| c as f32).collect();
     }
 
-    /// The water's level the term was made with.
-    pub fn water_m(&self) -> f32 {
-        self.water_m
-    }
-
-    /// Whether [`ErrorTerm::set_sketch_levels`] has been given the levels.
-    pub fn has_sketch_levels(&self) -> bool {
-        !self.sketch_levels.is_empty()
+    /// [`ErrorTerm::set_sketch_levels`] from `atlas`, at the term's water level, unless the term
+    /// has its levels already: once for a stage, which serves one sketch.
+    pub fn measure_sketch_levels(&mut self, atlas: &crate::sketch::Atlas) {
+        if self.sketch_levels.is_empty() {
+            self.set_sketch_levels(&atlas.level_curvature(self.water_m));
+        }
     }
 
     /// The [`SubTexel`] curvature for a sketch map of spacing `d0`: none where the map is as fine

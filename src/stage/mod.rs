@@ -122,14 +122,8 @@ impl CpuStage {
     /// Runs the stage for `camera`; Φ is then in `self.warp.phi`, relative to `sketch_map.origin`.
     pub fn run(&mut self, atlas: &Atlas, camera: &Camera) -> StageTimes {
         let t0 = Instant::now();
-        if let Some(e) = self
-            .params
-            .error
-            .as_mut()
-            .filter(|e| !e.has_sketch_levels())
-        {
-            // Once: the stage serves one sketch.
-            e.set_sketch_levels(&atlas.level_curvature(e.water_m()));
+        if let Some(e) = self.params.error.as_mut() {
+            e.measure_sketch_levels(atlas);
         }
         self.last_eye = camera.eye.truncate();
         let holding = self.hold.is_some();
