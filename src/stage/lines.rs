@@ -212,26 +212,55 @@ fn portable(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut [[f64; LA
     }
 }
 
-/// Lane l's value of line `first + l` (lines of `n` samples, one after another in `values`;
-/// lines past the last repeat it) linearly interpolated at fractional index `a[l]`: what
-/// [`line_mapping`]'s callers do with each mapping, for [`LANES`] lines at once.
+/// Where each lane's line starts in a buffer of lines of `n` samples (line `first + l`; lines
+/// past the last repeat it), for [`lerp_lanes`]. Worked out once for a group of lines and used
+/// at each of its samples: worked out at every sample, its division (`values.len() / n`) and
+/// eight products stood in the warp's interpolation loops.
+#[derive(Clone, Copy, Debug)]
+pub struct LaneLines {
+    len: usize,
+    n: usize,
+    start: [usize; LANES],
+    /// `start` as the gathers' indices; used only where `len` fits an i32.
+    start32: [i32; LANES],
+}
+
+impl LaneLines {
+    /// Lines `first ..` of `values`, lines of `n ≥ 2` samples.
+    #[inline(always)]
+    pub fn new(values: &[f32], n: usize, first: usize) -> LaneLines {
+        assert!(n >= 2 && values.len() >= n, "lines of {n} samples");
+        let lines = values.len() / n;
+        let start: [usize; LANES] = std::array::from_fn(|l| (first + l).min(lines - 1) * n);
+        LaneLines {
+            len: values.len(),
+            n,
+            start,
+            start32: start.map(|s| s as i32),
+        }
+    }
+}
+
+/// Lane l's value of its line of `lines` ([`LaneLines`], made for `values`) linearly
+/// interpolated at fractional index `a[l]`: what [`line_mapping`]'s callers do with each
+/// mapping, for [`LANES`] lines at once.
 #[inline(always)]
-pub fn lerp_lanes(values: &[f32], n: usize, first: usize, a: &[f64; LANES]) -> [f32; LANES] {
-    assert!(n >= 2 && values.len() >= n, "lines of {n} samples");
-    let lines = values.len() / n;
+pub fn lerp_lanes(values: &[f32], lines: &LaneLines, a: &[f64; LANES]) -> [f32; LANES] {
+    assert_eq!(values.len(), lines.len, "the lines' buffer");
     #[cfg(target_arch = "x86_64")]
     if values.len() < i32::MAX as usize {
         if crate::stage::simd::avx512() {
             // SAFETY: the processor has AVX-512F and AVX2 and the indices fit an i32, checked
-            // just above; a whole line, just before.
-            return unsafe { x86::lerp_avx512(values, n, first, a) };
+            // just above; every lane's line lies whole in `values` (`LaneLines::new`, made for
+            // a buffer of this length).
+            return unsafe { x86::lerp_avx512(values, lines, a) };
         }
         if crate::stage::simd::avx2() {
             // SAFETY: as above, with AVX2.
-            return unsafe { x86::lerp(values, n, first, a) };
+            return unsafe { x86::lerp(values, lines, a) };
         }
     }
-    std::array::from_fn(|l| lerp_at(&values[(first + l).min(lines - 1) * n..][..n], a[l]))
+    std::array::from_fn(|l| lerp_at(&values[lines.start[l]..][..lines.n], a[l]))
 }
 
 /// `values` linearly interpolated at fractional index `a` (a mapping's, in [0, len − 1]; outside
@@ -283,7 +312,7 @@ fn ends(total: &[f64; LANES], out: &mut [[f64; LANES]]) {
 /// development VM, no faster than eight calls of [`line_mapping`]).
 #[cfg(target_arch = "x86_64")]
 mod x86 {
-    use super::{LANES, LaneScratch};
+    use super::{LANES, LaneLines, LaneScratch};
     use std::arch::x86_64::*;
 
     /// # Safety
@@ -493,13 +522,13 @@ mod x86 {
     /// it becomes an index, which is what `lerp_at`'s saturating cast and min give (NaN: 0).
     ///
     /// # Safety
-    /// The processor must have AVX2; `values` holds at least one line of `n ≥ 2` samples and
-    /// fewer than 2^31 in all.
+    /// The processor must have AVX2; `lines` was made for `values` (so each lane's line lies
+    /// whole in it), which holds fewer than 2^31 samples.
     #[target_feature(enable = "avx2")]
-    pub unsafe fn lerp(values: &[f32], n: usize, first: usize, a: &[f64; LANES]) -> [f32; LANES] {
+    pub unsafe fn lerp(values: &[f32], lines: &LaneLines, a: &[f64; LANES]) -> [f32; LANES] {
         // SAFETY: every index is a line's start plus at most n − 2, and then one more.
         unsafe {
-            let (at, f) = lerp_index(values, n, first, a);
+            let (at, f) = lerp_index(lines, a);
             let v0 = _mm256_i32gather_ps::<4>(values.as_ptr(), at);
             let v1 = _mm256_i32gather_ps::<4>(values.as_ptr().add(1), at);
             finish_lerp(v0, v1, f)
@@ -512,16 +541,11 @@ mod x86 {
     /// # Safety
     /// As [`lerp`], with AVX-512F as well.
     #[target_feature(enable = "avx512f,avx2")]
-    pub unsafe fn lerp_avx512(
-        values: &[f32],
-        n: usize,
-        first: usize,
-        a: &[f64; LANES],
-    ) -> [f32; LANES] {
+    pub unsafe fn lerp_avx512(values: &[f32], lines: &LaneLines, a: &[f64; LANES]) -> [f32; LANES] {
         // SAFETY: every pair starts at a line's start plus at most n − 2, so it ends inside the
         // line; the gather's scale of 4 counts offsets in f32s.
         unsafe {
-            let (at, f) = lerp_index(values, n, first, a);
+            let (at, f) = lerp_index(lines, a);
             let pairs = _mm512_castpd_ps(_mm512_i32gather_pd::<4>(at, values.as_ptr().cast()));
             let parted = _mm512_permutexvar_ps(
                 _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 9, 11, 13, 15),
@@ -537,13 +561,12 @@ mod x86 {
     /// [`lerp`] and [`lerp_avx512`].
     #[inline]
     #[target_feature(enable = "avx2")]
-    fn lerp_index(values: &[f32], n: usize, first: usize, a: &[f64; LANES]) -> (__m256i, __m256) {
-        let lines = values.len() / n;
-        let line: [i32; LANES] = std::array::from_fn(|l| ((first + l).min(lines - 1) * n) as i32);
+    fn lerp_index(lines: &LaneLines, a: &[f64; LANES]) -> (__m256i, __m256) {
+        let n = lines.n;
         // SAFETY: both arrays hold eight lanes.
         let (base, a0, a1) = unsafe {
             (
-                _mm256_loadu_si256(line.as_ptr().cast()),
+                _mm256_loadu_si256(lines.start32.as_ptr().cast()),
                 _mm256_loadu_pd(a.as_ptr()),
                 _mm256_loadu_pd(a.as_ptr().add(4)),
             )
@@ -676,17 +699,18 @@ pub(crate) mod tests {
         for a in [inside, outside] {
             for first in 0..4 {
                 // Every build the processor can run, each called directly.
-                let mut builds = vec![lerp_lanes(&values, n, first, &a)];
+                let lines = LaneLines::new(&values, n, first);
+                let mut builds = vec![lerp_lanes(&values, &lines, &a)];
                 #[cfg(target_arch = "x86_64")]
                 {
                     use crate::stage::simd;
                     if simd::avx2() {
                         // SAFETY: the processor has AVX2; `values` holds whole lines.
-                        builds.push(unsafe { x86::lerp(&values, n, first, &a) });
+                        builds.push(unsafe { x86::lerp(&values, &lines, &a) });
                     }
                     if simd::avx512() {
                         // SAFETY: as above, with AVX-512F.
-                        builds.push(unsafe { x86::lerp_avx512(&values, n, first, &a) });
+                        builds.push(unsafe { x86::lerp_avx512(&values, &lines, &a) });
                     }
                 }
                 for l in 0..LANES {

@@ -125,7 +125,8 @@
 
 use crate::scene::WarpMethod;
 use crate::stage::lines::{
-    LANES, LaneScratch, LineScratch, lane_mappings, lerp_at, lerp_lanes, lerp_weight, line_mapping,
+    LANES, LaneLines, LaneScratch, LineScratch, lane_mappings, lerp_at, lerp_lanes, lerp_weight,
+    line_mapping,
 };
 
 pub struct Warp {
@@ -317,9 +318,10 @@ impl Warp {
             side_by_side(importance, n, t0, &mut self.lanes_in);
             lane_mappings(&self.lanes_in, &mut self.lanes, &mut self.lanes_out);
             let kept = LANES.min(n - t0);
+            let lines = LaneLines::new(importance, n, t0);
             for (s, a) in self.lanes_out.iter().enumerate() {
                 let x = a.map(|a| (a * d0 as f64) as f32);
-                let v = lerp_lanes(importance, n, t0, a);
+                let v = lerp_lanes(importance, &lines, a);
                 let at = s * n + t0;
                 store_kept(&mut self.row_x[at..], &x, kept);
                 store_kept(&mut self.row_importance[at..], &v, kept);
@@ -396,9 +398,10 @@ fn store_columns(
     b: impl Fn(usize) -> [f64; LANES],
 ) {
     let kept = LANES.min(n - s0);
+    let lines = LaneLines::new(row_x, n, s0);
     for t in 0..n {
         let b = b(t);
-        let x = lerp_lanes(row_x, n, s0, &b);
+        let x = lerp_lanes(row_x, &lines, &b);
         let p: [[f32; 2]; LANES] = std::array::from_fn(|l| [x[l], (b[l] * d0 as f64) as f32]);
         store_kept(&mut phi[t * n + s0..], &p, kept);
     }
