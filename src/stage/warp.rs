@@ -64,8 +64,12 @@
 //! → 77.2–78.8 on hills high, 51.1–51.5 → 49.2–50.4 on jacksboro near (run alternately, twice);
 //! and the all-mean pass's last partial store a cold call apart (`store_kept_apart`: LLVM had
 //! merged the two branches into one memcpy call per group): 51.3–51.6 → 50.8 µs near. The same
-//! in the row pass and `store_columns` made the plain warp slower, 63 → 64 µs, so they keep
-//! `store_kept`.
+//! in the row pass and `store_columns` made the plain warp slower then, 63 → 64 µs. Stop 37:
+//! `perf` put 4 % of the whole stage on gaussian high in that memcpy, called from
+//! `store_columns` (the points are [f32; 2], so LLVM copies them by call); with
+//! `store_kept_apart` there, the plain warp took 51–53 µs against 52–58 and the guarded 61–64
+//! against 61–66 on the high views (`benches/cpu_stage.rs`, alternately, twice). The row pass's
+//! f32 stores, inlined, keep `store_kept`.
 //!
 //! Stop 35, measured and rejected for the row pass's interpolation of the importance (run
 //! alternately with the build before, guarded warp): the importance's two samples carried
@@ -403,7 +407,7 @@ fn store_columns(
         let b = b(t);
         let x = lerp_lanes(row_x, &lines, &b);
         let p: [[f32; 2]; LANES] = std::array::from_fn(|l| [x[l], (b[l] * d0 as f64) as f32]);
-        store_kept(&mut phi[t * n + s0..], &p, kept);
+        store_kept_apart(&mut phi[t * n + s0..], &p, kept);
     }
 }
 
@@ -433,8 +437,9 @@ fn store_kept<T: Copy>(dst: &mut [T], v: &[T; LANES], kept: usize) {
 
 /// [`store_kept`] for `all_to_mean`, with the last group's copy of run-time length a call apart:
 /// inline, LLVM merged the two branches there into one memcpy of `kept` lanes, called for every
-/// group (5 % of the guarded warp on jacksboro near). In the row pass and `store_columns` the
-/// merged copy is the faster (this form took the plain warp 63 → 64 µs).
+/// group (5 % of the guarded warp on jacksboro near); `store_columns` too (the module doc). In
+/// the row pass the merged copy is inlined and the faster (this form took the plain warp 63 →
+/// 64 µs).
 #[inline(always)]
 fn store_kept_apart<T: Copy>(dst: &mut [T], v: &[T; LANES], kept: usize) {
     if kept == LANES {
