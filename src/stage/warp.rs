@@ -252,16 +252,6 @@ impl Warp {
         self.follows_mean.fill(false);
         self.guarded_columns = 0;
         let guarded = self.method == WarpMethod::Guarded;
-        if guarded {
-            self.mean_importance.fill(0.0);
-            for s in 0..n {
-                let line = &self.row_importance[s * n..(s + 1) * n];
-                for (m, &v) in self.mean_importance.iter_mut().zip(line) {
-                    *m += v;
-                }
-            }
-            line_mapping(&self.mean_importance, &mut self.scratch, &mut self.mean_map);
-        }
         // Eight columns at a time, so that the guard's count of folded pairs (kept in column
         // order) can stop the pass as soon as `fallback_pairs` have folded: every column then
         // follows the mean, whatever the rest would do.
@@ -285,15 +275,32 @@ impl Warp {
                 }
             }
         }
-        if guarded {
+        if guarded && folded > 0 {
+            self.mean_mapping();
             self.guard(d0);
         }
+    }
+
+    /// The mean column mapping `b̄`: that of the row-warped importance summed across columns.
+    /// Made only where a fold needs it (none folds on most high views).
+    #[inline(always)]
+    fn mean_mapping(&mut self) {
+        let n = self.n;
+        self.mean_importance.fill(0.0);
+        for s in 0..n {
+            let line = &self.row_importance[s * n..(s + 1) * n];
+            for (m, &v) in self.mean_importance.iter_mut().zip(line) {
+                *m += v;
+            }
+        }
+        line_mapping(&self.mean_importance, &mut self.scratch, &mut self.mean_map);
     }
 
     /// Every column to the mean column warp (near views, where more than an eighth of the column
     /// pairs fold).
     #[inline(always)]
     fn all_to_mean(&mut self, d0: f32) {
+        self.mean_mapping();
         self.follows_mean.fill(true);
         let n = self.n;
         // Every lane reads the same two samples of its column, so the columns go side by side
