@@ -144,14 +144,17 @@ pub struct Taps {
 impl Taps {
     /// Taps at level-0 texel coordinates `c0 + k·dc`, k < n, on a level `size` texels long that is
     /// level `l` of the pyramid.
+    #[inline(always)]
     fn fill(&mut self, c0: f64, dc: f64, n: usize, l: usize, size: usize) {
         let s = (1u64 << l) as f64;
+        // s is a power of two, so a product by its inverse is the division, bit for bit.
+        let inv_s = 1.0 / s;
         let off = (s - 1.0) * 0.5;
         self.index.resize(n, 0);
         self.frac.resize(n, 0.0);
         let hi = (size - 1) as f64;
         for k in 0..n {
-            let c = ((c0 + k as f64 * dc - off) / s).clamp(0.0, hi);
+            let c = ((c0 + k as f64 * dc - off) * inv_s).clamp(0.0, hi);
             let i = (c as usize).min(size - 2); // c ≥ 0: the cast is floor
             self.index[k] = i as u32;
             self.frac[k] = (c - i as f64) as f32;
