@@ -215,7 +215,8 @@ fn portable(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut [[f64; LA
 /// Where each lane's line starts in a buffer of lines of `n` samples (line `first + l`; lines
 /// past the last repeat it), for [`lerp_lanes`]. Worked out once for a group of lines and used
 /// at each of its samples: worked out at every sample, its division (`values.len() / n`) and
-/// eight products stood in the warp's interpolation loops.
+/// eight products stood in the warp's interpolation loops. Gain at the edge of the noise: plain
+/// warp 55–58 → 53–56 µs on the high views (`benches/cpu_stage.rs`, alternately, twice).
 #[derive(Clone, Copy, Debug)]
 pub struct LaneLines {
     len: usize,
