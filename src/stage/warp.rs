@@ -270,8 +270,8 @@ impl Warp {
             }
             if s0 == LANES {
                 let sound = pairs_unfolded(&self.phi, n, 0);
-                for pair in 0..LANES - 1 {
-                    if self.tally_pair(pair, sound[pair], &mut folded) {
+                for (pair, &unfolded) in sound.iter().enumerate().take(LANES - 1) {
+                    if self.tally_pair(pair, unfolded, &mut folded) {
                         self.all_to_mean(d0);
                         return;
                     }
