@@ -74,6 +74,9 @@
 //! first group's seven pairs wait for the second group, so that they are checked eight at once
 //! like the rest (one at a time they took 1–3 µs: 63–64 → 62 µs jacksboro high, 40.5–41.5 →
 //! 38–39 near). The count only decides when the shortcut is taken, and it grows the same.
+//! Measured and rejected: the guard's rounds checking the changed columns' pairs eight at once
+//! too (62–65 against 63–65 µs on the high views, three runs each: within the noise; a round
+//! changes a few columns).
 //!
 //! Stop 35, measured and rejected for the row pass's interpolation of the importance (run
 //! alternately with the build before, guarded warp): the importance's two samples carried
@@ -257,11 +260,11 @@ impl Warp {
         self.guarded_columns = 0;
         let guarded = self.method == WarpMethod::Guarded;
         // Eight columns at a time, so that the guard's count of folded pairs (kept in column
-        // order) can stop the pass as soon as `fallback_pairs` have folded: every column then
-        // follows the mean, whatever the rest would do.
+        // order but for the first group's) can stop the pass as soon as `fallback_pairs` have
+        // folded: every column then follows the mean, whatever the rest would do.
         let mut folded = 0;
         // The first group's pairs wait for the second group's first column, so that they too
-        // are checked eight at once (one at a time they took about 3 µs).
+        // are checked eight at once (one at a time they took 1–3 µs).
         let first_later = n > LANES;
         for s0 in (0..n).step_by(LANES) {
             self.map_columns(s0, d0);
@@ -297,7 +300,8 @@ impl Warp {
     }
 
     /// Records whether the columns `pair`, `pair + 1` fold and counts it; true once the count
-    /// reaches `fallback_pairs`. The order pairs are counted in changes only when that is known.
+    /// reaches `fallback_pairs`. The order in which pairs are counted changes only when the
+    /// count is reached, never whether it is.
     #[inline(always)]
     fn tally_pair(&mut self, pair: usize, unfolded: bool, folded: &mut usize) -> bool {
         self.folded[pair] = !unfolded;
