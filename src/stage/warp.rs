@@ -75,8 +75,8 @@
 //! like the rest (one at a time they took 1–3 µs: 63–64 → 62 µs jacksboro high, 40.5–41.5 →
 //! 38–39 near). The count only decides when the shortcut is taken, and it grows the same.
 //! Measured and rejected: the guard's rounds checking the changed columns' pairs eight at once
-//! too (62–65 against 63–65 µs on the high views, three runs each: within the noise; a round
-//! changes a few columns).
+//! too (the high views, three runs each: 59–66 µs and one run at 73, against 59–65: no
+//! faster; a round changes a few columns).
 //!
 //! Stop 35, measured and rejected for the row pass's interpolation of the importance (run
 //! alternately with the build before, guarded warp): the importance's two samples carried
