@@ -632,6 +632,44 @@ fn a_streamed_sketchs_ground_is_level_0s_so_a_camera_under_a_peak_is_refused() {
     assert!(e.to_string().contains("0.tile"), "{e}");
 }
 
+/// The error term's curvature of each pyramid level (`Atlas::level_curvature`): a streamed
+/// sketch measures the levels it does not hold in memory on windows read from their tiles, so
+/// it gets what the sketch held whole gets (here bit for bit: the DEM's levels are smaller than
+/// the window). A level whose tile is damaged is NaN, which the term skips, and nothing panics.
+#[test]
+fn a_streamed_sketch_measures_the_curvature_of_levels_not_in_memory() {
+    use terrain::scene::load_atlas;
+    let (_, asc, pyr) = jacksboro_pyramid("tiles-curvature");
+    let streamed = load_atlas(&jacksboro_scene(&pyr, "[stream]\ncpu_mb = 0")).unwrap();
+    let whole = load_atlas(&jacksboro_scene(&asc, "")).unwrap();
+    assert!(streamed.resident_from > 1 && streamed.levels[0].data.is_empty());
+    for water in [f32::MIN, 400.0] {
+        let (a, b) = (
+            streamed.level_curvature(water),
+            whole.level_curvature(water),
+        );
+        assert_eq!(a.len(), b.len());
+        // Levels under 3 texels a side have no interior texel: NaN either way.
+        let interior = whole
+            .levels
+            .iter()
+            .filter(|v| v.width.min(v.height) >= 3)
+            .count();
+        for (l, (a, b)) in a.iter().zip(&b).enumerate() {
+            assert_eq!(b.is_finite(), l < interior, "level {l}: {b}");
+            assert_eq!(
+                a.to_bits(),
+                b.to_bits(),
+                "level {l} at water {water}: {a} against {b}"
+            );
+        }
+    }
+    damage(&pyr.join("L0/0/0.tile"));
+    let a = streamed.level_curvature(f32::MIN);
+    assert!(a[0].is_nan(), "a damaged level-0 tile: {}", a[0]);
+    assert!(a[1].is_finite() && a[1] > 0.0, "level 1: {}", a[1]);
+}
+
 #[test]
 fn a_streamed_snapshot_settles_on_the_whole_sketchs_image_and_a_damaged_tile_fails_it() {
     use terrain::gpu::uniforms::View;

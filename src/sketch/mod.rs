@@ -64,6 +64,11 @@ pub struct Level {
     pub data: Vec<f32>,
 }
 
+/// The side of the window a level not in memory is measured on for
+/// [`Atlas::level_curvature`]: 512², whose stride (2) visits as many texels as on a level held
+/// whole.
+pub const CURVATURE_WINDOW: usize = 512;
+
 #[derive(Clone, Debug)]
 pub struct Atlas {
     /// Grid spacing in metres along x (east) and y (north).
@@ -402,7 +407,10 @@ impl Atlas {
     /// The mean curvature of each pyramid level, 1/m: the largest of its second differences
     /// (|h_xx|, |h_yy|, |h_xy|, the heights raised to `water_m`) at its own spacing, as the
     /// importance's geometric-error term takes them from the sketch map, averaged over the level.
-    /// NaN for a level not held in memory (a streamed pyramid's finest). Every k-th texel of a
+    /// A level not held in memory (a streamed pyramid's finest) is measured on its central
+    /// window of at most [`CURVATURE_WINDOW`]² texels, read from its tiles (NaN where they cannot
+    /// be read): counting only the levels in memory gave a sketch larger than memory, seen from
+    /// high up, less of the error term than the same sketch held whole. Every k-th texel of a
     /// level is visited, k its larger side ÷ 256 rounded down (fewer than 512² texels), so a
     /// sketch of any size costs about the same.
     ///
@@ -415,9 +423,29 @@ impl Atlas {
             .enumerate()
             .map(|(l, level)| {
                 let scale = (1u64 << l) as f64;
-                level.mean_curvature(self.dx * scale, self.dy * scale, water_m)
+                let (dx, dy) = (self.dx * scale, self.dy * scale);
+                match self.tiled_window(l) {
+                    Some(window) => window.mean_curvature(dx, dy, water_m),
+                    None => level.mean_curvature(dx, dy, water_m),
+                }
             })
             .collect()
+    }
+
+    /// Level `l`'s central window of at most [`CURVATURE_WINDOW`]² texels from the tiles, where
+    /// the level is not in memory but a pyramid holds it; None otherwise or where a tile cannot
+    /// be read.
+    fn tiled_window(&self, l: usize) -> Option<Level> {
+        let level = &self.levels[l];
+        let pyramid = self.pyramid.as_ref().filter(|_| level.data.is_empty())?;
+        let (w, h) = (level.width, level.height);
+        let (ww, wh) = (w.min(CURVATURE_WINDOW), h.min(CURVATURE_WINDOW));
+        let data = pyramid.window(l, (w - ww) / 2, (h - wh) / 2, ww, wh).ok()?;
+        Some(Level {
+            width: ww,
+            height: wh,
+            data,
+        })
     }
 
     pub fn height(&self) -> usize {

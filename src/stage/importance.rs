@@ -135,7 +135,7 @@ pub struct ErrorTerm {
     /// part is added there all the same).
     water_m: f32,
     /// The mean curvature of each of the sketch's pyramid levels (`Atlas::level_curvature`, NaN
-    /// where a level is not in memory); empty until [`ErrorTerm::set_sketch_levels`].
+    /// where a level could not be measured); empty until [`ErrorTerm::set_sketch_levels`].
     sketch_levels: Vec<f32>,
 }
 
@@ -152,8 +152,8 @@ const SUB_TEXEL_SEGMENTS: usize = 24;
 /// `delta·clamp((o − start)·inv_width, 0, 1)`. Each segment adds only an increase of C toward
 /// the finer level (a finer level less curved than the one above it adds nothing), so the term
 /// is never negative; on natural terrain C grows at every finer level and the two agree. A
-/// streamed pyramid counts only the levels it holds in memory, so a sketch larger than memory
-/// seen from high up gets less of the term than it would held whole.
+/// streamed pyramid's levels not in memory are measured on windows of their tiles
+/// (`Atlas::level_curvature`); one that cannot be read is NaN, and counting starts below it.
 #[derive(Clone, Copy, Debug)]
 struct SubTexel {
     /// (start, end, inv_width, delta) in o, one per segment.
@@ -247,7 +247,7 @@ impl ErrorTerm {
     fn sub_texel(&self, d0: f64) -> SubTexel {
         let mut sub = SubTexel::NONE;
         let levels = &self.sketch_levels;
-        // The map's level, and the finest level held in memory.
+        // The map's level, and the finest level measured.
         let top = (d0 / self.d_atlas).log2().min(levels.len() as f64 - 1.0);
         let Some(first) = levels.iter().position(|c| c.is_finite()) else {
             return sub;
@@ -872,7 +872,7 @@ mod tests {
 
     /// The sub-texel curvature: the sketch's mean curvature at the texel's spacing less the
     /// map's, linear between levels, none past the map's level or the atlas's, none for a map as
-    /// fine as the atlas, and only the levels held in memory. A segment's sign, width or offset
+    /// fine as the atlas, and only the levels measured (not NaN). A segment's sign, width or offset
     /// wrong (or the bias's sign) breaks the values at whole and half levels.
     #[test]
     fn the_sub_texel_curvature_is_what_the_map_cannot_see() {
