@@ -440,16 +440,11 @@ impl Atlas {
     /// the level is not in memory but a pyramid holds it; None otherwise or where a tile cannot
     /// be read.
     fn tiled_window(&self, l: usize) -> Option<Level> {
-        let level = &self.levels[l];
-        let pyramid = self.pyramid.as_ref().filter(|_| level.data.is_empty())?;
-        let (w, h) = (level.width, level.height);
-        let (ww, wh) = (w.min(CURVATURE_WINDOW), h.min(CURVATURE_WINDOW));
-        let data = pyramid.window(l, (w - ww) / 2, (h - wh) / 2, ww, wh).ok()?;
-        Some(Level {
-            width: ww,
-            height: wh,
-            data,
-        })
+        let pyramid = self
+            .pyramid
+            .as_ref()
+            .filter(|_| self.levels[l].data.is_empty())?;
+        pyramid.central_window(l, CURVATURE_WINDOW).ok()
     }
 
     pub fn height(&self) -> usize {

@@ -106,6 +106,19 @@ impl Pyramid {
         })
     }
 
+    /// Level `l`'s central window of at most `side`² nodes, as a level of its own: what a
+    /// measurement of a level too large for memory reads (the relief, the curvature).
+    pub fn central_window(&self, l: usize, side: usize) -> Result<crate::sketch::Level> {
+        let [w, h] = self.meta.levels[l];
+        let (ww, wh) = (w.min(side), h.min(side));
+        let data = self.window(l, (w - ww) / 2, (h - wh) / 2, ww, wh)?;
+        Ok(crate::sketch::Level {
+            width: ww,
+            height: wh,
+            data,
+        })
+    }
+
     /// Nodes `x0 .. x0 + w` × `y0 .. y0 + h` of level `l` (inside the level), row-major, from the
     /// interiors of the tiles that hold them.
     pub fn window(&self, l: usize, x0: usize, y0: usize, w: usize, h: usize) -> Result<Vec<f32>> {
@@ -315,15 +328,7 @@ pub fn streamed_atlas(dir: &Path, opts: &LoadOptions) -> Result<crate::sketch::A
 
 /// [`crate::sketch::Atlas::finest_relief`] of level 0's central window.
 fn window_relief(pyramid: &Pyramid) -> Result<[f64; 2]> {
-    let [w, h] = pyramid.meta.levels[0];
-    let (ww, wh) = (w.min(RELIEF_WINDOW), h.min(RELIEF_WINDOW));
-    let (x0, y0) = ((w - ww) / 2, (h - wh) / 2);
-    let data = pyramid.window(0, x0, y0, ww, wh)?;
-    let base = crate::sketch::Level {
-        width: ww,
-        height: wh,
-        data,
-    };
+    let base = pyramid.central_window(0, RELIEF_WINDOW)?;
     let probe = crate::sketch::Atlas {
         dx: pyramid.meta.dx_m,
         dy: pyramid.meta.dy_m,
