@@ -4,8 +4,8 @@
 
 mod common;
 use common::*;
-use terrain::eval::compare::report::CSV_COLUMNS;
-use terrain::eval::compare::sweep::{Setting, default_sweep};
+use terrain::eval::compare::report::{CSV_COLUMNS, Row};
+use terrain::eval::compare::sweep::{Setting, at_geomipmap_budgets, default_sweep};
 use terrain::scene::Mode;
 
 fn sketch(name: &str) -> String {
@@ -56,7 +56,46 @@ fn compare_reports_every_setting_with_every_column_filled() {
     let atlas = terrain::scene::load_atlas(&scene).unwrap();
     let camera = terrain::scene::camera_of(&scene, &atlas).unwrap();
     let modes = [Mode::Warped, Mode::Geomipmap, Mode::Bruteforce];
-    let settings = default_sweep(&modes, &scene, &atlas, &camera).unwrap();
+    let sweep = default_sweep(&modes, &scene, &atlas, &camera).unwrap();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let rows: Vec<Row> = serde_json::from_value(report["rows"].clone()).unwrap();
+    // Then warped at GeoMipMap's budgets, worked out from the sweep's rows, with the warped rows.
+    let in_sweep: Vec<Row> = rows
+        .iter()
+        .filter(|r| {
+            sweep
+                .iter()
+                .any(|s| s.mode_name() == r.mode && s.label() == r.setting)
+        })
+        .cloned()
+        .collect();
+    let at_budgets = at_geomipmap_budgets(scene.warp.quad_px, &in_sweep);
+    assert!(!at_budgets.is_empty(), "{rows:?}");
+    let settings: Vec<Setting> = modes
+        .iter()
+        .flat_map(|&m| {
+            let extra = if m == Mode::Warped {
+                &at_budgets[..]
+            } else {
+                &[]
+            };
+            sweep.iter().filter(move |s| s.mode() == m).chain(extra)
+        })
+        .copied()
+        .collect();
+    // Each GeoMipMap row has a warped row with the most triangles a fixed mesh can have within
+    // its own.
+    for g in rows.iter().filter(|r| r.mode == "geomipmap") {
+        let most = 2 * (g.triangles / 2).isqrt().pow(2);
+        assert!(
+            rows.iter()
+                .any(|w| w.mode == "warped" && w.triangles == most),
+            "no warped row of {most} triangles for {} ({})",
+            g.setting,
+            g.triangles
+        );
+    }
     let csv = std::fs::read_to_string(dir.join("report.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(lines[0], CSV_COLUMNS.join(","));
@@ -93,8 +132,6 @@ fn compare_reports_every_setting_with_every_column_filled() {
         assert!(lines.iter().any(|l| l.starts_with(m)), "{m} missing");
     }
 
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["rows"].as_array().unwrap().len(), settings.len());
     assert_eq!(report["skipped"].as_array().unwrap().len(), 0);
     // The reference is converged below the differences it measures.

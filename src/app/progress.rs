@@ -82,6 +82,14 @@ impl Progress {
         let _ = writeln!(std::io::stderr().lock(), "{line}");
     }
 
+    /// Takes `work` off the total: items counted in it that turned out not to be needed.
+    pub fn forgo(&mut self, work: f64) {
+        self.total = (self.total - work).max(self.done).max(f64::MIN_POSITIVE);
+        if let Some(bar) = &self.bar {
+            bar.set_length((self.total * UNITS).ceil() as u64);
+        }
+    }
+
     /// The line a log gets (what the bar shows on a terminal).
     fn line(&self, item: &str, elapsed: Duration) -> String {
         let fraction = self.done / self.total;

@@ -7,7 +7,9 @@
 //! `repeat` timed frames whose medians are reported (DESIGN.md's frame time: CPU stage plus GPU
 //! passes); the last frame's image and positions are measured. Every renderer is built with its
 //! position attachment on, so all modes carry the same one extra RGBA8 write per pixel. GeoMipMap
-//! settings of one block size share one baked grid. A setting that fails (a grid too large for the
+//! settings of one block size share one baked grid. The default sweep's warped rows at
+//! GeoMipMap's budgets (`sweep::at_geomipmap_budgets`) run last, once GeoMipMap's triangles are
+//! known, and the report lists them with the other warped rows. A setting that fails (a grid too large for the
 //! device, say) is recorded in `report.json`'s `skipped` and the rest carry on.
 //!
 //! Outputs in the out dir, each written atomically: `report.csv`, `report.json`, `summary.md`,
@@ -134,6 +136,49 @@ pub struct Outcome {
     pub report: Report,
 }
 
+/// The rows measured so far, each with its image, and the settings that failed.
+#[derive(Default)]
+struct Runs {
+    rows: Vec<Row>,
+    images: Vec<(Setting, Vec<u8>)>,
+    skipped: Vec<Skipped>,
+}
+
+impl Runs {
+    fn record(&mut self, s: &Setting, result: Result<(Row, Vec<u8>)>, progress: &mut Progress) {
+        match result {
+            Ok((row, rgba)) => {
+                self.rows.push(row);
+                self.images.push((*s, rgba));
+            }
+            Err(e) => self.skipped.push(Skipped {
+                mode: s.mode_name(),
+                setting: s.label(),
+                error: e.to_string(),
+            }),
+        }
+        progress.advance(1.0, &format!("{} {}", s.mode_name(), s.label()));
+    }
+
+    /// Each mode's rows together, in the order the modes first ran (a stable sort, so the rows
+    /// run late at GeoMipMap's budgets follow the other warped rows).
+    fn group_by_mode(&mut self) {
+        let mut modes: Vec<String> = Vec::new();
+        for r in &self.rows {
+            if !modes.contains(&r.mode) {
+                modes.push(r.mode.clone());
+            }
+        }
+        let rank = |m: &str| modes.iter().position(|x| x == m);
+        let mut both: Vec<(Row, (Setting, Vec<u8>))> = std::mem::take(&mut self.rows)
+            .into_iter()
+            .zip(std::mem::take(&mut self.images))
+            .collect();
+        both.sort_by_key(|(r, _)| rank(&r.mode));
+        (self.rows, self.images) = both.into_iter().unzip();
+    }
+}
+
 /// Runs the comparison of `scene` (named `name` in titles) and writes its outputs to `out_dir`.
 pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Outcome> {
     let mut scene = scene.clone();
@@ -154,9 +199,18 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
         .max(atlas.bytes());
     let ctx = GpuContext::new(&Needs { storage_bytes })?;
     let path_frames = o.path_frames * o.modes.len().min(1);
+    // Warped rows at GeoMipMap's budgets: at most one per GeoMipMap row, known once those ran.
+    let at_budgets = if o.settings.is_none() && o.modes.contains(&Mode::Warped) {
+        settings
+            .iter()
+            .filter(|s| s.mode() == Mode::Geomipmap)
+            .count()
+    } else {
+        0
+    };
     let mut progress = Progress::new(
         &format!("compare {name}"),
-        (2 + settings.len() + path_frames + 1) as f64,
+        (2 + settings.len() + at_budgets + path_frames + 1) as f64,
     );
 
     let converged = measure::converged_reference(&ctx, &scene, &atlas, &camera)?;
@@ -179,45 +233,45 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
         None
     };
     let steps = flight.as_ref().map_or(&[][..], |(_, c)| &c[..]);
-    let mut rows = Vec::new();
-    let mut skipped = Vec::new();
-    let mut images: Vec<(Setting, Vec<u8>)> = Vec::new();
     let mut gmm: Option<(u32, Renderer)> = None;
-    for s in &settings {
-        let result = (|| -> Result<(Row, Vec<u8>)> {
-            if let Setting::GeoMipMap { tau, block } = *s {
-                if gmm.as_ref().is_none_or(|(b, _)| *b != block) {
-                    gmm = None; // one baked grid at a time
-                    gmm = Some((block, renderer(&ctx, &scene, &atlas, s)?));
-                }
-                let (_, r) = gmm.as_mut().expect("just built");
-                if let Some(b) = r.lod_mut::<Baselines>() {
-                    b.params.tau = tau;
-                }
-                let (mut row, rgba) = measure(r, s, &camera, &truth0, o)?;
-                row.lod_change_levels = lod_change_along(r, steps)?;
-                return Ok((row, rgba));
+    let mut run_setting = |s: &Setting| -> Result<(Row, Vec<u8>)> {
+        if let Setting::GeoMipMap { tau, block } = *s {
+            if gmm.as_ref().is_none_or(|(b, _)| *b != block) {
+                gmm = None; // one baked grid at a time
+                gmm = Some((block, renderer(&ctx, &scene, &atlas, s)?));
             }
-            gmm = None;
-            let mut r = renderer(&ctx, &scene, &atlas, s)?;
-            let (mut row, rgba) = measure(&mut r, s, &camera, &truth0, o)?;
-            row.lod_change_levels = lod_change_along(&mut r, steps)?;
-            Ok((row, rgba))
-        })();
-        match result {
-            Ok((row, rgba)) => {
-                rows.push(row);
-                images.push((*s, rgba));
+            let (_, r) = gmm.as_mut().expect("just built");
+            if let Some(b) = r.lod_mut::<Baselines>() {
+                b.params.tau = tau;
             }
-            Err(e) => skipped.push(Skipped {
-                mode: s.mode_name(),
-                setting: s.label(),
-                error: e.to_string(),
-            }),
+            let (mut row, rgba) = measure(r, s, &camera, &truth0, o)?;
+            row.lod_change_levels = lod_change_along(r, steps)?;
+            return Ok((row, rgba));
         }
-        progress.advance(1.0, &format!("{} {}", s.mode_name(), s.label()));
+        gmm = None;
+        let mut r = renderer(&ctx, &scene, &atlas, s)?;
+        let (mut row, rgba) = measure(&mut r, s, &camera, &truth0, o)?;
+        row.lod_change_levels = lod_change_along(&mut r, steps)?;
+        Ok((row, rgba))
+    };
+    let mut runs = Runs::default();
+    for s in &settings {
+        runs.record(s, run_setting(s), &mut progress);
+    }
+    if at_budgets > 0 {
+        let extra = sweep::at_geomipmap_budgets(scene.warp.quad_px, &runs.rows);
+        progress.forgo((at_budgets - extra.len()) as f64);
+        for s in &extra {
+            runs.record(s, run_setting(s), &mut progress);
+        }
+        runs.group_by_mode();
     }
     drop(gmm);
+    let Runs {
+        mut rows,
+        images,
+        skipped,
+    } = runs;
     report::mark_fronts(&mut rows);
     let summary = report::summarise(&rows);
 

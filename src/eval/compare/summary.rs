@@ -69,8 +69,9 @@ pub struct Miss {
     pub warped_triangles_needed: Option<u64>,
     /// The triangles at which warped's error reaches the row's between its rows: log-log
     /// interpolation between the two warped rows of its least-error front (by triangles) around
-    /// the row's error. The sweep's rungs are about 1.4× apart, so `warped_triangles_needed`
-    /// alone reads a miss by a few per cent as up to 1.4×.
+    /// the row's error. The ladder's rungs are about 1.4× apart, so `warped_triangles_needed`
+    /// alone can read a miss by a few per cent as up to 1.4× (less where a row at a GeoMipMap
+    /// budget lies between them).
     pub warped_triangles_interpolated: Option<f64>,
 }
 

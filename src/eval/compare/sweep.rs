@@ -5,6 +5,14 @@
 //!   off) on the budget's ladder (`stage::budget`: rungs about 2^(1/4) apart from 16², so
 //!   triangles about half an octave apart) up to 8 triangles a pixel, and the scene's own
 //!   setting, the mesh its view asks for (the rung it draws is not repeated as a fixed row).
+//! - then, where GeoMipMap ran too, warped at GeoMipMap's budgets: for each GeoMipMap row, the
+//!   largest fixed mesh with no more triangles than it drew ([`at_geomipmap_budgets`]), unless a
+//!   warped row drew as many already. The acceptance asks, row by row, whether warped has less
+//!   error at no more triangles; on the ladder alone a warped curve below GeoMipMap's missed rows
+//!   that fell just above a rung (interpolated log-log between the rungs, warped needed 0.76–0.98×
+//!   the triangles of 12 of the 29 GeoMipMap rows it missed over the six bundled views), so the
+//!   answer depended on the ladder's spacing. A ladder twice as fine would double the warped rows
+//!   and still land beside GeoMipMap's counts, not on them.
 //! - GeoMipMap over τ 0.5, 1, 2, 4, 8 px at blocks of 17, 33 and 65 vertices;
 //! - brute force over grid spacings d_atlas/2^K for K = 0 up to the finest the device and the
 //!   vertex budget allow ([`default_k`]);
@@ -28,6 +36,7 @@
 //!   everywhere alike, and the warp normalises importance to the mesh it has, so at a fixed mesh
 //!   it changes Φ only where the surface bound `I_s` or the floor clip the importance.
 
+use super::report::Row;
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::lod::baseline::default_k;
@@ -238,6 +247,36 @@ fn warped_sweep(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<Vec<Set
     Ok(out)
 }
 
+/// The warped rows at GeoMipMap's budgets (at `quad_px`, the scene's), run after the default sweep when both modes ran:
+/// for each GeoMipMap row, the largest fixed mesh (up to [`MAX_MESH`]) with no more triangles
+/// than the row drew, unless a warped row already drew as many (the module doc's rule).
+pub fn at_geomipmap_budgets(quad_px: f64, rows: &[Row]) -> Vec<Setting> {
+    let drawn = |t: u64| rows.iter().any(|r| r.mode == "warped" && r.triangles == t);
+    let mut out: Vec<Setting> = Vec::new();
+    for g in rows.iter().filter(|r| r.mode == "geomipmap") {
+        let mesh = mesh_within(g.triangles);
+        let setting = Setting::Warped {
+            quad_px,
+            mesh,
+            budget: false,
+        };
+        if mesh >= 2 && !drawn(mesh_triangles(mesh)) && !out.contains(&setting) {
+            out.push(setting);
+        }
+    }
+    out
+}
+
+/// Triangles of a fixed mesh of `mesh`² vertices: two per cell.
+pub fn mesh_triangles(mesh: u32) -> u64 {
+    2 * (mesh as u64).saturating_sub(1).pow(2)
+}
+
+/// The largest mesh side with at most `triangles` triangles, up to [`MAX_MESH`] (1 below 2).
+fn mesh_within(triangles: u64) -> u32 {
+    ((triangles / 2).isqrt() + 1).min(MAX_MESH as u64) as u32
+}
+
 /// The mesh side the view asks for at the scene's `quad_px`, up to [`MAX_MESH`].
 fn view_mesh(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<u32> {
     let mut s = scene.clone();
@@ -246,4 +285,46 @@ fn view_mesh(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<u32> {
     let mut stage = CpuStage::new(&s, &detail)?;
     stage.run(atlas, camera);
     Ok(stage.mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::eval::compare::report::tests::row;
+
+    fn with_triangles(mode: &str, triangles: u64) -> Row {
+        Row {
+            triangles,
+            ..row(mode, 1.0, 30.0, 0.5)
+        }
+    }
+
+    /// Each GeoMipMap row gets the largest mesh within its triangles, once, unless warped drew
+    /// as many already; a row too small for any mesh gets none.
+    #[test]
+    fn warped_rows_at_geomipmap_budgets_fit_within_each_row() {
+        let rows: Vec<Row> = [("warped", 450), ("warped", 1058)]
+            .into_iter()
+            .chain([12_836, 12_836, 3_300, 3_199, 451, 1].map(|t| ("geomipmap", t)))
+            .map(|(m, t)| with_triangles(m, t))
+            .collect();
+        let meshes: Vec<u32> = at_geomipmap_budgets(2.0, &rows)
+            .iter()
+            .map(|s| match *s {
+                Setting::Warped {
+                    mesh,
+                    budget: false,
+                    quad_px: 2.0,
+                } => mesh,
+                other => panic!("not a fixed warped mesh: {other:?}"),
+            })
+            .collect();
+        // 12,836: 81² has 12,800, 82² 13,122. 3,300: 41² has 3,200, one more than 3,199 holds.
+        // 451: 16², 450, drawn already.
+        assert_eq!(meshes, [81, 41, 40]);
+        for (t, m) in [(12_836, 81), (3_300, 41), (3_199, 40)] {
+            assert!(mesh_triangles(m) <= t && mesh_triangles(m + 1) > t);
+        }
+        assert_eq!(mesh_within(u64::MAX), MAX_MESH);
+    }
 }
