@@ -1,25 +1,26 @@
 //! The CPU stage at 128²: sketch map, importance and warp, each alone and together, on every
-//! bundled view: jacksboro, gaussian and hills near the ground and from high up.
+//! bundled view: jacksboro, gaussian and hills near the ground and from high up; and the hills
+//! looking east, where the warp runs across (`stage::warp`).
 //!
 //! `cargo bench --bench cpu_stage`; criterion prints the median of each. `stage` is a frame that
 //! warps anew, `stage_held` one that keeps the held warp (`warp.hold`, a still camera).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use terrain::scene;
 use terrain::scene::{Scene, WarpMethod};
 use terrain::stage::CpuStage;
 
-fn bench_scene(c: &mut Criterion, name: &str) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("sketches")
-        .join(format!("{name}.toml"));
-    let scene = Scene::load(&path).expect("bundled scene");
-    let atlas = scene::load_atlas(&scene).expect("bundled sketch");
-    let detail = scene::detail_of(&scene, &atlas);
-    let camera = scene::camera_of(&scene, &atlas).expect("bundled camera");
-    let mut stage = CpuStage::new(&scene, &detail).expect("stage");
+fn sketches() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("sketches")
+}
+
+fn bench_scene(c: &mut Criterion, name: &str, scene: &Scene) {
+    let atlas = scene::load_atlas(scene).expect("bundled sketch");
+    let detail = scene::detail_of(scene, &atlas);
+    let camera = scene::camera_of(scene, &atlas).expect("bundled camera");
+    let mut stage = CpuStage::new(scene, &detail).expect("stage");
     stage.run(&atlas, &camera);
     let bounds = (atlas.origin, atlas.max_corner());
 
@@ -59,8 +60,15 @@ fn bench_scene(c: &mut Criterion, name: &str) {
     for method in [WarpMethod::Guarded, WarpMethod::Plain] {
         stage.warp.method = method;
         let label = format!("warp_{method:?}").to_lowercase();
+        let across = stage.warp.across;
         g.bench_function(label, |b| {
-            b.iter(|| stage.warp.run(&stage.importance.importance, d0))
+            b.iter(|| {
+                if across {
+                    stage.warp.run_across(&stage.importance.importance, d0)
+                } else {
+                    stage.warp.run(&stage.importance.importance, d0)
+                }
+            })
         });
     }
     g.finish();
@@ -75,9 +83,17 @@ fn cpu_stage(c: &mut Criterion) {
         "hills",
         "hills-high",
     ] {
-        bench_scene(c, scene);
+        let path = sketches().join(format!("{scene}.toml"));
+        bench_scene(c, scene, &Scene::load(&path).expect("bundled scene"));
     }
+    // The bundled views look north or north-east; this one looks east: the warp runs across.
+    let scene = Scene::parse(HILLS_EAST, sketches()).expect("hills looking east");
+    bench_scene(c, "hills-east", &scene);
 }
+
+/// `sketches/hills.toml`'s hills and height, looking east across them.
+const HILLS_EAST: &str = "[sketch]\nsynthetic = \"hills\"\n[camera]\nposition = [500.0, 3500.0, 760.0]\n\
+     look_at = [7933.0, 3500.0, 400.0]\nfov_y_deg = 60.0\nwidth = 512\nheight = 512\n[detail]\namplitude_m = 8.0\ngain = 0.45\n";
 
 criterion_group!(benches, cpu_stage);
 criterion_main!(benches);

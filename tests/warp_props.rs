@@ -71,14 +71,43 @@ proptest! {
 
     #[test]
     fn guarded_warp_never_folds_and_rows_increase((n, imp) in importance_map(), d0 in 0.01f32..1000.0) {
-        let mut w = Warp::new(n, WarpMethod::Guarded, 0.0);
-        w.run(&imp, d0);
-        for s in 0..n - 1 {
-            prop_assert!(pair_unfolded(&w.phi, n, s), "fold between columns {} and {}", s, s + 1);
-        }
-        for t in 0..n {
+        // Rows first (the paper's order) and columns first (`run_across`, views along x).
+        for across in [false, true] {
+            let mut w = Warp::new(n, WarpMethod::Guarded, 0.0);
+            if across {
+                w.run_across(&imp, d0);
+            } else {
+                w.run(&imp, d0);
+            }
             for s in 0..n - 1 {
-                prop_assert!(w.phi[t * n + s + 1][0] > w.phi[t * n + s][0]);
+                prop_assert!(pair_unfolded(&w.phi, n, s), "fold between columns {} and {} (across: {})", s, s + 1, across);
+            }
+            let extent = (n - 1) as f32 * d0;
+            let tol = 1e-5 * extent;
+            for k in 0..n {
+                prop_assert!(w.phi[k * n][0].abs() <= tol && (w.phi[k * n + n - 1][0] - extent).abs() <= tol);
+                prop_assert!(w.phi[k][1].abs() <= tol && (w.phi[(n - 1) * n + k][1] - extent).abs() <= tol);
+            }
+            for t in 0..n {
+                for s in 0..n - 1 {
+                    prop_assert!(w.phi[t * n + s + 1][0] > w.phi[t * n + s][0]);
+                    prop_assert!(w.phi[(s + 1) * n + t][1] > w.phi[s * n + t][1]);
+                }
+            }
+        }
+    }
+
+    /// Columns first is rows first on the map transposed, Φ reflected back across the diagonal.
+    #[test]
+    fn the_warp_across_is_the_warp_of_the_transposed_map((n, imp) in importance_map(), d0 in 0.01f32..1000.0) {
+        let transposed: Vec<f32> = (0..n * n).map(|k| imp[(k % n) * n + k / n]).collect();
+        let (mut a, mut b) = (Warp::new(n, WarpMethod::Guarded, 0.0), Warp::new(n, WarpMethod::Guarded, 0.0));
+        a.run_across(&imp, d0);
+        b.run(&transposed, d0);
+        for t in 0..n {
+            for s in 0..n {
+                let (p, q) = (a.phi[t * n + s], b.phi[s * n + t]);
+                prop_assert_eq!(p, [q[1], q[0]], "Φ({}, {})", s, t);
             }
         }
     }

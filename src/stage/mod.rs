@@ -65,6 +65,29 @@ pub struct CpuStage {
     surface_resampler: Resampler,
     /// The ground position of the camera of the last run (for figures).
     pub last_eye: DVec2,
+    /// Whether the last warp ran across ([`runs_across`]); `None` before the first.
+    across: Option<bool>,
+}
+
+/// How much more a view's heading must lie along the other axis before the warp turns: about
+/// 50° from the axis it runs along, so that a heading near the diagonal does not flip the mesh
+/// from frame to frame.
+const TURN_RATIO: f64 = 1.2;
+
+/// Whether the warp runs across (`Warp::run_across`, columns first): where the view's depth runs
+/// along x rather than y (the heading's x over its y), keeping the last choice within
+/// [`TURN_RATIO`] of the diagonal. A view straight down keeps the last, or runs rows first.
+fn runs_across(camera: &Camera, last: Option<bool>) -> Option<bool> {
+    let (x, y) = (camera.forward.x.abs(), camera.forward.y.abs());
+    if x.max(y) < 1e-9 {
+        return Some(last.unwrap_or(false));
+    }
+    let along_x = match last {
+        Some(true) => y <= TURN_RATIO * x,
+        Some(false) => x > TURN_RATIO * y,
+        None => x > y,
+    };
+    Some(along_x)
 }
 
 impl CpuStage {
@@ -116,6 +139,7 @@ impl CpuStage {
             surface_max_atlas,
             surface_resampler: Resampler::default(),
             last_eye: DVec2::ZERO,
+            across: None,
         })
     }
 
@@ -171,8 +195,13 @@ impl CpuStage {
         }
         let t2 = Instant::now();
         if !self.held {
-            self.warp
-                .run(&self.importance.importance, self.sketch_map.spacing as f32);
+            self.across = runs_across(camera, self.across);
+            let (imp, d0) = (&self.importance.importance, self.sketch_map.spacing as f32);
+            if self.across == Some(true) {
+                self.warp.run_across(imp, d0);
+            } else {
+                self.warp.run(imp, d0);
+            }
             if let Some(b) = &mut self.budget {
                 self.mesh = b.update(&self.importance.importance, self.sketch_map.spacing);
             }
@@ -199,11 +228,46 @@ impl CpuStage {
         if let Some(b) = &mut self.budget {
             b.forget();
         }
+        self.across = None;
     }
 
     /// Φ(s, t) in world metres (f64).
     pub fn phi_world(&self, s: usize, t: usize) -> DVec2 {
         let p = self.warp.phi[t * self.sketch_map.n + s];
         self.sketch_map.origin + DVec2::new(p[0] as f64, p[1] as f64)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn heading(x: f64, y: f64) -> Camera {
+        let scene = crate::scene::Scene::parse(
+            &format!(
+                "[sketch]\nsynthetic = \"flat\"\n[camera]\nposition = [0.0, 0.0, 100.0]\n\
+                 look_at = [{x}, {y}, 0.0]\n"
+            ),
+            std::path::PathBuf::from("."),
+        )
+        .expect("a scene");
+        let atlas = crate::scene::load_atlas(&scene).expect("an atlas");
+        crate::scene::camera_of(&scene, &atlas).expect("a camera")
+    }
+
+    /// The warp runs across where the heading lies along x, and turns only once the heading is
+    /// past the diagonal by [`TURN_RATIO`], so a camera swaying about 45° keeps its mesh.
+    #[test]
+    fn the_warp_turns_past_the_diagonal_only() {
+        let along = |x: f64, y: f64, last| runs_across(&heading(x, y), last);
+        assert_eq!(along(1000.0, 100.0, None), Some(true));
+        assert_eq!(along(100.0, 1000.0, None), Some(false));
+        assert_eq!(along(-1000.0, 300.0, None), Some(true));
+        // 48° from x: the last choice stands either way.
+        assert_eq!(along(1000.0, 1110.0, Some(true)), Some(true));
+        assert_eq!(along(1110.0, 1000.0, Some(false)), Some(false));
+        // 55°: past the band.
+        assert_eq!(along(1000.0, 1430.0, Some(true)), Some(false));
+        assert_eq!(along(-1430.0, 1000.0, Some(false)), Some(true));
     }
 }

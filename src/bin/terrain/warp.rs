@@ -37,7 +37,10 @@ struct Report {
     visible: bool,
     #[serde(flatten)]
     quality: Quality,
+    /// Lines the guard sent to the mean mapping: columns, or rows where the warp ran across.
     guarded_columns: usize,
+    /// Whether the warp ran across, columns first (a view whose depth runs along x).
+    across: bool,
     cpu_stage_us: f64,
     sketch_map_us: f64,
     importance_us: f64,
@@ -91,6 +94,7 @@ pub fn run(a: Args) -> Result<()> {
         visible: map.visible,
         quality: q,
         guarded_columns: stage.warp.guarded_columns,
+        across: stage.warp.across,
         cpu_stage_us: median.total_us(),
         sketch_map_us: median.sketch_map_us,
         importance_us: median.importance_us,
