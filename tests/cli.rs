@@ -86,6 +86,27 @@ fn info_reads_the_bundled_sketch() {
     assert!((spacing - 74.4).abs() < 0.5, "{spacing}");
 }
 
+/// A reader that stops reading (`terrain info … | head -c 0`) ends the program quietly: exit 0,
+/// nothing on stderr. `println!` panicked there, on the broken pipe.
+#[cfg(unix)]
+#[test]
+fn a_closed_stdout_ends_the_program_without_a_panic() {
+    use std::process::{Command, Stdio};
+    let path = manifest_dir().join("sketches/jacksboro_fault_dem.asc");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_terrain"))
+        .args(["info", path.to_str().unwrap(), "--json"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run terrain");
+    // Closed before terrain has read the 403 × 344 sketch it reports on.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("terrain ends");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(err.is_empty(), "{err}");
+}
+
 #[test]
 fn warp_writes_its_figures_and_statistics() {
     let dir = scratch("cli-warp");

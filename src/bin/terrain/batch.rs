@@ -65,7 +65,7 @@ pub fn run(a: Args) -> Result<()> {
     if a.json {
         crate::print_json(&r)?;
     } else {
-        println!(
+        outln!(
             "{} of {} items rendered in {:.1} s ({:.2} snapshots/s), {} already done, {} failed; {}",
             r.rendered,
             r.items,
@@ -96,7 +96,7 @@ fn merge(a: &Args) -> Result<()> {
     if a.json {
         crate::print_json(&m)?;
     } else {
-        println!(
+        outln!(
             "{}: {} items, {} missing, {} failed",
             a.out_dir.join("manifest.jsonl").display(),
             m.lines,

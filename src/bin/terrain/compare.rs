@@ -40,7 +40,7 @@ pub struct Args {
 pub fn run(a: Args) -> Result<()> {
     if a.replot {
         let n = terrain::eval::compare::replot(&a.out_dir)?;
-        println!("{n} rows redrawn in {}", a.out_dir.display());
+        outln!("{n} rows redrawn in {}", a.out_dir.display());
         return Ok(());
     }
     let scene = Scene::load_with(&a.scene, &a.set)?;
@@ -66,12 +66,12 @@ pub fn run(a: Args) -> Result<()> {
     if a.json {
         return crate::print_json(&outcome.report);
     }
-    print!(
+    out!(
         "{}",
         terrain::eval::compare::report::summary_markdown(&name, &outcome.summary)
     );
     let skipped = outcome.report.skipped.len();
-    println!(
+    outln!(
         "\n{} settings measured{} in {:.0} s; report.csv, report.json and figures in {}",
         outcome.rows.len(),
         if skipped > 0 {

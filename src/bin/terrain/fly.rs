@@ -90,7 +90,7 @@ pub fn run(a: Args) -> Result<()> {
     if a.json {
         return crate::print_json(&r);
     }
-    println!(
+    outln!(
         "{} frames on {} in {:.1} s: frame time median {:.1} ms, p95 {:.1} ms (p95/median {:.2}); {}, frames.csv in {}",
         r.frames,
         r.adapter,
@@ -102,7 +102,7 @@ pub fn run(a: Args) -> Result<()> {
         a.out_dir.display()
     );
     if let Some(s) = &r.stream {
-        println!(
+        outln!(
             "streamed: {:.1} tiles loaded a frame (most {}), {} of {} frames showed a stand-in level; {} pages, {:.0} MiB of GPU memory in all",
             s.tiles_loaded_mean,
             s.tiles_loaded_max,

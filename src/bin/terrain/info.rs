@@ -146,7 +146,7 @@ fn print(r: &Report, json: bool) -> Result<()> {
     if json {
         return crate::print_json(r);
     }
-    println!(
+    outln!(
         "{}: {} × {} cells of {:.2} × {:.2} m ({:.1} × {:.1} km), heights {:.1} … {:.1} m, {} nodata filled{}",
         r.file,
         r.width,
@@ -164,7 +164,7 @@ fn print(r: &Report, json: bool) -> Result<()> {
             .unwrap_or_default()
     );
     if let (Some(levels), Some(tiles)) = (&r.levels, r.tiles) {
-        println!(
+        outln!(
             "  a tile pyramid of {} levels (down to {}×{}) in {tiles} tiles",
             levels.len(),
             levels[levels.len() - 1][0],

@@ -4,6 +4,21 @@
 //! 1 for bad input found while working. `--json` prints one JSON object on stdout; messages go to
 //! stderr.
 
+/// `print!` to stdout, except that a reader gone away (`terrain warp … --json | head -c 100`)
+/// ends the program quietly, as it ends `cat`, where `print!` would panic on the broken pipe.
+macro_rules! out {
+    ($($arg:tt)*) => {
+        $crate::write_out(format_args!($($arg)*))
+    };
+}
+
+/// [`out!`] with a newline.
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        $crate::write_out(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
 mod args;
 mod batch;
 mod compare;
@@ -123,6 +138,20 @@ fn one_line(e: &anyhow::Error) -> String {
 
 /// Prints `value` as one JSON object on stdout.
 fn print_json(value: &impl serde::Serialize) -> anyhow::Result<()> {
-    println!("{}", serde_json::to_string(value)?);
+    outln!("{}", serde_json::to_string(value)?);
     Ok(())
+}
+
+/// Writes to stdout and flushes; a closed pipe exits with 0 (the reader took what it wanted),
+/// any other failure with 1 and one line.
+fn write_out(text: std::fmt::Arguments) {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    if let Err(e) = stdout.write_fmt(text).and_then(|()| stdout.flush()) {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("error: stdout: {e}");
+        std::process::exit(1);
+    }
 }

@@ -185,7 +185,7 @@ pub fn run(a: Args) -> Result<()> {
     if a.json {
         return crate::print_json(&report);
     }
-    println!(
+    outln!(
         "{}: {} × {} {} on {}, {} triangles; CPU {:.0} µs, GPU {:.2} ms ({})",
         a.output.display(),
         report.width,

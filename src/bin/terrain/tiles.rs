@@ -39,7 +39,7 @@ pub fn run(a: Args) -> Result<()> {
     if a.json {
         return crate::print_json(&s);
     }
-    println!(
+    outln!(
         "{}: {} × {} nodes from {} source file(s) in {} levels, {} tiles ({} written now), {:.1} MiB, {:.1} s",
         a.out.display(),
         s.width,

@@ -109,7 +109,7 @@ pub fn run(a: Args) -> Result<()> {
         return crate::print_json(&r);
     }
     let q = &r.quality;
-    println!(
+    outln!(
         "{} visible cells ({:.3}× their demand): {:.1} % with ratio in [0.5, 2], {:.1} % in [0.5, 1]; {} flipped, {} non-finite; CPU stage {:.0} µs (sketch map {:.0}, importance {:.0}, warp {:.0})",
         q.cells_visible,
         q.demand_met,
