@@ -44,6 +44,21 @@
 //!   matched are 45 either way (the script's count); so the term stays on. A uniform density
 //!   (`importance.view` off as well) gave 0.959 on jacksboro-high: there the view is nearly
 //!   straight down and GeoMipMap's blocks of 17 are a uniform grid on the DEM's own nodes.
+//!   Measured again in stop 38, counting GeoMipMap rows matched on triangles and error with the
+//!   sweep's warped rows at GeoMipMap's budgets (`eval::compare::sweep`), over the six bundled
+//!   views (same command, `--modes warped,geomipmap`): this term 74 of 90 (interpolated need
+//!   jacksboro 0.342, jacksboro-high 1.041, gaussian 0.385, gaussian-high 0.127, hills 0.694,
+//!   hills-high 0.446); the mean-error optimum `√(I_g·I_v)` (which minimises the mean projected
+//!   error `∫ κ s²·f³/d³ dA` for a given `∫ s⁻² dA`) 74 (0.363, 0.943, 0.401, 0.129, 0.680,
+//!   0.470: jacksboro-high 6 → 9 rows, gaussian, hills and hills-high one fewer each);
+//!   `I_g^¾·I_v^¼` 74 (0.339, 0.985, 0.396, 0.145, 0.684, 0.475); and κ's error projected across
+//!   the ray, `I_g·√(sin θ)` with θ the ray's angle from the vertical (a height error seen straight
+//!   down moves no pixel, and the screen-space error is measured across the ray), 74 (0.389,
+//!   1.026, 0.385, 0.107, 0.694, 0.423: jacksboro loses 14 %, near the camera where the ground
+//!   below is seen steeply). None moves the count; the term stays as it is. From 20 km up even a
+//!   uniform grid (`importance.view` and `importance.error` off) needs 1.06× the triangles of
+//!   GeoMipMap's blocks of 17 for their 0.048 px, so the shape of the importance is not what
+//!   jacksboro-high's misses are made of.
 //! - Computed in f32 relative to the region's corner; world-scale values never enter the loop.
 //!
 //! Speed (`benches/cpu_stage.rs`, `importance`, jacksboro near, 128², medians): 55 µs at commit
