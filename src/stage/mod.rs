@@ -12,6 +12,7 @@ pub mod lines;
 pub mod quality;
 pub mod simd;
 pub mod sketch_map;
+pub mod transpose;
 pub mod warp;
 
 use crate::camera::Camera;

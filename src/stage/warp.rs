@@ -43,8 +43,7 @@
 //!   [½, 1], demand met 0.58; across, 99.5 %, 82.7 % and 0.84, as looking north (99.8 %, 82.9 %,
 //!   0.88). `terrain compare` on it (`--modes warped,geomipmap --repeat 1 --path-frames 0`): rows
 //!   matched on triangles and error 8 → 13 of 15, interpolated need 0.895 → 0.423× GeoMipMap's.
-//!   The transpositions, in tiles of 16, cost 6 µs (`benches/cpu_stage.rs`, hills-east: guarded
-//!   warp 47 µs, against 41 µs for the hills looking north-east, rows first). Every bundled view
+//!   The two transpositions cost about 5 µs (`stage::transpose`). Every bundled view
 //!   looks north or north-east and keeps its bits. Not built: a region turned to any heading,
 //!   which would also serve the diagonal (hills: demand met 0.70, rows first or across alike)
 //!   but breaks the sketch map's lattice fixed in the world (`stage::sketch_map`).
@@ -156,6 +155,7 @@ use crate::stage::lines::{
     LANES, LaneLines, LaneScratch, LineScratch, lane_mappings, lerp_at, lerp_lanes, lerp_weight,
     line_mapping,
 };
+use crate::stage::transpose;
 
 pub struct Warp {
     n: usize,
@@ -183,8 +183,9 @@ pub struct Warp {
     /// Columns the guard sent to the mean column warp in the last frame (lines of x, not y,
     /// where the last frame ran [`Warp::run_across`]).
     pub guarded_columns: usize,
-    /// The importance transposed, for [`Warp::run_across`].
+    /// The importance transposed, and Φ before it is transposed back, for [`Warp::run_across`].
     transposed: Vec<f32>,
+    phi_across: Vec<[f32; 2]>,
     /// Whether the last frame ran [`Warp::run_across`].
     pub across: bool,
     /// Folded column pairs at which the guard sends every column to the mean at once
@@ -225,6 +226,7 @@ impl Warp {
             phi: vec![[0.0; 2]; n * n],
             guarded_columns: 0,
             transposed: vec![0.0; n * n],
+            phi_across: vec![[0.0; 2]; n * n],
             across: false,
             fallback_pairs: fallback_pairs(n),
         }
@@ -244,22 +246,18 @@ impl Warp {
     /// [`Warp::run`] with the passes' roles swapped: columns first, then rows, which the guard
     /// may send to the mean row mapping. For a view whose depth runs along x (the module doc's
     /// rule on orientation). It warps the map transposed and transposes Φ back, so Φ is the
-    /// same grid as [`Warp::run`]'s: (s, t) → (x, y).
+    /// same grid as [`Warp::run`]'s: (s, t) → (x, y). Each of the two reflections (of the output
+    /// grid, of the region) reverses a cell's turn, so together they keep it: a warp that folds
+    /// nowhere stays so.
     pub fn run_across(&mut self, importance: &[f32], d0: f32) {
         let n = self.n;
         assert_eq!(importance.len(), n * n, "importance map size");
         let mut transposed = std::mem::take(&mut self.transposed);
-        for (j0, i0) in tiles(n) {
-            for j in j0..(j0 + TILE).min(n) {
-                for i in i0..(i0 + TILE).min(n) {
-                    transposed[i * n + j] = importance[j * n + i];
-                    transposed[j * n + i] = importance[i * n + j];
-                }
-            }
-        }
+        transpose::importance(importance, &mut transposed, n);
         self.run_rows_first(&transposed, d0);
         self.transposed = transposed;
-        transpose_phi(&mut self.phi, n);
+        std::mem::swap(&mut self.phi, &mut self.phi_across);
+        transpose::phi(&self.phi_across, &mut self.phi, n);
         self.across = true;
     }
 
@@ -501,35 +499,6 @@ fn store_columns(
 /// `lanes[i][l]` is sample i of line `first + l`. Lanes past the last line repeat it; their
 /// results are not kept.
 #[inline(always)]
-/// Φ of the transposed map back to the map's own frame: the point of output (s, t) is the
-/// transposed one's of (t, s) with x and y swapped. Each of the two reflections reverses a
-/// cell's turn, so together they keep it: a warp that folds nowhere stays so.
-fn transpose_phi(phi: &mut [[f32; 2]], n: usize) {
-    for (t0, s0) in tiles(n) {
-        for t in t0..(t0 + TILE).min(n) {
-            // On the diagonal's tiles, each pair once, and the diagonal's points in place.
-            let first = if s0 == t0 { t } else { s0 };
-            for s in first..(s0 + TILE).min(n) {
-                let ([a0, a1], [b0, b1]) = (phi[t * n + s], phi[s * n + t]);
-                phi[t * n + s] = [b1, b0];
-                phi[s * n + t] = [a1, a0];
-            }
-        }
-    }
-}
-
-/// The side of the tiles a transposition works in. Row by row, a 128² map's column writes are
-/// 512 bytes apart and fall into a few of L1's sets: the transpose of the importance and Φ took
-/// about 50 µs so (`terrain warp` on a view looking east).
-const TILE: usize = 16;
-
-/// The corners (row, column) of the tiles on and above the diagonal of an n² map.
-fn tiles(n: usize) -> impl Iterator<Item = (usize, usize)> {
-    (0..n)
-        .step_by(TILE)
-        .flat_map(move |a| (a..n).step_by(TILE).map(move |b| (a, b)))
-}
-
 fn side_by_side(buf: &[f32], n: usize, first: usize, lanes: &mut [[f32; LANES]]) {
     let lines: [&[f32]; LANES] = std::array::from_fn(|l| &buf[(first + l).min(n - 1) * n..][..n]);
     for (i, v) in lanes.iter_mut().enumerate() {
