@@ -78,17 +78,16 @@ const TURN_RATIO: f64 = 1.2;
 /// Whether the warp runs across (`Warp::run_across`, columns first): where the view's depth runs
 /// along x rather than y (the heading's x over its y), keeping the last choice within
 /// [`TURN_RATIO`] of the diagonal. A view straight down keeps the last, or runs rows first.
-fn runs_across(camera: &Camera, last: Option<bool>) -> Option<bool> {
+fn runs_across(camera: &Camera, last: Option<bool>) -> bool {
     let (x, y) = (camera.forward.x.abs(), camera.forward.y.abs());
     if x.max(y) < 1e-9 {
-        return Some(last.unwrap_or(false));
+        return last.unwrap_or(false);
     }
-    let along_x = match last {
+    match last {
         Some(true) => y <= TURN_RATIO * x,
         Some(false) => x > TURN_RATIO * y,
         None => x > y,
-    };
-    Some(along_x)
+    }
 }
 
 impl CpuStage {
@@ -196,9 +195,10 @@ impl CpuStage {
         }
         let t2 = Instant::now();
         if !self.held {
-            self.across = runs_across(camera, self.across);
+            let across = runs_across(camera, self.across);
+            self.across = Some(across);
             let (imp, d0) = (&self.importance.importance, self.sketch_map.spacing as f32);
-            if self.across == Some(true) {
+            if across {
                 self.warp.run_across(imp, d0);
             } else {
                 self.warp.run(imp, d0);
@@ -261,14 +261,14 @@ mod tests {
     #[test]
     fn the_warp_turns_past_the_diagonal_only() {
         let along = |x: f64, y: f64, last| runs_across(&heading(x, y), last);
-        assert_eq!(along(1000.0, 100.0, None), Some(true));
-        assert_eq!(along(100.0, 1000.0, None), Some(false));
-        assert_eq!(along(-1000.0, 300.0, None), Some(true));
+        assert!(along(1000.0, 100.0, None));
+        assert!(!along(100.0, 1000.0, None));
+        assert!(along(-1000.0, 300.0, None));
         // 48° from x: the last choice stands either way.
-        assert_eq!(along(1000.0, 1110.0, Some(true)), Some(true));
-        assert_eq!(along(1110.0, 1000.0, Some(false)), Some(false));
+        assert!(along(1000.0, 1110.0, Some(true)));
+        assert!(!along(1110.0, 1000.0, Some(false)));
         // 55°: past the band.
-        assert_eq!(along(1000.0, 1430.0, Some(true)), Some(false));
-        assert_eq!(along(-1430.0, 1000.0, Some(false)), Some(true));
+        assert!(!along(1000.0, 1430.0, Some(true)));
+        assert!(along(-1430.0, 1000.0, Some(false)));
     }
 }

@@ -49,7 +49,8 @@
 //!   but breaks the sketch map's lattice fixed in the world (`stage::sketch_map`).
 //! - An optional limit on the importance gradient (`max_log2_step`) raises low importance next to
 //!   high, in log space, before warping: fewer folds to guard, at the cost of spreading cells.
-//! - All buffers are allocated once in [`Warp::new`]; a frame allocates nothing.
+//! - All buffers are allocated once in [`Warp::new`], the two the warp across needs on the first
+//!   frame that runs across; a frame allocates nothing after.
 //!
 //! Speed (`benches/cpu_stage.rs`, jacksboro near, 128², criterion medians on the 2-core
 //! development VM). Side by side with the warp that mapped one line at a time (commit 99bf083),
@@ -183,7 +184,9 @@ pub struct Warp {
     /// Columns the guard sent to the mean column warp in the last frame (lines of x, not y,
     /// where the last frame ran [`Warp::run_across`]).
     pub guarded_columns: usize,
-    /// The importance transposed, and Φ before it is transposed back, for [`Warp::run_across`].
+    /// The importance transposed, and Φ before it is transposed back, for [`Warp::run_across`]:
+    /// empty until the first frame that runs across (a view that never looks east or west does
+    /// not hold them; at `warp.size` 4096 they take 200 MB).
     transposed: Vec<f32>,
     phi_across: Vec<[f32; 2]>,
     /// Whether the last frame ran [`Warp::run_across`].
@@ -225,8 +228,8 @@ impl Warp {
             folded: vec![false; n],
             phi: vec![[0.0; 2]; n * n],
             guarded_columns: 0,
-            transposed: vec![0.0; n * n],
-            phi_across: vec![[0.0; 2]; n * n],
+            transposed: Vec::new(),
+            phi_across: Vec::new(),
             across: false,
             fallback_pairs: fallback_pairs(n),
         }
@@ -253,6 +256,8 @@ impl Warp {
         let n = self.n;
         assert_eq!(importance.len(), n * n, "importance map size");
         let mut transposed = std::mem::take(&mut self.transposed);
+        transposed.resize(n * n, 0.0);
+        self.phi_across.resize(n * n, [0.0; 2]);
         transpose::importance(importance, &mut transposed, n);
         self.run_rows_first(&transposed, d0);
         self.transposed = transposed;
