@@ -56,6 +56,8 @@ fn rest<T: Copy>(src: &[T], dst: &mut [T], n: usize, whole: usize, f: impl Fn(T)
 mod x86 {
     use std::arch::x86_64::*;
 
+    /// # Safety
+    /// The processor has AVX2, and `src` and `dst` hold n² values each.
     #[target_feature(enable = "avx2")]
     pub unsafe fn importance(src: &[f32], dst: &mut [f32], n: usize) {
         let whole = n / 8 * 8;
@@ -75,6 +77,8 @@ mod x86 {
         super::rest(src, dst, n, whole, |v| v);
     }
 
+    /// # Safety
+    /// As [`importance`]: AVX2, and n² points in each map.
     #[target_feature(enable = "avx2")]
     pub unsafe fn phi(src: &[[f32; 2]], dst: &mut [[f32; 2]], n: usize) {
         let whole = n / 8 * 8;

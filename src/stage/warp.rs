@@ -36,7 +36,7 @@
 //!   is alike in every line; across the depth the frustum's edges move from line to line. So
 //!   where the view's depth runs along x, the warp runs across ([`Warp::run_across`]): columns
 //!   first, then rows, on the map transposed, Φ transposed back. The heading decides, and turns
-//!   the warp only past the diagonal by 20 % (`stage::TURN_RATIO`), so that a heading near 45°
+//!   the warp only past the diagonal by 25 % (`stage::TURN_RATIO`), so that a heading near 45°
 //!   does not flip the mesh from frame to frame. Measured with `terrain warp S --out-dir D --json`
 //!   (`sketches/hills.toml`'s camera turned to look east, from [500, 3500, 760] at
 //!   [7933, 3500, 400]): rows first, 81.2 % of visible cells within [½, 2] and 43.8 % within

@@ -10,7 +10,7 @@
 //!   warped row drew as many already. The acceptance asks, row by row, whether warped has less
 //!   error at no more triangles; on the ladder alone a warped curve below GeoMipMap's missed rows
 //!   that fell just above a rung (interpolated log-log between the rungs, warped needed 0.76–0.98×
-//!   the triangles of 12 of the 29 GeoMipMap rows it missed over the six bundled views), so the
+//!   the triangles of 13 of the 29 GeoMipMap rows it missed over the six bundled views), so the
 //!   answer depended on the ladder's spacing. A ladder twice as fine would double the warped rows
 //!   and still land beside GeoMipMap's counts, not on them.
 //! - GeoMipMap over τ 0.5, 1, 2, 4, 8 px at blocks of 17, 33 and 65 vertices;
