@@ -232,7 +232,7 @@ fn warped_sweep(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<Vec<Set
         w.mesh
     };
     let pixels = camera.width as f64 * camera.height as f64;
-    let fits = |m: u32| 2.0 * (m as f64 - 1.0).powi(2) <= MAX_TRIANGLES_PER_PX * pixels;
+    let fits = |m: u32| mesh_triangles(m) as f64 <= MAX_TRIANGLES_PER_PX * pixels;
     let mut out: Vec<Setting> = Budget::new(MIN_MESH, MAX_MESH)
         .rungs()
         .iter()
@@ -269,7 +269,7 @@ pub fn at_geomipmap_budgets(quad_px: f64, rows: &[Row]) -> Vec<Setting> {
 }
 
 /// Triangles of a fixed mesh of `mesh`² vertices: two per cell.
-pub fn mesh_triangles(mesh: u32) -> u64 {
+fn mesh_triangles(mesh: u32) -> u64 {
     2 * (mesh as u64).saturating_sub(1).pow(2)
 }
 
