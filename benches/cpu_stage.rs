@@ -44,9 +44,10 @@ fn bench_scene(c: &mut Criterion, name: &str, scene: &Scene) {
         b.iter(|| {
             // Forgotten, so that the region is chosen and resampled (an unchanged region is not).
             stage.sketch_map.forget();
+            let turn = stage.sketch_map.turn;
             stage
                 .sketch_map
-                .update(&atlas, &camera, stage.params.reach_m, false)
+                .update(&atlas, &camera, stage.params.reach_m, false, turn)
         })
     });
     g.bench_function("importance", |b| {

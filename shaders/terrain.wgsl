@@ -305,7 +305,8 @@ fn terrain_fs(in: VsOut) -> FragOut {
         return frag_out(vec3<f32>(1.0), in.view_w);
     }
 #ifdef IMPORTANCE_VIEW
-    let texel = (in.local.xy - frame.mesh.phi_offset) / frame.mesh.d0;
+    let rel = in.local.xy - frame.mesh.phi_offset;
+    let texel = vec2<f32>(dot(rel, frame.mesh.phi_s), dot(rel, frame.mesh.phi_t)) / frame.mesh.d0;
     let i = clamp(vec2<u32>(max(texel, vec2<f32>(0.0))), vec2<u32>(0u), vec2<u32>(frame.mesh.n - 1u));
     let v = importance[i.y * frame.mesh.n + i.x];
     let t = clamp(log2(v / frame.mesh.importance_max) / 12.0 + 1.0, 0.0, 1.0);

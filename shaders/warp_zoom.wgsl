@@ -27,7 +27,9 @@ fn phi_at(st: vec2<f32>) -> vec2<f32> {
     let p10 = phi[i.y * n + i.x + 1u];
     let p01 = phi[(i.y + 1u) * n + i.x];
     let p11 = phi[(i.y + 1u) * n + i.x + 1u];
-    return mix(mix(p00, p10, f.x), mix(p01, p11, f.x), f.y) + frame.mesh.phi_offset;
+    let q = mix(mix(p00, p10, f.x), mix(p01, p11, f.x), f.y);
+    // Φ lies along the region's axes, turned 45° on a diagonal heading.
+    return frame.mesh.phi_s * q.x + frame.mesh.phi_t * q.y + frame.mesh.phi_offset;
 }
 
 // The horizontal position of mesh vertex `ij` (clamped to the mesh).

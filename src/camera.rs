@@ -153,6 +153,72 @@ impl Camera {
     /// The vertices of (pyramid ∩ slab) are the pyramid's vertices inside the slab and its edges'
     /// crossings of the slab's two planes; their box is the footprint's box.
     pub fn footprint(&self, z_lo: f64, z_hi: f64) -> Option<(DVec2, DVec2)> {
+        self.footprint_along(z_lo, z_hi, DVec2::X, DVec2::Y)
+    }
+
+    /// [`Camera::footprint`]'s box along the unit axes `s` and `t` instead of x and y: each
+    /// vertex's coordinates `(p·s, p·t)`. Along x and y, exactly `footprint`'s.
+    pub fn footprint_along(
+        &self,
+        z_lo: f64,
+        z_hi: f64,
+        s: DVec2,
+        t: DVec2,
+    ) -> Option<(DVec2, DVec2)> {
+        let (points, k) = self.footprint_points(z_lo, z_hi);
+        box_along(&points[..k], s, t)
+    }
+
+    /// The footprint's part over the rectangle `[lo, hi]` (the atlas), its box along the unit
+    /// axes `s` and `t`; `None` where they do not meet. For a region turned against the
+    /// rectangle, the box of the footprint clipped to the rectangle is much smaller than the
+    /// footprint's box clipped to the rectangle's box.
+    pub fn footprint_over(
+        &self,
+        z_lo: f64,
+        z_hi: f64,
+        (lo, hi): (DVec2, DVec2),
+        s: DVec2,
+        t: DVec2,
+    ) -> Option<(DVec2, DVec2)> {
+        let (points, k) = self.footprint_points(z_lo, z_hi);
+        let (mut poly, mut m) = convex_hull(&points[..k]);
+        // Sutherland–Hodgman against the rectangle's four sides: (axis, bound, keep below).
+        for (axis, bound, below) in [
+            (0, lo.x, false),
+            (0, hi.x, true),
+            (1, lo.y, false),
+            (1, hi.y, true),
+        ] {
+            let inside = |p: DVec2| {
+                if below {
+                    p[axis] <= bound
+                } else {
+                    p[axis] >= bound
+                }
+            };
+            let mut out = [DVec2::ZERO; CLIPPED];
+            let mut count = 0;
+            for i in 0..m {
+                let (a, b) = (poly[i], poly[(i + 1) % m]);
+                if inside(a) {
+                    out[count] = a;
+                    count += 1;
+                }
+                if inside(a) != inside(b) {
+                    let f = (bound - a[axis]) / (b[axis] - a[axis]);
+                    out[count] = a + (b - a) * f;
+                    count += 1;
+                }
+            }
+            (poly, m) = (out, count);
+        }
+        box_along(&poly[..m], s, t)
+    }
+
+    /// The vertices of (pyramid ∩ slab), in xy: the eye and far corners inside the slab, and the
+    /// edges' crossings of its two planes (at most 5 + 8·2).
+    fn footprint_points(&self, z_lo: f64, z_hi: f64) -> ([DVec2; POINTS], usize) {
         let far = self.far_corners();
         let vertices = [self.eye, far[0], far[1], far[2], far[3]];
         let edges = [
@@ -165,11 +231,11 @@ impl Camera {
             (3, 4),
             (4, 1),
         ];
-        let mut lo = DVec2::splat(f64::INFINITY);
-        let mut hi = DVec2::splat(f64::NEG_INFINITY);
+        let mut points = [DVec2::ZERO; POINTS];
+        let mut k = 0;
         let mut add = |p: DVec3| {
-            lo = lo.min(p.truncate());
-            hi = hi.max(p.truncate());
+            points[k] = p.truncate();
+            k += 1;
         };
         for v in vertices {
             if (z_lo..=z_hi).contains(&v.z) {
@@ -185,8 +251,58 @@ impl Camera {
                 }
             }
         }
-        (lo.x <= hi.x).then_some((lo, hi))
+        (points, k)
     }
+}
+
+/// The most vertices of the footprint ([`Camera::footprint_points`]).
+const POINTS: usize = 21;
+/// The most vertices of its hull clipped by a rectangle: one more per side.
+const CLIPPED: usize = POINTS + 4;
+
+/// The box of `points` along the unit axes `s` and `t`: `(p·s, p·t)`; `None` for no points.
+fn box_along(points: &[DVec2], s: DVec2, t: DVec2) -> Option<(DVec2, DVec2)> {
+    let mut lo = DVec2::splat(f64::INFINITY);
+    let mut hi = DVec2::splat(f64::NEG_INFINITY);
+    for p in points {
+        let f = DVec2::new(p.dot(s), p.dot(t));
+        lo = lo.min(f);
+        hi = hi.max(f);
+    }
+    (lo.x <= hi.x).then_some((lo, hi))
+}
+
+/// The convex hull of `points` counter-clockwise (Andrew's monotone chain), without allocating.
+fn convex_hull(points: &[DVec2]) -> ([DVec2; CLIPPED], usize) {
+    let mut sorted = [DVec2::ZERO; POINTS];
+    let k = points.len().min(POINTS);
+    sorted[..k].copy_from_slice(&points[..k]);
+    let sorted = &mut sorted[..k];
+    sorted.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    let mut hull = [DVec2::ZERO; CLIPPED];
+    if k < 3 {
+        hull[..k].copy_from_slice(sorted);
+        return (hull, k);
+    }
+    let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
+    let mut m = 0;
+    for &p in sorted.iter() {
+        while m >= 2 && cross(hull[m - 2], hull[m - 1], p) <= 0.0 {
+            m -= 1;
+        }
+        hull[m] = p;
+        m += 1;
+    }
+    let lower = m + 1;
+    for &p in sorted.iter().rev().skip(1) {
+        while m >= lower && cross(hull[m - 2], hull[m - 1], p) <= 0.0 {
+            m -= 1;
+        }
+        hull[m] = p;
+        m += 1;
+    }
+    // The last point is the first again.
+    (hull, m - 1)
 }
 
 #[cfg(test)]
@@ -219,6 +335,47 @@ mod tests {
         let behind = c.eye - c.forward * 500.0;
         assert!(c.planes().iter().all(|p| p.distance(ahead) > 0.0));
         assert!(c.planes().iter().any(|p| p.distance(behind) < 0.0));
+    }
+
+    /// The footprint clipped to a rectangle: over a rectangle that holds it all, its own box
+    /// (to rounding); over a smaller one, a box inside both the footprint's and the rectangle's,
+    /// and along turned axes smaller than the footprint's box clipped to the rectangle's box.
+    #[test]
+    fn footprint_over_a_rectangle_clips_the_footprint_itself() {
+        let c = cam(
+            DVec3::new(1000.0, 500.0, 800.0),
+            DVec3::new(6000.0, 6000.0, 300.0),
+        );
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let (s, t) = (DVec2::new(h, -h), DVec2::new(h, h));
+        let whole = (DVec2::splat(-1e6), DVec2::splat(1e6));
+        for (s, t) in [(DVec2::X, DVec2::Y), (s, t)] {
+            let (lo, hi) = c.footprint_along(0.0, 600.0, s, t).unwrap();
+            let (a, b) = c.footprint_over(0.0, 600.0, whole, s, t).unwrap();
+            assert!((a - lo).abs().max_element() < 1e-6 && (b - hi).abs().max_element() < 1e-6);
+        }
+        let rect = (DVec2::ZERO, DVec2::splat(7680.0));
+        let (lo, hi) = c.footprint_over(0.0, 600.0, rect, s, t).unwrap();
+        let (f_lo, f_hi) = c.footprint_along(0.0, 600.0, s, t).unwrap();
+        // The rectangle's corners along the axes.
+        let corners = [0.0, 7680.0].map(|x| [0.0, 7680.0].map(|y| DVec2::new(x, y)));
+        let along = corners
+            .as_flattened()
+            .iter()
+            .map(|p| DVec2::new(p.dot(s), p.dot(t)));
+        let (r_lo, r_hi) = along.fold((DVec2::splat(1e9), DVec2::splat(-1e9)), |(a, b), p| {
+            (a.min(p), b.max(p))
+        });
+        let eps = 1e-6;
+        assert!(lo.cmpge(f_lo.max(r_lo) - eps).all() && hi.cmple(f_hi.min(r_hi) + eps).all());
+        let (b_lo, b_hi) = (f_lo.max(r_lo), f_hi.min(r_hi));
+        assert!(
+            (hi - lo).max_element() < 0.9 * (b_hi - b_lo).max_element(),
+            "clipped {lo} {hi}, box clipped {b_lo} {b_hi}"
+        );
+        // Beside the rectangle, nothing.
+        let away = (DVec2::splat(-9000.0), DVec2::splat(-8000.0));
+        assert!(c.footprint_over(0.0, 600.0, away, s, t).is_none());
     }
 
     #[test]

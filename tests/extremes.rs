@@ -112,7 +112,9 @@ fn camera_outside_the_sketch() {
     // The region encloses the atlas's visible part, not the empty ground around the camera: it
     // reaches past the atlas only by the few texels of slack a region larger than the atlas has.
     let m = &r.stage.sketch_map;
-    let centre = m.origin + DVec2::splat(0.5 * m.extent());
+    // The camera looks north-east, so the region is turned (`stage::sketch_map::Turn`).
+    assert_ne!(m.turn, terrain::stage::sketch_map::Turn::None);
+    let centre = m.world(DVec2::splat(0.5 * m.extent()));
     let atlas_centre = 0.5 * (r.atlas.origin + r.atlas.max_corner());
     assert!(
         (centre - atlas_centre).abs().max_element() <= m.spacing,

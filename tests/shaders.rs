@@ -164,7 +164,9 @@ fn uniform_structs_match_the_wgsl_field_by_field() {
                 n,
                 mesh,
                 d0,
-                importance_max
+                importance_max,
+                phi_s,
+                phi_t
             }),
             size_of::<MeshUniforms>(),
         ),

@@ -79,6 +79,8 @@ struct MeshUniforms {
     mesh: u32,                   // detailed geometry image size (512)
     d0: f32,                     // sketch-map spacing: metres per warp texel
     importance_max: f32,         // the importance view's scale
+    phi_s: vec2<f32>,            // the region's s axis in the world (x unless turned 45°)
+    phi_t: vec2<f32>,            // its t axis (y unless turned)
 }
 
 // GeoMipMap's blocks.

@@ -114,7 +114,7 @@ pub struct DetailUniforms {
 
 /// The mesh the terrain pass draws: the warped geometry image, or GeoMipMap's baked grid.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct MeshUniforms {
     /// Sketch-map region corner − frame origin.
     pub phi_offset: [f32; 2],
@@ -128,6 +128,26 @@ pub struct MeshUniforms {
     pub d0: f32,
     /// The importance view's scale.
     pub importance_max: f32,
+    /// The sketch map region's s and t axes in the world (unit vectors; x and y unless the
+    /// region is turned, `stage::sketch_map::Turn`): Φ is along them.
+    pub phi_s: [f32; 2],
+    pub phi_t: [f32; 2],
+}
+
+/// No mesh: zeros, but Φ along x and y (a bake's identity Φ lies along them).
+impl Default for MeshUniforms {
+    fn default() -> Self {
+        MeshUniforms {
+            phi_offset: [0.0; 2],
+            mesh_offset: [0.0; 2],
+            n: 0,
+            mesh: 0,
+            d0: 0.0,
+            importance_max: 0.0,
+            phi_s: [1.0, 0.0],
+            phi_t: [0.0, 1.0],
+        }
+    }
 }
 
 /// GeoMipMap's blocks.
@@ -249,6 +269,12 @@ impl FrameUniforms {
                 mesh: f.mesh,
                 d0: f.map.map_or(0.0, |m| m.spacing as f32),
                 importance_max: f.importance_max,
+                phi_s: f
+                    .map
+                    .map_or([1.0, 0.0], |m| m.turn.axes().0.as_vec2().to_array()),
+                phi_t: f
+                    .map
+                    .map_or([0.0, 1.0], |m| m.turn.axes().1.as_vec2().to_array()),
             },
             blocks: f.block,
             march: MarchUniforms {

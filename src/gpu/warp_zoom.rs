@@ -106,7 +106,9 @@ fn phi_at(f: &FrameUniforms, phi: &[[f32; 2]], st: Vec2) -> Vec2 {
     let at = |x: u32, y: u32| Vec2::from(phi[(y * n + x) as usize]);
     let (p00, p10) = (at(i.x, i.y), at(i.x + 1, i.y));
     let (p01, p11) = (at(i.x, i.y + 1), at(i.x + 1, i.y + 1));
-    p00.lerp(p10, fr.x).lerp(p01.lerp(p11, fr.x), fr.y) + Vec2::from(f.mesh.phi_offset)
+    let q = p00.lerp(p10, fr.x).lerp(p01.lerp(p11, fr.x), fr.y);
+    let (s, t) = (Vec2::from(f.mesh.phi_s), Vec2::from(f.mesh.phi_t));
+    s * q.x + t * q.y + Vec2::from(f.mesh.phi_offset)
 }
 
 fn mesh_xy(f: &FrameUniforms, phi: &[[f32; 2]], ij: IVec2) -> Vec2 {

@@ -233,6 +233,9 @@ pub struct WarpSection {
     pub method: WarpMethod,
     /// Largest change of log2(importance) between neighbouring texels; 0 turns the limit off.
     pub max_log2_step: f64,
+    /// A view whose heading lies nearer a diagonal than an axis turns the sketch map's region by
+    /// 45° (`stage::sketch_map`); false: the region's axes are always x and y.
+    pub diagonal: bool,
 }
 impl Default for WarpSection {
     fn default() -> Self {
@@ -246,6 +249,7 @@ impl Default for WarpSection {
             size: 128,
             method: WarpMethod::Guarded,
             max_log2_step: 0.0,
+            diagonal: true,
         }
     }
 }

@@ -1,4 +1,5 @@
-//! The CPU stage's figures, all top-down over the sketch map's region, north up:
+//! The CPU stage's figures, all top-down over the sketch map's region, north up (a turned region,
+//! `stage::sketch_map`, with its t axis up: north-east or north-west):
 //! `importance.png` (log importance), `mesh.png` (the warped grid over the shaded sketch, like the
 //! paper's Fig. 3 top row) and `ratio.png` (obtained/demanded density per cell, like Fig. 6).
 //!
@@ -37,7 +38,7 @@ fn save(out: &mut Staged, path: &Path, p: &Pixmap) -> Result<()> {
 /// World metres to pixels over the region.
 fn to_px(stage: &CpuStage, w: DVec2) -> (f32, f32) {
     let m = &stage.sketch_map;
-    let rel = (w - m.origin) / m.extent();
+    let rel = m.local(w) / m.extent();
     (
         (rel.x * SIZE as f64) as f32,
         ((1.0 - rel.y) * SIZE as f64) as f32,
@@ -87,9 +88,11 @@ fn shaded_relief(atlas: &Atlas, stage: &CpuStage) -> Pixmap {
     let data = pix.data_mut();
     for py in 0..SIZE {
         for px in 0..SIZE {
-            let w = m.origin + DVec2::new(px as f64 + 0.5, (SIZE - py) as f64 - 0.5) * px_m;
-            let gx = (height(w + DVec2::X * px_m) - height(w - DVec2::X * px_m)) / (2.0 * px_m);
-            let gy = (height(w + DVec2::Y * px_m) - height(w - DVec2::Y * px_m)) / (2.0 * px_m);
+            let w = m.world(DVec2::new(px as f64 + 0.5, (SIZE - py) as f64 - 0.5) * px_m);
+            // The slope along the figure's axes, as the light comes from its top left.
+            let (s, t) = m.turn.axes();
+            let gx = (height(w + s * px_m) - height(w - s * px_m)) / (2.0 * px_m);
+            let gy = (height(w + t * px_m) - height(w - t * px_m)) / (2.0 * px_m);
             let normal = glam::DVec3::new(-gx, -gy, 1.0).normalize();
             let light = glam::DVec3::new(-1.0, 1.0, 1.4).normalize();
             let shade = (0.35 + 0.65 * normal.dot(light).max(0.0)) as f32;
@@ -180,8 +183,10 @@ fn draw_ratio(pix: &mut Pixmap, stage: &CpuStage, ratios: &[f32]) {
 fn draw_view(pix: &mut Pixmap, stage: &CpuStage) {
     let red = solid(Color::from_rgba8(220, 30, 30, 255));
     if let Some((lo, hi)) = stage.sketch_map.footprint {
-        let (x0, y0) = to_px(stage, lo);
-        let (x1, y1) = to_px(stage, hi);
+        // The box lies along the region's axes, in its turn's frame.
+        let turn = stage.sketch_map.turn;
+        let (x0, y0) = to_px(stage, turn.world(lo));
+        let (x1, y1) = to_px(stage, turn.world(hi));
         if let Some(rect) = tiny_skia::Rect::from_ltrb(x0, y1, x1.max(x0 + 1.0), y0.max(y1 + 1.0)) {
             let path = PathBuilder::from_rect(rect);
             let stroke = Stroke {

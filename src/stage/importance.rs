@@ -98,8 +98,8 @@
 //! (40.3 → 41.5 µs jacksboro near, run alternately, twice), so it stays a call.
 
 use crate::camera::Camera;
-use crate::stage::sketch_map::SketchMap;
-use glam::{DVec2, Vec3};
+use crate::stage::sketch_map::{SketchMap, Turn};
+use glam::{DVec2, DVec3, Vec3};
 
 /// The frustum factor's margin beyond a texel's reach and the detail's, as a share of the
 /// texel's distance to the eye: the room the upsampled mesh's cells take past the texels. 5 %
@@ -526,14 +526,16 @@ impl ImportanceMap {
         let n = map.n;
         let d0 = map.spacing;
         let corner = map.origin.extend(0.0);
-        let eye = (camera.eye - corner).as_vec3();
+        // Region-local: x and y along the region's axes (`SketchMap::local`), z up.
+        let local = |v: DVec3| map.turn.frame(v.truncate()).extend(v.z);
+        let eye = local(camera.eye - corner).as_vec3();
         // Each plane's distance is linear in the texel's (x, y, z): a·x + b·y + c·z + d.
         let planes = camera
             .planes()
-            .map(|pl| (pl.n.as_vec3(), (pl.d + pl.n.dot(corner)) as f32));
+            .map(|pl| (local(pl.n).as_vec3(), (pl.d + pl.n.dot(corner)) as f32));
         let k_view = (camera.f_px() / p.quad_px) as f32;
         let inv_d_min = (2.0 / d0) as f32;
-        let centre = map.origin + DVec2::splat(0.5 * map.extent());
+        let centre = map.world(DVec2::splat(0.5 * map.extent()));
         let uniform_view = (camera.f_px()
             / (p.quad_px * (camera.eye - centre.extend(0.0)).length().max(d0)))
             as f32;
@@ -550,14 +552,9 @@ impl ImportanceMap {
         };
         let (i_first, i_last) = inside(atlas_bounds.0.x, atlas_bounds.1.x, map.origin.x);
         let (j_first, j_last) = inside(atlas_bounds.0.y, atlas_bounds.1.y, map.origin.y);
+        let turned = map.turn != Turn::None;
         self.column_on_atlas.resize(n, 0.0);
-        for (i, v) in self.column_on_atlas.iter_mut().enumerate() {
-            *v = if i >= i_first && (i as isize) <= i_last {
-                1.0
-            } else {
-                0.0
-            };
-        }
+        fill_on_atlas(&mut self.column_on_atlas, (i_first, i_last));
         self.gx.resize(n, 0.0);
         self.inv_dist.resize(n, 0.0);
         self.inv_margin.resize(n, 0.0);
@@ -591,11 +588,16 @@ impl ImportanceMap {
         } = self;
         let (x, gx, inv_dist) = (&x[..n], &mut gx[..n], &mut inv_dist[..n]);
         let inv_margin = &mut inv_margin[..n];
-        let (curvature, column_on_atlas) = (&mut curvature[..n], &column_on_atlas[..n]);
+        let (curvature, column_on_atlas) = (&mut curvature[..n], &mut column_on_atlas[..n]);
         let octave = &mut octave[..n];
         for j in (0..n).step_by(row_step.max(1)) {
             let y = j as f32 * d0f;
-            let row_on = if j >= j_first && (j as isize) <= j_last {
+            let row_on = if turned {
+                // A turned region's row crosses the atlas's edges at its own columns.
+                let (base, step) = (map.texel_world(0, j), map.turn.axes().0 * d0);
+                fill_on_atlas(column_on_atlas, on_atlas(base, step, n, atlas_bounds));
+                1.0
+            } else if j >= j_first && (j as isize) <= j_last {
                 1.0
             } else {
                 0.0
@@ -868,6 +870,43 @@ fn backface(cos: f32, floor: f32) -> f32 {
     1.0 - (1.0 - floor) * smoothstep(t)
 }
 
+/// 1 for the columns in `first ..= last`, 0 elsewhere.
+fn fill_on_atlas(on: &mut [f32], (first, last): (usize, isize)) {
+    for (i, v) in on.iter_mut().enumerate() {
+        *v = if i >= first && (i as isize) <= last {
+            1.0
+        } else {
+            0.0
+        };
+    }
+}
+
+/// The texels `base + i·step`, i < n, that lie on the atlas `[lo, hi]` (a slack of 10⁻⁶ texel,
+/// as for an axis-aligned region): `(first, last)`, empty when last < first.
+fn on_atlas(base: DVec2, step: DVec2, n: usize, (lo, hi): (DVec2, DVec2)) -> (usize, isize) {
+    let (mut first, mut last) = (0.0f64, (n - 1) as f64);
+    for axis in 0..2 {
+        let (b, d) = (base[axis], step[axis]);
+        if d.abs() < 1e-12 {
+            if b < lo[axis] || b > hi[axis] {
+                return (1, 0);
+            }
+            continue;
+        }
+        let (a, c) = ((lo[axis] - b) / d, (hi[axis] - b) / d);
+        first = first.max(a.min(c) - 1e-6);
+        last = last.min(a.max(c) + 1e-6);
+    }
+    let (first, last) = (first.ceil(), last.floor());
+    // A NaN (a non-finite corner) leaves the row off the atlas, as an empty range does.
+    match first.partial_cmp(&last) {
+        Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal) => {
+            (first as usize, last as isize)
+        }
+        _ => (1, 0),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -974,7 +1013,7 @@ mod tests {
         )
         .unwrap();
         let mut map = SketchMap::new(128);
-        map.update(&atlas, &camera, 50.0, false);
+        map.update(&atlas, &camera, 50.0, false, Turn::None);
         let p = ImportanceParams {
             quad_px: 2.0,
             view: true,

@@ -24,7 +24,7 @@ use budget::Budget;
 use glam::DVec2;
 use hold::{Hold, ROW_STEP};
 use importance::{ErrorTerm, ImportanceMap, ImportanceParams};
-use sketch_map::{Resampler, SketchMap, resample};
+use sketch_map::{Resampler, SketchMap, Turn};
 use std::time::Instant;
 use warp::Warp;
 
@@ -66,12 +66,14 @@ pub struct CpuStage {
     surface_resampler: Resampler,
     /// The ground position of the camera of the last run (for figures).
     pub last_eye: DVec2,
-    /// Whether the last warp ran across ([`runs_across`]); `None` before the first.
-    across: Option<bool>,
+    /// The heading the last warp was made for ([`heading_of`]); `None` before the first.
+    heading: Option<Heading>,
+    /// Whether a diagonal heading turns the region (`warp.diagonal`).
+    diagonal: bool,
 }
 
-/// How much more a view's heading must lie along the other axis before the warp turns: about
-/// 51° from the axis it runs along, so that a heading near the diagonal does not flip the mesh
+/// Without `warp.diagonal`: how much more a view's heading must lie along the other axis before
+/// the warp turns: about 51° from the axis it runs along, so that a heading near the diagonal does not flip the mesh
 /// from frame to frame. Not 1.2: the bundled flight's last key looks 6000 m along x for 5000
 /// along y, and a threshold at its exact ratio would leave the turn to rounding.
 const TURN_RATIO: f64 = 1.25;
@@ -88,6 +90,86 @@ fn runs_across(camera: &Camera, last: Option<bool>) -> bool {
         Some(true) => y <= TURN_RATIO * x,
         Some(false) => x > TURN_RATIO * y,
         None => x > y,
+    }
+}
+
+/// The way a view's warp lies: the axis or diagonal nearest the view's heading (a line, so
+/// north and south are one), so that the warp's second pass runs along the view's depth
+/// (`stage::warp`'s rule on orientation).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Heading {
+    /// Rows first over an axis-aligned region.
+    North,
+    /// Rows first over a region turned to the north-east ([`Turn::NorthEast`]).
+    NorthEast,
+    /// Across ([`warp::Warp::run_across`]) over an axis-aligned region.
+    East,
+    /// Rows first over a region turned to the north-west ([`Turn::NorthWest`]).
+    NorthWest,
+}
+
+impl Heading {
+    const ALL: [Heading; 4] = [
+        Heading::North,
+        Heading::NorthEast,
+        Heading::East,
+        Heading::NorthWest,
+    ];
+
+    /// The region's axes for this heading.
+    pub fn turn(self) -> Turn {
+        match self {
+            Heading::North | Heading::East => Turn::None,
+            Heading::NorthEast => Turn::NorthEast,
+            Heading::NorthWest => Turn::NorthWest,
+        }
+    }
+
+    /// Whether the warp runs across.
+    pub fn across(self) -> bool {
+        self == Heading::East
+    }
+
+    /// Degrees from north toward east, modulo 180.
+    fn degrees(self) -> f64 {
+        match self {
+            Heading::North => 0.0,
+            Heading::NorthEast => 45.0,
+            Heading::East => 90.0,
+            Heading::NorthWest => 135.0,
+        }
+    }
+}
+
+/// Degrees past the half-way between two headings (22.5°) that a view must turn before its warp
+/// follows, so that a camera swaying about the half-way keeps its mesh.
+const TURN_BAND_DEG: f64 = 5.0;
+
+/// The heading a view's warp lies along: the nearest of the four ([`Heading`]), keeping the last
+/// one within [`TURN_BAND_DEG`] past the half-way. Without `diagonal` (`warp.diagonal`), north or
+/// east only, as [`runs_across`] chooses. A view straight down keeps the last, or north.
+fn heading_of(camera: &Camera, last: Option<Heading>, diagonal: bool) -> Heading {
+    if !diagonal {
+        return match runs_across(camera, last.map(Heading::across)) {
+            true => Heading::East,
+            false => Heading::North,
+        };
+    }
+    let (x, y) = (camera.forward.x, camera.forward.y);
+    if x.abs().max(y.abs()) < 1e-9 {
+        return last.unwrap_or(Heading::North);
+    }
+    let degrees = x.atan2(y).to_degrees().rem_euclid(180.0);
+    let off = |h: Heading| {
+        let d = (degrees - h.degrees()).rem_euclid(180.0);
+        d.min(180.0 - d)
+    };
+    match last {
+        Some(h) if off(h) <= 22.5 + TURN_BAND_DEG => h,
+        _ => Heading::ALL
+            .into_iter()
+            .min_by(|a, b| off(*a).total_cmp(&off(*b)))
+            .unwrap_or(Heading::North),
     }
 }
 
@@ -140,7 +222,8 @@ impl CpuStage {
             surface_max_atlas,
             surface_resampler: Resampler::default(),
             last_eye: DVec2::ZERO,
-            across: None,
+            heading: None,
+            diagonal: scene.warp.diagonal,
         })
     }
 
@@ -152,20 +235,15 @@ impl CpuStage {
         }
         self.last_eye = camera.eye.truncate();
         let holding = self.hold.is_some();
-        let moved = self
-            .sketch_map
-            .update(atlas, camera, self.params.reach_m, holding);
-        let n = self.sketch_map.n;
+        let heading = heading_of(camera, self.heading, self.diagonal);
+        // A new heading turns the region or the warp: the held one no longer serves.
+        let turned = self.heading != Some(heading);
+        let moved =
+            self.sketch_map
+                .update(atlas, camera, self.params.reach_m, holding, heading.turn());
         if let (true, Some(m)) = (moved, &self.surface_max_atlas) {
-            let map = &self.sketch_map;
-            resample(
-                m,
-                map.origin,
-                map.spacing,
-                n,
-                &mut self.surface_max,
-                &mut self.surface_resampler,
-            );
+            self.sketch_map
+                .resample_into(m, &mut self.surface_max, &mut self.surface_resampler);
         }
         let t1 = Instant::now();
         let bounds = (atlas.origin, atlas.max_corner());
@@ -175,7 +253,7 @@ impl CpuStage {
             .map(|_| self.surface_max.as_slice());
         // A held warp that still serves: only a sample of the importance, no warp.
         self.held = match &mut self.hold {
-            Some(h) if !moved && h.is_holding() => {
+            Some(h) if !moved && !turned && h.is_holding() => {
                 self.probe.update_rows(
                     &self.sketch_map,
                     bounds,
@@ -196,10 +274,9 @@ impl CpuStage {
         }
         let t2 = Instant::now();
         if !self.held {
-            let across = runs_across(camera, self.across);
-            self.across = Some(across);
+            self.heading = Some(heading);
             let (imp, d0) = (&self.importance.importance, self.sketch_map.spacing as f32);
-            if across {
+            if heading.across() {
                 self.warp.run_across(imp, d0);
             } else {
                 self.warp.run(imp, d0);
@@ -230,13 +307,13 @@ impl CpuStage {
         if let Some(b) = &mut self.budget {
             b.forget();
         }
-        self.across = None;
+        self.heading = None;
     }
 
     /// Φ(s, t) in world metres (f64).
     pub fn phi_world(&self, s: usize, t: usize) -> DVec2 {
         let p = self.warp.phi[t * self.sketch_map.n + s];
-        self.sketch_map.origin + DVec2::new(p[0] as f64, p[1] as f64)
+        self.sketch_map.world(DVec2::new(p[0] as f64, p[1] as f64))
     }
 }
 
@@ -271,5 +348,46 @@ mod tests {
         // 55°: past the band.
         assert!(!along(1000.0, 1430.0, Some(true)));
         assert!(along(-1430.0, 1000.0, Some(false)));
+    }
+
+    /// With `warp.diagonal`, the nearest of the four headings (a line: south is north), keeping
+    /// the last within 5° past the half-way, so a camera swaying about 22.5° keeps its mesh;
+    /// without it, [`runs_across`]'s choice.
+    #[test]
+    fn the_warp_follows_the_nearest_of_four_headings() {
+        use Heading::*;
+        let at = |degrees: f64, last, diagonal| {
+            let r = degrees.to_radians();
+            heading_of(&heading(1000.0 * r.sin(), 1000.0 * r.cos()), last, diagonal)
+        };
+        for (degrees, want) in [
+            (0.0, North),
+            (180.0, North),
+            (20.0, North),
+            (25.0, NorthEast),
+            (45.0, NorthEast),
+            (225.0, NorthEast),
+            (70.0, East),
+            (-90.0, East),
+            (135.0, NorthWest),
+            (-40.0, NorthWest),
+            (160.0, North),
+        ] {
+            assert_eq!(at(degrees, None, true), want, "{degrees}°");
+        }
+        // Within 27.5° of the last heading it stays; past, it turns.
+        assert_eq!(at(27.0, Some(North), true), North);
+        assert_eq!(at(18.0, Some(NorthEast), true), NorthEast);
+        assert_eq!(at(28.0, Some(North), true), NorthEast);
+        assert_eq!(at(72.0, Some(NorthEast), true), NorthEast);
+        assert_eq!(at(73.0, Some(NorthEast), true), East);
+        // Straight down keeps the last.
+        let down = heading(0.0, 0.0);
+        assert_eq!(heading_of(&down, Some(NorthWest), true), NorthWest);
+        assert_eq!(heading_of(&down, None, true), North);
+        // Without diagonals: north or east, as before.
+        assert_eq!(at(45.0, None, false), North);
+        assert_eq!(at(60.0, None, false), East);
+        assert_eq!(at(48.0, Some(East), false), East);
     }
 }

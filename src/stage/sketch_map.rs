@@ -13,18 +13,92 @@
 //!   footprint asks for, still encloses the footprint; the heights are then not resampled. A
 //!   region that follows the footprint's centre moves every d0 of flight and redoes the warp.
 //!
+//! - The region's axes follow the view's heading in steps of 45° ([`Turn`]): where the heading
+//!   lies nearer a diagonal than an axis, the region is a square turned by 45°, so that its t axis
+//!   (the warp's second pass, which the guard may send to one shared mapping) runs along the
+//!   view's depth, as it does for a view looking north (`stage::warp`'s rule on orientation). A
+//!   turned region's spacing is `d0` too, and its texels are the points of the world lattice of
+//!   spacing `d0/√2` whose lattice coordinates (from the atlas origin) sum to an even number: a
+//!   lattice fixed in the world as the axis-aligned one is, so a turned sketch map does not swim
+//!   either. Its heights are resampled along the rows of that finer lattice
+//!   ([`resample_turned`]), with the taps and the levels of the axis-aligned map's spacing.
+//!
 //! Rejected alternative: the exact bounding square, resampled anew each frame. Its samples slide
-//! over the atlas as the camera moves, and the terrain's silhouette wobbles with them.
+//! over the atlas as the camera moves, and the terrain's silhouette wobbles with them. Also
+//! rejected: a region turned to the exact heading. Its lattice would turn with the camera, and
+//! every sample would slide as the view turns.
 
 use crate::camera::Camera;
 use crate::sketch::Atlas;
 use glam::DVec2;
 
+/// How the region's axes lie in the world. Region-local coordinates (u, v) are metres along its
+/// s and t axes from texel (0, 0); Φ is in them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Turn {
+    /// s along x, t along y.
+    #[default]
+    None,
+    /// Turned 45° clockwise: t along (1, 1)/√2, for headings north-east and south-west.
+    NorthEast,
+    /// Turned 45° counter-clockwise: t along (−1, 1)/√2, for headings north-west and south-east.
+    NorthWest,
+}
+
+impl Turn {
+    /// The region's s and t axes as unit vectors in the world (a right-handed pair).
+    pub fn axes(self) -> (DVec2, DVec2) {
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        match self {
+            Turn::None => (DVec2::X, DVec2::Y),
+            Turn::NorthEast => (DVec2::new(h, -h), DVec2::new(h, h)),
+            Turn::NorthWest => (DVec2::new(h, h), DVec2::new(-h, h)),
+        }
+    }
+
+    /// A turned region's steps along s and t on the world lattice of spacing `d0/√2`, in its
+    /// units; `None` for an axis-aligned region.
+    fn lattice_steps(self) -> Option<([i64; 2], [i64; 2])> {
+        match self {
+            Turn::None => None,
+            Turn::NorthEast => Some(([1, -1], [1, 1])),
+            Turn::NorthWest => Some(([1, 1], [-1, 1])),
+        }
+    }
+
+    /// World point `w` in the turn's frame: its coordinates along the s and t axes (the world's
+    /// own, unchanged, for an axis-aligned region).
+    pub fn frame(self, w: DVec2) -> DVec2 {
+        match self {
+            Turn::None => w,
+            _ => {
+                let (s, t) = self.axes();
+                DVec2::new(w.dot(s), w.dot(t))
+            }
+        }
+    }
+
+    /// Frame coordinates back to the world ([`Turn::frame`]'s inverse).
+    pub fn world(self, f: DVec2) -> DVec2 {
+        match self {
+            Turn::None => f,
+            _ => {
+                let (s, t) = self.axes();
+                s * f.x + t * f.y
+            }
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct SketchMap {
     pub n: usize,
-    /// World position of texel (0, 0), the region's south-west corner.
+    /// World position of texel (0, 0), the region's corner (south-west, or south for a turned
+    /// region).
     pub origin: DVec2,
+    /// The region's axes.
+    pub turn: Turn,
     /// `d0`: metres between texels.
     pub spacing: f64,
     /// Heights, row-major, row 0 south.
@@ -32,7 +106,8 @@ pub struct SketchMap {
     /// Whether any of the atlas is in view.
     pub visible: bool,
     resampler: Resampler,
-    /// The footprint's box (world), clipped to the atlas, when visible.
+    /// The footprint's box in the turn's frame ([`Turn::frame`]; the world for an axis-aligned
+    /// region), clipped to the atlas's box there, when visible.
     pub footprint: Option<(DVec2, DVec2)>,
     /// Whether `heights` hold the region's samples (false until the first update, and forgotten).
     sampled: bool,
@@ -43,6 +118,7 @@ impl SketchMap {
         SketchMap {
             n,
             origin: DVec2::ZERO,
+            turn: Turn::None,
             spacing: 1.0,
             heights: vec![0.0; n * n],
             visible: false,
@@ -62,38 +138,62 @@ impl SketchMap {
         (self.n - 1) as f64 * self.spacing
     }
 
-    /// Chooses the region for `camera` and resamples the atlas into it; allocates nothing.
-    /// `reach_m`: how far procedural detail can lift or sink the surface. With `hold`, the last
-    /// region is kept while it still serves; returns whether the region changed.
-    pub fn update(&mut self, atlas: &Atlas, camera: &Camera, reach_m: f64, hold: bool) -> bool {
+    /// Chooses the region for `camera`, with its axes turned by `turn`, and resamples the atlas
+    /// into it; allocates nothing. `reach_m`: how far procedural detail can lift or sink the
+    /// surface. With `hold`, the last region is kept while it still serves (and has the same
+    /// turn); returns whether the region changed.
+    pub fn update(
+        &mut self,
+        atlas: &Atlas,
+        camera: &Camera,
+        reach_m: f64,
+        hold: bool,
+        turn: Turn,
+    ) -> bool {
         let z_lo = atlas.min_m as f64 - reach_m;
         let z_hi = atlas.max_m as f64 + reach_m;
-        let (a_lo, a_hi) = (atlas.origin, atlas.max_corner());
-        let clipped = camera
-            .footprint(z_lo, z_hi)
-            .map(|(lo, hi)| (lo.max(a_lo), hi.min(a_hi)))
-            .filter(|(lo, hi)| lo.x <= hi.x && lo.y <= hi.y);
+        let (a_lo, a_hi) = atlas_box(atlas, turn);
+        let (s, t) = turn.axes();
+        let clipped = match turn {
+            Turn::None => camera
+                .footprint(z_lo, z_hi)
+                .map(|(lo, hi)| (lo.max(a_lo), hi.min(a_hi))),
+            // Against a turned region the atlas is a diamond: the footprint is clipped to it
+            // first (its box clipped to the diamond's box would be up to twice as wide).
+            _ => camera.footprint_over(z_lo, z_hi, (atlas.origin, atlas.max_corner()), s, t),
+        }
+        .filter(|(lo, hi)| lo.x <= hi.x && lo.y <= hi.y);
         self.visible = clipped.is_some();
         self.footprint = clipped;
         let (lo, hi) = clipped.unwrap_or((a_lo, a_hi));
-        let before = (self.origin, self.spacing);
-        self.choose_region(atlas, lo, hi, hold && self.sampled);
-        if self.sampled && before == (self.origin, self.spacing) {
+        let before = (self.origin, self.spacing, self.turn);
+        let keep = hold && self.sampled && turn == self.turn;
+        self.turn = turn;
+        self.choose_region(atlas, lo, hi, keep);
+        if self.sampled && before == (self.origin, self.spacing, self.turn) {
             return false;
         }
         self.sampled = true;
-        resample(
-            atlas,
-            self.origin,
-            self.spacing,
-            self.n,
-            &mut self.heights,
-            &mut self.resampler,
+        let (mut heights, mut resampler) = (
+            std::mem::take(&mut self.heights),
+            std::mem::take(&mut self.resampler),
         );
+        self.resample_into(atlas, &mut heights, &mut resampler);
+        (self.heights, self.resampler) = (heights, resampler);
         true
     }
 
-    /// The region for the footprint [lo, hi]; with `keep`, the current corner if it still serves.
+    /// Samples `atlas` (the sketch, or any grid over it) on this region's texels into `out`.
+    pub fn resample_into(&self, atlas: &Atlas, out: &mut [f32], r: &mut Resampler) {
+        if self.turn == Turn::None {
+            resample(atlas, self.origin, self.spacing, self.n, out, r);
+        } else {
+            resample_turned(atlas, self.origin, self.spacing, self.turn, self.n, out, r);
+        }
+    }
+
+    /// The region for the footprint [lo, hi] (in the turn's frame); with `keep`, the current
+    /// corner if it still serves.
     fn choose_region(&mut self, atlas: &Atlas, lo: DVec2, hi: DVec2, keep: bool) {
         let d_atlas = atlas.d_atlas();
         let n = self.n as f64;
@@ -102,34 +202,76 @@ impl SketchMap {
         let q = (4.0 * (side / ((n - 3.0).max(1.0) * d_atlas)).log2()).ceil();
         let d0 = d_atlas * (q / 4.0).exp2();
         let full = (n - 1.0) * d0;
+        let turn = self.turn;
         if keep && d0 == self.spacing {
-            let (c, end) = (self.origin, self.origin + DVec2::splat(full));
+            let c = turn.frame(self.origin);
+            let end = c + DVec2::splat(full);
             if c.x <= lo.x && c.y <= lo.y && end.x >= hi.x && end.y >= hi.y {
                 return;
             }
         }
         let centre = 0.5 * (lo + hi);
+        // The lattice's origin, the atlas's corner, in the turn's frame: whole multiples of d0
+        // from it lie on the world lattice (for a turned region, on its even points).
+        let o = turn.frame(atlas.origin);
         let snap = |w: f64, o: f64| ((w - o) / d0).floor() * d0 + o;
-        let a_hi = atlas.max_corner();
+        let (a_lo, a_hi) = atlas_box(atlas, turn);
         let mut corner = DVec2::ZERO;
         for axis in 0..2 {
             let mut c = centre[axis] - 0.5 * full;
             // Inside the atlas where the atlas is wider than the region.
-            if a_hi[axis] - atlas.origin[axis] >= full {
-                c = c.clamp(atlas.origin[axis], a_hi[axis] - full);
+            if a_hi[axis] - a_lo[axis] >= full {
+                c = c.clamp(a_lo[axis], a_hi[axis] - full);
             }
             // Any corner in [hi − full + d0, lo] still covers the footprint after snapping down.
             c = c.clamp(hi[axis] - full + d0, lo[axis]);
-            corner[axis] = snap(c, atlas.origin[axis]);
+            corner[axis] = snap(c, o[axis]);
         }
-        self.origin = corner;
+        self.origin = match turn.lattice_steps() {
+            None => corner,
+            // From whole steps, so that the corner is a lattice point to the last bit.
+            Some((a, b)) => {
+                let (i, j) = (
+                    ((corner.x - o.x) / d0).round(),
+                    ((corner.y - o.y) / d0).round(),
+                );
+                let d_b = d0 * std::f64::consts::FRAC_1_SQRT_2;
+                let step = DVec2::new(
+                    i * a[0] as f64 + j * b[0] as f64,
+                    i * a[1] as f64 + j * b[1] as f64,
+                );
+                atlas.origin + step * d_b
+            }
+        };
         self.spacing = d0;
+    }
+
+    /// World position of region-local point `p` (metres along the region's s and t axes).
+    pub fn world(&self, p: DVec2) -> DVec2 {
+        self.origin + self.turn.world(p)
+    }
+
+    /// Region-local coordinates of world point `w` ([`SketchMap::world`]'s inverse).
+    pub fn local(&self, w: DVec2) -> DVec2 {
+        self.turn.frame(w - self.origin)
     }
 
     /// World position of texel (i, j).
     pub fn texel_world(&self, i: usize, j: usize) -> DVec2 {
-        self.origin + DVec2::new(i as f64, j as f64) * self.spacing
+        self.world(DVec2::new(i as f64, j as f64) * self.spacing)
     }
+}
+
+/// The atlas's bounding box in `turn`'s frame (the atlas itself for an axis-aligned region).
+fn atlas_box(atlas: &Atlas, turn: Turn) -> (DVec2, DVec2) {
+    let (a, b) = (atlas.origin, atlas.max_corner());
+    [a, DVec2::new(b.x, a.y), b, DVec2::new(a.x, b.y)]
+        .map(|c| turn.frame(c))
+        .iter()
+        .fold(
+            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &c| (lo.min(c), hi.max(c)),
+        )
 }
 
 /// Bilinear taps of one level along one axis: for each output sample, the lower texel and the
@@ -142,6 +284,12 @@ pub struct Taps {
 }
 
 impl Taps {
+    /// Tap k: the lower texel and the weight of the upper one.
+    #[inline(always)]
+    fn at(&self, k: usize) -> (usize, f32) {
+        (self.index[k] as usize, self.frac[k])
+    }
+
     /// Taps at level-0 texel coordinates `c0 + k·dc`, k < n, on a level `size` texels long that is
     /// level `l` of the pyramid.
     #[inline(always)]
@@ -162,13 +310,17 @@ impl Taps {
     }
 }
 
-/// Scratch for [`resample`]: taps for x and y at the two levels sampled, and one level row
-/// interpolated between two source rows (`vertical`).
+/// Scratch for [`resample`] and [`resample_turned`]: taps for x and y at the two levels sampled,
+/// and one level row interpolated between two source rows (`vertical`).
 #[derive(Clone, Debug, Default)]
 pub struct Resampler {
     x: [Taps; 2],
     y: [Taps; 2],
     vertical: Vec<f32>,
+    /// A turned region's taps along x: every other lattice column, from the first or the second
+    /// (`resample_turned`), at each level; and one run's samples.
+    runs: [[Taps; 2]; 2],
+    run: Vec<f32>,
 }
 
 /// Samples `atlas` on the n² lattice `origin + (i, j)·spacing`, trilinear between the two mip
@@ -243,29 +395,172 @@ fn resample_rows(
     let blend = t > 0.0 && l1 != l0;
     for j in 0..n {
         let row = &mut out[j * n..(j + 1) * n];
-        let Resampler { x, y, vertical } = r;
-        sample_row(&atlas.levels[l0], &x[0], &y[0], j, vertical, row, None);
+        let Resampler { x, y, vertical, .. } = r;
+        let taps = |k: usize| ((&x[k].index[..], &x[k].frac[..]), y[k].at(j));
+        let (tx, ty) = taps(0);
+        sample_row(&atlas.levels[l0], tx, ty, vertical, row, None);
         if blend {
-            sample_row(&atlas.levels[l1], &x[1], &y[1], j, vertical, row, Some(t));
+            let (tx, ty) = taps(1);
+            sample_row(&atlas.levels[l1], tx, ty, vertical, row, Some(t));
         }
     }
 }
 
-/// Output row j of one level: written to `row`, or blended into it by `blend`.
+/// [`resample`] for a region turned by `turn`, whose texel (i, j) lies at `origin + (i·a + j·b)·d_b`
+/// with `d_b = spacing/√2` and a, b its [`Turn::lattice_steps`]: the texels are points of the
+/// world lattice of spacing `d_b`, so each lattice row (one y) holds a run of them every other
+/// lattice column, one texel further along s each. Each run is sampled as an axis-aligned row is
+/// (the vertical interpolation over its span, then the taps along x, at the levels of `spacing`,
+/// as [`resample`] takes them), into `r.run`, and then written to its texels.
+pub fn resample_turned(
+    atlas: &Atlas,
+    origin: DVec2,
+    spacing: f64,
+    turn: Turn,
+    n: usize,
+    out: &mut [f32],
+    r: &mut Resampler,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if crate::stage::simd::avx512() {
+        // SAFETY: the processor has AVX-512F and AVX2 (`simd::avx512`), checked just above.
+        return unsafe { resample_turned_avx512(atlas, origin, spacing, turn, n, out, r) };
+    }
+    resample_runs(atlas, origin, spacing, turn, n, out, r);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2")]
+unsafe fn resample_turned_avx512(
+    atlas: &Atlas,
+    origin: DVec2,
+    spacing: f64,
+    turn: Turn,
+    n: usize,
+    out: &mut [f32],
+    r: &mut Resampler,
+) {
+    resample_runs(atlas, origin, spacing, turn, n, out, r);
+}
+
+#[inline(always)]
+fn resample_runs(
+    atlas: &Atlas,
+    origin: DVec2,
+    spacing: f64,
+    turn: Turn,
+    n: usize,
+    out: &mut [f32],
+    r: &mut Resampler,
+) {
+    let Some((a, b)) = turn.lattice_steps() else {
+        return resample_rows(atlas, origin, spacing, n, out, r);
+    };
+    // Both turns step one lattice row up along t (b[1] = 1), and along s one up or down
+    // (a[1] = ∓1); along a lattice row, the next texel is one along s and a[1] along t: two
+    // lattice columns on (a[0] − a[1]·b[0] = 2).
+    debug_assert!(b[1] == 1 && a[1].abs() == 1 && a[0] - a[1] * b[0] == 2);
+    let top = atlas.levels.len() - 1;
+    let lod = (spacing / atlas.d_atlas())
+        .log2()
+        .clamp(atlas.resident_from as f64, top as f64);
+    let l0 = lod as usize;
+    let l1 = (l0 + 1).min(top);
+    let t = (lod - l0 as f64) as f32;
+    let d_b = spacing * std::f64::consts::FRAC_1_SQRT_2;
+    let last = n as i64 - 1;
+    // Lattice row y' = j + a[1]·i of texel (i, j), relative to the corner's; column
+    // x' = 2i + b[0]·y'.
+    let (y_lo, y_hi) = if a[1] < 0 {
+        (-last, last)
+    } else {
+        (0, 2 * last)
+    };
+    // The least lattice column, x' = i·a[0] + j·b[0], at a corner of the region.
+    let x_lo = [0, last]
+        .into_iter()
+        .flat_map(|i| [0, last].map(|j| i * a[0] + j * b[0]))
+        .min()
+        .unwrap_or(0);
+    // Each parity's lattice columns from x_lo (or one past), every other one.
+    let columns = n + 1;
+    let u0 = (origin.x - atlas.origin.x) / atlas.dx;
+    let v0 = (origin.y - atlas.origin.y) / atlas.dy;
+    let rows = (y_hi - y_lo + 1) as usize;
+    for (k, l) in [l0, l1].into_iter().enumerate() {
+        let level = &atlas.levels[l];
+        for p in 0..2 {
+            let first = u0 + (x_lo + p as i64) as f64 * d_b / atlas.dx;
+            r.runs[p][k].fill(first, 2.0 * d_b / atlas.dx, columns, l, level.width);
+        }
+        r.y[k].fill(
+            v0 + y_lo as f64 * d_b / atlas.dy,
+            d_b / atlas.dy,
+            rows,
+            l,
+            level.height,
+        );
+    }
+    let blend = t > 0.0 && l1 != l0;
+    for y in y_lo..=y_hi {
+        // Texels (i, y − a[1]·i) of the region, i in [i_lo, i_hi].
+        let (i_lo, i_hi) = if a[1] < 0 {
+            ((-y).max(0), last.min(last - y))
+        } else {
+            ((y - last).max(0), last.min(y))
+        };
+        if i_lo > i_hi {
+            continue;
+        }
+        let len = (i_hi - i_lo + 1) as usize;
+        let x_first = 2 * i_lo + b[0] * y;
+        let p = (x_first - x_lo).rem_euclid(2) as usize;
+        let at = ((x_first - x_lo - p as i64) / 2) as usize;
+        let Resampler {
+            y: ty,
+            vertical,
+            runs,
+            run,
+            ..
+        } = r;
+        run.resize(len.max(run.len()), 0.0);
+        let run = &mut run[..len];
+        let row = (y - y_lo) as usize;
+        let taps = |k: usize| {
+            let tx = &runs[p][k];
+            (
+                (&tx.index[at..at + len], &tx.frac[at..at + len]),
+                ty[k].at(row),
+            )
+        };
+        let (tx, at_y) = taps(0);
+        sample_row(&atlas.levels[l0], tx, at_y, vertical, run, None);
+        if blend {
+            let (tx, at_y) = taps(1);
+            sample_row(&atlas.levels[l1], tx, at_y, vertical, run, Some(t));
+        }
+        for (k, &h) in run.iter().enumerate() {
+            let i = i_lo + k as i64;
+            let j = y - a[1] * i;
+            out[j as usize * n + i as usize] = h;
+        }
+    }
+}
+
+/// One output row of one level, from its taps along x and its source row and weight along y:
+/// written to `row`, or blended into it by `blend`.
 #[inline(always)]
 fn sample_row(
     level: &crate::sketch::Level,
-    tx: &Taps,
-    ty: &Taps,
-    j: usize,
+    (index, frac): (&[u32], &[f32]),
+    (y, fy): (usize, f32),
     vertical: &mut Vec<f32>,
     row: &mut [f32],
     blend: Option<f32>,
 ) {
     let w = level.width;
-    let (y, fy) = (ty.index[j] as usize, ty.frac[j]);
     // Taps increase along x, so the span is from the first tap's texel to the last's right one.
-    let (lo, hi) = (tx.index[0] as usize, tx.index[row.len() - 1] as usize + 2);
+    let (lo, hi) = (index[0] as usize, index[row.len() - 1] as usize + 2);
     let r0 = &level.data[y * w + lo..y * w + hi];
     let r1 = &level.data[(y + 1) * w + lo..(y + 1) * w + hi];
     vertical.clear();
@@ -274,17 +569,17 @@ fn sample_row(
     #[cfg(target_arch = "x86_64")]
     if crate::stage::simd::avx512()
         && (2..i32::MAX as usize - x86::WINDOW).contains(&span)
-        && row.len() <= tx.index.len().min(tx.frac.len())
+        && row.len() <= index.len().min(frac.len())
     {
         // Texels past the span, never a tap's, so that the last taps' windows lie inside too.
         vertical.resize(span + x86::WINDOW, 0.0);
-        let taps = (&tx.index[..row.len()], &tx.frac[..row.len()]);
+        let taps = (&index[..row.len()], &frac[..row.len()]);
         // SAFETY: the processor has AVX-512F and AVX2, the span holds at least one pair and its
         // indices fit an i32, and there are as many taps as outputs, checked just above.
         unsafe { x86::taps((vertical, span), taps, lo, row, blend) };
         return;
     }
-    taps(vertical, (&tx.index, &tx.frac), lo, row, blend);
+    taps(vertical, (index, frac), lo, row, blend);
 }
 
 /// The taps along x from the row of level texels `vertical` (texel `lo` first): each output
@@ -437,7 +732,7 @@ mod tests {
                 6000.0,
             )
             .unwrap();
-            map.update(&atlas, &cam, 50.0, false);
+            map.update(&atlas, &cam, 50.0, false, Turn::None);
             let (lo, hi) = map.footprint.unwrap();
             let end = map.origin + DVec2::splat(map.extent());
             assert!(map.origin.x <= lo.x && map.origin.y <= lo.y && end.x >= hi.x && end.y >= hi.y);
@@ -515,6 +810,66 @@ mod tests {
         );
     }
 
+    /// A turned region's heights are the atlas's trilinear sample at each texel's world
+    /// position (`Atlas::sample_texel` at the region's level), on both turns, with the region
+    /// partly off the atlas (clamped as the axis-aligned map clamps); and its texels are points
+    /// of the world lattice of spacing d0/√2 whose coordinates sum to an even number.
+    #[test]
+    fn a_turned_region_samples_the_atlas_at_its_texels() {
+        let atlas = hills();
+        for turn in [Turn::NorthEast, Turn::NorthWest] {
+            for (eye, at) in [
+                (
+                    DVec3::new(1000.0, 500.0, 760.0),
+                    DVec3::new(6000.0, 6000.0, 400.0),
+                ),
+                (
+                    DVec3::new(6500.0, 900.0, 900.0),
+                    DVec3::new(1500.0, 5000.0, 300.0),
+                ),
+                (
+                    DVec3::new(3000.0, 3000.0, 6000.0),
+                    DVec3::new(3500.0, 3600.0, 0.0),
+                ),
+            ] {
+                let cam = Camera::new(eye, at, 60.0, 512, 512, 9000.0).unwrap();
+                let mut map = SketchMap::new(37);
+                map.update(&atlas, &cam, 50.0, false, turn);
+                let lod = (map.spacing / atlas.d_atlas()).log2();
+                let d_b = map.spacing * std::f64::consts::FRAC_1_SQRT_2;
+                for j in 0..map.n {
+                    for i in 0..map.n {
+                        let w = map.texel_world(i, j);
+                        let u = (w.x - atlas.origin.x) / atlas.dx;
+                        let v = (w.y - atlas.origin.y) / atlas.dy;
+                        let want = atlas.sample_texel(u, v, lod);
+                        let got = map.heights[j * map.n + i];
+                        let at = format!("{turn:?} texel ({i}, {j}) at {w}");
+                        assert!(
+                            (got - want).abs() <= 1e-3 * want.abs().max(1.0),
+                            "{at}: {got} against {want}"
+                        );
+                        let k = (w - atlas.origin) / d_b;
+                        assert!(
+                            (k - k.round()).abs().max_element() < 1e-6,
+                            "{at}: off the lattice"
+                        );
+                        assert_eq!((k.x.round() + k.y.round()).rem_euclid(2.0), 0.0, "{at}");
+                    }
+                }
+                // Its footprint, in the turn's frame, lies inside the region.
+                let (lo, hi) = map.footprint.unwrap();
+                let c = turn.frame(map.origin);
+                let end = c + DVec2::splat(map.extent());
+                assert!(
+                    c.x <= lo.x + 1e-6 && c.y <= lo.y + 1e-6,
+                    "{turn:?}: {c} against {lo}"
+                );
+                assert!(end.x + 1e-6 >= hi.x && end.y + 1e-6 >= hi.y, "{turn:?}");
+            }
+        }
+    }
+
     #[test]
     fn sky_view_takes_the_whole_atlas_and_is_not_visible() {
         let atlas = hills();
@@ -528,7 +883,7 @@ mod tests {
         )
         .unwrap();
         let mut map = SketchMap::new(128);
-        map.update(&atlas, &cam, 50.0, false);
+        map.update(&atlas, &cam, 50.0, false, Turn::None);
         assert!(!map.visible);
         assert!(map.extent() >= 256.0 * 30.0);
     }

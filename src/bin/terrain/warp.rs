@@ -54,6 +54,9 @@ struct Region {
     origin_m: [f64; 2],
     spacing_m: f64,
     size: usize,
+    /// The region's axes: `none` (x and y), or turned 45° for a diagonal heading
+    /// (`north_east`: its t axis along (1, 1); `north_west`: along (−1, 1)).
+    turn: terrain::stage::sketch_map::Turn,
 }
 
 pub fn run(a: Args) -> Result<()> {
@@ -103,6 +106,7 @@ pub fn run(a: Args) -> Result<()> {
             origin_m: [map.origin.x, map.origin.y],
             spacing_m: map.spacing,
             size: n,
+            turn: map.turn,
         },
     };
     if a.json {
