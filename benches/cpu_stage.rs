@@ -1,6 +1,7 @@
 //! The CPU stage at 128²: sketch map, importance and warp, each alone and together, on every
-//! bundled view: jacksboro, gaussian and hills near the ground and from high up; and the hills
-//! looking east, where the warp runs across (`stage::warp`).
+//! bundled view: jacksboro, gaussian and hills near the ground and from high up; the hills
+//! looking east, where the warp runs across (`stage::warp`); and the hills view (north-east,
+//! where the region turns, `stage::sketch_map`) with `warp.diagonal` off.
 //!
 //! `cargo bench --bench cpu_stage`; criterion prints the median of each. `stage` is a frame that
 //! warps anew, `stage_held` one that keeps the held warp (`warp.hold`, a still camera).
@@ -90,6 +91,11 @@ fn cpu_stage(c: &mut Criterion) {
     // The bundled views look north or north-east; this one looks east: the warp runs across.
     let scene = Scene::parse(HILLS_EAST, sketches()).expect("hills looking east");
     bench_scene(c, "hills-east", &scene);
+    // The hills view (north-east, a turned region) with the region's axes along x and y, for
+    // what the turn costs.
+    let mut scene = Scene::load(&sketches().join("hills.toml")).expect("bundled scene");
+    scene.warp.diagonal = false;
+    bench_scene(c, "hills-axes", &scene);
 }
 
 /// `sketches/hills.toml`'s hills and height, looking east across them.

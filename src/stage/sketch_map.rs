@@ -30,6 +30,7 @@
 
 use crate::camera::Camera;
 use crate::sketch::Atlas;
+use crate::stage::lines::LANES;
 use glam::DVec2;
 
 /// How the region's axes lie in the world. Region-local coordinates (u, v) are metres along its
@@ -320,7 +321,8 @@ pub struct Resampler {
     /// A turned region's taps along x: every other lattice column, from the first or the second
     /// (`resample_turned`), at each level; and one run's samples.
     runs: [[Taps; 2]; 2],
-    run: Vec<f32>,
+    /// A turned region's samples, lattice row by lattice row (`resample_turned`).
+    skewed: Vec<f32>,
 }
 
 /// Samples `atlas` on the n² lattice `origin + (i, j)·spacing`, trilinear between the two mip
@@ -411,7 +413,8 @@ fn resample_rows(
 /// world lattice of spacing `d_b`, so each lattice row (one y) holds a run of them every other
 /// lattice column, one texel further along s each. Each run is sampled as an axis-aligned row is
 /// (the vertical interpolation over its span, then the taps along x, at the levels of `spacing`,
-/// as [`resample`] takes them), into `r.run`, and then written to its texels.
+/// as [`resample`] takes them), into a row of `r.skewed`, and then the texels are read from them
+/// in order.
 pub fn resample_turned(
     atlas: &Atlas,
     origin: DVec2,
@@ -482,11 +485,16 @@ fn resample_runs(
         .flat_map(|i| [0, last].map(|j| i * a[0] + j * b[0]))
         .min()
         .unwrap_or(0);
-    // Each parity's lattice columns from x_lo (or one past), every other one.
-    let columns = n + 1;
+    // Each parity's lattice columns from x_lo (or one past), every other one; and LANES more,
+    // so that every run can take whole groups of eight taps (the rest are sampled, not kept).
+    let columns = n + 1 + LANES;
     let u0 = (origin.x - atlas.origin.x) / atlas.dx;
     let v0 = (origin.y - atlas.origin.y) / atlas.dy;
     let rows = (y_hi - y_lo + 1) as usize;
+    // Lattice row y' − y_lo's samples at [(y' − y_lo)·w + i], i its texels' first index, with
+    // room for a run's last group of eight.
+    let w = n + LANES;
+    r.skewed.resize(rows * w, 0.0);
     for (k, l) in [l0, l1].into_iter().enumerate() {
         let level = &atlas.levels[l];
         for p in 0..2 {
@@ -512,7 +520,7 @@ fn resample_runs(
         if i_lo > i_hi {
             continue;
         }
-        let len = (i_hi - i_lo + 1) as usize;
+        let len = ((i_hi - i_lo + 1) as usize).next_multiple_of(LANES);
         let x_first = 2 * i_lo + b[0] * y;
         let p = (x_first - x_lo).rem_euclid(2) as usize;
         let at = ((x_first - x_lo - p as i64) / 2) as usize;
@@ -520,12 +528,12 @@ fn resample_runs(
             y: ty,
             vertical,
             runs,
-            run,
+            skewed,
             ..
         } = r;
-        run.resize(len.max(run.len()), 0.0);
-        let run = &mut run[..len];
         let row = (y - y_lo) as usize;
+        let first = i_lo as usize;
+        let run = &mut skewed[row * w + first..][..len];
         let taps = |k: usize| {
             let tx = &runs[p][k];
             (
@@ -539,10 +547,21 @@ fn resample_runs(
             let (tx, at_y) = taps(1);
             sample_row(&atlas.levels[l1], tx, at_y, vertical, run, Some(t));
         }
-        for (k, &h) in run.iter().enumerate() {
-            let i = i_lo + k as i64;
-            let j = y - a[1] * i;
-            out[j as usize * n + i as usize] = h;
+    }
+    // Texel (i, j) is element i of lattice row j + a[1]·i. Read along the skew, written in
+    // order: written along the runs instead, each texel to another cache line, this took 8 of
+    // the turned map's 27 µs.
+    // Along a region row, texel i + 1 lies a[1]·w + 1 samples after texel i in `skewed`: walked
+    // as a slice's stride (from the last texel where a[1] < 0), so that no read is checked.
+    for (j, texels) in out[..n * n].chunks_exact_mut(n).enumerate() {
+        let row_of_first = (j as i64 - y_lo) as usize;
+        if a[1] > 0 {
+            let walk = r.skewed[row_of_first * w..].iter().step_by(w + 1);
+            texels.iter_mut().zip(walk).for_each(|(h, &v)| *h = v);
+        } else {
+            let last = row_of_first * w - (n - 1) * (w - 1);
+            let walk = r.skewed[last..].iter().step_by(w - 1);
+            texels.iter_mut().rev().zip(walk).for_each(|(h, &v)| *h = v);
         }
     }
 }
