@@ -274,9 +274,13 @@ fn box_along(points: &[DVec2], s: DVec2, t: DVec2) -> Option<(DVec2, DVec2)> {
 
 /// The convex hull of `points` counter-clockwise (Andrew's monotone chain), without allocating.
 fn convex_hull(points: &[DVec2]) -> ([DVec2; CLIPPED], usize) {
+    // Finite points only, so that every turn's sign is a number (a valid camera's always are).
     let mut sorted = [DVec2::ZERO; POINTS];
-    let k = points.len().min(POINTS);
-    sorted[..k].copy_from_slice(&points[..k]);
+    let mut k = 0;
+    for p in points.iter().filter(|p| p.is_finite()).take(POINTS) {
+        sorted[k] = *p;
+        k += 1;
+    }
     let sorted = &mut sorted[..k];
     sorted.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
     let mut hull = [DVec2::ZERO; CLIPPED];
@@ -286,20 +290,26 @@ fn convex_hull(points: &[DVec2]) -> ([DVec2; CLIPPED], usize) {
     }
     let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
     let mut m = 0;
+    // Each chain holds at most k points, so the hull at most k + 1 before the last is dropped;
+    // the bound on m only guards against a turn that overflows to NaN.
     for &p in sorted.iter() {
         while m >= 2 && cross(hull[m - 2], hull[m - 1], p) <= 0.0 {
             m -= 1;
         }
-        hull[m] = p;
-        m += 1;
+        if m < CLIPPED {
+            hull[m] = p;
+            m += 1;
+        }
     }
     let lower = m + 1;
     for &p in sorted.iter().rev().skip(1) {
         while m >= lower && cross(hull[m - 2], hull[m - 1], p) <= 0.0 {
             m -= 1;
         }
-        hull[m] = p;
-        m += 1;
+        if m < CLIPPED {
+            hull[m] = p;
+            m += 1;
+        }
     }
     // The last point is the first again.
     (hull, m - 1)

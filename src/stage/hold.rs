@@ -12,7 +12,8 @@
 //!
 //! Rules:
 //! - The sketch map's region is held too (`SketchMap::update` keeps its corner while it still
-//!   encloses the footprint at the same spacing); a frame whose region moved warps anew.
+//!   encloses the footprint at the same spacing and turn); a frame whose region moved or turned
+//!   (`stage::sketch_map::Turn`) warps anew.
 //! - Otherwise the frame computes its importance over the held region on every [`ROW_STEP`]-th
 //!   row and compares it with the importance the held Φ was made for, over the texels in view
 //!   (`S_f ≥ 0.5` now). Where the demand changed by more than `warp.hold_drift` octaves on

@@ -898,7 +898,8 @@ fn on_atlas(base: DVec2, step: DVec2, n: usize, (lo, hi): (DVec2, DVec2)) -> (us
         last = last.min(a.max(c) + 1e-6);
     }
     let (first, last) = (first.ceil(), last.floor());
-    // A NaN (a non-finite corner) leaves the row off the atlas, as an empty range does.
+    // f64::max and min pass over a NaN (a non-finite corner), which then leaves the row on the
+    // atlas, as the axis-aligned range does; a NaN here cannot arise, but would leave it off.
     match first.partial_cmp(&last) {
         Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal) => {
             (first as usize, last as isize)

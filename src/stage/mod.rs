@@ -227,7 +227,8 @@ impl CpuStage {
         })
     }
 
-    /// Runs the stage for `camera`; Φ is then in `self.warp.phi`, relative to `sketch_map.origin`.
+    /// Runs the stage for `camera`; Φ is then in `self.warp.phi`, in region-local metres
+    /// (`SketchMap::world` turns them into world positions).
     pub fn run(&mut self, atlas: &Atlas, camera: &Camera) -> StageTimes {
         let t0 = Instant::now();
         if let Some(e) = self.params.error.as_mut() {
@@ -235,9 +236,9 @@ impl CpuStage {
         }
         self.last_eye = camera.eye.truncate();
         let holding = self.hold.is_some();
+        // A new turn moves the region, so the held warp is redone with it; a view turning from
+        // north to east keeps a held warp while it serves, as it always has.
         let heading = heading_of(camera, self.heading, self.diagonal);
-        // A new heading turns the region or the warp: the held one no longer serves.
-        let turned = self.heading != Some(heading);
         let moved =
             self.sketch_map
                 .update(atlas, camera, self.params.reach_m, holding, heading.turn());
@@ -253,7 +254,7 @@ impl CpuStage {
             .map(|_| self.surface_max.as_slice());
         // A held warp that still serves: only a sample of the importance, no warp.
         self.held = match &mut self.hold {
-            Some(h) if !moved && !turned && h.is_holding() => {
+            Some(h) if !moved && h.is_holding() => {
                 self.probe.update_rows(
                     &self.sketch_map,
                     bounds,

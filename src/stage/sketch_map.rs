@@ -5,7 +5,7 @@
 //! - The footprint is the frustum (to the far distance) cut by the slab of the sketch's heights,
 //!   widened by the procedural detail's reach, then clipped to the atlas.
 //! - The spacing `d0` is `d_atlas · 2^(q/4)` for a whole q, and the region's corner is a whole
-//!   multiple of `d0` from the atlas origin. So every sample lies on a lattice fixed in the world:
+//!   multiple of `d0` from the atlas origin (along the turned axes for a turned region, below). So every sample lies on a lattice fixed in the world:
 //!   moving the camera shifts which lattice points are taken, never where they are, and the sketch
 //!   map does not swim. It changes only when q does, in steps of 19 %.
 //! - With nothing in view the region is the whole atlas and [`SketchMap::visible`] is false.
@@ -95,14 +95,14 @@ impl Turn {
 #[derive(Clone, Debug)]
 pub struct SketchMap {
     pub n: usize,
-    /// World position of texel (0, 0), the region's corner (south-west, or south for a turned
-    /// region).
+    /// World position of texel (0, 0), the region's corner: its south-west, or for a turned
+    /// region its west vertex (`Turn::NorthEast`) or its south vertex (`Turn::NorthWest`).
     pub origin: DVec2,
     /// The region's axes.
     pub turn: Turn,
     /// `d0`: metres between texels.
     pub spacing: f64,
-    /// Heights, row-major, row 0 south.
+    /// Heights, row-major, row 0 through the corner along s (south for an axis-aligned region).
     pub heights: Vec<f32>,
     /// Whether any of the atlas is in view.
     pub visible: bool,
@@ -415,6 +415,14 @@ fn resample_rows(
 /// (the vertical interpolation over its span, then the taps along x, at the levels of `spacing`,
 /// as [`resample`] takes them), into a row of `r.skewed`, and then the texels are read from them
 /// in order.
+///
+/// Measured on the hills view (north-east, turned; `benches/cpu_stage.rs`, `sketch_map`,
+/// medians, one build after the other): each run's samples written straight to their texels
+/// took 27.6 µs, 8 of them in those writes, each to another cache line; written along the
+/// lattice rows and read back by checked indices, 28.7 µs; read as a slice's stride, 22.2 µs.
+/// Rejected: runs started on a 32-byte boundary, so that no group of eight stores straddles
+/// two cache lines (24.5 µs: the extra samples cost more). The axis-aligned map of the same view
+/// takes 7.3 µs: twice the calls for the same samples, and the reordering.
 pub fn resample_turned(
     atlas: &Atlas,
     origin: DVec2,
@@ -548,11 +556,9 @@ fn resample_runs(
             sample_row(&atlas.levels[l1], tx, at_y, vertical, run, Some(t));
         }
     }
-    // Texel (i, j) is element i of lattice row j + a[1]·i. Read along the skew, written in
-    // order: written along the runs instead, each texel to another cache line, this took 8 of
-    // the turned map's 27 µs.
-    // Along a region row, texel i + 1 lies a[1]·w + 1 samples after texel i in `skewed`: walked
-    // as a slice's stride (from the last texel where a[1] < 0), so that no read is checked.
+    // Texel (i, j) is element i of lattice row j + a[1]·i, so along a region row texel i + 1
+    // lies a[1]·w + 1 samples after texel i: walked as a slice's stride (from the last texel
+    // where a[1] < 0), so that no read is checked.
     for (j, texels) in out[..n * n].chunks_exact_mut(n).enumerate() {
         let row_of_first = (j as i64 - y_lo) as usize;
         if a[1] > 0 {

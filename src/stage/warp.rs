@@ -43,10 +43,12 @@
 //!   [½, 1], demand met 0.58; across, 99.5 %, 82.7 % and 0.84, as looking north (99.8 %, 82.9 %,
 //!   0.88). `terrain compare` on it (`--modes warped,geomipmap --repeat 1 --path-frames 0`): rows
 //!   matched on triangles and error 8 → 13 of 15, interpolated need 0.895 → 0.423× GeoMipMap's.
-//!   The two transpositions cost about 5 µs (`stage::transpose`). Every bundled view
-//!   looks north or north-east and keeps its bits. Not built: a region turned to any heading,
-//!   which would also serve the diagonal (hills: demand met 0.70, rows first or across alike)
-//!   but breaks the sketch map's lattice fixed in the world (`stage::sketch_map`).
+//!   The two transpositions cost about 5 µs (`stage::transpose`). Neither order serves a
+//!   heading near a diagonal (hills, looking north-east: demand met 0.70 either way): there the
+//!   stage turns the sketch map's region by 45° instead (`stage::sketch_map::Turn`, chosen by
+//!   `stage::heading_of`), and this warp runs rows first over it, unchanged; Φ lies along the
+//!   region's axes. The hills went to 0.86. A region turned to the exact heading was not built:
+//!   its lattice would turn with the camera, and the sketch map would swim.
 //! - An optional limit on the importance gradient (`max_log2_step`) raises low importance next to
 //!   high, in log space, before warping: fewer folds to guard, at the cost of spreading cells.
 //! - All buffers are allocated once in [`Warp::new`], the two the warp across needs on the first

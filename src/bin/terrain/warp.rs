@@ -48,7 +48,8 @@ struct Report {
     region: Region,
 }
 
-/// The sketch map's region: its south-west corner, texel spacing and size.
+/// The sketch map's region: its corner (texel (0, 0): south-west, or a turned region's west or
+/// south vertex), texel spacing, size and turn.
 #[derive(Serialize)]
 struct Region {
     origin_m: [f64; 2],
