@@ -59,7 +59,10 @@
 //!   uniform grid (`importance.view` and `importance.error` off) needs 1.06× the triangles of
 //!   GeoMipMap's blocks of 17 for their 0.048 px, so the shape of the importance is not what
 //!   jacksboro-high's misses are made of.
-//! - Computed in f32 relative to the region's corner; world-scale values never enter the loop.
+//! - Computed in f32 relative to the region's corner, along its axes; world-scale values never
+//!   enter the loop. A turned region (`stage::sketch_map::Turn`) has the eye and the frustum's
+//!   planes turned into its frame, and each of its rows finds its own texels on the atlas
+//!   (`on_atlas`); an axis-aligned region's values are as before, bit for bit.
 //!
 //! Speed (`benches/cpu_stage.rs`, `importance`, jacksboro near, 128², medians): 55 µs at commit
 //! 9b07df8, 41 µs at stop 30 (both without the geometric-error term), run alternately. The two steps, each measured in runs of its own: each row

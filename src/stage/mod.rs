@@ -73,8 +73,8 @@ pub struct CpuStage {
 }
 
 /// Without `warp.diagonal`: how much more a view's heading must lie along the other axis before
-/// the warp turns: about 51° from the axis it runs along, so that a heading near the diagonal does not flip the mesh
-/// from frame to frame. Not 1.2: the bundled flight's last key looks 6000 m along x for 5000
+/// the warp turns: about 51° from the axis it runs along, so that a heading near the diagonal
+/// does not flip the mesh from frame to frame. Not 1.2: the bundled flight's last key looks 6000 m along x for 5000
 /// along y, and a threshold at its exact ratio would leave the turn to rounding.
 const TURN_RATIO: f64 = 1.25;
 
