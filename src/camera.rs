@@ -199,16 +199,22 @@ impl Camera {
             };
             let mut out = [DVec2::ZERO; CLIPPED];
             let mut count = 0;
+            // A convex polygon gains at most one vertex a side, so this never drops one; it
+            // bounds what a hull made of points past f64's range could hold.
+            let mut push = |p: DVec2| {
+                if count < CLIPPED {
+                    out[count] = p;
+                    count += 1;
+                }
+            };
             for i in 0..m {
                 let (a, b) = (poly[i], poly[(i + 1) % m]);
                 if inside(a) {
-                    out[count] = a;
-                    count += 1;
+                    push(a);
                 }
                 if inside(a) != inside(b) {
                     let f = (bound - a[axis]) / (b[axis] - a[axis]);
-                    out[count] = a + (b - a) * f;
-                    count += 1;
+                    push(a + (b - a) * f);
                 }
             }
             (poly, m) = (out, count);

@@ -379,14 +379,7 @@ fn resample_rows(
     out: &mut [f32],
     r: &mut Resampler,
 ) {
-    let top = atlas.levels.len() - 1;
-    // A streamed sketch's finest levels are on the GPU only: the CPU reads the finest it holds.
-    let lod = (spacing / atlas.d_atlas())
-        .log2()
-        .clamp(atlas.resident_from as f64, top as f64);
-    let l0 = lod as usize;
-    let l1 = (l0 + 1).min(top);
-    let t = (lod - l0 as f64) as f32;
+    let (l0, l1, t) = levels(atlas, spacing);
     let u0 = (origin.x - atlas.origin.x) / atlas.dx;
     let v0 = (origin.y - atlas.origin.y) / atlas.dy;
     for (k, l) in [l0, l1].into_iter().enumerate() {
@@ -473,13 +466,7 @@ fn resample_runs(
     // (a[1] = ∓1); along a lattice row, the next texel is one along s and a[1] along t: two
     // lattice columns on (a[0] − a[1]·b[0] = 2).
     debug_assert!(b[1] == 1 && a[1].abs() == 1 && a[0] - a[1] * b[0] == 2);
-    let top = atlas.levels.len() - 1;
-    let lod = (spacing / atlas.d_atlas())
-        .log2()
-        .clamp(atlas.resident_from as f64, top as f64);
-    let l0 = lod as usize;
-    let l1 = (l0 + 1).min(top);
-    let t = (lod - l0 as f64) as f32;
+    let (l0, l1, t) = levels(atlas, spacing);
     let d_b = spacing * std::f64::consts::FRAC_1_SQRT_2;
     let last = n as i64 - 1;
     // Lattice row y' = j + a[1]·i of texel (i, j), relative to the corner's; column
@@ -572,6 +559,18 @@ fn resample_runs(
             texels.iter_mut().rev().zip(walk).for_each(|(h, &v)| *h = v);
         }
     }
+}
+
+/// The two mip levels around `spacing` and the weight of the coarser: trilinear sampling.
+#[inline(always)]
+fn levels(atlas: &Atlas, spacing: f64) -> (usize, usize, f32) {
+    let top = atlas.levels.len() - 1;
+    // A streamed sketch's finest levels are on the GPU only: the CPU reads the finest it holds.
+    let lod = (spacing / atlas.d_atlas())
+        .log2()
+        .clamp(atlas.resident_from as f64, top as f64);
+    let l0 = lod as usize;
+    (l0, (l0 + 1).min(top), (lod - l0 as f64) as f32)
 }
 
 /// One output row of one level, from its taps along x and its source row and weight along y:
