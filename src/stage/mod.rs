@@ -391,4 +391,39 @@ mod tests {
         assert_eq!(at(60.0, None, false), East);
         assert_eq!(at(48.0, Some(East), false), East);
     }
+
+    /// A held warp is redone when the view turns past 27.5° (its region turns with it), and
+    /// then held again while the camera stays; within the band it is kept.
+    #[test]
+    fn a_turn_of_the_region_redoes_the_held_warp() {
+        let scene = |degrees: f64| {
+            let r = degrees.to_radians();
+            let (x, y) = (3840.0 + 3000.0 * r.sin(), 2000.0 + 3000.0 * r.cos());
+            crate::scene::Scene::parse(
+                &format!(
+                    "[sketch]\nsynthetic = \"hills\"\n[camera]\nposition = [3840.0, 2000.0, \
+                     760.0]\nlook_at = [{x}, {y}, 400.0]\n"
+                ),
+                std::path::PathBuf::from("."),
+            )
+            .expect("a scene")
+        };
+        let first = scene(20.0);
+        let atlas = crate::scene::load_atlas(&first).expect("an atlas");
+        let detail = crate::scene::detail_of(&first, &atlas);
+        let mut stage = CpuStage::new(&first, &detail).expect("a stage");
+        let mut run = |degrees: f64| {
+            let camera = crate::scene::camera_of(&scene(degrees), &atlas).expect("a camera");
+            stage.run(&atlas, &camera);
+            (stage.held, stage.sketch_map.turn)
+        };
+        assert_eq!(run(20.0), (false, Turn::None));
+        assert_eq!(run(20.0), (true, Turn::None));
+        // 25° is nearer north-east, but within the band about north: the region keeps its
+        // axes (the warp is redone only if the demand drifted).
+        assert_eq!(run(25.0).1, Turn::None);
+        // 29° is past it: the region turns, and the warp is made anew.
+        assert_eq!(run(29.0), (false, Turn::NorthEast));
+        assert_eq!(run(29.0), (true, Turn::NorthEast));
+    }
 }
