@@ -233,7 +233,7 @@ pub struct WarpSection {
     pub method: WarpMethod,
     /// Largest change of log2(importance) between neighbouring texels; 0 turns the limit off.
     pub max_log2_step: f64,
-    /// A view whose heading lies nearer a diagonal than an axis turns the sketch map's region by
+    /// A view whose heading lies within 15° of a diagonal turns the sketch map's region by
     /// 45° (`stage::sketch_map`); false: the region's axes are always x and y.
     pub diagonal: bool,
 }

@@ -14,7 +14,7 @@
 //!   region that follows the footprint's centre moves every d0 of flight and redoes the warp.
 //!
 //! - The region's axes follow the view's heading in steps of 45° ([`Turn`]): where the heading
-//!   lies nearer a diagonal than an axis, the region is a square turned by 45°, so that its t axis
+//!   lies within 15° of a diagonal (`stage::heading_of`), the region is a square turned by 45°, so that its t axis
 //!   (the warp's second pass, which the guard may send to one shared mapping) runs along the
 //!   view's depth, as it does for a view looking north (`stage::warp`'s rule on orientation). A
 //!   turned region's spacing is `d0` too, and its texels are the points of the world lattice of
