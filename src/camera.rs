@@ -158,13 +158,7 @@ impl Camera {
 
     /// [`Camera::footprint`]'s box along the unit axes `s` and `t` instead of x and y: each
     /// vertex's coordinates `(p·s, p·t)`. Along x and y, exactly `footprint`'s.
-    pub fn footprint_along(
-        &self,
-        z_lo: f64,
-        z_hi: f64,
-        s: DVec2,
-        t: DVec2,
-    ) -> Option<(DVec2, DVec2)> {
+    fn footprint_along(&self, z_lo: f64, z_hi: f64, s: DVec2, t: DVec2) -> Option<(DVec2, DVec2)> {
         let (points, k) = self.footprint_points(z_lo, z_hi);
         box_along(&points[..k], s, t)
     }

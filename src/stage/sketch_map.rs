@@ -21,7 +21,7 @@
 //!   spacing `d0/√2` whose lattice coordinates (from the atlas origin) sum to an even number: a
 //!   lattice fixed in the world as the axis-aligned one is, so a turned sketch map does not swim
 //!   either. Its heights are resampled along the rows of that finer lattice
-//!   ([`resample_turned`]), with the taps and the levels of the axis-aligned map's spacing.
+//!   (`resample_runs`), with the taps and the levels of the axis-aligned map's spacing.
 //!
 //! Rejected alternative: the exact bounding square, resampled anew each frame. Its samples slide
 //! over the atlas as the camera moves, and the terrain's silhouette wobbles with them. Also
@@ -186,11 +186,7 @@ impl SketchMap {
 
     /// Samples `atlas` (the sketch, or any grid over it) on this region's texels into `out`.
     pub fn resample_into(&self, atlas: &Atlas, out: &mut [f32], r: &mut Resampler) {
-        if self.turn == Turn::None {
-            resample(atlas, self.origin, self.spacing, self.n, out, r);
-        } else {
-            resample_turned(atlas, self.origin, self.spacing, self.turn, self.n, out, r);
-        }
+        resample(atlas, self.origin, self.spacing, self.turn, self.n, out, r);
     }
 
     /// The region for the footprint [lo, hi] (in the turn's frame); with `keep`, the current
@@ -311,7 +307,7 @@ impl Taps {
     }
 }
 
-/// Scratch for [`resample`] and [`resample_turned`]: taps for x and y at the two levels sampled,
+/// Scratch for [`resample`]: taps for x and y at the two levels sampled,
 /// and one level row interpolated between two source rows (`vertical`).
 #[derive(Clone, Debug, Default)]
 pub struct Resampler {
@@ -319,9 +315,9 @@ pub struct Resampler {
     y: [Taps; 2],
     vertical: Vec<f32>,
     /// A turned region's taps along x: every other lattice column, from the first or the second
-    /// (`resample_turned`), at each level; and one run's samples.
+    /// (`resample_runs`), at each level.
     runs: [[Taps; 2]; 2],
-    /// A turned region's samples, lattice row by lattice row (`resample_turned`).
+    /// A turned region's samples, lattice row by lattice row (`resample_runs`).
     skewed: Vec<f32>,
 }
 
@@ -341,10 +337,13 @@ pub struct Resampler {
 /// Built for AVX-512 where the processor has it (`resample_avx512`), so that the rows' vertical
 /// interpolation runs sixteen lanes wide: in the baseline build it was 2–3 % of the stage on
 /// the high views. The same operations, so the same bits.
+///
+/// A region turned by `turn` is sampled by `resample_runs`, through the same dispatch.
 pub fn resample(
     atlas: &Atlas,
     origin: DVec2,
     spacing: f64,
+    turn: Turn,
     n: usize,
     out: &mut [f32],
     r: &mut Resampler,
@@ -352,9 +351,9 @@ pub fn resample(
     #[cfg(target_arch = "x86_64")]
     if crate::stage::simd::avx512() {
         // SAFETY: the processor has AVX-512F and AVX2 (`simd::avx512`), checked just above.
-        return unsafe { resample_avx512(atlas, origin, spacing, n, out, r) };
+        return unsafe { resample_avx512(atlas, origin, spacing, turn, n, out, r) };
     }
-    resample_rows(atlas, origin, spacing, n, out, r);
+    resample_runs(atlas, origin, spacing, turn, n, out, r);
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -363,11 +362,12 @@ unsafe fn resample_avx512(
     atlas: &Atlas,
     origin: DVec2,
     spacing: f64,
+    turn: Turn,
     n: usize,
     out: &mut [f32],
     r: &mut Resampler,
 ) {
-    resample_rows(atlas, origin, spacing, n, out, r);
+    resample_runs(atlas, origin, spacing, turn, n, out, r);
 }
 
 #[inline(always)]
@@ -401,7 +401,8 @@ fn resample_rows(
     }
 }
 
-/// [`resample`] for a region turned by `turn`, whose texel (i, j) lies at `origin + (i·a + j·b)·d_b`
+/// [`resample`]'s samples for a region turned by `turn` (an axis-aligned one goes to
+/// `resample_rows`), whose texel (i, j) lies at `origin + (i·a + j·b)·d_b`
 /// with `d_b = spacing/√2` and a, b its [`Turn::lattice_steps`]: the texels are points of the
 /// world lattice of spacing `d_b`, so each lattice row (one y) holds a run of them every other
 /// lattice column, one texel further along s each. Each run is sampled as an axis-aligned row is
@@ -418,37 +419,6 @@ fn resample_rows(
 /// 2.7 and the second level's pass 8.5 (each left out in a build made only to measure it). The
 /// axis-aligned map of the same view takes 7.3 µs from one level (its spacing falls on one), the
 /// other views' 10–12 µs from two: a turned map makes twice the calls, each half as long.
-pub fn resample_turned(
-    atlas: &Atlas,
-    origin: DVec2,
-    spacing: f64,
-    turn: Turn,
-    n: usize,
-    out: &mut [f32],
-    r: &mut Resampler,
-) {
-    #[cfg(target_arch = "x86_64")]
-    if crate::stage::simd::avx512() {
-        // SAFETY: the processor has AVX-512F and AVX2 (`simd::avx512`), checked just above.
-        return unsafe { resample_turned_avx512(atlas, origin, spacing, turn, n, out, r) };
-    }
-    resample_runs(atlas, origin, spacing, turn, n, out, r);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx2")]
-unsafe fn resample_turned_avx512(
-    atlas: &Atlas,
-    origin: DVec2,
-    spacing: f64,
-    turn: Turn,
-    n: usize,
-    out: &mut [f32],
-    r: &mut Resampler,
-) {
-    resample_runs(atlas, origin, spacing, turn, n, out, r);
-}
-
 #[inline(always)]
 fn resample_runs(
     atlas: &Atlas,
