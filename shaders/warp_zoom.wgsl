@@ -4,8 +4,9 @@
 // the vertex), and noise octaves added as displacement up to it (octave ⌊o⌋+1 shared with the
 // bump by g_k).
 // Output: the detailed geometry image, (x, y, z, split octave) per vertex, metres from the frame
-// origin.
-// Rust twin: src/gpu/warp_zoom.rs (`vertex_cpu`).
+// origin. With CENTRES, also the height of each cell's centre (the mean of its corners), for
+// mesh_split.wgsl to choose the cell's diagonal by.
+// Rust twin: src/gpu/warp_zoom.rs (`vertex_cpu`, `centre_cpu`).
 
 #import frame
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -16,6 +17,9 @@
 
 @group(0) @binding(2) var<storage, read> phi: array<vec2<f32>>;
 @group(0) @binding(3) var<storage, read_write> detailed: array<vec4<f32>>;
+#ifdef CENTRES
+@group(0) @binding(4) var<storage, read_write> centres: array<f32>;
+#endif
 
 // Φ at warp coordinates `st` (bilinear), metres from the frame origin.
 fn phi_at(st: vec2<f32>) -> vec2<f32> {
@@ -39,17 +43,9 @@ fn mesh_xy(ij: vec2<i32>) -> vec2<f32> {
     return phi_at(vec2<f32>(c) * (f32(frame.mesh.n - 1u) / f32(frame.mesh.mesh - 1u)));
 }
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (id.x >= frame.mesh.mesh || id.y >= frame.mesh.mesh) {
-        return;
-    }
-    let ij = vec2<i32>(id.xy);
-    let p = mesh_xy(ij);
-    let d_max = max(
-        max(distance(p, mesh_xy(ij + vec2<i32>(1, 0))), distance(p, mesh_xy(ij - vec2<i32>(1, 0)))),
-        max(distance(p, mesh_xy(ij + vec2<i32>(0, 1))), distance(p, mesh_xy(ij - vec2<i32>(0, 1)))),
-    );
+// The detailed surface at `p` for a mesh whose spacing there is `d_max` metres: (height, split
+// octave).
+fn detailed_at(p: vec2<f32>, d_max: f32) -> vec2<f32> {
     var o = log2(frame.atlas.d_atlas / max(d_max, 1e-6)) - frame.detail.bias;
     // The sketch's pyramid level is −o_sketch: without a camera (a bake), −o; with one, its
     // pixel octave's, the reference's level there or finer (sketch_octave_in_view in the Rust
@@ -74,5 +70,30 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 #endif
     // Under the water the surface is the water's, flat.
-    detailed[id.y * frame.mesh.mesh + id.x] = vec4<f32>(p, max(z, frame.atlas.water_m), o);
+    return vec2<f32>(max(z, frame.atlas.water_m), o);
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= frame.mesh.mesh || id.y >= frame.mesh.mesh) {
+        return;
+    }
+    let ij = vec2<i32>(id.xy);
+    let p = mesh_xy(ij);
+    let east = mesh_xy(ij + vec2<i32>(1, 0));
+    let north = mesh_xy(ij + vec2<i32>(0, 1));
+    let d_max = max(
+        max(distance(p, east), distance(p, mesh_xy(ij - vec2<i32>(1, 0)))),
+        max(distance(p, north), distance(p, mesh_xy(ij - vec2<i32>(0, 1)))),
+    );
+    let z = detailed_at(p, d_max);
+    detailed[id.y * frame.mesh.mesh + id.x] = vec4<f32>(p, z.x, z.y);
+#ifdef CENTRES
+    // The cell from this vertex to (s+1, t+1), at the spacing of its longest side.
+    if (id.x + 1u < frame.mesh.mesh && id.y + 1u < frame.mesh.mesh) {
+        let far = mesh_xy(ij + vec2<i32>(1, 1));
+        let side = max(max(distance(p, east), distance(p, north)), max(distance(far, east), distance(far, north)));
+        centres[id.y * frame.mesh.mesh + id.x] = detailed_at(0.25 * (p + east + north + far), side).x;
+    }
+#endif
 }

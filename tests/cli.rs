@@ -564,7 +564,10 @@ fn pass_times_are_keyed_by_the_passes_that_ran() {
     let scene = manifest_dir().join("sketches/jacksboro-small.toml");
     let dir = scratch("cli-passes");
     for (mode, passes) in [
-        ("warped", &["warp_zoom", "normals", "terrain"][..]),
+        (
+            "warped",
+            &["warp_zoom", "mesh_split", "normals", "terrain"][..],
+        ),
         ("geomipmap", &["terrain"][..]),
         ("reference", &["reference"][..]),
     ] {

@@ -316,6 +316,11 @@ fn padded_row(width: u32) -> u32 {
 
 /// A storage buffer of vec4 f32 copied back (tests, and the baseline's δ computation).
 pub fn read_vec4(ctx: &GpuContext, source: &wgpu::Buffer) -> Result<Vec<[f32; 4]>> {
+    read_pod(ctx, source)
+}
+
+/// A whole buffer (with COPY_SRC use) read back as values of `T`.
+pub fn read_pod<T: bytemuck::Pod>(ctx: &GpuContext, source: &wgpu::Buffer) -> Result<Vec<T>> {
     let size = source.size();
     let staging = staging(ctx, "readback", size);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());

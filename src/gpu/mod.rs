@@ -1,4 +1,4 @@
-//! The GPU half of a frame: warp & zoom → normals → terrain (with the sky), one struct per pass,
+//! The GPU half of a frame: warp & zoom → mesh split → normals → terrain (with the sky), one struct per pass,
 //! each owning its pipeline, bind-group layout and resources, each with a WGSL file of the same
 //! name in `shaders/`. [`renderer::Renderer`] runs them as a flat list.
 
@@ -6,6 +6,7 @@ pub mod alloc;
 pub mod clipmaps;
 pub mod context;
 pub mod frame_io;
+pub mod mesh_split;
 pub mod normals;
 pub mod planet;
 pub mod reference;

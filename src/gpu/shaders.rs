@@ -20,8 +20,9 @@ const SHARED: [(&str, &str); 7] = [
 ];
 
 /// The passes' WGSL files, by name.
-pub const PASSES: [(&str, &str); 7] = [
+pub const PASSES: [(&str, &str); 8] = [
     ("warp_zoom", include_str!("../../shaders/warp_zoom.wgsl")),
+    ("mesh_split", include_str!("../../shaders/mesh_split.wgsl")),
     ("normals", include_str!("../../shaders/normals.wgsl")),
     ("terrain", include_str!("../../shaders/terrain.wgsl")),
     ("reference", include_str!("../../shaders/reference.wgsl")),
@@ -34,8 +35,9 @@ pub const PASSES: [(&str, &str); 7] = [
 ];
 
 /// Every flag any pass tests, for validating all variants.
-pub const FLAGS: [&str; 12] = [
+pub const FLAGS: [&str; 13] = [
     "DETAIL",
+    "CENTRES",
     "BUMP",
     "NOISE",
     "IMPORTANCE_VIEW",

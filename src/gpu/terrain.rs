@@ -224,10 +224,15 @@ impl TerrainPass {
             }
             None => {
                 let indices = quad_indices(mesh);
+                // STORAGE: an adaptive triangulation's indices are written by `mesh_split` (and
+                // read back by the tests).
                 let index = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("quad mesh indices"),
                     contents: bytemuck::cast_slice(&indices),
-                    usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
+                    usage: wgpu::BufferUsages::INDEX
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC
+                        | wgpu::BufferUsages::STORAGE,
                 });
                 (index, indices.len() as u32)
             }
@@ -326,6 +331,22 @@ impl TerrainPass {
         queue.write_buffer(&self.index, 0, bytemuck::cast_slice(&indices));
         self.index_count = indices.len() as u32;
         self.quad_mesh = mesh;
+    }
+
+    /// The warped variant draws a `mesh`² quad mesh whose indices [`super::mesh_split`] writes
+    /// this frame (at most the size it was built for).
+    pub fn use_split_mesh(&mut self, mesh: u32) {
+        let count = mesh.saturating_sub(1).pow(2) as u64 * 6;
+        if self.quad_mesh == 0 || count > self.index.size() / 4 {
+            return;
+        }
+        self.index_count = count as u32;
+        self.quad_mesh = mesh;
+    }
+
+    /// The quad mesh's index buffer, for a pass that writes it (`mesh_split`).
+    pub fn quad_mesh_indices(&self) -> &wgpu::Buffer {
+        &self.index
     }
 
     /// The GeoMipMap variant's indices for this frame.

@@ -1,6 +1,7 @@
 //! Warp & zoom (`shaders/warp_zoom.wgsl`): Φ upsampled to the mesh, heights from the atlas at Φ,
-//! split octaves, displacement up to them. [`vertex_cpu`] is its CPU twin, used by the tests to
-//! hold the GPU to the CPU stage's definitions.
+//! split octaves, displacement up to them; for an adaptive triangulation (`gpu::mesh_split`),
+//! also each cell's centre height. [`vertex_cpu`] and [`centre_cpu`] are its CPU twins, used by
+//! the tests to hold the GPU to the CPU stage's definitions.
 
 use super::alloc::{Alloc, Buffer};
 use super::stream::AtlasBinding;
@@ -19,6 +20,9 @@ pub struct WarpZoomPass {
     pub phi: Buffer,
     /// The detailed geometry image, mesh² vec4 (x, y, z, split octave).
     pub detailed: Buffer,
+    /// Each cell's centre height, mesh² f32 (cell (s, t) at s + t·mesh; the last row and column
+    /// unused), when built with centres.
+    pub centres: Option<Buffer>,
     mesh: u32,
 }
 
@@ -33,6 +37,7 @@ impl WarpZoomPass {
         n: u32,
         mesh: u32,
         detail: bool,
+        centres: bool,
     ) -> Result<WarpZoomPass> {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("warp_zoom"),
@@ -43,12 +48,20 @@ impl WarpZoomPass {
                     entry(2, S::COMPUTE, storage(true)),
                     entry(3, S::COMPUTE, storage(false)),
                 ],
+                if centres {
+                    vec![entry(4, S::COMPUTE, storage(false))]
+                } else {
+                    vec![]
+                },
             ]
             .concat(),
         });
         let mut flags = Vec::new();
         if detail {
             flags.push("DETAIL");
+        }
+        if centres {
+            flags.push("CENTRES");
         }
         atlas.flag(&mut flags);
         let pipeline = compute_pipeline(device, "warp_zoom", &flags, &layout)?;
@@ -64,6 +77,14 @@ impl WarpZoomPass {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
+        let centres = centres.then(|| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("cell centres"),
+                size: (mesh * mesh) as u64 * 4,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("warp_zoom"),
             layout: &layout,
@@ -71,6 +92,7 @@ impl WarpZoomPass {
                 vec![bind(0, frame)],
                 atlas.binds(),
                 vec![bind(2, &phi), bind(3, &detailed)],
+                centres.iter().map(|c| bind(4, c)).collect(),
             ]
             .concat(),
         });
@@ -79,6 +101,7 @@ impl WarpZoomPass {
             bind_group,
             phi,
             detailed,
+            centres,
             mesh,
         })
     }
@@ -242,6 +265,24 @@ pub fn split_octave_in_view(f: &FrameUniforms, p: Vec2, o: f32) -> f32 {
     pixel_octave(f, p).map_or(o, |px| o.min(px))
 }
 
+/// `detailed_at` in the shader: the detailed surface's height at `p` for a mesh spacing of
+/// `d_max` metres there, and its split octave.
+fn detailed_at(f: &FrameUniforms, atlas: &Atlas, detail: bool, p: Vec2, d_max: f32) -> (f32, f32) {
+    let o_mesh = (f.atlas.d_atlas / d_max.max(1e-6)).log2() - f.detail.bias;
+    let o = split_octave_in_view(f, p, o_mesh);
+    let o_sketch = sketch_octave_in_view(f, p, o_mesh);
+    let mut z = atlas_height(f, atlas, p, sketch_spacing(f.atlas.d_atlas, o_sketch));
+    if detail {
+        let last = f.detail.octaves.min(o.ceil().max(0.0) as u32);
+        for k in 1..=last {
+            let g = (o - k as f32 + 1.0).clamp(0.0, 1.0);
+            let oct = &f.detail.octave[(k - 1) as usize];
+            z += oct.weight * g * octave_local(oct, p);
+        }
+    }
+    (z.max(f.atlas.water_m), o)
+}
+
 /// The CPU twin of one invocation of `warp_zoom.wgsl`: vertex `ij` of the detailed geometry image.
 pub fn vertex_cpu(
     f: &FrameUniforms,
@@ -255,19 +296,26 @@ pub fn vertex_cpu(
     let d_max = d(IVec2::X)
         .max(d(-IVec2::X))
         .max(d(IVec2::Y).max(d(-IVec2::Y)));
-    let o_mesh = (f.atlas.d_atlas / d_max.max(1e-6)).log2() - f.detail.bias;
-    let o = split_octave_in_view(f, p, o_mesh);
-    let o_sketch = sketch_octave_in_view(f, p, o_mesh);
-    let mut z = atlas_height(f, atlas, p, sketch_spacing(f.atlas.d_atlas, o_sketch));
-    if detail {
-        let last = f.detail.octaves.min(o.ceil().max(0.0) as u32);
-        for k in 1..=last {
-            let g = (o - k as f32 + 1.0).clamp(0.0, 1.0);
-            let oct = &f.detail.octave[(k - 1) as usize];
-            z += oct.weight * g * octave_local(oct, p);
-        }
-    }
-    [p.x, p.y, z.max(f.atlas.water_m), o]
+    let (z, o) = detailed_at(f, atlas, detail, p, d_max);
+    [p.x, p.y, z, o]
+}
+
+/// The CPU twin of `warp_zoom.wgsl`'s centres: the height at the mean of cell `ij`'s corners
+/// (from vertex `ij` to `ij + (1, 1)`), at the spacing of its longest side.
+pub fn centre_cpu(
+    f: &FrameUniforms,
+    phi: &[[f32; 2]],
+    atlas: &Atlas,
+    detail: bool,
+    ij: IVec2,
+) -> f32 {
+    let at = |o: IVec2| mesh_xy(f, phi, ij + o);
+    let (p, east, north, far) = (at(IVec2::ZERO), at(IVec2::X), at(IVec2::Y), at(IVec2::ONE));
+    let side = p
+        .distance(east)
+        .max(p.distance(north))
+        .max(far.distance(east).max(far.distance(north)));
+    detailed_at(f, atlas, detail, 0.25 * (p + east + north + far), side).0
 }
 
 impl WarpZoomPass {

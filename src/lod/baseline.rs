@@ -109,6 +109,7 @@ pub fn bake(s: &Shared, k: u32, cells: usize) -> Result<(Grid, Bake)> {
         n as u32,
         n as u32,
         detail.octaves > 0,
+        false,
     )?;
     let phi: Vec<[f32; 2]> = (0..n * n)
         .map(|v| {

@@ -1,6 +1,7 @@
 //! The warped mode (Dachsbacher & Stamminger): the CPU stage places the geometry image, then a
-//! frame is three named passes: warp & zoom, normals, terrain (with the sky). Sky-only frames
-//! skip the first two and the terrain draw.
+//! frame is named passes: warp & zoom, mesh split (with `warp.triangulation = "adaptive"`),
+//! normals (unless lit per pixel), terrain (with the sky). Sky-only frames run the terrain pass
+//! alone.
 
 use super::{CpuTimes, Lod, Shared};
 use crate::camera::Camera;
@@ -8,22 +9,35 @@ use crate::error::Result;
 use crate::gpu::alloc::Buffer;
 use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::{ColourReadback, Timer, read_vec4};
+use crate::gpu::mesh_split::MeshSplitPass;
 use crate::gpu::normals::NormalsPass;
 use crate::gpu::terrain::{Shading, TerrainPass, Variant};
 use crate::gpu::uniforms::{FrameInputs, View};
 use crate::gpu::warp_zoom::WarpZoomPass;
+use crate::scene::Triangulation;
 use crate::sketch::Atlas;
 use crate::stage::CpuStage;
 use std::any::Any;
 
-/// The passes of a warped frame, in order.
-const PASSES: [&str; 3] = [WarpZoomPass::NAME, NormalsPass::NAME, TerrainPass::NAME];
-/// With pixel normals the mesh's normals are never read: no normals pass.
-const PASSES_PIXEL_NORMALS: [&str; 2] = [WarpZoomPass::NAME, TerrainPass::NAME];
+/// The passes of a warped frame, in order, for each choice of (adaptive triangulation, mesh
+/// normals): the mesh split runs only for the first, the normals pass only for the second.
+const PASSES: [&[&str]; 4] = [
+    &[WarpZoomPass::NAME, TerrainPass::NAME],
+    &[WarpZoomPass::NAME, NormalsPass::NAME, TerrainPass::NAME],
+    &[WarpZoomPass::NAME, MeshSplitPass::NAME, TerrainPass::NAME],
+    &[
+        WarpZoomPass::NAME,
+        MeshSplitPass::NAME,
+        NormalsPass::NAME,
+        TerrainPass::NAME,
+    ],
+];
 
 pub struct Warped {
     pub stage: CpuStage,
     warp_zoom: WarpZoomPass,
+    /// Each cell's diagonal, with an adaptive triangulation (`warp.triangulation`).
+    mesh_split: Option<MeshSplitPass>,
     /// The mesh's normals, unless the terrain is lit per pixel (`render.pixel_normals`).
     normals: Option<NormalsPass>,
     terrain: TerrainPass,
@@ -40,7 +54,9 @@ impl Warped {
         let (width, height) = (s.scene.camera.width, s.scene.camera.height);
         let stage = CpuStage::new(s.scene, s.detail)?;
         let noise = s.detail.octaves > 0;
-        let warp_zoom = WarpZoomPass::new(device, s.frame, s.atlas_binding, n, mesh, noise)?;
+        let adaptive = s.scene.warp.triangulation == Triangulation::Adaptive;
+        let warp_zoom =
+            WarpZoomPass::new(device, s.frame, s.atlas_binding, n, mesh, noise, adaptive)?;
         let normals = if s.scene.render.pixel_normals {
             None
         } else {
@@ -84,10 +100,22 @@ impl Warped {
             height,
             &variant,
         )?;
+        let mesh_split = match &warp_zoom.centres {
+            Some(centres) => Some(MeshSplitPass::new(
+                device,
+                s.frame,
+                &warp_zoom.detailed,
+                centres,
+                terrain.quad_mesh_indices(),
+                mesh,
+            )?),
+            None => None,
+        };
         let readback = ColourReadback::new(device, width, height);
         Ok(Warped {
             stage,
             warp_zoom,
+            mesh_split,
             normals,
             terrain,
             importance,
@@ -101,6 +129,21 @@ impl Warped {
         read_vec4(ctx, &self.warp_zoom.detailed)
     }
 
+    /// The cell centres' heights of the last frame, read back (for tests); none with a fixed
+    /// triangulation.
+    pub fn read_centres(&self, ctx: &GpuContext) -> Result<Option<Vec<f32>>> {
+        self.warp_zoom
+            .centres
+            .as_ref()
+            .map(|b| crate::gpu::frame_io::read_pod(ctx, b))
+            .transpose()
+    }
+
+    /// The quad mesh's indices of the last frame, read back (for tests).
+    pub fn read_indices(&self, ctx: &GpuContext) -> Result<Vec<u32>> {
+        crate::gpu::frame_io::read_pod(ctx, self.terrain.quad_mesh_indices())
+    }
+
     /// The normals of the last frame, read back (for tests); none when lit per pixel.
     pub fn read_normals(&self, ctx: &GpuContext) -> Result<Option<Vec<[f32; 4]>>> {
         self.normals
@@ -112,11 +155,7 @@ impl Warped {
 
 impl Lod for Warped {
     fn passes(&self) -> &'static [&'static str] {
-        if self.normals.is_some() {
-            &PASSES
-        } else {
-            &PASSES_PIXEL_NORMALS
-        }
+        PASSES[2 * self.mesh_split.is_some() as usize + self.normals.is_some() as usize]
     }
 
     fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes {
@@ -166,9 +205,15 @@ impl Lod for Warped {
                 self.phi_on_gpu = true;
             }
             let m = self.stage.mesh;
-            self.terrain.use_quad_mesh(queue, m);
             let warp_zoom = t.map(|t| t.compute(WarpZoomPass::NAME));
             self.warp_zoom.record(encoder, m, warp_zoom);
+            match &self.mesh_split {
+                Some(split) => {
+                    self.terrain.use_split_mesh(m);
+                    split.record(encoder, m, t.map(|t| t.compute(MeshSplitPass::NAME)));
+                }
+                None => self.terrain.use_quad_mesh(queue, m),
+            }
             if let Some(normals) = &self.normals {
                 normals.record(encoder, m, t.map(|t| t.compute(NormalsPass::NAME)));
             }

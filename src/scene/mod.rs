@@ -214,6 +214,16 @@ crate::named_enum! {
     }
 }
 
+crate::named_enum! {
+    /// Which diagonal each cell of the warped mesh is split along; see `gpu::mesh_split`.
+    pub enum Triangulation ("triangulation") {
+        /// Every cell along (s, t)–(s+1, t+1).
+        Fixed = "fixed",
+        /// Each convex cell along the diagonal whose midpoint lies nearer the surface.
+        Adaptive = "adaptive",
+    }
+}
+
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct WarpSection {
@@ -236,6 +246,8 @@ pub struct WarpSection {
     /// A view whose heading lies within 15° of a diagonal turns the sketch map's region by
     /// 45° (`stage::sketch_map`); false: the region's axes are always x and y.
     pub diagonal: bool,
+    /// How each cell of the mesh is split into two triangles.
+    pub triangulation: Triangulation,
 }
 impl Default for WarpSection {
     fn default() -> Self {
@@ -250,6 +262,7 @@ impl Default for WarpSection {
             method: WarpMethod::Guarded,
             max_log2_step: 0.0,
             diagonal: true,
+            triangulation: Triangulation::Adaptive,
         }
     }
 }
