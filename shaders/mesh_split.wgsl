@@ -34,20 +34,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let z = centres[a];
     let along = abs(z - 0.5 * (pa.z + pc.z));
     let across = abs(z - 0.5 * (pb.z + pd.z));
-    let at = 6u * (id.y * (m - 1u) + id.x);
+    var q = array<u32, 6>(a, b, c, a, c, d);
     if (across < along && ccw(pa.xy, pb.xy, pd.xy) && ccw(pb.xy, pc.xy, pd.xy)) {
-        indices[at] = a;
-        indices[at + 1u] = b;
-        indices[at + 2u] = d;
-        indices[at + 3u] = b;
-        indices[at + 4u] = c;
-        indices[at + 5u] = d;
-    } else {
-        indices[at] = a;
-        indices[at + 1u] = b;
-        indices[at + 2u] = c;
-        indices[at + 3u] = a;
-        indices[at + 4u] = c;
-        indices[at + 5u] = d;
+        q = array<u32, 6>(a, b, d, b, c, d);
+    }
+    let at = 6u * (id.y * (m - 1u) + id.x);
+    for (var k = 0u; k < 6u; k++) {
+        indices[at + k] = q[k];
     }
 }

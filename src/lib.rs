@@ -4,8 +4,8 @@
 //! The folders follow a frame, in the order data flows through it: [`scene`] (the scene file, and
 //! building a camera, the detail and the sketch from it) → [`sketch`] (the height map read into
 //! its atlas) → [`stage`] (the CPU stage: sketch map → importance → warp → Φ, measured by its
-//! quality) → [`gpu`] (the passes: warp & zoom, normals, terrain, reference) driven by one
-//! [`render::Renderer`] through a level-of-detail scheme from [`lod`]. [`detail`] is the
+//! quality) → [`gpu`] (the passes: warp & zoom, mesh split, normals, terrain, reference) driven
+//! by one [`render::Renderer`] through a level-of-detail scheme from [`lod`]. [`detail`] is the
 //! procedural model both sides share. [`eval`] measures images against the reference
 //! (`compare`); [`app`] holds the jobs users run (fly, batch, the window) and what they share
 //! (outputs, progress, camera paths).

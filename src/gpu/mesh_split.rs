@@ -24,6 +24,10 @@
 //! 7.9 m at s = 3.13 and 5.5 → 4.4 m at s = 2.13 alike. So the centre is evaluated, one more
 //! height per vertex in warp & zoom. GeoMipMap keeps its fixed split: its blocks' triangles are
 //! the ones its δ was computed for.
+//!
+//! Cost, on llvmpipe (jacksboro at 256², a 320² mesh, `terrain render ... --repeat 15 --json`,
+//! `passes_ms`): warp & zoom 13.0–13.2 ms against 6.0 without the centres; this pass 1.1 ms, 2.1
+//! as first written with its six indices stored one by one instead of from one array.
 
 use super::alloc::Alloc;
 use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
