@@ -1,5 +1,5 @@
 // The terrain pass: the detailed geometry image drawn as a quad mesh (two triangles per cell,
-// split along (s,t)–(s+1,t+1)), shaded with the terrain function's normal at each pixel
+// split along the diagonal mesh_split.wgsl chose, or along (s,t)–(s+1,t+1)), shaded with the terrain function's normal at each pixel
 // (PIXEL_NORMALS, shared with the reference) or with the mesh's normals plus per-pixel bump
 // detail from the split octave up to the pixel's own octave (BUMP); procedural surface types, sun
 // and sky light and aerial perspective. GEOMIPMAP draws a baked grid's blocks instead; with

@@ -92,7 +92,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     // The cell from this vertex to (s+1, t+1), at the spacing of its longest side.
     if (id.x + 1u < frame.mesh.mesh && id.y + 1u < frame.mesh.mesh) {
         let far = mesh_xy(ij + vec2<i32>(1, 1));
-        let side = max(max(distance(p, east), distance(p, north)), max(distance(far, east), distance(far, north)));
+        let side = max(
+            max(distance(p, east), distance(p, north)),
+            max(distance(far, east), distance(far, north)),
+        );
         centres[id.y * frame.mesh.mesh + id.x] = detailed_at(0.25 * (p + east + north + far), side).x;
     }
 #endif

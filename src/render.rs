@@ -20,7 +20,7 @@ use crate::lod::reference::Reference;
 use crate::lod::warped::Warped;
 use crate::lod::{CpuTimes, Lod, Shared};
 use crate::scene;
-use crate::scene::{Mode, Scene};
+use crate::scene::{Mode, Scene, Triangulation};
 use crate::sketch::Atlas;
 use crate::stage::StageTimes;
 use crate::tiles::cache::StreamStats;
@@ -72,8 +72,16 @@ pub struct Renderer {
 /// What a scene in `mode` needs of the adapter: the atlas, and the warped mode's mesh.
 pub fn needs(scene: &Scene, mode: Mode, atlas: &Atlas) -> Needs {
     let largest = match mode {
-        // The detailed geometry image: a vec4 per vertex.
-        Mode::Warped => (scene.warp.mesh as u64).pow(2) * 16,
+        // The detailed geometry image, a vec4 per vertex; with an adaptive triangulation the
+        // quad indices are bound too (`mesh_split`), six u32 a cell, 1.5× as large.
+        Mode::Warped => {
+            let m = scene.warp.mesh as u64;
+            let indices = match scene.warp.triangulation {
+                Triangulation::Adaptive => m.saturating_sub(1).pow(2) * 24,
+                Triangulation::Fixed => 0,
+            };
+            (m * m * 16).max(indices)
+        }
         // The hemisphere's vertices carried to the terrain: a vec4 each.
         Mode::Clipmaps => scene.planet().map_or(0, |p| {
             crate::planet::rings::vertex_count(p.phi_steps, p.rings_per_level) * 16
@@ -414,4 +422,27 @@ pub fn world_positions(relative: &[[f32; 4]], camera: &Camera) -> Vec<f64> {
             ]
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An adaptive triangulation binds the quad indices as storage, 24 bytes a cell: from a
+    /// mesh of 6 on they outgrow the detailed geometry image's 16 bytes a vertex, and the
+    /// adapter is asked for them.
+    #[test]
+    fn the_warped_mode_needs_room_for_its_largest_binding() {
+        let scene = |triangulation: &str| {
+            let text = format!(
+                "[sketch]\nsynthetic = \"gaussian\"\n[camera]\nposition = [0.0, 0.0, 900.0]\n\
+                 look_at = [100.0, 100.0, 0.0]\n[warp]\nmesh = 2600\ntriangulation = \"{triangulation}\"\n"
+            );
+            Scene::parse(&text, std::path::PathBuf::from(".")).unwrap()
+        };
+        let atlas = Atlas::synthetic("gaussian", 64, &Default::default()).unwrap();
+        let needs = |s: &Scene| needs(s, Mode::Warped, &atlas).storage_bytes;
+        assert_eq!(needs(&scene("fixed")), 2600 * 2600 * 16);
+        assert_eq!(needs(&scene("adaptive")), 2599 * 2599 * 24);
+    }
 }

@@ -25,7 +25,8 @@ use crate::error::{Error, Result, Role};
 use crate::gpu::frame_io::PassTimes;
 use crate::gpu::uniforms::View;
 use crate::gpu::{
-    normals::NormalsPass, reference::ReferencePass, terrain::TerrainPass, warp_zoom::WarpZoomPass,
+    mesh_split::MeshSplitPass, normals::NormalsPass, reference::ReferencePass,
+    terrain::TerrainPass, warp_zoom::WarpZoomPass,
 };
 use crate::render::Renderer;
 use crate::scene::{Mode, Scene};
@@ -109,7 +110,7 @@ impl CsvRow<'_> {
             frame_ms: Fixed(r.frame_ms),
             triangles: r.triangles,
             warp_zoom_ms: ms(WarpZoomPass::NAME),
-            mesh_split_ms: ms(crate::gpu::mesh_split::MeshSplitPass::NAME),
+            mesh_split_ms: ms(MeshSplitPass::NAME),
             normals_ms: ms(NormalsPass::NAME),
             terrain_ms: ms(TerrainPass::NAME),
             reference_ms: ms(ReferencePass::NAME),

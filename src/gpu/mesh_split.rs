@@ -128,8 +128,13 @@ mod tests {
     }
 
     const SQUARE: [[f32; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
-    const FIXED: [u32; 6] = [0, 1, 3, 0, 3, 2];
+    /// b–d's triangles, (a, b, d) and (b, c, d), in a 2² mesh (a 0, b 1, d 2, c 3).
     const ACROSS: [u32; 6] = [0, 1, 2, 1, 3, 2];
+
+    /// The fixed split: `quad_indices`, which a fixed triangulation draws.
+    fn fixed() -> Vec<u32> {
+        super::super::terrain::quad_indices(2)
+    }
 
     #[test]
     fn a_ridge_along_a_diagonal_is_kept_by_the_split_along_it() {
@@ -137,19 +142,31 @@ mod tests {
         let mesh = cell(SQUARE, [0.0, 10.0, 0.0, 10.0]);
         assert_eq!(split_cpu(&mesh, &[10.0, 0.0, 0.0, 0.0], 2, 0, 0), ACROSS);
         // The same heights with the centre in the valley: a–c draws it.
-        assert_eq!(split_cpu(&mesh, &[0.0, 0.0, 0.0, 0.0], 2, 0, 0), FIXED);
+        assert_eq!(
+            split_cpu(&mesh, &[0.0, 0.0, 0.0, 0.0], 2, 0, 0).to_vec(),
+            fixed()
+        );
         // A tie keeps the fixed split.
-        assert_eq!(split_cpu(&mesh, &[5.0, 0.0, 0.0, 0.0], 2, 0, 0), FIXED);
+        assert_eq!(
+            split_cpu(&mesh, &[5.0, 0.0, 0.0, 0.0], 2, 0, 0).to_vec(),
+            fixed()
+        );
     }
 
     #[test]
     fn a_cell_that_would_fold_along_the_other_diagonal_keeps_the_fixed_split() {
-        // a pushed in toward c: a reflex corner at a. Split along a–c, both triangles are
-        // counter-clockwise; along b–d, (a, b, d) turns clockwise.
-        let arrow = [[0.8, 0.8], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
-        let mesh = cell(arrow, [0.0, 10.0, 0.0, 10.0]);
-        assert!(ccw(mesh[0], mesh[1], mesh[3]) && ccw(mesh[0], mesh[3], mesh[2]));
-        assert!(!ccw(mesh[0], mesh[1], mesh[2]));
-        assert_eq!(split_cpu(&mesh, &[10.0, 0.0, 0.0, 0.0], 2, 0, 0), FIXED);
+        // A reflex corner at a (pushed in toward c) or at c (pushed in toward a): split along
+        // a–c, both triangles are counter-clockwise; along b–d, (a, b, d) or (b, c, d) turns
+        // clockwise.
+        let at_a = [[0.8, 0.8], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        let at_c = [[0.0, 0.0], [1.0, 0.0], [0.2, 0.2], [0.0, 1.0]];
+        for (xy, folds) in [(at_a, [0, 1, 2]), (at_c, [1, 3, 2])] {
+            let mesh = cell(xy, [0.0, 10.0, 0.0, 10.0]);
+            assert!(ccw(mesh[0], mesh[1], mesh[3]) && ccw(mesh[0], mesh[3], mesh[2]));
+            assert!(!ccw(mesh[folds[0]], mesh[folds[1]], mesh[folds[2]]));
+            // The ridge along b–d would take b–d on a convex cell.
+            let cut = split_cpu(&mesh, &[10.0, 0.0, 0.0, 0.0], 2, 0, 0);
+            assert_eq!(cut.to_vec(), fixed(), "{xy:?}");
+        }
     }
 }

@@ -8,7 +8,7 @@ use crate::camera::Camera;
 use crate::error::Result;
 use crate::gpu::alloc::Buffer;
 use crate::gpu::context::GpuContext;
-use crate::gpu::frame_io::{ColourReadback, Timer, read_vec4};
+use crate::gpu::frame_io::{ColourReadback, Timer, read_pod, read_vec4};
 use crate::gpu::mesh_split::MeshSplitPass;
 use crate::gpu::normals::NormalsPass;
 use crate::gpu::terrain::{Shading, TerrainPass, Variant};
@@ -135,13 +135,13 @@ impl Warped {
         self.warp_zoom
             .centres
             .as_ref()
-            .map(|b| crate::gpu::frame_io::read_pod(ctx, b))
+            .map(|b| read_pod(ctx, b))
             .transpose()
     }
 
     /// The quad mesh's indices of the last frame, read back (for tests).
     pub fn read_indices(&self, ctx: &GpuContext) -> Result<Vec<u32>> {
-        crate::gpu::frame_io::read_pod(ctx, self.terrain.quad_mesh_indices())
+        read_pod(ctx, self.terrain.quad_mesh_indices())
     }
 
     /// The normals of the last frame, read back (for tests); none when lit per pixel.

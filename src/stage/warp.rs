@@ -11,8 +11,10 @@
 //! - `Plain` stops there: the paper's method. Where neighbouring columns want very different column
 //!   warps and the rows under them were warped differently too, cells fold.
 //! - `Guarded` (the default) keeps both triangles of every cell counter-clockwise and every row of Φ
-//!   increasing in x. The mesh is drawn with each cell split along its diagonal from (s, t) to
-//!   (s+1, t+1); a merely non-convex cell is harmless, a flipped triangle is a fold on screen. The
+//!   increasing in x. A cell split along its diagonal from (s, t) to (s+1, t+1) is then sound;
+//!   the GPU splits a convex cell along the other diagonal where that lies nearer the surface
+//!   (`gpu::mesh_split`), and a merely non-convex cell keeps this one. A flipped triangle is a
+//!   fold on screen. The
 //!   guard gives the columns on either side of a folded cell (and one more each way) the *mean*
 //!   column mapping `b̄`, that of the row-warped importance summed across columns, and repeats until
 //!   nothing folds. A cell between two columns that both follow `b̄` is a convex trapezoid between
@@ -703,7 +705,8 @@ mod x86 {
 }
 
 /// Positive when cell (s, t) is sound: neither of its two triangles (split along the diagonal
-/// from (s, t) to (s+1, t+1), as the mesh is drawn) is flipped or degenerate, and its bottom and
+/// from (s, t) to (s+1, t+1), as the mesh is drawn unless the cell is convex: `gpu::mesh_split`)
+/// is flipped or degenerate, and its bottom and
 /// top edges run east, so every row of Φ increases in x as every column increases in y.
 /// Only the sign means anything. f32 suffices: edges are at least 1/(n−1) of a texel long,
 /// coordinates at most n texels.
