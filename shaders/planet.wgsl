@@ -125,6 +125,18 @@ fn planet_fs(in: VsOut) -> FragOut {
     let last = min(planet.octaves, u32(max(ceil(o_px), 0.0)));
     var grad = vec3<f32>(0.0);
     let rel = in.rel.x * planet.east + in.rel.y * planet.north + in.rel.z * planet.up;
+#ifdef BUMP_FADE
+    // The bump's weights by their expected correlation (`bump_fade` in shading.wgsl); the
+    // height keeps every octave whole.
+    var height_var = 0.0;
+    for (var k = 1u; k <= last; k++) {
+        let g = clamp(in.split - f32(k) + 1.0, 0.0, 1.0);
+        let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
+        let hk = FADE_NOISE_RMS * planet.octave[k - 1u].weight * (1.0 - g) * b;
+        height_var += hk * hk;
+    }
+    let spread = fade_spread(height_var, dot(to_eye / dist, n));
+#endif
     for (var k = 1u; k <= last; k++) {
         let g = clamp(in.split - f32(k) + 1.0, 0.0, 1.0);
         let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
@@ -134,7 +146,11 @@ fn planet_fs(in: VsOut) -> FragOut {
             // The bump's octaves count in the pixel's height too, as the reference's surface
             // holds them: a small lake the mesh cannot carry still shows as water.
             h += o.x;
+#ifdef BUMP_FADE
+            grad += bump_fade(planet.octave[k - 1u].scale, spread) * o.yzw;
+#else
             grad += o.yzw;
+#endif
         }
     }
     // The gradient in the tangent frame, less its part along the vertical.

@@ -259,18 +259,34 @@ fn shading_normal(in: VsOut, footprint: f32) -> vec3<f32> {
 #else
 // The mesh's interpolated normal, with BUMP the octaves from the vertex's split octave up to the
 // pixel's own octave added as bump detail; the geometry already holds g_k of each, octaves past
-// the pixel octave are never evaluated.
+// the pixel octave are never evaluated. With BUMP_FADE each octave's bump is weighted by its
+// expected correlation with the surface the ray meets (`bump_fade` in shading.wgsl).
 fn mesh_normal(in: VsOut, footprint: f32) -> vec3<f32> {
     let n = normalize(in.normal);
 #ifdef BUMP
     let o_px = log2(frame.atlas.d_atlas / max(footprint, 1e-6));
     let last = min(frame.detail.octaves, u32(max(ceil(o_px), 0.0)));
     var grad = vec2<f32>(0.0);
+#ifdef BUMP_FADE
+    var height_var = 0.0;
     for (var k = 1u; k <= last; k++) {
         let g = clamp(in.split - f32(k) + 1.0, 0.0, 1.0);
         let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
+        let h = FADE_NOISE_RMS * frame.detail.octave[k - 1u].weight * (1.0 - g) * b;
+        height_var += h * h;
+    }
+    let spread = fade_spread(height_var, dot(normalize(frame.camera.eye - in.local), n));
+#endif
+    for (var k = 1u; k <= last; k++) {
+        let g = clamp(in.split - f32(k) + 1.0, 0.0, 1.0);
+        let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
+#ifdef BUMP_FADE
+        let share = (1.0 - g) * b * bump_fade(frame.detail.octave[k - 1u].scale, spread);
+        if (share > FADE_SKIP) {
+#else
         let share = (1.0 - g) * b;
         if (share > 0.0) {
+#endif
             grad += frame.detail.octave[k - 1u].weight * share * octave_local(frame.detail.octave[k - 1u], in.local.xy).yz;
         }
     }

@@ -35,10 +35,11 @@ pub const PASSES: [(&str, &str); 8] = [
 ];
 
 /// Every flag any pass tests, for validating all variants.
-pub const FLAGS: [&str; 13] = [
+pub const FLAGS: [&str; 14] = [
     "DETAIL",
     "CENTRES",
     "BUMP",
+    "BUMP_FADE",
     "NOISE",
     "IMPORTANCE_VIEW",
     "GEOMIPMAP",

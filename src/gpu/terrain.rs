@@ -58,6 +58,8 @@ pub enum Shading {
 pub struct Variant {
     pub noise: bool,
     pub bump: bool,
+    /// With `bump`: each bump octave weighted by its expected correlation (`detail.bump_fade`).
+    pub bump_fade: bool,
     /// Where the light's normals come from.
     pub shading: Shading,
     /// The importance debug view's buffer (n² f32), only when that view is drawn.
@@ -116,12 +118,18 @@ impl TerrainPass {
                 entries.push(entry(4, S::VERTEX, storage(true)));
                 if variant.bump {
                     flags.push("BUMP");
+                    if variant.bump_fade {
+                        flags.push("BUMP_FADE");
+                    }
                 }
             }
             Shading::PixelNormals => flags.push("PIXEL_NORMALS"),
             Shading::GridNormals => {
                 if variant.bump {
                     flags.push("BUMP");
+                    if variant.bump_fade {
+                        flags.push("BUMP_FADE");
+                    }
                 }
             }
         }

@@ -73,6 +73,9 @@ impl Clipmaps {
             flags.push("NOISE");
             if s.scene.detail.bump {
                 flags.push("BUMP");
+                if s.scene.detail.bump_fade {
+                    flags.push("BUMP_FADE");
+                }
             }
         }
         let size = (s.scene.camera.width, s.scene.camera.height);

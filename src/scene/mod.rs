@@ -189,6 +189,9 @@ pub struct DetailSection {
     pub bias: Option<f64>,
     /// Per-pixel bump detail past the split octave; off leaves its code out of the shader.
     pub bump: bool,
+    /// Each bump octave weighted by its expected correlation with the surface the ray meets
+    /// (`shaders/shared/shading.wgsl`'s `bump_fade`); off draws every bump octave whole.
+    pub bump_fade: bool,
 }
 impl Default for DetailSection {
     fn default() -> Self {
@@ -199,6 +202,7 @@ impl Default for DetailSection {
             seed: 7,
             bias: None,
             bump: true,
+            bump_fade: true,
         }
     }
 }
