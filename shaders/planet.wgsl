@@ -13,6 +13,9 @@
 @group(0) @binding(3) var<storage, read> hemisphere: array<vec4<f32>>;
 
 #import raster
+#ifdef BUMP_FADE
+#import fade
+#endif
 
 @fragment
 fn sky_fs(in: SkyOut) -> FragOut {
@@ -126,7 +129,7 @@ fn planet_fs(in: VsOut) -> FragOut {
     var grad = vec3<f32>(0.0);
     let rel = in.rel.x * planet.east + in.rel.y * planet.north + in.rel.z * planet.up;
 #ifdef BUMP_FADE
-    // The bump's weights by their expected correlation (`bump_fade` in shading.wgsl); the
+    // The bump's weights by their expected correlation (shared/fade.wgsl); the
     // height keeps every octave whole.
     var height_var = 0.0;
     for (var k = 1u; k <= last; k++) {
@@ -135,7 +138,7 @@ fn planet_fs(in: VsOut) -> FragOut {
         let hk = FADE_NOISE_RMS * planet.octave[k - 1u].weight * (1.0 - g) * b;
         height_var += hk * hk;
     }
-    let spread = fade_spread(height_var, dot(to_eye / dist, n));
+    let spread = fade_spread(height_var, to_eye / dist, n, up);
 #endif
     for (var k = 1u; k <= last; k++) {
         let g = clamp(in.split - f32(k) + 1.0, 0.0, 1.0);

@@ -36,6 +36,9 @@ fn vertex_normal(i: u32) -> vec3<f32> {
 #endif
 #ifdef BUMP
 #import noise
+#ifdef BUMP_FADE
+#import fade
+#endif
 #endif
 #import surface
 #import shading
@@ -260,7 +263,7 @@ fn shading_normal(in: VsOut, footprint: f32) -> vec3<f32> {
 // The mesh's interpolated normal, with BUMP the octaves from the vertex's split octave up to the
 // pixel's own octave added as bump detail; the geometry already holds g_k of each, octaves past
 // the pixel octave are never evaluated. With BUMP_FADE each octave's bump is weighted by its
-// expected correlation with the surface the ray meets (`bump_fade` in shading.wgsl).
+// expected correlation with the surface the ray meets (shared/fade.wgsl).
 fn mesh_normal(in: VsOut, footprint: f32) -> vec3<f32> {
     let n = normalize(in.normal);
 #ifdef BUMP
@@ -275,7 +278,8 @@ fn mesh_normal(in: VsOut, footprint: f32) -> vec3<f32> {
         let h = FADE_NOISE_RMS * frame.detail.octave[k - 1u].weight * (1.0 - g) * b;
         height_var += h * h;
     }
-    let spread = fade_spread(height_var, dot(normalize(frame.camera.eye - in.local), n));
+    let to_eye = frame.camera.eye - in.local;
+    let spread = fade_spread(height_var, to_eye / max(length(to_eye), 1e-3), n, vec3<f32>(0.0, 0.0, 1.0));
 #endif
     for (var k = 1u; k <= last; k++) {
         let g = clamp(in.split - f32(k) + 1.0, 0.0, 1.0);

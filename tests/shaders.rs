@@ -285,3 +285,19 @@ fn view_constants_in_wgsl_are_the_rust_enum() {
     }
     assert_eq!(found, View::ALL.len(), "a VIEW_ constant per View");
 }
+
+/// The bump fade's noise RMS (shaders/shared/fade.wgsl) is the planar noise's, src/detail.rs's.
+#[test]
+fn the_fades_noise_rms_is_the_noises() {
+    let module = validate("terrain", &["NOISE", "BUMP", "BUMP_FADE"]);
+    let (_, c) = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some("FADE_NOISE_RMS"))
+        .expect("FADE_NOISE_RMS in the terrain pass with BUMP_FADE");
+    let value = match module.global_expressions[c.init] {
+        naga::Expression::Literal(naga::Literal::F32(v)) => v,
+        ref e => panic!("FADE_NOISE_RMS is {e:?}"),
+    };
+    assert_eq!(value, terrain::detail::NOISE_RMS as f32);
+}

@@ -18,40 +18,6 @@ const ON_WATER_M: f32 = 0.01;
 fn on_water(z: f32) -> bool {
     return z <= frame.atlas.water_m + ON_WATER_M;
 }
-#ifdef BUMP_FADE
-// Bump fade (`detail.bump_fade`). Bump detail has no parallax: where the mesh lacks the height
-// of the octaves it bumps (and of its own error), the ray meets the true surface away from where
-// it meets the mesh, by that height times the tangent of the ray's incidence, so a bump octave
-// drawn at the mesh's point is a copy of the reference's shifted by a fraction of its wavelength
-// or more. For a shift δ of spread σ, an octave of frequency f keeps E[cos 2πfδ] =
-// exp(−2π²f²σ²) =: ρ of its correlation with the true pattern; drawn with weight ρ its expected
-// squared error is (1 − ρ²) of its variance, below both the full copy's 2(1 − ρ) and leaving it
-// out's 1. `FADE_SPECTRUM` scales f² for the noise's gradient, whose spectrum lies above its
-// lattice frequency: measured on gaussian at 256² (`terrain compare --modes warped,geomipmap
-// --repeat 1 --path-frames 0`, PSNR at mesh 96, at GeoMipMap τ 4 blocks of 17, at mesh 264):
-// no fade 21.79 / 24.31 / 27.58 dB; 0.5: 25.01 / 24.95 / 27.79; 1: 25.19 / 25.12 / 27.86;
-// 2: 25.21 / 25.21 / 27.89; 4: 25.18 / 25.23 / 27.87; 10⁴ (bump only where seen straight on):
-// 25.16 / 25.22 / 27.65.
-const FADE_SPECTRUM: f32 = 2.0;
-// The noise's RMS value: src/detail.rs's NOISE_RMS.
-const FADE_NOISE_RMS: f32 = 0.31;
-// Below this weight an octave's bump is not evaluated: it would turn the normal by less than a
-// five-hundredth of the octave's slope.
-const FADE_SKIP: f32 = 0.002;
-
-// The variance (m²) of the shift along the ground of a bump whose octaves leave `height_var` m²
-// of height variance out of the mesh, seen at cosine `cos_i` between the ray and the normal.
-fn fade_spread(height_var: f32, cos_i: f32) -> f32 {
-    let c = clamp(abs(cos_i), 0.02, 1.0);
-    return height_var * (1.0 - c * c) / (c * c);
-}
-
-// ρ for an octave of `scale` lattice cells per metre at shift variance `spread`.
-fn bump_fade(scale: f32, spread: f32) -> f32 {
-    return exp(-19.739209 * FADE_SPECTRUM * scale * scale * spread);
-}
-#endif
-
 // The atmosphere, twins of src/light.rs's constants of the same names.
 const RAYLEIGH: vec3<f32> = vec3<f32>(5.8e-6, 13.5e-6, 33.1e-6);
 const RAYLEIGH_SCALE_M: f32 = 8000.0;

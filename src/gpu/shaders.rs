@@ -9,7 +9,7 @@
 
 use crate::error::{Error, Result};
 
-const SHARED: [(&str, &str); 7] = [
+const SHARED: [(&str, &str); 8] = [
     ("frame", include_str!("../../shaders/shared/frame.wgsl")),
     ("noise", include_str!("../../shaders/shared/noise.wgsl")),
     ("atlas", include_str!("../../shaders/shared/atlas.wgsl")),
@@ -17,6 +17,7 @@ const SHARED: [(&str, &str); 7] = [
     ("surface", include_str!("../../shaders/shared/surface.wgsl")),
     ("sphere", include_str!("../../shaders/shared/sphere.wgsl")),
     ("raster", include_str!("../../shaders/shared/raster.wgsl")),
+    ("fade", include_str!("../../shaders/shared/fade.wgsl")),
 ];
 
 /// The passes' WGSL files, by name.

@@ -255,7 +255,7 @@ impl Baselines {
         let variant = Variant {
             noise,
             bump: noise && scene.detail.bump,
-            bump_fade: scene.detail.bump_fade,
+            bump_fade: noise && scene.detail.bump && scene.detail.bump_fade,
             shading: match bake.as_ref().and_then(|b| b.normals.as_ref()) {
                 Some(normals) => Shading::MeshNormals(wgpu::Buffer::clone(normals)),
                 None if bake.is_none() && !scene.render.pixel_normals => Shading::GridNormals,

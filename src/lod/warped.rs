@@ -79,7 +79,7 @@ impl Warped {
         let variant = Variant {
             noise,
             bump: noise && s.scene.detail.bump,
-            bump_fade: s.scene.detail.bump_fade,
+            bump_fade: noise && s.scene.detail.bump && s.scene.detail.bump_fade,
             shading: match &normals {
                 Some(pass) => Shading::MeshNormals(wgpu::Buffer::clone(&pass.normals)),
                 None => Shading::PixelNormals,

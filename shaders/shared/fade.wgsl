@@ -1,0 +1,44 @@
+// Bump fade (`detail.bump_fade`), imported with BUMP_FADE by the terrain and planet passes.
+//
+// Bump detail has no parallax. Where the mesh lacks the height of the octaves it bumps, the ray
+// meets the true surface away from where it meets the mesh, by that height along the normal over
+// the cosine of the ray's incidence, so at grazing angles a bump octave drawn whole is the
+// reference's pattern shifted by a fraction of its wavelength or more. For a shift δ of spread σ,
+// an octave of frequency f keeps E[cos 2πfδ] = exp(−2π²f²σ²) =: ρ of its correlation with the
+// true pattern; drawn with weight ρ its expected squared error is (1 − ρ²) of its variance, below
+// both the full copy's 2(1 − ρ) and leaving it out's 1.
+//
+// The exponent is fitted, not the model's: σ counts only the bumped octaves' height, not the
+// mesh's own error nor, in GeoMipMap's coarse blocks, the octaves in neither its geometry nor its
+// bump, so the true shift is larger. `FADE_SPECTRUM` multiplies 2π²σ² by the octave's lattice
+// frequency squared (its noise frequency f_k is 1/1.6 of it: src/detail.rs's LATTICE_PER_CYCLE),
+// so the model is 1/1.6² ≈ 0.39. Measured on gaussian at 256²
+// (`terrain compare sketches/gaussian.toml --out-dir D --modes warped,geomipmap --repeat 1
+// --path-frames 0`, PSNR against the reference at warped mesh 96 / GeoMipMap τ 4, blocks of 17 /
+// warped mesh 264, with σ's shift as tan i of the missing height, before the slope's exact
+// geometry): bump whole 21.79 / 24.31 / 27.58 dB; 0.5: 25.01 / 24.95 / 27.79; 1: 25.19 / 25.12 /
+// 27.86; 2: 25.21 / 25.21 / 27.89; 4: 25.18 / 25.23 / 27.87; 10⁴ (bump only where the ground is
+// seen straight on): 25.16 / 25.22 / 27.65.
+
+const FADE_SPECTRUM: f32 = 2.0;
+// The noise's RMS value per unit weight: src/detail.rs's NOISE_RMS (tests/shaders.rs holds them
+// equal).
+const FADE_NOISE_RMS: f32 = 0.31;
+// Below this weight an octave's bump is not evaluated: it would turn the normal by less than a
+// five-hundredth of the octave's slope.
+const FADE_SKIP: f32 = 0.002;
+
+// The variance (m²) of the shift along the ground where the surface lacks `height_var` m² of
+// height variance, for a ray of unit direction `view` meeting ground of unit normal `n`, `up` the
+// vertical: a height h moves the surface h·(n·up) along its normal, the ray's hit h·(n·up)/|v·n|
+// along itself, and the part of that across `up` along the ground. (On level ground, h·tan i.)
+fn fade_spread(height_var: f32, view: vec3<f32>, n: vec3<f32>, up: vec3<f32>) -> f32 {
+    let c = max(abs(dot(view, n)), 0.02);
+    let along = dot(n, up) * length(view - dot(view, up) * up) / c;
+    return height_var * along * along;
+}
+
+// ρ for an octave of `scale` lattice cells per metre at shift variance `spread`.
+fn bump_fade(scale: f32, spread: f32) -> f32 {
+    return exp(-19.739209 * FADE_SPECTRUM * scale * scale * spread);
+}
