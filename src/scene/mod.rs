@@ -190,7 +190,7 @@ pub struct DetailSection {
     /// Per-pixel bump detail past the split octave; off leaves its code out of the shader.
     pub bump: bool,
     /// Each bump octave weighted by its expected correlation with the surface the ray meets
-    /// (`shaders/shared/shading.wgsl`'s `bump_fade`); off draws every bump octave whole.
+    /// (`shaders/shared/fade.wgsl`); off draws every bump octave whole.
     pub bump_fade: bool,
 }
 impl Default for DetailSection {
