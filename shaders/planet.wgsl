@@ -129,7 +129,7 @@ fn planet_fs(in: VsOut) -> FragOut {
     var grad = vec3<f32>(0.0);
     let rel = in.rel.x * planet.east + in.rel.y * planet.north + in.rel.z * planet.up;
 #ifdef BUMP_FADE
-    // The bump's weights by their expected correlation (shared/fade.wgsl); the
+    // The bump's weights by a fitted power of their expected correlation (shared/fade.wgsl); the
     // height keeps every octave whole.
     var height_var = 0.0;
     for (var k = 1u; k <= last; k++) {

@@ -262,8 +262,8 @@ fn shading_normal(in: VsOut, footprint: f32) -> vec3<f32> {
 #else
 // The mesh's interpolated normal, with BUMP the octaves from the vertex's split octave up to the
 // pixel's own octave added as bump detail; the geometry already holds g_k of each, octaves past
-// the pixel octave are never evaluated. With BUMP_FADE each octave's bump is weighted by its
-// expected correlation with the surface the ray meets (shared/fade.wgsl).
+// the pixel octave are never evaluated. With BUMP_FADE each octave's bump is weighted by a
+// fitted power of its expected correlation with the surface the ray meets (shared/fade.wgsl).
 fn mesh_normal(in: VsOut, footprint: f32) -> vec3<f32> {
     let n = normalize(in.normal);
 #ifdef BUMP

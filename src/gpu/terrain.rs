@@ -58,7 +58,8 @@ pub enum Shading {
 pub struct Variant {
     pub noise: bool,
     pub bump: bool,
-    /// With `bump`: each bump octave weighted by its expected correlation (`detail.bump_fade`).
+    /// With `bump`: each bump octave weighted by a fitted power of its expected correlation
+    /// (`detail.bump_fade`).
     pub bump_fade: bool,
     /// Where the light's normals come from.
     pub shading: Shading,

@@ -189,8 +189,8 @@ pub struct DetailSection {
     pub bias: Option<f64>,
     /// Per-pixel bump detail past the split octave; off leaves its code out of the shader.
     pub bump: bool,
-    /// Each bump octave weighted by its expected correlation with the surface the ray meets
-    /// (`shaders/shared/fade.wgsl`); off draws every bump octave whole.
+    /// Each bump octave weighted by a fitted power of its expected correlation with the surface
+    /// the ray meets (`shaders/shared/fade.wgsl`); off draws every bump octave whole.
     pub bump_fade: bool,
 }
 impl Default for DetailSection {
