@@ -19,6 +19,10 @@
 // geometry): bump whole 21.79 / 24.31 / 27.58 dB; 0.5: 25.01 / 24.95 / 27.79; 1: 25.19 / 25.12 /
 // 27.86; 2: 25.21 / 25.21 / 27.89; 4: 25.18 / 25.23 / 27.87; 10⁴ (bump only where the ground is
 // seen straight on): 25.16 / 25.22 / 27.65.
+//
+// A departure from DESIGN.md, whose octave k contributes w_k·n_k·(g_k + (1 − g_k)·b_k): with the
+// fade the normal takes the bump share (1 − g_k)·b_k times this weight; the geometry share and
+// every height are as DESIGN.md defines them. `detail.bump_fade = false` restores its definition.
 
 const FADE_SPECTRUM: f32 = 2.0;
 // The noise's RMS value per unit weight: src/detail.rs's NOISE_RMS (tests/shaders.rs holds them
