@@ -133,17 +133,13 @@ fn planet_fs(in: VsOut) -> FragOut {
     // height keeps every octave whole.
     var height_var = 0.0;
     for (var k = 1u; k <= last; k++) {
-        let g = clamp(in.split - f32(k) + 1.0, 0.0, 1.0);
-        let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
-        let hk = FADE_NOISE_RMS * planet.octave[k - 1u].weight * (1.0 - g) * b;
+        let hk = FADE_NOISE_RMS * planet.octave[k - 1u].weight * bump_share(k, in.split, o_px);
         height_var += hk * hk;
     }
     let spread = fade_spread(height_var, to_eye / dist, n, up);
 #endif
     for (var k = 1u; k <= last; k++) {
-        let g = clamp(in.split - f32(k) + 1.0, 0.0, 1.0);
-        let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
-        let share = (1.0 - g) * b;
+        let share = bump_share(k, in.split, o_px);
         if (share > 0.0) {
             let o = planet.octave[k - 1u].weight * share * octave_rel(planet.octave[k - 1u], rel);
             // The bump's octaves count in the pixel's height too, as the reference's surface

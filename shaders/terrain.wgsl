@@ -273,22 +273,18 @@ fn mesh_normal(in: VsOut, footprint: f32) -> vec3<f32> {
 #ifdef BUMP_FADE
     var height_var = 0.0;
     for (var k = 1u; k <= last; k++) {
-        let g = clamp(in.split - f32(k) + 1.0, 0.0, 1.0);
-        let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
-        let h = FADE_NOISE_RMS * frame.detail.octave[k - 1u].weight * (1.0 - g) * b;
+        let h = FADE_NOISE_RMS * frame.detail.octave[k - 1u].weight * bump_share(k, in.split, o_px);
         height_var += h * h;
     }
     let to_eye = frame.camera.eye - in.local;
     let spread = fade_spread(height_var, to_eye / max(length(to_eye), 1e-3), n, vec3<f32>(0.0, 0.0, 1.0));
 #endif
     for (var k = 1u; k <= last; k++) {
-        let g = clamp(in.split - f32(k) + 1.0, 0.0, 1.0);
-        let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
 #ifdef BUMP_FADE
-        let share = (1.0 - g) * b * bump_fade(frame.detail.octave[k - 1u].scale, spread);
+        let share = bump_share(k, in.split, o_px) * bump_fade(frame.detail.octave[k - 1u].scale, spread);
         if (share > FADE_SKIP) {
 #else
-        let share = (1.0 - g) * b;
+        let share = bump_share(k, in.split, o_px);
         if (share > 0.0) {
 #endif
             grad += frame.detail.octave[k - 1u].weight * share * octave_local(frame.detail.octave[k - 1u], in.local.xy).yz;

@@ -179,6 +179,13 @@ pub fn octave_share(k: u32, o: f32, o_px: f32) -> f32 {
     g + (1.0 - g) * b
 }
 
+/// The bump remainder alone, `(1 − g_k)·b_k`: what the per-pixel normal takes of octave k.
+pub fn bump_share(k: u32, o: f32, o_px: f32) -> f32 {
+    let g = (o - k as f32 + 1.0).clamp(0.0, 1.0);
+    let b = (o_px - k as f32 + 1.0).clamp(0.0, 1.0);
+    (1.0 - g) * b
+}
+
 /// Wraps a whole f64 into i32 the way two's complement addition on the GPU would.
 fn wrap_i32(c: f64) -> i32 {
     (c as i64) as i32
@@ -311,6 +318,9 @@ mod tests {
         // Half geometry, and the other half is bump up to the pixel octave's share.
         assert!((octave_share(4, 3.5, 3.5) - 0.75).abs() < 1e-6);
         assert_eq!(octave_share(4, 3.5, 5.0), 1.0);
+        assert!((bump_share(4, 3.5, 3.5) - 0.25).abs() < 1e-6);
+        assert_eq!(bump_share(1, 3.0, 5.0), 0.0);
+        assert_eq!(bump_share(5, 3.0, 5.0), 1.0);
         assert_eq!(d.last_octave(3.2), 4);
         assert_eq!(d.last_octave(-1.0), 0);
     }

@@ -53,3 +53,10 @@ fn octave_share(k: u32, o: f32, o_px: f32) -> f32 {
     let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
     return g + (1.0 - g) * b;
 }
+
+// The bump remainder alone, (1 − g_k)·b_k: what the per-pixel normal takes of octave k.
+fn bump_share(k: u32, o: f32, o_px: f32) -> f32 {
+    let g = clamp(o - f32(k) + 1.0, 0.0, 1.0);
+    let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
+    return (1.0 - g) * b;
+}
