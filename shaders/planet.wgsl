@@ -146,7 +146,7 @@ fn planet_fs(in: VsOut) -> FragOut {
             // holds them: a small lake the mesh cannot carry still shows as water.
             h += o.x;
 #ifdef BUMP_FADE
-            grad += bump_fade(planet.octave[k - 1u].scale, spread) * o.yzw;
+            grad += bump_fade(planet.octave[k - 1u].scale, spread, FADE_SPECTRUM) * o.yzw;
 #else
             grad += o.yzw;
 #endif

@@ -286,18 +286,28 @@ fn view_constants_in_wgsl_are_the_rust_enum() {
     assert_eq!(found, View::ALL.len(), "a VIEW_ constant per View");
 }
 
-/// The bump fade's noise RMS (shaders/shared/fade.wgsl) is the planar noise's, src/detail.rs's.
+/// The bump fade's noise RMS and model factor (shaders/shared/fade.wgsl) are the planar noise's,
+/// src/detail.rs's.
 #[test]
-fn the_fades_noise_rms_is_the_noises() {
+fn the_fades_constants_are_the_noises() {
     let module = validate("terrain", &["NOISE", "BUMP", "BUMP_FADE"]);
-    let (_, c) = module
-        .constants
-        .iter()
-        .find(|(_, c)| c.name.as_deref() == Some("FADE_NOISE_RMS"))
-        .expect("FADE_NOISE_RMS in the terrain pass with BUMP_FADE");
-    let value = match module.global_expressions[c.init] {
-        naga::Expression::Literal(naga::Literal::F32(v)) => v,
-        ref e => panic!("FADE_NOISE_RMS is {e:?}"),
+    let constant = |name: &str| {
+        let (_, c) = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("{name} in the terrain pass with BUMP_FADE"));
+        match module.global_expressions[c.init] {
+            naga::Expression::Literal(naga::Literal::F32(v)) => v,
+            ref e => panic!("{name} is {e:?}"),
+        }
     };
-    assert_eq!(value, terrain::detail::NOISE_RMS as f32);
+    assert_eq!(
+        constant("FADE_NOISE_RMS"),
+        terrain::detail::NOISE_RMS as f32
+    );
+    // The model's factor: the octave's noise frequency is its lattice frequency over
+    // LATTICE_PER_CYCLE.
+    let model = 1.0 / (terrain::detail::LATTICE_PER_CYCLE * terrain::detail::LATTICE_PER_CYCLE);
+    assert_eq!(constant("FADE_MODEL"), model as f32);
 }

@@ -25,6 +25,10 @@
 // every height are as DESIGN.md defines them. `detail.bump_fade = false` restores its definition.
 
 const FADE_SPECTRUM: f32 = 2.0;
+// The model's own factor, 1/1.6² (src/detail.rs's LATTICE_PER_CYCLE; tests/shaders.rs holds
+// them equal), for the terrain function's normal on coarse ground (terrain.wgsl's
+// `coarse_normal`), where it measured best.
+const FADE_MODEL: f32 = 0.390625;
 // The noise's RMS value per unit weight: src/detail.rs's NOISE_RMS (tests/shaders.rs holds them
 // equal).
 const FADE_NOISE_RMS: f32 = 0.31;
@@ -42,7 +46,8 @@ fn fade_spread(height_var: f32, view: vec3<f32>, n: vec3<f32>, up: vec3<f32>) ->
     return height_var * along * along;
 }
 
-// ρ for an octave of `scale` lattice cells per metre at shift variance `spread`.
-fn bump_fade(scale: f32, spread: f32) -> f32 {
-    return exp(-19.739209 * FADE_SPECTRUM * scale * scale * spread);
+// ρ^(spectrum / FADE_MODEL) for an octave of `scale` lattice cells per metre at shift variance
+// `spread`: FADE_SPECTRUM for the bump, FADE_MODEL for the terrain function's normal.
+fn bump_fade(scale: f32, spread: f32, spectrum: f32) -> f32 {
+    return exp(-19.739209 * spectrum * scale * scale * spread);
 }
