@@ -21,8 +21,10 @@
 // seen straight on): 25.16 / 25.22 / 27.65.
 //
 // A departure from DESIGN.md, whose octave k contributes w_k·n_k·(g_k + (1 − g_k)·b_k): with the
-// fade the normal takes the bump share (1 − g_k)·b_k times this weight; the geometry share and
-// every height are as DESIGN.md defines them. `detail.bump_fade = false` restores its definition.
+// fade the normal takes the bump share (1 − g_k)·b_k times this weight, in the mesh's normal and
+// in the terrain function's normal that coarse ground takes (terrain.wgsl's `coarse_normal`);
+// the geometry share and every height are as DESIGN.md defines them. `detail.bump_fade = false`
+// restores its definition.
 
 const FADE_SPECTRUM: f32 = 2.0;
 // The model's own factor, 1/1.6² (src/detail.rs's LATTICE_PER_CYCLE; tests/shaders.rs holds
