@@ -297,11 +297,11 @@ fn coarse_normal(in: VsOut, footprint: f32) -> vec3<f32> {
 #ifdef BUMP_FADE
     // The split octave the mesh's spacing stands for: GeoMipMap's coarse blocks carry the bake's
     // (`in.split`), which holds octaves between the bake's vertices that the block's lack. With
-    // the bake's split nothing faded there and GeoMipMap's images were as before (gaussian τ 8,
-    // blocks of 17: 22.72 dB against 25.83). In the warped mode it is `in.split` at the
-    // vertices; inside a triangle, the split of the spacing interpolated, at most about
-    // (ln 2/8)·Δ² octaves below `in.split` interpolated, Δ the vertices' difference (warped's
-    // PSNR the same to 0.01 dB either way).
+    // the bake's split nothing faded there and GeoMipMap's images were as before (the command
+    // above, gaussian τ 8, blocks of 17: 22.72 dB against 25.83). In the warped mode it is
+    // `in.split` at the vertices; inside a triangle, the split of the spacing interpolated, at
+    // most about (ln 2/8)·Δ² octaves below `in.split` interpolated, Δ the vertices' difference
+    // (warped's PSNR the same to 0.01 dB either way).
     let split = log2(frame.atlas.d_atlas / in.spacing) - frame.detail.bias;
     let gradient = sketch_gradient(in.local.xy, footprint) + octaves_gradient(in, footprint, normalize(in.normal), split, true);
     return normalize(vec3<f32>(-gradient, 1.0));

@@ -699,10 +699,9 @@ fn geomipmap_from_afar_shades_like_the_reference() {
 /// pattern shifted by a fraction of its wavelength or more; weighted by its expected correlation
 /// (`detail.bump_fade`) it errs less than drawn whole, and less than left out where the ground is
 /// seen steeply enough to hold it. The octaves of the terrain function's normal, which shades
-/// ground where the mesh samples the sketch at twice its cells or coarser (blended in from once),
-/// are faded alike. The gaussian
-/// mountain and the hills from their foot, against the reference, in the warped mode and in
-/// GeoMipMap (τ 4, blocks of 17), which shares the bump.
+/// ground where the mesh samples the sketch at twice its cells or coarser (blended in between
+/// once and twice), are faded alike. The gaussian mountain and the hills from their foot, against
+/// the reference, in the warped mode and in GeoMipMap (τ 4, blocks of 17), which shares the bump.
 #[test]
 fn the_bump_fades_where_the_mesh_cannot_hold_its_place() {
     let shot = |s: &Scene, mode: Mode| {

@@ -101,12 +101,12 @@
 //! Stop 37: `apply_floor` inlined into the row loops' builds (alone it was built for the
 //! baseline's four lanes); `slope_x` inlined too made the map about 1 µs slower on every view
 //! (40.3 → 41.5 µs jacksboro near, run alternately, twice), so it stays a call.
-//! Stop 42, measured and rejected: `perf` put 14 % of the map's time (jacksboro high) on the
+//! Stop 42, measured and not kept: `perf` put 14 % of the map's time (jacksboro high) on the
 //! serial ends of its reductions (the row's height range and `octave_range`'s sixteen lanes,
-//! each folded one lane after another with f32::min's NaN blends); folding the lanes in halves
-//! instead removed them from the profile but not from the time (`benches/cpu_stage.rs`,
-//! `importance`, medians, one build after the other: 36.4 → 37.2 µs jacksboro high, 44.4 → 41.8
-//! hills, 34.2 → 34.8 hills high): the chains overlapped the next row's work.
+//! each folded one lane after another with f32::min's NaN blends). Folding the lanes in halves
+//! removed those chains from the profile, but the time moved within the noise
+//! (`benches/cpu_stage.rs`, `importance`, medians, one build after the other, one run each:
+//! 36.4 → 37.2 µs jacksboro high, 44.4 → 41.8 hills, 34.2 → 34.8 hills high).
 
 use crate::camera::Camera;
 use crate::stage::sketch_map::{SketchMap, Turn};

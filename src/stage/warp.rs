@@ -115,10 +115,11 @@
 //! gaussian near, 85 to 60 on hills (`terrain warp sketches/S.toml --out-dir D --json
 //! --no-figures --repeat 400`, alternately, twice each).
 //!
-//! Stop 42, measured and rejected: Φ, `row_x` and `row_importance` allocated on 64-byte
-//! boundaries, so that `store_columns`' 64-byte stores (where `perf` put a tenth of the warp,
-//! jacksboro high) never straddle two cache lines: guarded 58.8 → 58.0 µs, plain 48.5 → 48.1
-//! (`benches/cpu_stage.rs`), within the noise.
+//! Stop 42, measured and not kept: Φ, `row_x` and `row_importance` allocated on 64-byte
+//! boundaries, so that `store_columns`' 64-byte stores (where `perf` put a tenth of the warp on
+//! jacksboro high) never straddle two cache lines: on jacksboro high, guarded 58.8 → 58.0 µs,
+//! plain 48.5 → 48.1 (`benches/cpu_stage.rs`, medians, one build after the other, one run
+//! each), within the noise.
 //!
 //! Rejected alternative, measured: two threads. Rayon's `join` over halves of the rows, of the
 //! column mappings and of Φ's rows (the row pass written row-major and transposed) took 511 µs
