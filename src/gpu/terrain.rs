@@ -115,23 +115,15 @@ impl TerrainPass {
             flags.push("NOISE");
         }
         match variant.shading {
-            Shading::MeshNormals(_) => {
-                entries.push(entry(4, S::VERTEX, storage(true)));
-                if variant.bump {
-                    flags.push("BUMP");
-                    if variant.bump_fade {
-                        flags.push("BUMP_FADE");
-                    }
-                }
-            }
+            Shading::MeshNormals(_) => entries.push(entry(4, S::VERTEX, storage(true))),
             Shading::PixelNormals => flags.push("PIXEL_NORMALS"),
-            Shading::GridNormals => {
-                if variant.bump {
-                    flags.push("BUMP");
-                    if variant.bump_fade {
-                        flags.push("BUMP_FADE");
-                    }
-                }
+            Shading::GridNormals => {}
+        }
+        // Pixel normals hold every octave already: no bump on top of them.
+        if variant.bump && !matches!(variant.shading, Shading::PixelNormals) {
+            flags.push("BUMP");
+            if variant.bump_fade {
+                flags.push("BUMP_FADE");
             }
         }
         if variant.shadows {
