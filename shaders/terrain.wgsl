@@ -218,13 +218,23 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
 }
 #endif
 
+// Whether a fragment is drawn: the sketch ends at its edge, as the reference's does. The warped
+// region (a square on a quantised lattice) and the baked grid (the square enclosing the sketch)
+// reach past it, and warp & zoom puts every vertex beyond the edge on it (`mesh_xy`), so the
+// cells past the edge lie in the vertical plane of the edge, spanning chords of its height
+// profile: they are left out with a margin inside the edge (a thousandth of the sketch's spacing,
+// far above f32's rounding of a coordinate there and far below a pixel's footprint).
+fn inside_sketch(local: vec2<f32>) -> bool {
+    return on_sketch(local, -1e-3 * frame.atlas.d_atlas);
+}
+
 #ifdef POSITIONS
 // The depth copy alone, for a multisampled frame: its colour pass leaves positions out (its
 // samples cannot hold four bytes of one depth through a resolve), and this single-sampled pass
 // writes each pixel centre's depth, as a single-sampled frame does.
 @fragment
 fn depth_fs(in: VsOut) -> @location(1) vec4<f32> {
-    if (!on_sketch(in.local.xy, 1e-3 * frame.atlas.d_atlas)) {
+    if (!inside_sketch(in.local.xy)) {
         discard;
     }
     return depth_bytes(in.view_w);
@@ -354,9 +364,7 @@ fn octaves_gradient(in: VsOut, footprint: f32, n: vec3<f32>, split: f32, terrain
 
 @fragment
 fn terrain_fs(in: VsOut) -> FragOut {
-    // The sketch ends at its edge, as the reference's does: the warped region (a square on a
-    // quantised lattice) and the baked grid (the square enclosing the sketch) may reach past it.
-    if (!on_sketch(in.local.xy, 1e-3 * frame.atlas.d_atlas)) {
+    if (!inside_sketch(in.local.xy)) {
         discard;
     }
     let to_eye = frame.camera.eye - in.local;

@@ -36,11 +36,20 @@ fn phi_at(st: vec2<f32>) -> vec2<f32> {
     return frame.mesh.phi_s * q.x + frame.mesh.phi_t * q.y + frame.mesh.phi_offset;
 }
 
-// The horizontal position of mesh vertex `ij` (clamped to the mesh).
+// The horizontal position of mesh vertex `ij` (clamped to the mesh), where Φ puts it.
 fn mesh_xy(ij: vec2<i32>) -> vec2<f32> {
     let m = i32(frame.mesh.mesh);
     let c = clamp(ij, vec2<i32>(0), vec2<i32>(m - 1));
     return phi_at(vec2<f32>(c) * (f32(frame.mesh.n - 1u) / f32(frame.mesh.mesh - 1u)));
+}
+
+// A vertex past the sketch's edge is drawn on it: the region is a square on a lattice and
+// reaches past the sketch, and a cell the edge crosses then ends there with the edge's own
+// heights at its vertices, as the reference's surface ends, not a line to a vertex beyond. The
+// spacing (the split octave, the cell's side) stays Φ's, so the bake's grid and its blocks'
+// figures measured on tiles (src/tiles/blocks.rs) are unchanged.
+fn on_sketch_edge(p: vec2<f32>) -> vec2<f32> {
+    return clamp(p, sketch_lo(), sketch_hi());
 }
 
 // The detailed surface at `p` for a mesh whose spacing there is `d_max` metres: (height, split
@@ -86,8 +95,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         max(distance(p, east), distance(p, mesh_xy(ij - vec2<i32>(1, 0)))),
         max(distance(p, north), distance(p, mesh_xy(ij - vec2<i32>(0, 1)))),
     );
-    let z = detailed_at(p, d_max);
-    detailed[id.y * frame.mesh.mesh + id.x] = vec4<f32>(p, z.x, z.y);
+    let drawn = on_sketch_edge(p);
+    let z = detailed_at(drawn, d_max);
+    detailed[id.y * frame.mesh.mesh + id.x] = vec4<f32>(drawn, z.x, z.y);
 #ifdef CENTRES
     // The cell from this vertex to (s+1, t+1), at the spacing of its longest side.
     if (id.x + 1u < frame.mesh.mesh && id.y + 1u < frame.mesh.mesh) {
@@ -96,7 +106,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             max(distance(p, east), distance(p, north)),
             max(distance(far, east), distance(far, north)),
         );
-        centres[id.y * frame.mesh.mesh + id.x] = detailed_at(0.25 * (p + east + north + far), side).x;
+        let mean = 0.25 * (drawn + on_sketch_edge(east) + on_sketch_edge(north) + on_sketch_edge(far));
+        centres[id.y * frame.mesh.mesh + id.x] = detailed_at(mean, side).x;
     }
 #endif
 }

@@ -18,7 +18,7 @@ use common::*;
 use glam::IVec2;
 use terrain::gpu::mesh_split::split_cpu;
 use terrain::gpu::uniforms::View;
-use terrain::gpu::warp_zoom::{centre_cpu, vertex_cpu};
+use terrain::gpu::warp_zoom::{centre_cpu, sketch_rect, vertex_cpu};
 use terrain::lod::warped::Warped;
 use terrain::render::Renderer;
 use terrain::scene::Mode;
@@ -61,6 +61,8 @@ fn gpu_warp_and_zoom_matches_its_cpu_twin() {
         ("jacksboro", false),
         ("gaussian-high", false),
         ("hills", true),
+        // Its region reaches past the sketch: vertices on the edge (`mesh_xy`).
+        ("hills-high", false),
     ] {
         // The full 512² mesh, and one frame at the mesh its budget chose.
         let mut scene = bundled(name, 64, 512);
@@ -75,6 +77,8 @@ fn gpu_warp_and_zoom_matches_its_cpu_twin() {
         let m = uniforms.mesh.mesh as i32;
         assert_eq!(m < 512, budget, "{name}: mesh {m}");
         let (mut worst_z, mut worst_xy, mut checked) = (0.0f64, 0.0f64, 0);
+        let (lo, hi) = sketch_rect(&uniforms);
+        let mut on_edge = 0;
         for j in (0..m).step_by(7).chain([m - 1]) {
             for i in (0..m).step_by(7).chain([m - 1]) {
                 let cpu = vertex_cpu(
@@ -105,7 +109,15 @@ fn gpu_warp_and_zoom_matches_its_cpu_twin() {
                     cpu[3]
                 );
                 checked += 1;
+                let p = glam::Vec2::new(cpu[0], cpu[1]);
+                on_edge += usize::from(p.cmpeq(lo).any() || p.cmpeq(hi).any());
             }
+        }
+        if name == "hills-high" {
+            assert!(
+                on_edge > 0,
+                "{name}: no vertex checked lies on the sketch's edge"
+            );
         }
         // The centres against their twin, and the mesh split against its twin fed the GPU's
         // own vertices and centres.
@@ -759,6 +771,33 @@ fn the_bump_fades_where_the_mesh_cannot_hold_its_place() {
             faded > none + over_none,
             "{view}, {mode:?}, mesh {mesh}: none {none:.2}, faded {faded:.2} dB"
         );
+    }
+}
+
+/// The warped region is a square on a lattice and reaches past the sketch; warp & zoom puts the
+/// vertices beyond the edge on it, and the terrain pass leaves out the cells between them (the
+/// edge's vertical plane), so the mesh ends where the reference's surface does. hills-high sees
+/// the whole sketch, its edges against the ground beyond, at 256²; PSNR against the reference,
+/// measured: warped mesh 33 41.26 dB with the vertices beyond the edge where Φ put them (88 % of
+/// the squared error in 100 pixels along the far edge, whose heights were a line to a vertex
+/// beyond), 48.15 with them on it; mesh 96 52.36 and 55.87. With the vertices on the edge but
+/// the cells between them drawn (chords of the near edge's profile, standing in the edge's
+/// plane), mesh 33 read 48.32 and mesh 96 49.34. The bounds lie between.
+#[test]
+fn the_mesh_ends_at_the_sketchs_edge() {
+    let shot = |s: &Scene, mode: Mode| {
+        let mut r = Renderer::new(s, mode, View::Shaded).unwrap();
+        let camera = terrain::scene::camera_of(s, &r.atlas).unwrap();
+        r.render(&camera).unwrap().rgba
+    };
+    let mut s = bundled("hills-high", 256, 33);
+    s.warp.budget = false;
+    let reference = shot(&s, Mode::Reference);
+    for (mesh, least) in [(33, 45.0), (96, 54.0)] {
+        s.warp.mesh = mesh;
+        let db = psnr(&shot(&s, Mode::Warped), &reference);
+        eprintln!("hills-high at 256², warped mesh {mesh}: {db:.2} dB");
+        assert!(db > least, "mesh {mesh}: {db:.2} dB against the reference");
     }
 }
 

@@ -144,6 +144,20 @@ fn mesh_xy(f: &FrameUniforms, phi: &[[f32; 2]], ij: IVec2) -> Vec2 {
     )
 }
 
+/// `on_sketch_edge` in the shader: a vertex past the sketch's edge is drawn on it.
+fn on_sketch_edge(f: &FrameUniforms, p: Vec2) -> Vec2 {
+    let (lo, hi) = sketch_rect(f);
+    p.clamp(lo, hi)
+}
+
+/// The sketch's rectangle, metres from the frame origin (`sketch_lo` and `sketch_hi` in
+/// `shaders/shared/frame.wgsl`).
+pub fn sketch_rect(f: &FrameUniforms) -> (Vec2, Vec2) {
+    let lo = -Vec2::from(f.atlas.offset);
+    let nodes = glam::UVec2::new(f.atlas.level[0][0], f.atlas.level[0][1]) - glam::UVec2::ONE;
+    (lo, lo + nodes.as_vec2() / Vec2::from(f.atlas.inv_spacing))
+}
+
 pub(crate) fn catmull_rom(t: f32) -> [f32; 4] {
     let (t2, t3) = (t * t, t * t * t);
     [
@@ -296,8 +310,9 @@ pub fn vertex_cpu(
     let d_max = d(IVec2::X)
         .max(d(-IVec2::X))
         .max(d(IVec2::Y).max(d(-IVec2::Y)));
-    let (z, o) = detailed_at(f, atlas, detail, p, d_max);
-    [p.x, p.y, z, o]
+    let drawn = on_sketch_edge(f, p);
+    let (z, o) = detailed_at(f, atlas, detail, drawn, d_max);
+    [drawn.x, drawn.y, z, o]
 }
 
 /// The CPU twin of `warp_zoom.wgsl`'s centres: the height at the mean of cell `ij`'s corners
@@ -315,7 +330,9 @@ pub fn centre_cpu(
         .distance(east)
         .max(p.distance(north))
         .max(far.distance(east).max(far.distance(north)));
-    detailed_at(f, atlas, detail, 0.25 * (p + east + north + far), side).0
+    let edge = |q: Vec2| on_sketch_edge(f, q);
+    let mean = 0.25 * (edge(p) + edge(east) + edge(north) + edge(far));
+    detailed_at(f, atlas, detail, mean, side).0
 }
 
 impl WarpZoomPass {

@@ -5,7 +5,8 @@
 //! Rules:
 //! - The grid is GeoMipMap's at k = 0: spacing d = min(dx, dy), vertex (i, j) the bake's
 //!   Catmull-Rom sample of level 0 at texel coordinates (i·d/dx, j·d/dy), taps clamped to the
-//!   level, and never below the water's surface (`sketch.water_level_m`). δ and the range follow
+//!   level, and never below the water's surface (`sketch.water_level_m`). A vertex past the
+//!   sketch's last node lies on its edge, as the bake draws it. δ and the range follow
 //!   [`crate::geomipmap::block_stats`], the rule the baked grid's blocks use, so both paths
 //!   choose the same levels.
 //! - Square cells, with blocks that divide the tile: every vertex is a node
@@ -38,7 +39,8 @@ pub struct BlockStats {
     pub z_range: Vec<(f32, f32)>,
 }
 
-const MAGIC: &[u8; 8] = b"TGMMB\x002\n";
+// Version 3: vertices past the edge on it (figures kept by version 2 are measured anew).
+const MAGIC: &[u8; 8] = b"TGMMB\x003\n";
 
 /// The figures of `per_side`² blocks of `cells` cells over `pyramid`'s level 0 with the water's
 /// surface at `water` metres: from the folder's file when it matches, else measured (with
@@ -159,7 +161,10 @@ struct Strips<'a> {
 impl Strips<'_> {
     /// The Catmull-Rom taps and weights at grid index `i` along an axis of `len` nodes.
     fn taps(&self, i: usize, axis: usize, len: usize) -> ([usize; 4], [f32; 4]) {
-        let u = ((i as f64 * self.d) as f32) * self.inv[axis];
+        // Past the sketch's last node the bake draws the vertex on the edge (`on_sketch_edge` in
+        // warp_zoom.wgsl), with the shader's f32 operations.
+        let x = ((i as f64 * self.d) as f32).min((len - 1) as f32 / self.inv[axis]);
+        let u = x * self.inv[axis];
         let f = u.floor();
         let at = |k: i64| (f as i64 - 1 + k).clamp(0, len as i64 - 1) as usize;
         (
