@@ -128,8 +128,10 @@ fn grid_index(g: vec2<u32>) -> u32 {
 fn grid_vertex(g: vec2<u32>) -> vec4<f32> {
     let d = frame.atlas.d_atlas;
     let p = vec2<f32>(min(g, vec2<u32>(frame.mesh.mesh - 1u))) * d;
-    let z = atlas_height(p + frame.mesh.mesh_offset, d);
-    return vec4<f32>(p, max(z, frame.atlas.water_m), -frame.detail.bias);
+    // Past the sketch's edge, on it, as the bake draws its vertices.
+    let drawn = on_sketch_edge(p + frame.mesh.mesh_offset);
+    let z = atlas_height(drawn, d);
+    return vec4<f32>(drawn - frame.mesh.mesh_offset, max(z, frame.atlas.water_m), -frame.detail.bias);
 }
 #else
 fn grid_vertex(g: vec2<u32>) -> vec4<f32> {
@@ -218,12 +220,11 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
 }
 #endif
 
-// Whether a fragment is drawn: the sketch ends at its edge, as the reference's does. The warped
-// region (a square on a quantised lattice) and the baked grid (the square enclosing the sketch)
-// reach past it, and warp & zoom puts every vertex beyond the edge on it (`mesh_xy`), so the
-// cells past the edge lie in the vertical plane of the edge, spanning chords of its height
-// profile: they are left out with a margin inside the edge (a thousandth of the sketch's spacing,
-// far above f32's rounding of a coordinate there and far below a pixel's footprint).
+// Whether a fragment is drawn: the sketch ends at its edge, as the reference's does. The cells
+// between vertices drawn on the edge (`on_sketch_edge`) stand in its vertical plane, spanning
+// chords of its height profile: they are left out with a margin inside the edge (a thousandth of
+// the sketch's spacing, far above f32's rounding of a coordinate there and far below a pixel's
+// footprint).
 fn inside_sketch(local: vec2<f32>) -> bool {
     return on_sketch(local, -1e-3 * frame.atlas.d_atlas);
 }

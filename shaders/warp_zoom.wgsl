@@ -43,15 +43,6 @@ fn mesh_xy(ij: vec2<i32>) -> vec2<f32> {
     return phi_at(vec2<f32>(c) * (f32(frame.mesh.n - 1u) / f32(frame.mesh.mesh - 1u)));
 }
 
-// A vertex past the sketch's edge is drawn on it: the region is a square on a lattice and
-// reaches past the sketch, and a cell the edge crosses then ends there with the edge's own
-// heights at its vertices, as the reference's surface ends, not a line to a vertex beyond. The
-// spacing (the split octave, the cell's side) stays Φ's, so the bake's grid and its blocks'
-// figures measured on tiles (src/tiles/blocks.rs) are unchanged.
-fn on_sketch_edge(p: vec2<f32>) -> vec2<f32> {
-    return clamp(p, sketch_lo(), sketch_hi());
-}
-
 // The detailed surface at `p` for a mesh whose spacing there is `d_max` metres: (height, split
 // octave).
 fn detailed_at(p: vec2<f32>, d_max: f32) -> vec2<f32> {
@@ -95,6 +86,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         max(distance(p, east), distance(p, mesh_xy(ij - vec2<i32>(1, 0)))),
         max(distance(p, north), distance(p, mesh_xy(ij - vec2<i32>(0, 1)))),
     );
+    // Drawn on the sketch's edge where Φ puts it beyond (`on_sketch_edge`); the spacing (the
+    // split octave, a cell's side) stays Φ's, so the bake's grid keeps the figures its blocks'
+    // measurement on tiles gives (src/tiles/blocks.rs).
     let drawn = on_sketch_edge(p);
     let z = detailed_at(drawn, d_max);
     detailed[id.y * frame.mesh.mesh + id.x] = vec4<f32>(drawn, z.x, z.y);

@@ -553,8 +553,11 @@ fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path, water: f64)
     let db = psnr(&last.rgba, &expected.rgba);
     eprintln!("geomipmap, {name} cells: first frame {first_db:.1} dB, resident {db:.1} dB");
     assert!(first_db < 50.0, "{name}: the stand-in frame should differ");
+    // Measured: 95.0 dB with square cells, 88.1 with degrees. With the streamed grid's vertices
+    // past the sketch's edge left where the grid puts them, while the bake draws them on it,
+    // square cells read 52.5.
     assert!(
-        db >= 50.0,
+        db >= 70.0,
         "{name}: {db:.1} dB against the sketch in memory"
     );
     drop(s);

@@ -144,7 +144,7 @@ fn mesh_xy(f: &FrameUniforms, phi: &[[f32; 2]], ij: IVec2) -> Vec2 {
     )
 }
 
-/// `on_sketch_edge` in the shader: a vertex past the sketch's edge is drawn on it.
+/// `on_sketch_edge` in `shaders/shared/frame.wgsl`: a vertex past the sketch's edge is drawn on it.
 fn on_sketch_edge(f: &FrameUniforms, p: Vec2) -> Vec2 {
     let (lo, hi) = sketch_rect(f);
     p.clamp(lo, hi)
