@@ -222,9 +222,10 @@ fn terrain_vs(@builtin(vertex_index) vi: u32) -> VsOut {
 
 // Whether a fragment is drawn: the sketch ends at its edge, as the reference's does. The cells
 // between vertices drawn on the edge (`on_sketch_edge`) stand in its vertical plane, spanning
-// chords of its height profile: they are left out with a margin inside the edge (a thousandth of
-// the sketch's spacing, far above f32's rounding of a coordinate there and far below a pixel's
-// footprint).
+// chords of its height profile: they are left out with a margin inside the edge, a thousandth of
+// the sketch's spacing. That is above f32's rounding of a coordinate up to about 8,000 spacings
+// from the frame's origin (the camera's ground point); farther away, a pixel spans hundreds of
+// metres there (240 km for 30 m spacings: about 500 m at 512², 60°).
 fn inside_sketch(local: vec2<f32>) -> bool {
     return on_sketch(local, -1e-3 * frame.atlas.d_atlas);
 }

@@ -43,6 +43,19 @@ fn mesh_xy(ij: vec2<i32>) -> vec2<f32> {
     return phi_at(vec2<f32>(c) * (f32(frame.mesh.n - 1u) / f32(frame.mesh.mesh - 1u)));
 }
 
+// Where a vertex Φ puts at `p` is drawn: on the sketch's edge where `p` lies beyond it
+// (`on_sketch_edge`), in a region along x and y (and the bake's grid). A region turned by 45°
+// keeps its vertices where Φ puts them: its rows cross the sketch's edges at 45°, and a vertex
+// moved onto an edge across them can turn its cell over (on hills from 9 km up, looking
+// north-east, warped mesh 48² read 40.80 dB against the reference with its vertices beyond the
+// edge, 39.55 with them on it).
+fn drawn_xy(p: vec2<f32>) -> vec2<f32> {
+    if (frame.mesh.phi_s.y != 0.0) {
+        return p;
+    }
+    return on_sketch_edge(p);
+}
+
 // The detailed surface at `p` for a mesh whose spacing there is `d_max` metres: (height, split
 // octave).
 fn detailed_at(p: vec2<f32>, d_max: f32) -> vec2<f32> {
@@ -86,10 +99,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         max(distance(p, east), distance(p, mesh_xy(ij - vec2<i32>(1, 0)))),
         max(distance(p, north), distance(p, mesh_xy(ij - vec2<i32>(0, 1)))),
     );
-    // Drawn on the sketch's edge where Φ puts it beyond (`on_sketch_edge`); the spacing (the
-    // split octave, a cell's side) stays Φ's, so the bake's grid keeps the figures its blocks'
-    // measurement on tiles gives (src/tiles/blocks.rs).
-    let drawn = on_sketch_edge(p);
+    // The spacing (the split octave, a cell's side) stays Φ's, so the bake's grid keeps the
+    // figures its blocks' measurement on tiles gives (src/tiles/blocks.rs).
+    let drawn = drawn_xy(p);
     let z = detailed_at(drawn, d_max);
     detailed[id.y * frame.mesh.mesh + id.x] = vec4<f32>(drawn, z.x, z.y);
 #ifdef CENTRES
@@ -100,7 +112,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             max(distance(p, east), distance(p, north)),
             max(distance(far, east), distance(far, north)),
         );
-        let mean = 0.25 * (drawn + on_sketch_edge(east) + on_sketch_edge(north) + on_sketch_edge(far));
+        let mean = 0.25 * (drawn + drawn_xy(east) + drawn_xy(north) + drawn_xy(far));
         centres[id.y * frame.mesh.mesh + id.x] = detailed_at(mean, side).x;
     }
 #endif

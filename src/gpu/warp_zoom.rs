@@ -144,8 +144,12 @@ fn mesh_xy(f: &FrameUniforms, phi: &[[f32; 2]], ij: IVec2) -> Vec2 {
     )
 }
 
-/// `on_sketch_edge` in `shaders/shared/frame.wgsl`: a vertex past the sketch's edge is drawn on it.
-fn on_sketch_edge(f: &FrameUniforms, p: Vec2) -> Vec2 {
+/// `drawn_xy` in the shader: a vertex past the sketch's edge is drawn on it (`on_sketch_edge` in
+/// `shaders/shared/frame.wgsl`), unless the region is turned.
+fn drawn_xy(f: &FrameUniforms, p: Vec2) -> Vec2 {
+    if f.mesh.phi_s[1] != 0.0 {
+        return p;
+    }
     let (lo, hi) = sketch_rect(f);
     p.clamp(lo, hi)
 }
@@ -310,7 +314,7 @@ pub fn vertex_cpu(
     let d_max = d(IVec2::X)
         .max(d(-IVec2::X))
         .max(d(IVec2::Y).max(d(-IVec2::Y)));
-    let drawn = on_sketch_edge(f, p);
+    let drawn = drawn_xy(f, p);
     let (z, o) = detailed_at(f, atlas, detail, drawn, d_max);
     [drawn.x, drawn.y, z, o]
 }
@@ -330,7 +334,7 @@ pub fn centre_cpu(
         .distance(east)
         .max(p.distance(north))
         .max(far.distance(east).max(far.distance(north)));
-    let edge = |q: Vec2| on_sketch_edge(f, q);
+    let edge = |q: Vec2| drawn_xy(f, q);
     let mean = 0.25 * (edge(p) + edge(east) + edge(north) + edge(far));
     detailed_at(f, atlas, detail, mean, side).0
 }

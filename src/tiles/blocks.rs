@@ -162,7 +162,7 @@ impl Strips<'_> {
     /// The Catmull-Rom taps and weights at grid index `i` along an axis of `len` nodes.
     fn taps(&self, i: usize, axis: usize, len: usize) -> ([usize; 4], [f32; 4]) {
         // Past the sketch's last node the bake draws the vertex on the edge (`on_sketch_edge` in
-        // shaders/shared/frame.wgsl), with the shader's f32 operations.
+        // shaders/shared/frame.wgsl): the edge's f32 coordinate, as the shader computes it.
         let x = ((i as f64 * self.d) as f32).min((len - 1) as f32 / self.inv[axis]);
         let u = x * self.inv[axis];
         let f = u.floor();
