@@ -45,6 +45,13 @@ fn render(scene: &Scene, view: View) -> (Renderer, terrain::render::Frame) {
     (r, frame)
 }
 
+/// A shaded frame of `s` in `mode` from its own camera: its pixels (RGBA).
+fn shot(s: &Scene, mode: Mode) -> Vec<u8> {
+    let mut r = Renderer::new(s, mode, View::Shaded).unwrap();
+    let camera = terrain::scene::camera_of(s, &r.atlas).unwrap();
+    r.render(&camera).unwrap().rgba
+}
+
 /// A frame of `scene` in `mode` with its pixels' world positions (x, y, z, 1 on ground / 0 on
 /// sky, f64, row-major), and the renderer that drew it.
 fn render_with_positions(scene: &Scene, mode: Mode) -> (Renderer, Vec<u8>, Vec<f64>) {
@@ -716,11 +723,6 @@ fn geomipmap_from_afar_shades_like_the_reference() {
 /// the reference, in the warped mode and in GeoMipMap (τ 4, blocks of 17), which shares the bump.
 #[test]
 fn the_bump_fades_where_the_mesh_cannot_hold_its_place() {
-    let shot = |s: &Scene, mode: Mode| {
-        let mut r = Renderer::new(s, mode, View::Shaded).unwrap();
-        let camera = terrain::scene::camera_of(s, &r.atlas).unwrap();
-        r.render(&camera).unwrap().rgba
-    };
     // (view, mode, warped mesh, least gain over the bump drawn whole, over no bump), dB, about
     // half of what was measured: on gaussian, warped mesh 24 +6.11 and +5.98 (nearly all its
     // ground shaded with the terrain function's normal), mesh 96 +4.52 and +1.14 (its near
@@ -788,11 +790,6 @@ fn the_bump_fades_where_the_mesh_cannot_hold_its_place() {
 /// edge (cells turned over), 40.77 now.
 #[test]
 fn the_mesh_ends_at_the_sketchs_edge() {
-    let shot = |s: &Scene, mode: Mode| {
-        let mut r = Renderer::new(s, mode, View::Shaded).unwrap();
-        let camera = terrain::scene::camera_of(s, &r.atlas).unwrap();
-        r.render(&camera).unwrap().rgba
-    };
     let mut high = bundled("hills-high", 256, 33);
     high.warp.budget = false;
     let mut turned = high.clone();
