@@ -248,8 +248,10 @@ fn depth_fs(in: VsOut) -> @location(1) vec4<f32> {
 // between frames leaves the light alone. Otherwise the mesh's own normal plus bump detail where
 // the mesh samples the sketch at its own cells or finer, and the terrain function's normal where
 // it samples the sketch at twice its cells or coarser (views from high up, far ground,
-// GeoMipMap's coarse levels), blended between. There the mesh's facets point-sample the
-// sketch's pyramid and miss its relief between the mesh's spacing and the pixel's footprint.
+// GeoMipMap's coarse levels) or holds octaves more than one past the pixel's own (GeoMipMap's
+// baked grid seen from afar), blended between. There the mesh's facets point-sample the
+// sketch's pyramid and miss its relief between the mesh's spacing and the pixel's footprint, or
+// point-sample octaves the pixel averages.
 // Measured on jacksboro-high at 256² against the reference: warped 38.2 dB with the facets, 46.7
 // with the facets plus that band of the sketch's gradient, 48.0 with the terrain function's
 // normal; GeoMipMap 33.7, 41.0, 42.2. It costs what PIXEL_NORMALS costs, on those pixels only:
@@ -259,8 +261,9 @@ fn shading_normal(in: VsOut, footprint: f32) -> vec3<f32> {
     return normalize(vec3<f32>(-surface_gradient(in.local.xy, footprint), 1.0));
 #else
     // Also where the mesh holds octaves more than one past the pixel's own (GeoMipMap's baked
-    // grid seen from afar; the warped mesh's split stops at the pixel octave): its normal
-    // point-samples them and aliases. GeoMipMap at 256², blocks of 17, τ 0.5, against the
+    // grid seen from afar, and brute force's; the warped mesh's split stops at the pixel octave
+    // of the vertex's nearest possible height, so only a fragment more than twice as far as that
+    // can pass it): its normal point-samples them and aliases. GeoMipMap at 256², blocks of 17, τ 0.5, against the
     // reference: hills-high 43.65 → 49.79 dB, gaussian-high 49.85 → 60.30; blocks of 33: hills
     // τ 0.5 24.88 → 25.24, τ 1 24.35 → 24.79, gaussian τ 1 26.91 → 26.99; the rest and every
     // warped image unchanged. From the first octave past the pixel's, hills gained 0.94 dB but
@@ -295,10 +298,10 @@ fn mesh_normal(in: VsOut, footprint: f32) -> vec3<f32> {
 }
 
 // The terrain function's normal, where the mesh samples the sketch at twice its cells or
-// coarser: the sketch's gradient and the octaves'. With BUMP_FADE the octaves the mesh does not
-// hold are faded as the bump is, for the same reason: the ray meets the true surface away from
-// where it meets the mesh, by the height the mesh lacks, and drawn whole they are the reference's
-// pattern shifted. Here the model's own factor (FADE_MODEL) measured best, not the bump's fitted
+// coarser or holds octaves well past the pixel's: the sketch's gradient and the octaves'. With
+// BUMP_FADE the octaves the mesh does not hold are faded as the bump is, for the same reason: the
+// ray meets the true surface away from where it meets the mesh, by the height the mesh lacks, and
+// drawn whole they are the reference's pattern shifted. Here the model's own factor (FADE_MODEL) measured best, not the bump's fitted
 // one. Measured at 256² (`terrain compare sketches/S.toml --out-dir D --modes warped,geomipmap
 // --repeat 1 --path-frames 0`), PSNR against the reference at warped mesh 16 / 48 / 96 / 144 and
 // GeoMipMap τ 4, blocks of 17 / τ 8, blocks of 33, by the factor:

@@ -124,9 +124,9 @@ fn on_sketch(local: vec2<f32>, margin: f32) -> bool {
     return all(local >= sketch_lo() - margin) && all(local <= sketch_hi() + margin);
 }
 
-// Where a mesh vertex at `p` is drawn: on the sketch's edge when it lies beyond it. The warped
-// region is a square on a lattice and the baked grid the square enclosing the sketch, and both
-// reach past it; a cell the edge crosses then ends there with the edge's own heights at its
+// Where a mesh vertex at `p` is drawn: on the sketch's edge when it lies beyond it (a warped
+// region turned by 45° excepted: `drawn_xy` in warp_zoom.wgsl). The warped region is a square on
+// a lattice and the baked grid the square enclosing the sketch, and both reach past it; a cell the edge crosses then ends there with the edge's own heights at its
 // vertices, as the reference's surface ends, not a line to a vertex beyond. The cells between
 // two such vertices stand in the edge's vertical plane, and the terrain pass leaves them out
 // (`inside_sketch` in terrain.wgsl).
