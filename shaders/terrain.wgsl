@@ -263,10 +263,10 @@ fn shading_normal(in: VsOut, footprint: f32) -> vec3<f32> {
     // Also where the mesh holds octaves more than one past the pixel's own (GeoMipMap's baked
     // grid seen from afar, and brute force's; the warped mesh's split stops at the pixel octave
     // of the vertex's nearest possible height, so only a fragment more than twice as far as that
-    // can pass it): its normal point-samples them and aliases. GeoMipMap at 256², blocks of 17, τ 0.5, against the
-    // reference: hills-high 43.65 → 49.79 dB, gaussian-high 49.85 → 60.30; blocks of 33: hills
-    // τ 0.5 24.88 → 25.24, τ 1 24.35 → 24.79, gaussian τ 1 26.91 → 26.99; the rest and every
-    // warped image unchanged. From the first octave past the pixel's, hills gained 0.94 dB but
+    // can pass it): its normal point-samples them and aliases. GeoMipMap at 256², blocks of 17,
+    // τ 0.5, against the reference: hills-high 43.65 → 49.79 dB, gaussian-high 49.85 → 60.30;
+    // blocks of 33: hills τ 0.5 24.88 → 25.24, τ 1 24.35 → 24.79, gaussian τ 1 26.91 → 26.99; the
+    // rest measured and every warped image measured unchanged. From the first octave past the pixel's, hills gained 0.94 dB but
     // gaussian lost 0.42 at τ 4 (26.36 → 25.94), where the bump over the mesh's normal serves
     // better than the terrain function's faded octaves.
     let excess = in.split - log2(frame.atlas.d_atlas / max(footprint, 1e-6));
@@ -301,10 +301,11 @@ fn mesh_normal(in: VsOut, footprint: f32) -> vec3<f32> {
 // coarser or holds octaves well past the pixel's: the sketch's gradient and the octaves'. With
 // BUMP_FADE the octaves the mesh does not hold are faded as the bump is, for the same reason: the
 // ray meets the true surface away from where it meets the mesh, by the height the mesh lacks, and
-// drawn whole they are the reference's pattern shifted. Here the model's own factor (FADE_MODEL) measured best, not the bump's fitted
-// one. Measured at 256² (`terrain compare sketches/S.toml --out-dir D --modes warped,geomipmap
-// --repeat 1 --path-frames 0`), PSNR against the reference at warped mesh 16 / 48 / 96 / 144 and
-// GeoMipMap τ 4, blocks of 17 / τ 8, blocks of 33, by the factor:
+// drawn whole they are the reference's pattern shifted. Here the model's own factor (FADE_MODEL)
+// measured best, not the bump's fitted one. Measured at 256² (`terrain compare sketches/S.toml
+// --out-dir D --modes warped,geomipmap --repeat 1 --path-frames 0`), PSNR against the reference
+// at warped mesh 16 / 48 / 96 / 144 and GeoMipMap τ 4, blocks of 17 / τ 8, blocks of 33, by the
+// factor:
 // - gaussian: octaves whole 19.52 / 22.43 / 25.21 / 26.47 / 25.22 / 23.49 dB; 2: 25.26 / 25.87 /
 //   26.24 / 26.70 / 26.15 / 25.86; 1: 25.31 / 25.89 / 26.26 / 26.71 / 26.17 / 25.88; 0.39: 25.29
 //   / 25.92 / 26.29 / 26.72 / 26.20 / 25.92; 0.15: 24.42 / 25.72 / 26.21 / 26.70 / 26.12 /

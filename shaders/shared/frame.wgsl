@@ -126,10 +126,11 @@ fn on_sketch(local: vec2<f32>, margin: f32) -> bool {
 
 // Where a mesh vertex at `p` is drawn: on the sketch's edge when it lies beyond it (a warped
 // region turned by 45° excepted: `drawn_xy` in warp_zoom.wgsl). The warped region is a square on
-// a lattice and the baked grid the square enclosing the sketch, and both reach past it; a cell the edge crosses then ends there with the edge's own heights at its
-// vertices, as the reference's surface ends, not a line to a vertex beyond. The cells between
-// two such vertices stand in the edge's vertical plane, and the terrain pass leaves them out
-// (`inside_sketch` in terrain.wgsl).
+// a lattice and the baked grid the square enclosing the sketch, and both reach past it; a cell
+// the edge crosses then ends there with the edge's own heights at its vertices, as the
+// reference's surface ends, not a line to a vertex beyond. The cells between two such vertices
+// stand in the edge's vertical plane, and the terrain pass leaves them out (`inside_sketch` in
+// terrain.wgsl).
 fn on_sketch_edge(p: vec2<f32>) -> vec2<f32> {
     return clamp(p, sketch_lo(), sketch_hi());
 }
