@@ -160,7 +160,14 @@ fn level_normal(g: vec2<u32>, s: u32) -> vec3<f32> {
     let west = grid_vertex(g - min(vec2<u32>(s, 0u), g)).xyz;
     let north = grid_vertex(min(g + vec2<u32>(0u, s), hi)).xyz;
     let south = grid_vertex(g - min(vec2<u32>(0u, s), g)).xyz;
-    return normalize(cross(east - west, north - south));
+    // Zero where every neighbour was drawn on one point of the sketch's edge (`on_sketch_edge`):
+    // up, as the normals pass gives it, rather than NaN.
+    let c = cross(east - west, north - south);
+    let len = length(c);
+    if (len > 0.0) {
+        return c / len;
+    }
+    return vec3<f32>(0.0, 0.0, 1.0);
 #endif
 }
 
