@@ -124,7 +124,7 @@ fn planet_fs(in: VsOut) -> FragOut {
     var n = normalize(in.normal);
 #ifdef BUMP
 #ifdef NOISE
-    let o_px = log2(frame.atlas.d_atlas / max(footprint, 1e-6));
+    let o_px = footprint_octave(footprint);
     let last = min(planet.octaves, u32(max(ceil(o_px), 0.0)));
     var grad = vec3<f32>(0.0);
     let rel = in.rel.x * planet.east + in.rel.y * planet.north + in.rel.z * planet.up;

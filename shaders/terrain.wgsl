@@ -273,10 +273,10 @@ fn shading_normal(in: VsOut, footprint: f32) -> vec3<f32> {
     // can pass it): its normal point-samples them and aliases. GeoMipMap at 256², blocks of 17,
     // τ 0.5, against the reference: hills-high 43.65 → 49.79 dB, gaussian-high 49.85 → 60.30;
     // blocks of 33: hills τ 0.5 24.88 → 25.24, τ 1 24.35 → 24.79, gaussian τ 1 26.91 → 26.99; the
-    // rest measured and every warped image measured unchanged. From the first octave past the pixel's, hills gained 0.94 dB but
-    // gaussian lost 0.42 at τ 4 (26.36 → 25.94), where the bump over the mesh's normal serves
-    // better than the terrain function's faded octaves.
-    let excess = in.split - log2(frame.atlas.d_atlas / max(footprint, 1e-6));
+    // rest measured and every warped image measured unchanged. From the first octave past the
+    // pixel's, hills gained 0.94 dB but gaussian lost 0.42 at τ 4 (26.36 → 25.94), where the bump
+    // over the mesh's normal serves better than the terrain function's faded octaves.
+    let excess = in.split - footprint_octave(footprint);
     let coarse_mesh = max(log2(in.spacing / frame.atlas.d_atlas), excess - 1.0);
     let coarse = select(clamp(coarse_mesh, 0.0, 1.0), 0.0, on_water(in.local.z));
     if (coarse >= 1.0) {
@@ -352,7 +352,7 @@ fn coarse_normal(in: VsOut, footprint: f32) -> vec3<f32> {
 // the ray meets, for ground of normal `n` (shared/fade.wgsl): FADE_SPECTRUM for the mesh's
 // normal, FADE_MODEL for the terrain function's.
 fn octaves_gradient(in: VsOut, footprint: f32, n: vec3<f32>, split: f32, terrain_function: bool) -> vec2<f32> {
-    let o_px = log2(frame.atlas.d_atlas / max(footprint, 1e-6));
+    let o_px = footprint_octave(footprint);
     let last = min(frame.detail.octaves, u32(max(ceil(o_px), 0.0)));
     var grad = vec2<f32>(0.0);
 #ifdef BUMP_FADE

@@ -76,7 +76,7 @@ fn detailed_at(p: vec2<f32>, d_max: f32) -> vec2<f32> {
     if (frame.camera.pixel_scale > 0.0) {
         let nearest = vec3<f32>(p, min(frame.camera.eye.z, frame.atlas.max_m));
         let footprint = distance(nearest, frame.camera.eye) * frame.camera.pixel_scale;
-        o_sketch = log2(frame.atlas.d_atlas / max(footprint, 1e-6));
+        o_sketch = footprint_octave(footprint);
         o = min(o, o_sketch);
     }
     var z = atlas_height(p, frame.atlas.d_atlas * exp2(-o_sketch));

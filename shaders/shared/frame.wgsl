@@ -109,6 +109,12 @@ struct Frame {
     march: MarchUniforms,
 }
 
+// The octave level a footprint of `footprint` metres shows: log2(d_atlas / footprint), the
+// pixel octave (octave k is drawn with share clamp(o − k + 1, 0, 1)).
+fn footprint_octave(footprint: f32) -> f32 {
+    return log2(frame.atlas.d_atlas / max(footprint, 1e-6));
+}
+
 // The sketch's rectangle in frame coordinates (metres from the frame origin): its south-west and
 // north-east nodes. The reference's march box, the mesh's edge and the world beyond all end there.
 fn sketch_lo() -> vec2<f32> {

@@ -348,7 +348,7 @@ fn planet_lit(p: vec3<f32>, n: vec3<f32>, h: f32, to_eye: vec3<f32>, dist: f32) 
 fn planet_ground(v: vec4<f32>, footprint: f32) -> f32 {
     var h = planet_sketch(planet_texel_of(v), footprint);
 #ifdef NOISE
-    let o_px = log2(frame.atlas.d_atlas / max(footprint, 1e-6));
+    let o_px = footprint_octave(footprint);
     let last = min(planet.octaves, u32(max(ceil(o_px), 0.0)));
     let rel = sphere_rel(v);
     for (var k = 1u; k <= last; k++) {

@@ -13,7 +13,7 @@
 fn surface_octaves(p: vec2<f32>, footprint: f32) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
 #ifdef NOISE
-    let o_px = log2(frame.atlas.d_atlas / max(footprint, 1e-6));
+    let o_px = footprint_octave(footprint);
     let last = min(frame.detail.octaves, u32(max(ceil(o_px), 0.0)));
     for (var k = 1u; k <= last; k++) {
         let b = clamp(o_px - f32(k) + 1.0, 0.0, 1.0);
