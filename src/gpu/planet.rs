@@ -1,6 +1,7 @@
-//! The planet pass (`shaders/planet.wgsl`): the sky or space as one full-screen triangle, then the
-//! clipmap rings drawn from the clipmaps pass's vertices (vertex pulling, one static index
-//! buffer: the drawn levels' quads and the fill's fan are two ranges of it). Reversed-Z depth
+//! The planet pass (`shaders/planet.wgsl`): the clipmap rings drawn from the clipmaps pass's
+//! vertices (vertex pulling, one static index buffer: the drawn levels' quads and the fill's fan
+//! are two ranges of it), then the sky or space as one full-screen triangle behind them
+//! (`terrain::SKY_TEST`). Reversed-Z depth
 //! with an infinite far plane, so a view holds ground from a metre to 20,000 km away without
 //! z-fighting. Owns the colour and depth targets.
 
@@ -80,7 +81,7 @@ impl PlanetPass {
             }
             .build(device)
         };
-        let sky = pipeline_of(("sky_vs", "sky_fs"), false, wgpu::CompareFunction::Always);
+        let sky = pipeline_of(("sky_vs", "sky_fs"), false, super::terrain::SKY_TEST);
         let planet_pipeline = pipeline_of(
             ("planet_vs", "planet_fs"),
             true,
@@ -159,7 +160,7 @@ impl PlanetPass {
         super::frame_io::positions_from_depth(ctx, depth, view_proj, camera.near)
     }
 
-    /// Records the sky and the rings of `span` with their fill.
+    /// Records the rings of `span` with their fill, then the sky.
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -199,12 +200,13 @@ impl PlanetPass {
             multiview_mask: None,
         });
         pass.set_bind_group(0, &self.bind_group, &[]);
-        pass.set_pipeline(&self.sky);
-        pass.draw(0..3, 0..1);
         pass.set_pipeline(&self.planet);
         pass.set_index_buffer(self.index.slice(..), wgpu::IndexFormat::Uint32);
         for range in rings.draw_ranges(span) {
             pass.draw_indexed(range, 0, 0..1);
         }
+        // After the ground, where it left the depth cleared (`SKY_TEST`).
+        pass.set_pipeline(&self.sky);
+        pass.draw(0..3, 0..1);
     }
 }
