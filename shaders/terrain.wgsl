@@ -4,7 +4,8 @@
 // detail from the split octave up to the pixel's own octave (BUMP); procedural surface types, sun
 // and sky light and aerial perspective. GEOMIPMAP draws a baked grid's blocks instead; with
 // GRID_STREAMED (a tile pyramid) there is no baked grid, and each vertex reads the sketch.
-// Also the sky, drawn first as one full-screen triangle.
+// Also the sky, one full-screen triangle drawn after the ground where none was drawn; with DEFERRED
+// (single-sampled frames) that triangle shades the ground too, from the G-buffer the mesh wrote.
 
 #import frame
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -46,6 +47,10 @@ fn vertex_normal(i: u32) -> vec3<f32> {
 
 @fragment
 fn sky_fs(in: SkyOut) -> FragOut {
+    return sky(in);
+}
+
+fn sky(in: SkyOut) -> FragOut {
     if (frame.camera.view == VIEW_COVERAGE) {
         return frag_out(vec3<f32>(0.0), 0.0);
     }
@@ -263,7 +268,7 @@ fn depth_fs(in: VsOut) -> @location(1) vec4<f32> {
 // with the facets plus that band of the sketch's gradient, 48.0 with the terrain function's
 // normal; GeoMipMap 33.7, 41.0, 42.2. It costs what PIXEL_NORMALS costs, on those pixels only:
 // the terrain pass at 512² on llvmpipe 7–36 % slower on jacksboro-high, 0–18 % on jacksboro.
-fn shading_normal(in: VsOut, footprint: f32) -> vec3<f32> {
+fn shading_normal(in: Surface, footprint: f32) -> vec3<f32> {
 #ifdef PIXEL_NORMALS
     return normalize(vec3<f32>(-surface_gradient(in.local.xy, footprint), 1.0));
 #else
@@ -295,7 +300,7 @@ fn shading_normal(in: VsOut, footprint: f32) -> vec3<f32> {
 // The mesh's interpolated normal, with BUMP the octaves from the vertex's split octave up to the
 // pixel's own octave added as bump detail; the geometry already holds g_k of each, octaves past
 // the pixel octave are never evaluated.
-fn mesh_normal(in: VsOut, footprint: f32) -> vec3<f32> {
+fn mesh_normal(in: Surface, footprint: f32) -> vec3<f32> {
     let n = normalize(in.normal);
 #ifdef BUMP
     return normalize(vec3<f32>(n.xy / max(n.z, 0.05) - octaves_gradient(in, footprint, n, in.split, false), 1.0));
@@ -325,7 +330,7 @@ fn mesh_normal(in: VsOut, footprint: f32) -> vec3<f32> {
 // The views from high up are unchanged to 0.01 dB (their ground is seen too steeply to fade).
 // With the kept factor FLIP fell by up to 0.077 (gaussian) and rose by at most 0.0007 (a few of
 // hills' rows); with the factor 2 it rose on hills by up to 0.008.
-fn coarse_normal(in: VsOut, footprint: f32) -> vec3<f32> {
+fn coarse_normal(in: Surface, footprint: f32) -> vec3<f32> {
 #ifdef BUMP
 #ifdef BUMP_FADE
     // The split octave the mesh's spacing stands for: GeoMipMap's coarse blocks carry the bake's
@@ -351,7 +356,7 @@ fn coarse_normal(in: VsOut, footprint: f32) -> vec3<f32> {
 // BUMP_FADE the bump share is weighted by a power of its expected correlation with the surface
 // the ray meets, for ground of normal `n` (shared/fade.wgsl): FADE_SPECTRUM for the mesh's
 // normal, FADE_MODEL for the terrain function's.
-fn octaves_gradient(in: VsOut, footprint: f32, n: vec3<f32>, split: f32, terrain_function: bool) -> vec2<f32> {
+fn octaves_gradient(in: Surface, footprint: f32, n: vec3<f32>, split: f32, terrain_function: bool) -> vec2<f32> {
     let o_px = footprint_octave(footprint);
     let last = min(frame.detail.octaves, u32(max(ceil(o_px), 0.0)));
     var grad = vec2<f32>(0.0);
@@ -385,19 +390,46 @@ fn octaves_gradient(in: VsOut, footprint: f32, n: vec3<f32>, split: f32, terrain
 #endif
 #endif
 
+// What shading needs of a fragment of the ground: VsOut's values without the clip position, and
+// the wireframe's line weight, which takes derivatives and so is found where the mesh is
+// rasterised.
+struct Surface {
+    local: vec3<f32>,
+    normal: vec3<f32>,
+    split: f32,
+    spacing: f32,
+    inscatter: vec3<f32>,
+    through: vec3<f32>,
+    view_w: f32,
+    wire: f32,
+}
+
+fn surface_of(in: VsOut) -> Surface {
+    var wire = 1.0;
+    if (frame.camera.view == VIEW_WIREFRAME) {
+        // The quad mesh's grid lines: 0 on a line, 1 a pixel or more from it.
+        let d = abs(fract(in.grid + 0.5) - 0.5) / max(fwidth(in.grid), vec2<f32>(1e-6));
+        wire = clamp(min(d.x, d.y), 0.0, 1.0);
+    }
+    return Surface(in.local, in.normal, in.split, in.spacing, in.inscatter, in.through, in.view_w, wire);
+}
+
 @fragment
 fn terrain_fs(in: VsOut) -> FragOut {
     if (!inside_sketch(in.local.xy)) {
         discard;
     }
+    return shade(surface_of(in));
+}
+
+fn shade(in: Surface) -> FragOut {
     let to_eye = frame.camera.eye - in.local;
     let dist = max(length(to_eye), 1e-3);
     let n = shading_normal(in, dist * frame.camera.pixel_scale);
     var colour = lit(in.local, n, to_eye, dist);
     if (frame.camera.view == VIEW_WIREFRAME) {
         // Wireframe: the quad mesh's grid lines over the shaded terrain.
-        let d = abs(fract(in.grid + 0.5) - 0.5) / max(fwidth(in.grid), vec2<f32>(1e-6));
-        colour = mix(vec3<f32>(0.05, 0.05, 0.08), colour, clamp(min(d.x, d.y), 0.0, 1.0));
+        colour = mix(vec3<f32>(0.05, 0.05, 0.08), colour, in.wire);
     } else if (frame.camera.view == VIEW_SPLIT_OCTAVE) {
         let t = clamp(in.split / f32(max(frame.detail.octaves, 1u)), 0.0, 1.0);
         colour = mix(vec3<f32>(0.1, 0.1, 0.6), vec3<f32>(1.0, 0.9, 0.1), t);
@@ -416,3 +448,52 @@ fn terrain_fs(in: VsOut) -> FragOut {
 #endif
     return frag_out(colour * in.through + in.inscatter, in.view_w);
 }
+
+#ifdef DEFERRED
+// Deferred (single-sampled frames): the mesh writes each pixel's Surface to four integer targets
+// (the f32s' bits), and one full-screen pass shades each pixel once, or draws the sky where no
+// ground was written. Why: a rasteriser shades every block of pixels a triangle touches (llvmpipe
+// 4×4 blocks, GPUs 2×2 quads), so a fine mesh shades each pixel several times over, and the
+// shading (shadow ray, octaves) is most of the pass. See src/gpu/terrain.rs for the measurement.
+struct GBuffer {
+    @location(0) local_w: vec4<u32>,
+    @location(1) normal_split: vec4<u32>,
+    @location(2) inscatter_spacing: vec4<u32>,
+    @location(3) through_wire: vec4<u32>,
+}
+
+@fragment
+fn gbuffer_fs(in: VsOut) -> GBuffer {
+    if (!inside_sketch(in.local.xy)) {
+        discard;
+    }
+    let s = surface_of(in);
+    var out: GBuffer;
+    // view_w > 0 on every drawn fragment (in front of the near plane): 0, the clear value, marks
+    // a pixel with no ground.
+    out.local_w = bitcast<vec4<u32>>(vec4<f32>(s.local, s.view_w));
+    out.normal_split = bitcast<vec4<u32>>(vec4<f32>(s.normal, s.split));
+    out.inscatter_spacing = bitcast<vec4<u32>>(vec4<f32>(s.inscatter, s.spacing));
+    out.through_wire = bitcast<vec4<u32>>(vec4<f32>(s.through, s.wire));
+    return out;
+}
+
+@group(1) @binding(0) var gbuffer_local_w: texture_2d<u32>;
+@group(1) @binding(1) var gbuffer_normal_split: texture_2d<u32>;
+@group(1) @binding(2) var gbuffer_inscatter_spacing: texture_2d<u32>;
+@group(1) @binding(3) var gbuffer_through_wire: texture_2d<u32>;
+
+@fragment
+fn deferred_fs(in: SkyOut) -> FragOut {
+    let p = vec2<i32>(in.clip.xy);
+    let a = textureLoad(gbuffer_local_w, p, 0);
+    if (a.w == 0u) {
+        return sky(in);
+    }
+    let b = bitcast<vec4<f32>>(textureLoad(gbuffer_normal_split, p, 0));
+    let c = bitcast<vec4<f32>>(textureLoad(gbuffer_inscatter_spacing, p, 0));
+    let d = bitcast<vec4<f32>>(textureLoad(gbuffer_through_wire, p, 0));
+    let l = bitcast<vec4<f32>>(a);
+    return shade(Surface(l.xyz, b.xyz, b.w, c.w, c.xyz, d.xyz, l.w, d.w));
+}
+#endif

@@ -340,6 +340,44 @@ fn extreme_cameras_render_without_holes() {
     }
 }
 
+/// Deferred shading (`render.deferred`, single-sampled frames) shades each pixel from the
+/// G-buffer with the values a forward frame interpolates, so it draws the same bytes: the picture,
+/// the positions, the sky where no ground is, and the wireframe's lines (found where the mesh is
+/// rasterised). A field packed into the wrong place, or the sky drawn over the ground, breaks it.
+#[test]
+fn deferred_shading_draws_what_forward_draws() {
+    for (name, mode, view) in [
+        ("jacksboro", Mode::Warped, View::Shaded),
+        ("hills-high", Mode::Geomipmap, View::Shaded),
+        ("gaussian", Mode::Warped, View::Wireframe),
+        ("jacksboro", Mode::Warped, View::Importance),
+    ] {
+        let frame = |deferred: bool| {
+            let mut scene = bundled(name, 64, 128);
+            scene.render.mode = mode;
+            scene.render.deferred = deferred;
+            let mut r = Renderer::with_positions(&scene, mode, view, true).expect("renderer");
+            let camera = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
+            let rgba = r.render(&camera).expect("frame").rgba;
+            (rgba, r.read_positions(&camera).unwrap())
+        };
+        let (forward, deferred) = (frame(false), frame(true));
+        let sky = forward.1.iter().filter(|p| p[3] == 0.0).count();
+        assert!(
+            sky > 0 && sky < forward.1.len(),
+            "{name}: sky and ground in view"
+        );
+        assert!(
+            forward.0 == deferred.0,
+            "{name} {mode:?} {view:?}: the pictures differ"
+        );
+        assert!(
+            forward.1 == deferred.1,
+            "{name} {mode:?} {view:?}: the positions differ"
+        );
+    }
+}
+
 #[test]
 fn every_debug_view_renders() {
     let scene = bundled("hills", 64, 128);

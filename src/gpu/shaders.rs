@@ -36,7 +36,7 @@ pub const PASSES: [(&str, &str); 8] = [
 ];
 
 /// Every flag any pass tests, for validating all variants.
-pub const FLAGS: [&str; 14] = [
+pub const FLAGS: [&str; 15] = [
     "DETAIL",
     "CENTRES",
     "BUMP",
@@ -51,6 +51,7 @@ pub const FLAGS: [&str; 14] = [
     "SUPERSAMPLE",
     "STREAMED",
     "GRID_STREAMED",
+    "DEFERRED",
 ];
 
 /// The combined source of pass `name` with `flags` set.

@@ -1,9 +1,12 @@
 //! The terrain pass (`shaders/terrain.wgsl`): the detailed geometry image as an indexed quad mesh
-//! read from its storage buffers (no vertex upload), then the sky as one full-screen triangle
-//! behind it ([`SKY_TEST`]).
-//! Reversed-Z depth with an infinite far plane. Owns the colour and depth targets. Multisampled
-//! (`render.msaa`), it draws into multisampled targets the hardware resolves, and the depth copy
-//! for positions in a second, single-sampled pass of the terrain's depth alone.
+//! read from its storage buffers (no vertex upload), and the sky as one full-screen triangle.
+//! Reversed-Z depth with an infinite far plane. Owns the colour and depth targets.
+//! - Single-sampled (by default), deferred ([`Deferred`]): the mesh writes a G-buffer, and the
+//!   full-screen triangle shades each pixel from it, or draws the sky where no ground was written.
+//! - Multisampled (`render.msaa`) or with `render.deferred` off, forward: the mesh is shaded as
+//!   it is drawn, then the sky behind it ([`SKY_TEST`]). Multisampled, it draws into
+//!   multisampled targets the hardware resolves, and the depth copy for positions in a second,
+//!   single-sampled pass of the terrain's depth alone.
 
 use super::alloc::{Alloc, Buffer, Texture};
 use super::stream::AtlasBinding;
@@ -17,14 +20,15 @@ pub const COLOUR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 pub const DEPTH_COPY: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
-/// The sky's depth test. The sky lies at depth 0, where reversed-Z clears the depth, and is drawn
-/// after the ground, so that it passes only where no ground was drawn and the depth test rejects
-/// the rest before its shader runs (nothing in `sky_fs` discards). Drawn first under the ground,
-/// as until stop 44, every pixel paid for the sky and then for the ground: on llvmpipe, the world
-/// beyond the sketch (`beyond`, lit and hazed) and the sky's colour took about a fifth of the
-/// terrain pass where the ground fills most of the picture (gaussian at 256², warped at mesh 61:
-/// 28.0 → 21.9 ms median with the sky left out; GeoMipMap τ 8, blocks of 17: 24.6 → 18.7). The
-/// images are the same bytes: the ground covered every sample it now keeps from the sky.
+/// The sky's depth test in forward frames (and the planet pass's). The sky lies at depth 0, where
+/// reversed-Z clears the depth, and is drawn after the ground, so that it passes only where no
+/// ground was drawn and the depth test rejects the rest before its shader runs (nothing in
+/// `sky_fs` discards). Drawn first under the ground, as until stop 44, every pixel paid for the
+/// sky and then for the ground: on llvmpipe, the world beyond the sketch (`beyond`, lit and hazed)
+/// and the sky's colour took about a fifth of the terrain pass where the ground fills most of the
+/// picture (gaussian at 256², warped at mesh 61: 28.0 → 21.9 ms median with the sky left out;
+/// GeoMipMap τ 8, blocks of 17: 24.6 → 18.7). The images are the same bytes: the ground covered
+/// every sample it now keeps from the sky.
 pub const SKY_TEST: wgpu::CompareFunction = wgpu::CompareFunction::GreaterEqual;
 
 pub struct TerrainPass {
@@ -44,6 +48,35 @@ pub struct TerrainPass {
     /// Multisampled: the colour's samples (resolved into `colour`), and with positions the
     /// single-sampled depth pass.
     multisampled: Option<Multisampled>,
+    /// Single-sampled: `terrain` writes the ground's surface to a G-buffer and `sky` shades the
+    /// picture from it ([`GBUFFER`]).
+    deferred: Option<Deferred>,
+}
+
+/// The G-buffer's targets: the f32s of the shader's `Surface` as bits, four to a target.
+/// Integer targets, because float ones are not renderable on every adapter (llvmpipe's GL path).
+pub const GBUFFER: [wgpu::TextureFormat; 4] = [wgpu::TextureFormat::Rgba32Uint; 4];
+
+/// Deferred shading, for single-sampled frames: the mesh writes each pixel's surface (position,
+/// normal, split octave, spacing, the air in front of it) to [`GBUFFER`], and one full-screen
+/// triangle shades each pixel once, or draws the sky where no ground was written. Drawn forward,
+/// a rasteriser runs the fragment shader over every block of pixels a triangle touches (llvmpipe
+/// over 4×4 blocks, GPUs over 2×2 quads), so a fine mesh shades most pixels several times over,
+/// and the shading (the shadow ray, the bump octaves, the surface types) is most of the pass.
+/// Measured on llvmpipe at 256² (gaussian, warped at mesh 61², 7,200 triangles, against
+/// GeoMipMap τ 8 at blocks of 17, 7,297, medians of 5 runs alternately, `passes_ms`): with a
+/// fragment shader that returns at once both passes took 16.0 ms; with a loop made heavy to count
+/// the shader's runs, warped's took 40.0 ms above that and GeoMipMap's 30.5, the same share in
+/// every band of rows and 0.95× in the 16-pixel columns at the picture's sides; forward, their
+/// passes took 28.4 and 25.3 ms. Deferred, side by side with the forward build (three runs
+/// alternately): 26.1 → 17.9 ms and 22.6 → 19.4; jacksboro-high at 512², 190.7 → 84.3 and 151.5
+/// → 81.4; jacksboro at 512², whose fine mesh close up is bound by its triangles, 226.3 → 225.9
+/// and 109.8 → 100.7 (README). Multisampled frames stay forward: a G-buffer of samples would need
+/// shading per sample.
+struct Deferred {
+    bind_group: wgpu::BindGroup,
+    views: Vec<wgpu::TextureView>,
+    _targets: Vec<Texture>,
 }
 
 struct Multisampled {
@@ -91,6 +124,8 @@ pub struct Variant {
     pub detail_shadows: bool,
     /// Samples per pixel: 1, or 4 multisampled (`render.msaa`).
     pub samples: u32,
+    /// Single-sampled, shade from a G-buffer ([`Deferred`], `render.deferred`).
+    pub deferred: bool,
 }
 
 impl TerrainPass {
@@ -152,6 +187,14 @@ impl TerrainPass {
             flags.push("GEOMIPMAP");
         }
         let multisampled = variant.samples > 1;
+        let limits = device.limits();
+        let deferred = variant.deferred
+            && !multisampled
+            && limits.max_color_attachments as usize >= GBUFFER.len()
+            && limits.max_color_attachment_bytes_per_sample >= 16 * GBUFFER.len() as u32;
+        if deferred {
+            flags.push("DEFERRED");
+        }
         let mut targets = vec![Some(wgpu::ColorTargetState::from(COLOUR))];
         if variant.positions && !multisampled {
             flags.push("POSITIONS");
@@ -194,9 +237,38 @@ impl TerrainPass {
         };
         let (sky_test, greater) = (SKY_TEST, wgpu::CompareFunction::Greater);
         let n = variant.samples;
-        let sky = pipeline_of(&module, ("sky_vs", "sky_fs"), &targets, n, false, sky_test);
-        let shaded = ("terrain_vs", "terrain_fs");
-        let terrain = pipeline_of(&module, shaded, &targets, n, true, greater);
+        let gbuffer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("terrain g-buffer"),
+            entries: &(0..GBUFFER.len() as u32)
+                .map(|b| entry(b, S::FRAGMENT, gbuffer_texture()))
+                .collect::<Vec<_>>(),
+        });
+        let (sky, terrain) = if deferred {
+            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("terrain shading"),
+                bind_group_layouts: &[Some(&layout), Some(&gbuffer_layout)],
+                immediate_size: 0,
+            });
+            let shade = ("sky_vs", "deferred_fs");
+            let gbuffer = GBUFFER.map(|f| Some(f.into()));
+            (
+                full_screen_pipeline(device, &layout, &module, shade, &targets),
+                pipeline_of(
+                    &module,
+                    ("terrain_vs", "gbuffer_fs"),
+                    &gbuffer,
+                    1,
+                    true,
+                    greater,
+                ),
+            )
+        } else {
+            let shaded = ("terrain_vs", "terrain_fs");
+            (
+                pipeline_of(&module, ("sky_vs", "sky_fs"), &targets, n, false, sky_test),
+                pipeline_of(&module, shaded, &targets, n, true, greater),
+            )
+        };
         let depth_pipeline = depth_module.map(|m| {
             let targets = [None, Some(DEPTH_COPY.into())];
             pipeline_of(&m, ("terrain_vs", "depth_fs"), &targets, 1, true, greater)
@@ -288,6 +360,35 @@ impl TerrainPass {
             }
             ms
         });
+        let deferred = deferred.then(|| {
+            let usage = drawn | wgpu::TextureUsages::TEXTURE_BINDING;
+            let targets: Vec<_> = GBUFFER
+                .iter()
+                .map(|&f| target(f, usage, "g-buffer"))
+                .collect();
+            let views: Vec<_> = targets
+                .iter()
+                .map(|t| t.create_view(&Default::default()))
+                .collect();
+            let entries: Vec<_> = views
+                .iter()
+                .enumerate()
+                .map(|(b, view)| wgpu::BindGroupEntry {
+                    binding: b as u32,
+                    resource: wgpu::BindingResource::TextureView(view),
+                })
+                .collect();
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("terrain g-buffer"),
+                layout: &gbuffer_layout,
+                entries: &entries,
+            });
+            Deferred {
+                bind_group,
+                views,
+                _targets: targets,
+            }
+        });
         Ok(TerrainPass {
             sky,
             terrain,
@@ -303,6 +404,7 @@ impl TerrainPass {
             depth_copy,
             colour,
             multisampled,
+            deferred,
         })
     }
 
@@ -408,6 +510,51 @@ impl TerrainPass {
                 stencil_ops: None,
             })
         };
+        if let Some(deferred) = &self.deferred {
+            // The pass's timer spans both: from the G-buffer's start to the shading's end.
+            let (begin, end) = match timestamps {
+                Some(t) => (
+                    Some(wgpu::RenderPassTimestampWrites {
+                        end_of_pass_write_index: None,
+                        ..t
+                    }),
+                    Some(wgpu::RenderPassTimestampWrites {
+                        beginning_of_pass_write_index: None,
+                        ..t
+                    }),
+                ),
+                None => (None, None),
+            };
+            let gbuffer: Vec<_> = deferred.views.iter().map(|v| attach(v, None)).collect();
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("terrain g-buffer"),
+                color_attachments: &gbuffer,
+                depth_stencil_attachment: depth(&self.depth_view),
+                timestamp_writes: begin,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            if draw_terrain {
+                pass.set_bind_group(0, &self.bind_group, &[]);
+                pass.set_pipeline(&self.terrain);
+                pass.set_index_buffer(self.index.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..self.index_count, 0, 0..1);
+            }
+            drop(pass);
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("terrain shading"),
+                color_attachments: &attachments,
+                depth_stencil_attachment: None,
+                timestamp_writes: end,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.set_bind_group(1, &deferred.bind_group, &[]);
+            pass.set_pipeline(&self.sky);
+            pass.draw(0..3, 0..1);
+            return;
+        }
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("terrain"),
             color_attachments: &attachments,
@@ -462,6 +609,46 @@ pub fn quad_indices(mesh: u32) -> Vec<u32> {
         }
     }
     v
+}
+
+/// A G-buffer target as the shading pass reads it.
+fn gbuffer_texture() -> wgpu::BindingType {
+    wgpu::BindingType::Texture {
+        sample_type: wgpu::TextureSampleType::Uint,
+        view_dimension: wgpu::TextureViewDimension::D2,
+        multisampled: false,
+    }
+}
+
+/// The deferred shading's pipeline: one full-screen triangle, no depth.
+fn full_screen_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    (vs, fs): (&str, &str),
+    targets: &[Option<wgpu::ColorTargetState>],
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(fs),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(vs),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil: None,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(fs),
+            compilation_options: Default::default(),
+            targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
 }
 
 /// A render pipeline of the raster passes (terrain, planet): vertices pulled from storage (no

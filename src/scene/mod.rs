@@ -477,6 +477,9 @@ pub struct RenderSection {
     pub detail_shadows: bool,
     /// Anti-aliasing: the mesh modes multisampled and the reference supersampled alike.
     pub msaa: Msaa,
+    /// Single-sampled frames of the mesh modes shade each pixel once, from a G-buffer the mesh
+    /// writes (`gpu::terrain`'s `Deferred`); `false`: forward, once per triangle touching it.
+    pub deferred: bool,
 }
 impl Default for RenderSection {
     fn default() -> Self {
@@ -486,6 +489,7 @@ impl Default for RenderSection {
             shadows: true,
             detail_shadows: false,
             msaa: Msaa::Auto,
+            deferred: true,
         }
     }
 }
