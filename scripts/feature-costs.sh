@@ -12,9 +12,10 @@ B=${BEFORE:?a build of commit 3418a4d}; N=${NOW:-target/release/terrain}; OUT=${
 command -v nvidia-smi >/dev/null && nvidia-smi -L | head -1
 for mode in warped geomipmap; do
   run "$mode before" $B --mode $mode
-  run "$mode shadows=false msaa=off" $N --mode $mode --set render.shadows=false --set render.msaa=off
-  run "$mode msaa=off (sketch shadow)" $N --mode $mode --set render.msaa=off
-  run "$mode msaa=off detail_shadows=true" $N --mode $mode --set render.msaa=off --set render.detail_shadows=true
+  run "$mode shadows=false msaa=off" $N --mode $mode --set render.shadows=false --set render.msaa=off --set render.deferred=false
+  run "$mode msaa=off (sketch shadow)" $N --mode $mode --set render.msaa=off --set render.deferred=false
+  run "$mode msaa=off deferred (the default on llvmpipe)" $N --mode $mode --set render.msaa=off
+  run "$mode msaa=off detail_shadows=true" $N --mode $mode --set render.msaa=off --set render.deferred=false --set render.detail_shadows=true
   run "$mode msaa=4x detail_shadows=true" $N --mode $mode --set render.msaa=4x --set render.detail_shadows=true
   run "$mode msaa=4x (detail off)" $N --mode $mode --set render.msaa=4x
 done

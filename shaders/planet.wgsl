@@ -1,7 +1,8 @@
-// The planet pass: the sky (or space) as one full-screen triangle, then the clipmap rings the
-// clipmaps pass carried to the terrain, drawn from the storage buffer (vertex pulling: each
-// vertex finds its neighbours on its ring and the next rings for its normal), shaded in the
-// local frame of each point of the sphere: the sun sets across the planet, the air is a shell.
+// The planet pass: the clipmap rings the clipmaps pass carried to the terrain, drawn from the
+// storage buffer (vertex pulling: each vertex finds its neighbours on its ring and the next rings
+// for its normal), shaded in the local frame of each point of the sphere: the sun sets across the
+// planet, the air is a shell. Then the sky (or space) as one full-screen triangle where no ring
+// was drawn.
 // Bump detail adds the octaves from the vertex's split octave up to the pixel's, as in the plane.
 
 #import frame

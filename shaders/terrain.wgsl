@@ -63,10 +63,11 @@ fn sky(in: SkyOut) -> FragOut {
 
 // The aerial perspective travels with the vertex (`inscatter`, `through`): the air between the
 // eye and the ground varies smoothly over a triangle (the bundled views' PSNR against the
-// reference is the same to 0.01 dB), and a vertex is evaluated once where a pixel is shaded once
-// for every triangle that covers it. Jacksboro 512², shadows off, terrain pass on an H100: warped
-// 4.14 -> 3.54 ms, GeoMipMap 2.77 -> 2.10 ms. On llvmpipe, which shades a vertex once per
-// triangle, it costs more (warped 239 -> 312 ms); the GPU's count decided.
+// reference is the same to 0.01 dB), and a vertex is evaluated once where a forward frame shades
+// a pixel once for every triangle that covers it. Jacksboro 512², shadows off, terrain pass on an
+// H100 (forward, multisampled): warped 4.14 -> 3.54 ms, GeoMipMap 2.77 -> 2.10 ms. On llvmpipe,
+// which shades a vertex once per triangle, it cost more (warped 239 -> 312 ms, forward); the
+// GPU's count decided. Deferred, the air takes 24 of the G-buffer's 64 bytes a pixel.
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) local: vec3<f32>,
@@ -451,10 +452,9 @@ fn shade(in: Surface) -> FragOut {
 
 #ifdef DEFERRED
 // Deferred (single-sampled frames): the mesh writes each pixel's Surface to four integer targets
-// (the f32s' bits), and one full-screen pass shades each pixel once, or draws the sky where no
-// ground was written. Why: a rasteriser shades every block of pixels a triangle touches (llvmpipe
-// 4×4 blocks, GPUs 2×2 quads), so a fine mesh shades each pixel several times over, and the
-// shading (shadow ray, octaves) is most of the pass. See src/gpu/terrain.rs for the measurement.
+// and one full-screen pass shades each pixel once, or draws the sky where no ground was written
+// (src/gpu/terrain.rs's `Deferred` says why). Integer targets keep the f32s' bits, so the pass
+// shades with exactly the values a forward fragment has.
 struct GBuffer {
     @location(0) local_w: vec4<u32>,
     @location(1) normal_split: vec4<u32>,
@@ -462,20 +462,30 @@ struct GBuffer {
     @location(3) through_wire: vec4<u32>,
 }
 
+// The pair that fixes the G-buffer's layout: a Surface packed, and unpacked.
+fn gbuffer_of(s: Surface) -> GBuffer {
+    return GBuffer(
+        bitcast<vec4<u32>>(vec4<f32>(s.local, s.view_w)),
+        bitcast<vec4<u32>>(vec4<f32>(s.normal, s.split)),
+        bitcast<vec4<u32>>(vec4<f32>(s.inscatter, s.spacing)),
+        bitcast<vec4<u32>>(vec4<f32>(s.through, s.wire)),
+    );
+}
+
+fn surface_from(g: GBuffer) -> Surface {
+    let a = bitcast<vec4<f32>>(g.local_w);
+    let b = bitcast<vec4<f32>>(g.normal_split);
+    let c = bitcast<vec4<f32>>(g.inscatter_spacing);
+    let d = bitcast<vec4<f32>>(g.through_wire);
+    return Surface(a.xyz, b.xyz, b.w, c.w, c.xyz, d.xyz, a.w, d.w);
+}
+
 @fragment
 fn gbuffer_fs(in: VsOut) -> GBuffer {
     if (!inside_sketch(in.local.xy)) {
         discard;
     }
-    let s = surface_of(in);
-    var out: GBuffer;
-    // view_w > 0 on every drawn fragment (in front of the near plane): 0, the clear value, marks
-    // a pixel with no ground.
-    out.local_w = bitcast<vec4<u32>>(vec4<f32>(s.local, s.view_w));
-    out.normal_split = bitcast<vec4<u32>>(vec4<f32>(s.normal, s.split));
-    out.inscatter_spacing = bitcast<vec4<u32>>(vec4<f32>(s.inscatter, s.spacing));
-    out.through_wire = bitcast<vec4<u32>>(vec4<f32>(s.through, s.wire));
-    return out;
+    return gbuffer_of(surface_of(in));
 }
 
 @group(1) @binding(0) var gbuffer_local_w: texture_2d<u32>;
@@ -486,14 +496,17 @@ fn gbuffer_fs(in: VsOut) -> GBuffer {
 @fragment
 fn deferred_fs(in: SkyOut) -> FragOut {
     let p = vec2<i32>(in.clip.xy);
-    let a = textureLoad(gbuffer_local_w, p, 0);
-    if (a.w == 0u) {
+    let local_w = textureLoad(gbuffer_local_w, p, 0);
+    // view_w is the clip w of a fragment in front of the near plane, above 0: the clear value's
+    // 0 bits mark a pixel with no ground.
+    if (local_w.w == 0u) {
         return sky(in);
     }
-    let b = bitcast<vec4<f32>>(textureLoad(gbuffer_normal_split, p, 0));
-    let c = bitcast<vec4<f32>>(textureLoad(gbuffer_inscatter_spacing, p, 0));
-    let d = bitcast<vec4<f32>>(textureLoad(gbuffer_through_wire, p, 0));
-    let l = bitcast<vec4<f32>>(a);
-    return shade(Surface(l.xyz, b.xyz, b.w, c.w, c.xyz, d.xyz, l.w, d.w));
+    return shade(surface_from(GBuffer(
+        local_w,
+        textureLoad(gbuffer_normal_split, p, 0),
+        textureLoad(gbuffer_inscatter_spacing, p, 0),
+        textureLoad(gbuffer_through_wire, p, 0),
+    )));
 }
 #endif

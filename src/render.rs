@@ -61,6 +61,8 @@ pub struct Renderer {
     pub mode: Mode,
     /// Samples per pixel the picture was drawn with (`render.msaa` where the adapter allows).
     pub samples: u32,
+    /// The ground was shaded deferred (`render.deferred` where the frame and adapter allow).
+    pub deferred: bool,
     view: View,
     frame: Buffer,
     sketch: SketchGpu,
@@ -158,6 +160,12 @@ impl Renderer {
             },
             SketchGpu::Streamed(s) => s.binding(),
         };
+        // Planets are not multisampled (nor supersampled) yet.
+        let samples = if planet {
+            1
+        } else {
+            ctx.samples(scene.render.msaa)
+        };
         let shared = Shared {
             ctx: &ctx,
             alloc,
@@ -168,12 +176,8 @@ impl Renderer {
             atlas_binding: &atlas_binding,
             view,
             positions,
-            // Planets are not multisampled (nor supersampled) yet.
-            samples: if planet {
-                1
-            } else {
-                ctx.samples(scene.render.msaa)
-            },
+            samples,
+            deferred: !planet && ctx.deferred(scene.render.deferred, samples),
         };
         if planet != (mode == Mode::Clipmaps) && mode != Mode::Reference {
             return Err(crate::Error::value(
@@ -191,9 +195,10 @@ impl Renderer {
             Mode::Geomipmap | Mode::Bruteforce => Box::new(Baselines::new(&shared, mode)?),
             Mode::Reference => Box::new(Reference::new(&shared)?),
         };
-        let samples = shared.samples;
+        let deferred = shared.deferred && mode.is_mesh();
         Ok(Renderer {
             samples,
+            deferred,
             timer: Timer::new(&ctx, &alloc, lod.passes()),
             ctx,
             atlas,

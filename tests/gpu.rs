@@ -21,8 +21,8 @@ use terrain::gpu::uniforms::View;
 use terrain::gpu::warp_zoom::{centre_cpu, sketch_rect, vertex_cpu};
 use terrain::lod::warped::Warped;
 use terrain::render::Renderer;
-use terrain::scene::Mode;
 use terrain::scene::Scene;
+use terrain::scene::{Mode, Msaa};
 
 fn bundled(name: &str, size: u32, mesh: u32) -> Scene {
     let path = manifest_dir().join("sketches").join(format!("{name}.toml"));
@@ -344,6 +344,8 @@ fn extreme_cameras_render_without_holes() {
 /// G-buffer with the values a forward frame interpolates, so it draws the same bytes: the picture,
 /// the positions, the sky where no ground is, and the wireframe's lines (found where the mesh is
 /// rasterised). A field packed into the wrong place, or the sky drawn over the ground, breaks it.
+/// Single-sampled by the scene, as a hardware GPU would multisample by default and draw both
+/// forward; an adapter that cannot draw the G-buffer fails the test rather than pass it forward.
 #[test]
 fn deferred_shading_draws_what_forward_draws() {
     for (name, mode, view) in [
@@ -356,7 +358,9 @@ fn deferred_shading_draws_what_forward_draws() {
             let mut scene = bundled(name, 64, 128);
             scene.render.mode = mode;
             scene.render.deferred = deferred;
+            scene.render.msaa = Msaa::Off;
             let mut r = Renderer::with_positions(&scene, mode, view, true).expect("renderer");
+            assert_eq!(r.deferred, deferred, "{name}: shaded deferred as asked");
             let camera = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
             let rgba = r.render(&camera).expect("frame").rgba;
             (rgba, r.read_positions(&camera).unwrap())

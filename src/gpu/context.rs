@@ -103,6 +103,16 @@ impl GpuContext {
         }
     }
 
+    /// Whether the mesh modes shade deferred (`render.deferred` asks; [`super::terrain`]'s
+    /// `Deferred`): single-sampled frames, on an adapter that draws the G-buffer's targets at once.
+    pub fn deferred(&self, asked: bool, samples: u32) -> bool {
+        let targets = super::terrain::GBUFFER.len() as u32;
+        asked
+            && samples == 1
+            && self.limits.max_color_attachments >= targets
+            && self.limits.max_color_attachment_bytes_per_sample >= 16 * targets
+    }
+
     /// "name (backend)", for reports.
     pub fn adapter_name(&self) -> String {
         format!("{} ({:?})", self.adapter.name, self.adapter.backend)

@@ -69,23 +69,21 @@ impl PlanetPass {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline_of = |entry, depth_write, compare| {
+        let pipeline_of = |entry, depth| {
             RasterPipeline {
                 layout: &pipeline_layout,
                 module: &module,
                 entry,
                 targets: &targets,
                 samples: 1,
-                depth_write,
-                compare,
+                depth: Some(depth),
             }
             .build(device)
         };
-        let sky = pipeline_of(("sky_vs", "sky_fs"), false, super::terrain::SKY_TEST);
+        let sky = pipeline_of(("sky_vs", "sky_fs"), (false, super::terrain::SKY_TEST));
         let planet_pipeline = pipeline_of(
             ("planet_vs", "planet_fs"),
-            true,
-            wgpu::CompareFunction::Greater,
+            (true, wgpu::CompareFunction::Greater),
         );
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("planet"),

@@ -32,8 +32,11 @@ pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 pub const SKY_TEST: wgpu::CompareFunction = wgpu::CompareFunction::GreaterEqual;
 
 pub struct TerrainPass {
-    sky: wgpu::RenderPipeline,
-    terrain: wgpu::RenderPipeline,
+    /// The mesh: shaded as it is drawn (forward), or written to the G-buffer (deferred).
+    ground: wgpu::RenderPipeline,
+    /// The full-screen triangle: the sky behind the ground (forward), or the shading of every
+    /// pixel from the G-buffer, the sky where no ground was written (deferred).
+    screen: wgpu::RenderPipeline,
     bind_group: wgpu::BindGroup,
     index: Buffer,
     index_count: u32,
@@ -124,7 +127,8 @@ pub struct Variant {
     pub detail_shadows: bool,
     /// Samples per pixel: 1, or 4 multisampled (`render.msaa`).
     pub samples: u32,
-    /// Single-sampled, shade from a G-buffer ([`Deferred`], `render.deferred`).
+    /// Shade from a G-buffer ([`Deferred`]): single-sampled frames only, where the adapter allows
+    /// (`GpuContext::deferred` decides).
     pub deferred: bool,
 }
 
@@ -187,12 +191,12 @@ impl TerrainPass {
             flags.push("GEOMIPMAP");
         }
         let multisampled = variant.samples > 1;
-        let limits = device.limits();
-        let deferred = variant.deferred
-            && !multisampled
-            && limits.max_color_attachments as usize >= GBUFFER.len()
-            && limits.max_color_attachment_bytes_per_sample >= 16 * GBUFFER.len() as u32;
-        if deferred {
+        if variant.deferred {
+            if multisampled {
+                return Err(crate::error::Error::Internal(
+                    "deferred shading asked of a multisampled frame",
+                ));
+            }
             flags.push("DEFERRED");
         }
         let mut targets = vec![Some(wgpu::ColorTargetState::from(COLOUR))];
@@ -218,60 +222,59 @@ impl TerrainPass {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline_of = |module: &wgpu::ShaderModule,
+        let pipeline_of = |layout: &wgpu::PipelineLayout,
+                           module: &wgpu::ShaderModule,
                            entry: (&str, &str),
                            targets: &[Option<wgpu::ColorTargetState>],
                            samples: u32,
-                           depth_write: bool,
-                           compare: wgpu::CompareFunction| {
+                           depth: Option<(bool, wgpu::CompareFunction)>| {
             RasterPipeline {
-                layout: &pipeline_layout,
+                layout,
                 module,
                 entry,
                 targets,
                 samples,
-                depth_write,
-                compare,
+                depth,
             }
             .build(device)
         };
-        let (sky_test, greater) = (SKY_TEST, wgpu::CompareFunction::Greater);
+        let ground_test = Some((true, wgpu::CompareFunction::Greater));
         let n = variant.samples;
-        let gbuffer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("terrain g-buffer"),
-            entries: &(0..GBUFFER.len() as u32)
-                .map(|b| entry(b, S::FRAGMENT, gbuffer_texture()))
-                .collect::<Vec<_>>(),
-        });
-        let (sky, terrain) = if deferred {
-            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        let (ground, screen, gbuffer) = if variant.deferred {
+            let gbuffer_layout =
+                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some("terrain g-buffer"),
+                    entries: &(0..GBUFFER.len() as u32)
+                        .map(|b| entry(b, S::FRAGMENT, gbuffer_texture()))
+                        .collect::<Vec<_>>(),
+                });
+            let shading_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("terrain shading"),
                 bind_group_layouts: &[Some(&layout), Some(&gbuffer_layout)],
                 immediate_size: 0,
             });
-            let shade = ("sky_vs", "deferred_fs");
             let gbuffer = GBUFFER.map(|f| Some(f.into()));
+            let writes = ("terrain_vs", "gbuffer_fs");
+            let shades = ("sky_vs", "deferred_fs");
             (
-                full_screen_pipeline(device, &layout, &module, shade, &targets),
-                pipeline_of(
-                    &module,
-                    ("terrain_vs", "gbuffer_fs"),
-                    &gbuffer,
-                    1,
-                    true,
-                    greater,
-                ),
+                pipeline_of(&pipeline_layout, &module, writes, &gbuffer, 1, ground_test),
+                pipeline_of(&shading_layout, &module, shades, &targets, 1, None),
+                Some(gbuffer_layout),
             )
         } else {
             let shaded = ("terrain_vs", "terrain_fs");
+            let sky = ("sky_vs", "sky_fs");
+            let sky_test = Some((false, SKY_TEST));
             (
-                pipeline_of(&module, ("sky_vs", "sky_fs"), &targets, n, false, sky_test),
-                pipeline_of(&module, shaded, &targets, n, true, greater),
+                pipeline_of(&pipeline_layout, &module, shaded, &targets, n, ground_test),
+                pipeline_of(&pipeline_layout, &module, sky, &targets, n, sky_test),
+                None,
             )
         };
         let depth_pipeline = depth_module.map(|m| {
             let targets = [None, Some(DEPTH_COPY.into())];
-            pipeline_of(&m, ("terrain_vs", "depth_fs"), &targets, 1, true, greater)
+            let entry = ("terrain_vs", "depth_fs");
+            pipeline_of(&pipeline_layout, &m, entry, &targets, 1, ground_test)
         });
 
         let mut bind_entries = vec![bind(0, frame)];
@@ -360,7 +363,7 @@ impl TerrainPass {
             }
             ms
         });
-        let deferred = deferred.then(|| {
+        let deferred = gbuffer.map(|gbuffer_layout| {
             let usage = drawn | wgpu::TextureUsages::TEXTURE_BINDING;
             let targets: Vec<_> = GBUFFER
                 .iter()
@@ -390,8 +393,8 @@ impl TerrainPass {
             }
         });
         Ok(TerrainPass {
-            sky,
-            terrain,
+            ground,
+            screen,
             bind_group,
             index_count,
             quad_mesh: if variant.geomipmap.is_some() { 0 } else { mesh },
@@ -536,7 +539,7 @@ impl TerrainPass {
             });
             if draw_terrain {
                 pass.set_bind_group(0, &self.bind_group, &[]);
-                pass.set_pipeline(&self.terrain);
+                pass.set_pipeline(&self.ground);
                 pass.set_index_buffer(self.index.slice(..), wgpu::IndexFormat::Uint32);
                 pass.draw_indexed(0..self.index_count, 0, 0..1);
             }
@@ -551,7 +554,7 @@ impl TerrainPass {
             });
             pass.set_bind_group(0, &self.bind_group, &[]);
             pass.set_bind_group(1, &deferred.bind_group, &[]);
-            pass.set_pipeline(&self.sky);
+            pass.set_pipeline(&self.screen);
             pass.draw(0..3, 0..1);
             return;
         }
@@ -565,11 +568,11 @@ impl TerrainPass {
         });
         pass.set_bind_group(0, &self.bind_group, &[]);
         if draw_terrain {
-            pass.set_pipeline(&self.terrain);
+            pass.set_pipeline(&self.ground);
             pass.set_index_buffer(self.index.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..self.index_count, 0, 0..1);
         }
-        pass.set_pipeline(&self.sky);
+        pass.set_pipeline(&self.screen);
         pass.draw(0..3, 0..1);
         drop(pass);
         let Some(Multisampled {
@@ -620,39 +623,8 @@ fn gbuffer_texture() -> wgpu::BindingType {
     }
 }
 
-/// The deferred shading's pipeline: one full-screen triangle, no depth.
-fn full_screen_pipeline(
-    device: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
-    (vs, fs): (&str, &str),
-    targets: &[Option<wgpu::ColorTargetState>],
-) -> wgpu::RenderPipeline {
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(fs),
-        layout: Some(layout),
-        vertex: wgpu::VertexState {
-            module,
-            entry_point: Some(vs),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: Default::default(),
-        depth_stencil: None,
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module,
-            entry_point: Some(fs),
-            compilation_options: Default::default(),
-            targets,
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
-}
-
 /// A render pipeline of the raster passes (terrain, planet): vertices pulled from storage (no
-/// vertex buffers), triangle lists, and the reversed-Z depth test `compare` into [`DEPTH`].
+/// vertex buffers), triangle lists, and a reversed-Z depth test into [`DEPTH`] or none.
 pub(crate) struct RasterPipeline<'a> {
     pub layout: &'a wgpu::PipelineLayout,
     pub module: &'a wgpu::ShaderModule,
@@ -660,8 +632,8 @@ pub(crate) struct RasterPipeline<'a> {
     pub entry: (&'a str, &'a str),
     pub targets: &'a [Option<wgpu::ColorTargetState>],
     pub samples: u32,
-    pub depth_write: bool,
-    pub compare: wgpu::CompareFunction,
+    /// Whether it writes the depth, and its test; `None`: drawn without a depth attachment.
+    pub depth: Option<(bool, wgpu::CompareFunction)>,
 }
 
 impl RasterPipeline<'_> {
@@ -680,10 +652,10 @@ impl RasterPipeline<'_> {
                 topology: wgpu::PrimitiveTopology::TriangleList,
                 ..Default::default()
             },
-            depth_stencil: Some(wgpu::DepthStencilState {
+            depth_stencil: self.depth.map(|(write, compare)| wgpu::DepthStencilState {
                 format: DEPTH,
-                depth_write_enabled: Some(self.depth_write),
-                depth_compare: Some(self.compare),
+                depth_write_enabled: Some(write),
+                depth_compare: Some(compare),
                 stencil: Default::default(),
                 bias: Default::default(),
             }),

@@ -268,7 +268,7 @@ impl Baselines {
             shadows: s.scene.render.shadows,
             detail_shadows: s.scene.render.detail_shadows,
             samples: s.samples,
-            deferred: s.scene.render.deferred,
+            deferred: s.deferred,
         };
         let n = grid.n as u32;
         let (width, height) = (scene.camera.width, scene.camera.height);

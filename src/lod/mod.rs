@@ -47,6 +47,8 @@ pub struct Shared<'a> {
     /// Samples per pixel: 4 where `render.msaa` asks and the adapter allows, else 1 (the
     /// reference supersamples when it is 4).
     pub samples: u32,
+    /// The mesh modes shade single-sampled frames deferred (`GpuContext::deferred`).
+    pub deferred: bool,
 }
 
 /// The CPU's part of a frame.

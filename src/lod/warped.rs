@@ -91,7 +91,7 @@ impl Warped {
             shadows: s.scene.render.shadows,
             detail_shadows: s.scene.render.detail_shadows,
             samples: s.samples,
-            deferred: s.scene.render.deferred,
+            deferred: s.deferred,
         };
         let terrain = TerrainPass::new(
             device,

@@ -462,6 +462,12 @@ impl Mode {
     pub fn bakes_whole_sketch(self) -> bool {
         self == Mode::Bruteforce
     }
+
+    /// The modes that draw the sketch as a mesh in the terrain pass (warped, GeoMipMap, brute
+    /// force).
+    pub fn is_mesh(self) -> bool {
+        matches!(self, Mode::Warped | Mode::Geomipmap | Mode::Bruteforce)
+    }
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]

@@ -58,6 +58,8 @@ struct Report {
     height: u32,
     /// Samples per pixel: 4 multisampled (the reference: four rays), or 1 (`render.msaa`).
     samples: u32,
+    /// The mesh modes' ground shaded deferred (`render.deferred`).
+    deferred: bool,
     visible: bool,
     triangles: u64,
     cpu_stage_us: f64,
@@ -152,6 +154,7 @@ pub fn run(a: Args) -> Result<()> {
         width: last.width,
         height: last.height,
         samples: r.samples,
+        deferred: r.deferred,
         visible: r.visible(),
         triangles: last.gpu.triangles,
         cpu_stage_us: cpu_us,
