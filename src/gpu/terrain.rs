@@ -51,13 +51,13 @@ pub struct TerrainPass {
     /// Multisampled: the colour's samples (resolved into `colour`), and with positions the
     /// single-sampled depth pass.
     multisampled: Option<Multisampled>,
-    /// Single-sampled: `terrain` writes the ground's surface to a G-buffer and `sky` shades the
-    /// picture from it ([`GBUFFER`]).
+    /// Deferred: the G-buffer `ground` writes and `screen` shades the picture from.
     deferred: Option<Deferred>,
 }
 
-/// The G-buffer's targets: the f32s of the shader's `Surface` as bits, four to a target.
-/// Integer targets, because float ones are not renderable on every adapter (llvmpipe's GL path).
+/// The G-buffer's targets: the f32s of the shader's `Surface` as bits, four to a target. Integer
+/// targets keep the bits exactly, so deferred shading sees what forward interpolates; float ones
+/// are not renderable on every adapter either (llvmpipe's GL path).
 pub const GBUFFER: [wgpu::TextureFormat; 4] = [wgpu::TextureFormat::Rgba32Uint; 4];
 
 /// Deferred shading, for single-sampled frames: the mesh writes each pixel's surface (position,
@@ -469,8 +469,9 @@ impl TerrainPass {
         self.index_count = indices.len() as u32;
     }
 
-    /// The terrain unless nothing of it is in view, then the sky where the terrain left the depth
-    /// cleared ([`SKY_TEST`]).
+    /// The terrain unless nothing of it is in view, then the full-screen triangle: deferred, the
+    /// shading of the G-buffer and the sky where no ground was written; forward, the sky where the
+    /// terrain left the depth cleared ([`SKY_TEST`]).
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
