@@ -161,8 +161,7 @@ fn planet_fs(in: VsOut) -> FragOut {
     h = max(h, planet.water_m);
     var colour = planet_lit(in.local, n, h, to_eye, dist);
     if (frame.camera.view == VIEW_WIREFRAME) {
-        let d = abs(fract(in.grid + 0.5) - 0.5) / max(fwidth(in.grid), vec2<f32>(1e-6));
-        colour = mix(vec3<f32>(0.05, 0.05, 0.08), colour, clamp(min(d.x, d.y), 0.0, 1.0));
+        colour = mix(vec3<f32>(0.05, 0.05, 0.08), colour, grid_line_weight(in.grid));
     } else if (frame.camera.view == VIEW_SPLIT_OCTAVE) {
         let t = clamp(in.split / f32(max(planet.octaves, 1u)), 0.0, 1.0);
         colour = mix(vec3<f32>(0.1, 0.1, 0.6), vec3<f32>(1.0, 0.9, 0.1), t);

@@ -408,9 +408,7 @@ struct Surface {
 fn surface_of(in: VsOut) -> Surface {
     var wire = 1.0;
     if (frame.camera.view == VIEW_WIREFRAME) {
-        // The quad mesh's grid lines: 0 on a line, 1 a pixel or more from it.
-        let d = abs(fract(in.grid + 0.5) - 0.5) / max(fwidth(in.grid), vec2<f32>(1e-6));
-        wire = clamp(min(d.x, d.y), 0.0, 1.0);
+        wire = grid_line_weight(in.grid);
     }
     return Surface(in.local, in.normal, in.split, in.spacing, in.inscatter, in.through, in.view_w, wire);
 }

@@ -177,7 +177,7 @@ impl Renderer {
             view,
             positions,
             samples,
-            deferred: !planet && ctx.deferred(scene.render.deferred, samples),
+            deferred: mode.is_mesh() && ctx.deferred(scene.render.deferred, samples),
         };
         if planet != (mode == Mode::Clipmaps) && mode != Mode::Reference {
             return Err(crate::Error::value(
@@ -195,7 +195,7 @@ impl Renderer {
             Mode::Geomipmap | Mode::Bruteforce => Box::new(Baselines::new(&shared, mode)?),
             Mode::Reference => Box::new(Reference::new(&shared)?),
         };
-        let deferred = shared.deferred && mode.is_mesh();
+        let deferred = shared.deferred;
         Ok(Renderer {
             samples,
             deferred,

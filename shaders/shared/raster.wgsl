@@ -35,6 +35,14 @@ fn frag_out(colour: vec3<f32>, view_w: f32) -> FragOut {
     return out;
 }
 
+// The wireframe view's weight of the picture at a fragment of mesh coordinates `grid`: 0 on a
+// grid line, 1 a pixel or more from it. It takes derivatives, so it is found where the mesh is
+// rasterised.
+fn grid_line_weight(grid: vec2<f32>) -> f32 {
+    let d = abs(fract(grid + 0.5) - 0.5) / max(fwidth(grid), vec2<f32>(1e-6));
+    return clamp(min(d.x, d.y), 0.0, 1.0);
+}
+
 // The sky: one triangle over the whole screen, each pixel knowing its normalised device
 // coordinates to find its view direction.
 struct SkyOut {

@@ -469,6 +469,13 @@ impl TerrainPass {
         self.index_count = indices.len() as u32;
     }
 
+    /// The mesh (its index buffer, all of it this frame) with `pipeline`, the bind group set.
+    fn draw_mesh(&self, pass: &mut wgpu::RenderPass, pipeline: &wgpu::RenderPipeline) {
+        pass.set_pipeline(pipeline);
+        pass.set_index_buffer(self.index.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..self.index_count, 0, 0..1);
+    }
+
     /// The terrain unless nothing of it is in view, then the full-screen triangle: deferred, the
     /// shading of the G-buffer and the sky where no ground was written; forward, the sky where the
     /// terrain left the depth cleared ([`SKY_TEST`]).
@@ -504,6 +511,7 @@ impl TerrainPass {
                     .collect()
             }
         };
+        // The depth, cleared; every pass's own (nothing reads it after).
         let depth = |view| {
             Some(wgpu::RenderPassDepthStencilAttachment {
                 view,
@@ -530,48 +538,25 @@ impl TerrainPass {
                 None => (None, None),
             };
             let gbuffer: Vec<_> = deferred.views.iter().map(|v| attach(v, None)).collect();
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("terrain g-buffer"),
-                color_attachments: &gbuffer,
-                depth_stencil_attachment: depth(&self.depth_view),
-                timestamp_writes: begin,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let label = "terrain g-buffer";
+            let mut pass = render_pass(encoder, label, &gbuffer, depth(&self.depth_view), begin);
+            pass.set_bind_group(0, &self.bind_group, &[]);
             if draw_terrain {
-                pass.set_bind_group(0, &self.bind_group, &[]);
-                pass.set_pipeline(&self.ground);
-                pass.set_index_buffer(self.index.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..self.index_count, 0, 0..1);
+                self.draw_mesh(&mut pass, &self.ground);
             }
             drop(pass);
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("terrain shading"),
-                color_attachments: &attachments,
-                depth_stencil_attachment: None,
-                timestamp_writes: end,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = render_pass(encoder, "terrain shading", &attachments, None, end);
             pass.set_bind_group(0, &self.bind_group, &[]);
             pass.set_bind_group(1, &deferred.bind_group, &[]);
             pass.set_pipeline(&self.screen);
             pass.draw(0..3, 0..1);
             return;
         }
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("terrain"),
-            color_attachments: &attachments,
-            depth_stencil_attachment: depth(&self.depth_view),
-            timestamp_writes: timestamps,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let ground_depth = depth(&self.depth_view);
+        let mut pass = render_pass(encoder, "terrain", &attachments, ground_depth, timestamps);
         pass.set_bind_group(0, &self.bind_group, &[]);
         if draw_terrain {
-            pass.set_pipeline(&self.ground);
-            pass.set_index_buffer(self.index.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..self.index_count, 0, 0..1);
+            self.draw_mesh(&mut pass, &self.ground);
         }
         pass.set_pipeline(&self.screen);
         pass.draw(0..3, 0..1);
@@ -583,20 +568,20 @@ impl TerrainPass {
         else {
             return;
         };
-        let copy = self.depth_copy_view.as_ref().map(|v| attach(v, None));
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("terrain depth copy"),
-            color_attachments: &[None, copy.flatten()],
-            depth_stencil_attachment: depth(depth_view),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let copy = [
+            None,
+            self.depth_copy_view.as_ref().and_then(|v| attach(v, None)),
+        ];
+        let mut pass = render_pass(
+            encoder,
+            "terrain depth copy",
+            &copy,
+            depth(depth_view),
+            None,
+        );
+        pass.set_bind_group(0, &self.bind_group, &[]);
         if draw_terrain {
-            pass.set_bind_group(0, &self.bind_group, &[]);
-            pass.set_pipeline(pipeline);
-            pass.set_index_buffer(self.index.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..self.index_count, 0, 0..1);
+            self.draw_mesh(&mut pass, pipeline);
         }
     }
 }
@@ -613,6 +598,24 @@ pub fn quad_indices(mesh: u32) -> Vec<u32> {
         }
     }
     v
+}
+
+/// A render pass of the terrain's: no occlusion queries, one view.
+fn render_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    colour: &[Option<wgpu::RenderPassColorAttachment>],
+    depth: Option<wgpu::RenderPassDepthStencilAttachment>,
+    timestamps: Option<wgpu::RenderPassTimestampWrites>,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: colour,
+        depth_stencil_attachment: depth,
+        timestamp_writes: timestamps,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
 }
 
 /// A G-buffer target as the shading pass reads it.

@@ -47,7 +47,7 @@ pub struct Shared<'a> {
     /// Samples per pixel: 4 where `render.msaa` asks and the adapter allows, else 1 (the
     /// reference supersamples when it is 4).
     pub samples: u32,
-    /// The mesh modes shade single-sampled frames deferred (`GpuContext::deferred`).
+    /// A mesh mode, shading single-sampled frames deferred (`GpuContext::deferred`).
     pub deferred: bool,
 }
 
