@@ -394,3 +394,62 @@ fn the_warped_sweep_spans_the_budgets_where_geomipmap_competes() {
         "512² climbs further: {fixed_rows:?}"
     );
 }
+
+/// The settings are timed side by side, a frame of each a round (`compare::rounds`): every row
+/// gets `--repeat` frames from the rounds, each drawing its own setting's triangles (a renderer
+/// left at another GeoMipMap τ would draw others, and the row would fall back to being timed
+/// alone). With no room to keep renderers (`--keep-mib 0`) every setting is timed alone, and
+/// the images, triangles and errors are the same: only the times are taken differently.
+#[test]
+fn compare_times_the_settings_in_rounds() {
+    let run = |name: &str, keep_mib: &str| -> serde_json::Value {
+        let dir = scratch(name);
+        let out = dir.display().to_string();
+        let (code, _, err) = terrain(&[
+            "compare",
+            &sketch("jacksboro.toml"),
+            "--out-dir",
+            &out,
+            "--size",
+            "48",
+            "--modes",
+            "warped,geomipmap",
+            "--repeat",
+            "3",
+            "--path-frames",
+            "0",
+            "--keep-mib",
+            keep_mib,
+        ]);
+        assert_eq!(code, 0, "{err}");
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
+    };
+    let rounds = run("compare-rounds", "1024");
+    let alone = run("compare-alone", "0");
+    let rows =
+        |r: &serde_json::Value| -> Vec<Row> { serde_json::from_value(r["rows"].clone()).unwrap() };
+    let (a, b) = (rows(&rounds), rows(&alone));
+    assert!(a.iter().any(|r| r.mode == "geomipmap") && a.iter().any(|r| r.mode == "warped"));
+    assert_eq!(
+        rounds["timed_alone"],
+        serde_json::json!([]),
+        "{:?}",
+        rounds["timed_alone"]
+    );
+    let named: Vec<String> = serde_json::from_value(alone["timed_alone"].clone()).unwrap();
+    assert_eq!(named.len(), b.len(), "{named:?}");
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!(x.frames, 3, "{x:?}");
+        assert_eq!(y.frames, 3, "{y:?}");
+        assert!(x.frame_ms > 0.0 && x.frame_ms.is_finite(), "{x:?}");
+        assert_eq!((&x.setting, x.triangles), (&y.setting, y.triangles));
+        assert_eq!(x.psnr_db.to_bits(), y.psnr_db.to_bits(), "{}", x.setting);
+        assert_eq!(
+            x.sse_mean_px.to_bits(),
+            y.sse_mean_px.to_bits(),
+            "{}",
+            x.setting
+        );
+    }
+}

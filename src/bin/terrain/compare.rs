@@ -18,9 +18,13 @@ pub struct Args {
     /// clipmaps; a tile pyramid's warped].
     #[arg(long, value_delimiter = ',', value_parser = args::mesh_mode)]
     modes: Vec<Mode>,
-    /// Timed frames per setting after one warm-up; medians are reported.
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    /// Timed frames per setting, one of each setting a round (see --keep-mib); medians are reported.
+    #[arg(long, default_value_t = 15, value_parser = clap::value_parser!(u32).range(1..=1000))]
     repeat: u32,
+    /// GPU memory (MiB) for the renderers kept to time the settings side by side, a frame of
+    /// each in turn, `--repeat` rounds; a setting past it is timed alone. 0: every setting alone.
+    #[arg(long, value_name = "MIB", default_value_t = terrain::eval::compare::rounds::KEEP_BYTES >> 20)]
+    keep_mib: u64,
     /// Frames along the camera path (the scene's [path], else straight ahead); 0: none.
     #[arg(long, default_value_t = 24, value_parser = clap::value_parser!(u32).range(0..=100000))]
     path_frames: u32,
@@ -55,6 +59,7 @@ pub fn run(a: Args) -> Result<()> {
         repeat: a.repeat,
         path_frames: a.path_frames as usize,
         path_fps: a.path_fps,
+        keep_bytes: a.keep_mib.saturating_mul(1 << 20),
         ..Default::default()
     };
     let name = a

@@ -62,38 +62,41 @@ pub(super) fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// Times `repeat` frames after a warm-up and measures the last against `truth`.
-pub(super) fn measure(
+/// Measures `s` after a warm-up: its image and positions against `truth`, and its times over
+/// `timed` frames drawn one after another (at least the one whose image is kept; a row timed in
+/// rounds, `rounds`, has its times replaced there).
+fn measure(
     r: &mut Renderer,
     s: &Setting,
     camera: &Camera,
     truth: &Truth,
     o: &Options,
+    timed: u32,
 ) -> Result<(Row, Vec<u8>)> {
     r.render_settled(camera)?;
-    // At least one timed frame: `last` below is the one whose image is kept. Each is drawn as by
-    // a fresh renderer, so a still camera times the whole CPU stage, not a held warp.
-    let mut frames = Vec::new();
-    for _ in 0..o.repeat.max(1) {
+    // Each frame is drawn as by a fresh renderer, so a still camera times the whole CPU stage,
+    // not a held warp.
+    let mut frames = Timed::default();
+    let mut last = None;
+    for _ in 0..timed.max(1) {
         r.forget();
-        frames.push(r.render(camera)?);
+        let frame = r.render(camera)?;
+        frames.push(&frame);
+        last = Some(frame);
     }
-    let last = &frames[frames.len() - 1];
+    let last = last.expect("at least one frame");
     let positions = r.read_positions(camera)?;
     let width = camera.width;
     let sse = metrics::screen_space_error(&positions, &truth.positions, width as usize, o.window);
-    let cpu_us = median(frames.iter().map(|f| f.cpu_us).collect());
-    let gpu_ms = median(frames.iter().map(|f| f.gpu.gpu_ms).collect());
-    let passes: Vec<&PassTimes> = frames.iter().map(|f| &f.gpu.passes).collect();
     let (pre_ms, pre_bytes) = r.precompute().unwrap_or((0.0, 0));
-    let row = Row {
+    let mut row = Row {
         mode: s.mode_name().to_string(),
         setting: s.label(),
         triangles: last.gpu.triangles,
         triangles_per_px: last.gpu.triangles as f64 / (camera.width as f64 * camera.height as f64),
-        cpu_stage_us: cpu_us,
-        gpu_ms,
-        frame_ms: gpu_ms + cpu_us * 1e-3,
+        cpu_stage_us: 0.0,
+        gpu_ms: 0.0,
+        frame_ms: 0.0,
         psnr_db: metrics::psnr(&last.rgba, &truth.rgba),
         ssim: metrics::ssim(&truth.rgba, &last.rgba, width).unwrap_or(0.0),
         flip_mean: metrics::flip_mean(&truth.rgba, &last.rgba, width).unwrap_or(1.0),
@@ -103,13 +106,61 @@ pub(super) fn measure(
         precompute_ms: pre_ms,
         precompute_bytes: pre_bytes,
         gpu_memory_bytes: r.gpu_bytes(),
-        frames: o.repeat.max(1),
+        frames: 0,
         pareto_psnr: false,
         pareto_sse: false,
         lod_change_levels: None,
-        passes_ms: PassTimes::median(&passes),
+        passes_ms: PassTimes::default(),
     };
-    Ok((row, last.rgba.clone()))
+    frames.apply(&mut row);
+    Ok((row, last.rgba))
+}
+
+/// [`measure`] with `s`'s τ set first (GeoMipMap's settings of one block size share a
+/// renderer), then the LOD change per frame along `steps`.
+pub(super) fn measure_lod(
+    r: &mut Renderer,
+    s: &Setting,
+    camera: &Camera,
+    truth: &Truth,
+    o: &Options,
+    timed: u32,
+    steps: &[Camera],
+) -> Result<(Row, Vec<u8>)> {
+    super::rounds::set_tau(r, s);
+    let (mut row, rgba) = measure(r, s, camera, truth, o, timed)?;
+    row.lod_change_levels = lod_change_along(r, steps)?;
+    Ok((row, rgba))
+}
+
+/// A row's timed frames: the CPU stage, the GPU passes and each pass.
+#[derive(Default)]
+pub(super) struct Timed {
+    cpu_us: Vec<f64>,
+    gpu_ms: Vec<f64>,
+    passes: Vec<PassTimes>,
+}
+
+impl Timed {
+    pub fn push(&mut self, frame: &Frame) {
+        self.cpu_us.push(frame.cpu_us);
+        self.gpu_ms.push(frame.gpu.gpu_ms);
+        self.passes.push(frame.gpu.passes.clone());
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.cpu_us.is_empty()
+    }
+
+    /// The row's times: the medians of these frames (DESIGN.md's frame time: CPU stage plus GPU
+    /// passes).
+    pub fn apply(&self, row: &mut Row) {
+        row.cpu_stage_us = median(self.cpu_us.clone());
+        row.gpu_ms = median(self.gpu_ms.clone());
+        row.frame_ms = row.gpu_ms + row.cpu_stage_us * 1e-3;
+        row.passes_ms = PassTimes::median(&self.passes.iter().collect::<Vec<_>>());
+        row.frames = self.cpu_us.len() as u32;
+    }
 }
 
 /// The reference at the scene's camera, converged: halving the step moves the image less than

@@ -4,8 +4,10 @@
 //! Rules: one device for the whole run; the reference is ray-marched once per camera and its
 //! convergence shown: the image at half the step differs from it by at least
 //! [`REFERENCE_CONVERGED_DB`] PSNR, the step halved (up to three times) until it does. Per setting: a warm-up frame, then
-//! `repeat` timed frames whose medians are reported (DESIGN.md's frame time: CPU stage plus GPU
-//! passes); the last frame's image and positions are measured. Every renderer is built with its
+//! a frame whose image and positions are measured; the times are the medians of `repeat` frames
+//! (DESIGN.md's frame time: CPU stage plus GPU passes) taken side by side, a frame of every
+//! setting a round, once all are measured ([`rounds`]; a setting whose renderer does not fit
+//! [`Options::keep_bytes`] has its frames timed one after another as it is measured). Every renderer is built with its
 //! position attachment on, so all modes carry the same one extra RGBA8 write per pixel. GeoMipMap
 //! settings of one block size share one baked grid. The default sweep's warped rows at
 //! GeoMipMap's budgets (`sweep::at_geomipmap_budgets`) run last, once GeoMipMap's triangles are
@@ -25,6 +27,7 @@ pub mod figures;
 mod measure;
 mod path;
 pub mod report;
+pub mod rounds;
 pub mod summary;
 pub mod sweep;
 pub mod temporal;
@@ -35,15 +38,15 @@ use crate::app::progress::Progress;
 use crate::camera::Camera;
 use crate::error::{Error, Result, Role};
 use crate::gpu::context::{GpuContext, Needs};
-use crate::lod::baseline::Baselines;
 use crate::render::Renderer;
 use crate::scene;
 use crate::scene::{Mode, Scene};
 use crate::sketch::Atlas;
 use crate::stage::CpuStage;
-use measure::{lod_change_along, measure, renderer};
+use measure::{Timed, measure_lod, renderer};
 use path::{Out, path_series};
 use report::{DetailUsed, RatioReport, ReferenceFigures, Replot, Report, Row, Skipped};
+use rounds::Rounds;
 use std::path::Path;
 use sweep::Setting;
 
@@ -71,6 +74,9 @@ pub struct Options {
     pub window: usize,
     /// The settings to run; `None`: the default sweep.
     pub settings: Option<Vec<Setting>>,
+    /// The GPU memory the renderers kept for timing in rounds may hold ([`rounds::KEEP_BYTES`];
+    /// 0: every setting timed alone).
+    pub keep_bytes: u64,
 }
 
 impl Default for Options {
@@ -78,11 +84,12 @@ impl Default for Options {
         Options {
             size: (256, 256),
             modes: vec![Mode::Warped, Mode::Geomipmap, Mode::Bruteforce],
-            repeat: 5,
+            repeat: 15,
             path_frames: 24,
             path_fps: 15.0,
             window: 16,
             settings: None,
+            keep_bytes: rounds::KEEP_BYTES,
         }
     }
 }
@@ -160,6 +167,19 @@ impl Runs {
         progress.advance(1.0, &format!("{} {}", s.mode_name(), s.label()));
     }
 
+    /// Gives the rows timed in rounds their rounds' times; returns the settings timed alone.
+    fn time(&mut self, timed: &[(usize, Timed)]) -> Vec<String> {
+        let mut alone = vec![true; self.rows.len()];
+        for (i, t) in timed {
+            t.apply(&mut self.rows[*i]);
+            alone[*i] = false;
+        }
+        let rows = self.rows.iter().zip(alone);
+        rows.filter(|(_, a)| *a)
+            .map(|(r, _)| format!("{} {}", r.mode, r.setting))
+            .collect()
+    }
+
     /// Each mode's rows together, in the order the modes first ran (a stable sort, so the rows
     /// run late at GeoMipMap's budgets follow the other warped rows).
     fn group_by_mode(&mut self) {
@@ -210,7 +230,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     };
     let mut progress = Progress::new(
         &format!("compare {name}"),
-        (2 + settings.len() + at_budgets + path_frames + 1) as f64,
+        (2 + settings.len() + at_budgets + o.repeat.max(1) as usize + path_frames + 1) as f64,
     );
 
     let converged = measure::converged_reference(&ctx, &scene, &atlas, &camera)?;
@@ -233,40 +253,61 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
         None
     };
     let steps = flight.as_ref().map_or(&[][..], |(_, c)| &c[..]);
-    let mut gmm: Option<(u32, Renderer)> = None;
-    let mut run_setting = |s: &Setting| -> Result<(Row, Vec<u8>)> {
-        if let Setting::GeoMipMap { tau, block } = *s {
-            if gmm.as_ref().is_none_or(|(b, _)| *b != block) {
-                gmm = None; // one baked grid at a time
-                gmm = Some((block, renderer(&ctx, &scene, &atlas, s)?));
+    let mut rounds = Rounds::new(o.keep_bytes);
+    // The last renderer that did not fit the rounds: GeoMipMap's serves its block size's next τ.
+    let mut spare: Option<(Option<u32>, Renderer)> = None;
+    let mut run_setting = |s: &Setting, row: usize| -> Result<(Row, Vec<u8>)> {
+        let measure_with =
+            |r: &mut Renderer, frames| measure_lod(r, s, &camera, &truth0, o, frames, steps);
+        let block = match *s {
+            Setting::GeoMipMap { block, .. } => Some(block),
+            _ => None,
+        };
+        let (measured, kept) = match rounds.find(s) {
+            Some(i) => (measure_with(rounds.renderer(i), 1), i),
+            None => {
+                let mut r = match spare.take() {
+                    Some((b, r)) if b.is_some() && b == block => r,
+                    _ => renderer(&ctx, &scene, &atlas, s)?,
+                };
+                if !rounds.fits(&r) {
+                    let measured = measure_with(&mut r, o.repeat);
+                    spare = Some((block, r));
+                    return measured;
+                }
+                let i = rounds.keep(*s, r);
+                let measured = measure_with(rounds.renderer(i), 1);
+                if measured.is_err() {
+                    rounds.release_last();
+                }
+                (measured, i)
             }
-            let (_, r) = gmm.as_mut().expect("just built");
-            if let Some(b) = r.lod_mut::<Baselines>() {
-                b.params.tau = tau;
-            }
-            let (mut row, rgba) = measure(r, s, &camera, &truth0, o)?;
-            row.lod_change_levels = lod_change_along(r, steps)?;
-            return Ok((row, rgba));
+        };
+        if let Ok((r, _)) = &measured {
+            rounds.time_row(row, kept, *s, r.triangles);
         }
-        gmm = None;
-        let mut r = renderer(&ctx, &scene, &atlas, s)?;
-        let (mut row, rgba) = measure(&mut r, s, &camera, &truth0, o)?;
-        row.lod_change_levels = lod_change_along(&mut r, steps)?;
-        Ok((row, rgba))
+        measured
     };
     let mut runs = Runs::default();
     for s in &settings {
-        runs.record(s, run_setting(s), &mut progress);
+        runs.record(s, run_setting(s, runs.rows.len()), &mut progress);
     }
     if at_budgets > 0 {
         let extra = sweep::at_geomipmap_budgets(scene.warp.quad_px, &runs.rows);
         progress.forgo((at_budgets - extra.len()) as f64);
         for s in &extra {
-            runs.record(s, run_setting(s), &mut progress);
+            runs.record(s, run_setting(s, runs.rows.len()), &mut progress);
         }
+    }
+    drop(spare);
+    let timed = rounds.run(&camera, o.repeat.max(1), |round| {
+        progress.advance(1.0, &format!("timing round {}", round + 1))
+    });
+    let timed_alone = runs.time(&timed);
+    drop(rounds);
+    if at_budgets > 0 {
         runs.group_by_mode();
     }
-    drop(gmm);
     let Runs {
         mut rows,
         images,
@@ -344,6 +385,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
             "wall time around submit"
         },
         timed_frames: o.repeat.max(1),
+        timed_alone,
         reference: ReferenceFigures {
             step,
             ms: ref_frame.gpu.gpu_ms,

@@ -170,6 +170,9 @@ pub struct Report {
     pub size: [u32; 2],
     pub gpu_timing: &'static str,
     pub timed_frames: u32,
+    /// The settings timed alone, their frames one after another, for want of room to keep
+    /// their renderers for the rounds (`compare::rounds`); the rest were timed side by side.
+    pub timed_alone: Vec<String>,
     pub reference: ReferenceFigures,
     pub rows: Vec<Row>,
     pub summary: Summary,
