@@ -214,8 +214,9 @@ impl Renderer {
         })
     }
 
-    /// The next frame is drawn as by a fresh renderer, whatever frames came before (see
-    /// [`Lod::forget`]).
+    /// The next frame's level of detail is chosen as by a fresh renderer, whatever frames came
+    /// before (see [`Lod::forget`]). A streamed sketch keeps its tiles: those of the frames
+    /// before stay in the pool.
     pub fn forget(&mut self) {
         self.lod.forget();
     }

@@ -77,14 +77,14 @@ fn measure(
     // Each frame is drawn as by a fresh renderer, so a still camera times the whole CPU stage,
     // not a held warp.
     let mut frames = Timed::default();
-    let mut last = None;
-    for _ in 0..timed.max(1) {
+    r.forget();
+    let mut last = r.render(camera)?;
+    frames.push(&last);
+    for _ in 1..timed {
         r.forget();
-        let frame = r.render(camera)?;
-        frames.push(&frame);
-        last = Some(frame);
+        last = r.render(camera)?;
+        frames.push(&last);
     }
-    let last = last.expect("at least one frame");
     let positions = r.read_positions(camera)?;
     let width = camera.width;
     let sse = metrics::screen_space_error(&positions, &truth.positions, width as usize, o.window);

@@ -1,18 +1,22 @@
 //! `terrain compare`: every mode over a sweep of its quality setting, each measured against the
 //! reference image for the scene's camera, then each mode's scene setting along a camera path.
 //!
-//! Rules: one device for the whole run; the reference is ray-marched once per camera and its
-//! convergence shown: the image at half the step differs from it by at least
-//! [`REFERENCE_CONVERGED_DB`] PSNR, the step halved (up to three times) until it does. Per setting: a warm-up frame, then
-//! a frame whose image and positions are measured; the times are the medians of `repeat` frames
-//! (DESIGN.md's frame time: CPU stage plus GPU passes) taken side by side, a frame of every
-//! setting a round, once all are measured ([`rounds`]; a setting whose renderer does not fit
-//! [`Options::keep_bytes`] has its frames timed one after another as it is measured). Every renderer is built with its
-//! position attachment on, so all modes carry the same one extra RGBA8 write per pixel. GeoMipMap
-//! settings of one block size share one baked grid. The default sweep's warped rows at
-//! GeoMipMap's budgets (`sweep::at_geomipmap_budgets`) run last, once GeoMipMap's triangles are
-//! known, and the report lists them with the other warped rows. A setting that fails (a grid too large for the
-//! device, say) is recorded in `report.json`'s `skipped` and the rest carry on.
+//! Rules:
+//! - One device for the whole run. The reference is ray-marched once per camera and its
+//!   convergence shown: the image at half the step differs from it by at least
+//!   [`REFERENCE_CONVERGED_DB`] PSNR, the step halved (up to three times) until it does.
+//! - Per setting: a warm-up frame, then a frame whose image and positions are measured. The
+//!   times are the medians of `repeat` frames (DESIGN.md's frame time: CPU stage plus GPU
+//!   passes) taken side by side once all are measured, a frame of every setting a round
+//!   ([`rounds`]); a setting whose renderer does not fit [`Options::keep_bytes`] has its frames
+//!   timed one after another as it is measured.
+//! - Every renderer is built with its position attachment on, so all modes carry the same one
+//!   extra RGBA8 write per pixel. GeoMipMap settings of one block size share one baked grid.
+//! - The default sweep's warped rows at GeoMipMap's budgets (`sweep::at_geomipmap_budgets`) run
+//!   last, once GeoMipMap's triangles are known, and the report lists them with the other
+//!   warped rows.
+//! - A setting that fails (a grid too large for the device, say) is recorded in `report.json`'s
+//!   `skipped` and the rest carry on.
 //!
 //! Outputs in the out dir, each written atomically: `report.csv`, `report.json`, `summary.md`,
 //! `error_vs_time.svg`/`.png`, `error_vs_triangles.svg`/`.png`, `lod_change_vs_psnr.svg`/`.png`, `ratio_histogram.svg`/`.png`, `path.csv`, `path_error.svg`/`.png`,
@@ -38,15 +42,14 @@ use crate::app::progress::Progress;
 use crate::camera::Camera;
 use crate::error::{Error, Result, Role};
 use crate::gpu::context::{GpuContext, Needs};
-use crate::render::Renderer;
 use crate::scene;
 use crate::scene::{Mode, Scene};
 use crate::sketch::Atlas;
 use crate::stage::CpuStage;
-use measure::{Timed, measure_lod, renderer};
+use measure::{measure_lod, renderer};
 use path::{Out, path_series};
 use report::{DetailUsed, RatioReport, ReferenceFigures, Replot, Report, Row, Skipped};
-use rounds::Rounds;
+use rounds::{Rounds, RowTimes};
 use std::path::Path;
 use sweep::Setting;
 
@@ -61,11 +64,11 @@ const LOD_STEPS: usize = 3;
 const MAX_REFERENCE_HALVINGS: usize = 3;
 
 pub struct Options {
-    /// Image width and height in pixels.
     /// Image width and height, pixels.
     pub size: (u32, u32),
     pub modes: Vec<Mode>,
-    /// Timed frames per setting, after one warm-up.
+    /// Timed frames per setting: the timing rounds ([`rounds`]), or frames one after another
+    /// for a setting timed alone.
     pub repeat: u32,
     /// Frames along the camera path (0: no path).
     pub path_frames: usize,
@@ -167,12 +170,29 @@ impl Runs {
         progress.advance(1.0, &format!("{} {}", s.mode_name(), s.label()));
     }
 
-    /// Gives the rows timed in rounds their rounds' times; returns the settings timed alone.
-    fn time(&mut self, timed: &[(usize, Timed)]) -> Vec<String> {
+    /// Gives the rows timed in rounds their rounds' times; a row the rounds stopped timing is
+    /// listed in `skipped` with the cause. Returns the settings timed alone.
+    fn time(&mut self, timed: Vec<RowTimes>) -> Vec<String> {
         let mut alone = vec![true; self.rows.len()];
-        for (i, t) in timed {
-            t.apply(&mut self.rows[*i]);
-            alone[*i] = false;
+        for RowTimes {
+            row,
+            setting,
+            timed,
+            failure,
+        } in timed
+        {
+            alone[row] = false;
+            // The rounds kept only frames that drew the row's own triangles.
+            if !timed.is_empty() {
+                timed.apply(&mut self.rows[row]);
+            }
+            if let Some(error) = failure {
+                self.skipped.push(Skipped {
+                    mode: setting.mode_name(),
+                    setting: setting.label(),
+                    error: format!("{error}; its times are its measured frame's"),
+                });
+            }
         }
         let rows = self.rows.iter().zip(alone);
         rows.filter(|(_, a)| *a)
@@ -254,39 +274,14 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     };
     let steps = flight.as_ref().map_or(&[][..], |(_, c)| &c[..]);
     let mut rounds = Rounds::new(o.keep_bytes);
-    // The last renderer that did not fit the rounds: GeoMipMap's serves its block size's next τ.
-    let mut spare: Option<(Option<u32>, Renderer)> = None;
     let mut run_setting = |s: &Setting, row: usize| -> Result<(Row, Vec<u8>)> {
-        let measure_with =
-            |r: &mut Renderer, frames| measure_lod(r, s, &camera, &truth0, o, frames, steps);
-        let block = match *s {
-            Setting::GeoMipMap { block, .. } => Some(block),
-            _ => None,
-        };
-        let (measured, kept) = match rounds.find(s) {
-            Some(i) => (measure_with(rounds.renderer(i), 1), i),
-            None => {
-                let mut r = match spare.take() {
-                    Some((b, r)) if b.is_some() && b == block => r,
-                    _ => renderer(&ctx, &scene, &atlas, s)?,
-                };
-                if !rounds.fits(&r) {
-                    let measured = measure_with(&mut r, o.repeat);
-                    spare = Some((block, r));
-                    return measured;
-                }
-                let i = rounds.keep(*s, r);
-                let measured = measure_with(rounds.renderer(i), 1);
-                if measured.is_err() {
-                    rounds.release_last();
-                }
-                (measured, i)
-            }
-        };
-        if let Ok((r, _)) = &measured {
-            rounds.time_row(row, kept, *s, r.triangles);
-        }
-        measured
+        rounds.measure(
+            s,
+            row,
+            o.repeat,
+            || renderer(&ctx, &scene, &atlas, s),
+            |r, frames| measure_lod(r, s, &camera, &truth0, o, frames, steps),
+        )
     };
     let mut runs = Runs::default();
     for s in &settings {
@@ -299,11 +294,11 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
             runs.record(s, run_setting(s, runs.rows.len()), &mut progress);
         }
     }
-    drop(spare);
+    rounds.drop_spare();
     let timed = rounds.run(&camera, o.repeat.max(1), |round| {
         progress.advance(1.0, &format!("timing round {}", round + 1))
     });
-    let timed_alone = runs.time(&timed);
+    let timed_alone = runs.time(timed);
     drop(rounds);
     if at_budgets > 0 {
         runs.group_by_mode();

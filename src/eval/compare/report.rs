@@ -172,13 +172,15 @@ pub struct Report {
     pub timed_frames: u32,
     /// The settings timed alone, their frames one after another, for want of room to keep
     /// their renderers for the rounds (`compare::rounds`); the rest were timed side by side.
+    /// The two are not alike: frames one after another find the caches warm.
     pub timed_alone: Vec<String>,
     pub reference: ReferenceFigures,
     pub rows: Vec<Row>,
     pub summary: Summary,
     pub path: Option<PathReport>,
     pub density_ratio: Option<RatioReport>,
-    /// Settings that failed, with their cause; the rest were measured.
+    /// Settings that failed, with their cause; the rest were measured. A row whose timing
+    /// rounds failed is here too, its times those of the frame it was measured by.
     pub skipped: Vec<Skipped>,
     pub elapsed_s: f64,
 }

@@ -6,39 +6,68 @@
 //!   [`KEEP_BYTES`] of GPU memory (`Renderer::gpu_bytes`; GeoMipMap's settings of one block size
 //!   share one). A setting that does not fit is timed alone, its `repeat` frames one after
 //!   another as it is measured, and `report.json`'s `timed_alone` names it.
-//! - Odd rounds visit the settings in reverse, so that no setting always follows the same one.
-//! - Each frame is drawn as by a fresh renderer (`Renderer::forget`), as when timed alone.
+//! - A round that is not timed comes first: each row's renderer settles at the camera again.
+//! - Odd rounds visit the settings in reverse: each setting's mean place in a round is the same.
+//! - Each frame chooses its level of detail as a fresh renderer would (`Renderer::forget`), as
+//!   when timed alone, and must draw the triangles of the frame the row was measured by.
 //!
 //! Why: timed alone, one setting after another, a row's frames fall within a second or two,
 //! and this VM's speed drifts over a run by more than the differences `compare` is asked to
 //! tell apart. Measured (`render sketches/jacksboro.toml --size 256 --repeat 10 --json`, the
 //! median `gpu_ms` plus the CPU stage of 10 frames, four settings alternately, 8 times): warped
 //! at mesh 48 fixed 15.34 ms, GeoMipMap at τ 8 with blocks of 65 15.89 ms, blocks of 33
-//! 15.97 ms; single invocations of the same settings ranged over 16.2–20.1 ms. Timed alone in
-//! `compare` (stop 44, three runs of the six bundled views), rows that this put 3 % apart came
-//! out either way. Rejected alternative: one renderer per mode, its setting changed between
-//! frames: a warped renderer's mesh is fixed when it is built (`warp.mesh` sizes its buffers),
-//! so that would time meshes in buffers sized for another.
+//! 15.97 ms; four invocations of warped at mesh 48 alone ranged over 16.2–20.1 ms. Timed alone
+//! in `compare` (stop 44: five frames, three runs of the six bundled views), jacksboro's rows
+//! at τ 8 came out either way. Five rounds left frame-to-frame noise of 2–3 % in a row (the six
+//! views once: misses of 1.006–1.023× GeoMipMap's time); fifteen are the default.
+//! Rejected alternative: one renderer per mode, its setting changed between frames: a warped
+//! renderer's buffers are sized for its `warp.mesh`, so that would time small meshes in buffers
+//! sized for another.
 
 use super::measure::Timed;
+use super::report::Row;
 use super::sweep::Setting;
 use crate::camera::Camera;
+use crate::error::Result;
 use crate::lod::baseline::Baselines;
 use crate::render::Renderer;
 
 /// The most GPU memory the renderers kept for the rounds may hold together: at 256² the
 /// warped and GeoMipMap rows of every bundled view fit (0.37–0.73 GiB; jacksboro's three
-/// GeoMipMap grids take about 170 MB each, its 31 warped renderers 261 MB together).
+/// GeoMipMap grids take about 170 MB each, its 31 warped renderers 261 MB together). Beside
+/// them live the reference renderer and one renderer at a time that did not fit.
 pub const KEEP_BYTES: u64 = 1 << 30;
 
-/// The renderers kept for the rounds and the rows each times.
+/// The renderers kept for the rounds, the rows each times, and the last renderer that did not
+/// fit.
 pub(super) struct Rounds {
     kept: Vec<(Setting, Renderer)>,
     bytes: u64,
     cap: u64,
-    /// Each row timed in rounds: its index, its kept renderer, its setting and the triangles
-    /// its measured frame drew.
-    rows: Vec<(usize, usize, Setting, u64)>,
+    rows: Vec<Entry>,
+    /// A renderer timed alone, kept only while the next setting may draw with it: GeoMipMap's,
+    /// for its block size's next τ.
+    spare: Option<(Setting, Renderer)>,
+}
+
+/// A row timed in the rounds.
+#[derive(Clone, Copy)]
+struct Entry {
+    /// Its index among the rows measured.
+    row: usize,
+    /// Its kept renderer.
+    renderer: usize,
+    setting: Setting,
+    /// The triangles its measured frame drew.
+    triangles: u64,
+}
+
+/// A row's frames from the rounds, and why the rounds stopped timing it, if they did.
+pub(super) struct RowTimes {
+    pub row: usize,
+    pub setting: Setting,
+    pub timed: Timed,
+    pub failure: Option<String>,
 }
 
 impl Rounds {
@@ -48,82 +77,132 @@ impl Rounds {
             bytes: 0,
             cap,
             rows: Vec::new(),
+            spare: None,
         }
     }
 
-    /// The kept renderer that can draw `s`: GeoMipMap's of the same block size.
-    pub fn find(&self, s: &Setting) -> Option<usize> {
-        let Setting::GeoMipMap { block, .. } = *s else {
-            return None;
+    /// Measures setting `s`, whose row will be `row` if it succeeds, by `measure` (a renderer
+    /// and the frames to time): with the kept renderer that draws it, else with the spare or one
+    /// `build` makes. A renderer that fits is kept and its row timed in the rounds (`measure`
+    /// times one frame); else the row's `repeat` frames are timed there, one after another.
+    pub fn measure(
+        &mut self,
+        s: &Setting,
+        row: usize,
+        repeat: u32,
+        build: impl FnOnce() -> Result<Renderer>,
+        mut measure: impl FnMut(&mut Renderer, u32) -> Result<(Row, Vec<u8>)>,
+    ) -> Result<(Row, Vec<u8>)> {
+        if let Some(i) = self.kept.iter().position(|(k, _)| same_renderer(k, s)) {
+            let measured = measure(&mut self.kept[i].1, 1);
+            self.time_row(&measured, row, i, s);
+            return measured;
+        }
+        let mut r = match self.spare.take() {
+            Some((k, r)) if same_renderer(&k, s) => r,
+            // Dropped before the next is built: one large grid at a time.
+            other => {
+                drop(other);
+                build()?
+            }
         };
-        self.kept
-            .iter()
-            .position(|(k, _)| matches!(*k, Setting::GeoMipMap { block: b, .. } if b == block))
-    }
-
-    /// Whether `r` may be kept beside the renderers kept so far.
-    pub fn fits(&self, r: &Renderer) -> bool {
-        self.bytes.saturating_add(r.gpu_bytes()) <= self.cap
-    }
-
-    /// Keeps `r`, built for `s` (that it [`Rounds::fits`] is the caller's choice); its index.
-    pub fn keep(&mut self, s: Setting, r: Renderer) -> usize {
+        if self.bytes.saturating_add(r.gpu_bytes()) > self.cap {
+            let measured = measure(&mut r, repeat);
+            self.spare = matches!(s, Setting::GeoMipMap { .. }).then_some((*s, r));
+            return measured;
+        }
         self.bytes += r.gpu_bytes();
-        self.kept.push((s, r));
-        self.kept.len() - 1
-    }
-
-    /// Lets go of the renderer last kept (its setting failed before any row was timed).
-    pub fn release_last(&mut self) {
-        if let Some((_, r)) = self.kept.pop() {
+        self.kept.push((*s, r));
+        let i = self.kept.len() - 1;
+        let measured = measure(&mut self.kept[i].1, 1);
+        if measured.is_err()
+            && let Some((_, r)) = self.kept.pop()
+        {
             self.bytes -= r.gpu_bytes();
         }
+        self.time_row(&measured, row, i, s);
+        measured
     }
 
-    pub fn renderer(&mut self, i: usize) -> &mut Renderer {
-        &mut self.kept[i].1
+    fn time_row(&mut self, measured: &Result<(Row, Vec<u8>)>, row: usize, i: usize, s: &Setting) {
+        if let Ok((r, _)) = measured {
+            self.rows.push(Entry {
+                row,
+                renderer: i,
+                setting: *s,
+                triangles: r.triangles,
+            });
+        }
     }
 
-    /// Row `row` is timed in the rounds with kept renderer `renderer`, set to `s`; its measured
-    /// frame drew `triangles`.
-    pub fn time_row(&mut self, row: usize, renderer: usize, s: Setting, triangles: u64) {
-        self.rows.push((row, renderer, s, triangles));
+    /// Lets go of the renderer timed alone.
+    pub fn drop_spare(&mut self) {
+        self.spare = None;
     }
 
-    /// Runs `repeat` rounds at `camera` and returns each timed row's frames, by row index. A
-    /// setting whose frame fails, or draws other triangles than its measured frame (a renderer
-    /// left at another setting), drops out of the later rounds and keeps the frames it had.
+    /// Runs `repeat` rounds at `camera`, after one that is not timed, and returns each timed
+    /// row's frames. The untimed round settles each renderer at `camera` again (a streamed
+    /// sketch holds the tiles of the camera path its LOD change was measured along). A row whose
+    /// frame fails, or draws other triangles than its measured frame, drops out of the later
+    /// rounds and keeps the frames it had, with the cause.
     pub fn run(
         &mut self,
         camera: &Camera,
         repeat: u32,
         mut progress: impl FnMut(u32),
-    ) -> Vec<(usize, Timed)> {
-        let mut timed: Vec<Timed> = self.rows.iter().map(|_| Timed::default()).collect();
-        let mut failed = vec![false; self.rows.len()];
+    ) -> Vec<RowTimes> {
+        let mut times: Vec<RowTimes> = self
+            .rows
+            .iter()
+            .map(|e| RowTimes {
+                row: e.row,
+                setting: e.setting,
+                timed: Timed::default(),
+                failure: None,
+            })
+            .collect();
+        for (e, t) in self.rows.iter().zip(&mut times) {
+            let r = &mut self.kept[e.renderer].1;
+            set_tau(r, &e.setting);
+            r.forget();
+            if let Err(err) = r.render_settled(camera) {
+                t.failure = Some(format!("settling before the timing rounds: {err}"));
+            }
+        }
         for round in 0..repeat {
             for k in order(self.rows.len(), round) {
-                if failed[k] {
+                if times[k].failure.is_some() {
                     continue;
                 }
-                let (_, i, s, triangles) = self.rows[k];
-                let r = &mut self.kept[i].1;
-                set_tau(r, &s);
+                let e = self.rows[k];
+                let r = &mut self.kept[e.renderer].1;
+                set_tau(r, &e.setting);
                 r.forget();
                 match r.render(camera) {
-                    Ok(frame) if frame.gpu.triangles == triangles => timed[k].push(&frame),
-                    _ => failed[k] = true,
+                    Ok(frame) if frame.gpu.triangles == e.triangles => times[k].timed.push(&frame),
+                    Ok(frame) => {
+                        times[k].failure = Some(format!(
+                            "timing round {}: drew {} triangles, its measured frame {}",
+                            round + 1,
+                            frame.gpu.triangles,
+                            e.triangles
+                        ))
+                    }
+                    Err(err) => {
+                        times[k].failure = Some(format!("timing round {}: {err}", round + 1))
+                    }
                 }
             }
             progress(round);
         }
-        self.rows
-            .iter()
-            .zip(timed)
-            .filter(|(_, t)| !t.is_empty())
-            .map(|(&(row, ..), t)| (row, t))
-            .collect()
+        times
     }
+}
+
+/// Whether settings `a` and `b` draw with one renderer: GeoMipMap's of one block size (one
+/// baked grid, τ set per frame).
+fn same_renderer(a: &Setting, b: &Setting) -> bool {
+    matches!((*a, *b), (Setting::GeoMipMap { block: x, .. }, Setting::GeoMipMap { block: y, .. }) if x == y)
 }
 
 /// Sets a GeoMipMap renderer's τ to `s`'s (its settings of one block size share a renderer).
