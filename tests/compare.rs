@@ -109,23 +109,35 @@ fn compare_reports_every_setting_with_every_column_filled() {
         assert_eq!(cells.len(), CSV_COLUMNS.len(), "{line}");
         assert!(cells.iter().all(|c| !c.is_empty()), "empty cell: {line}");
         assert_eq!((cells[0], cells[1]), (s.mode_name(), s.label().as_str()));
-        let num = |k: usize| cells[k].parse::<f64>().unwrap_or_else(|_| panic!("{line}"));
-        assert!(num(2) > 0.0, "no triangles: {line}");
+        let num = |name: &str| {
+            let k = CSV_COLUMNS.iter().position(|c| *c == name).unwrap();
+            cells[k]
+                .parse::<f64>()
+                .unwrap_or_else(|_| panic!("{name}: {line}"))
+        };
+        assert!(num("triangles") > 0.0, "no triangles: {line}");
         assert!(
-            (num(3) - num(2) / (64.0 * 64.0)).abs() < 1e-4,
+            (num("triangles_per_px") - num("triangles") / (64.0 * 64.0)).abs() < 1e-4,
             "triangles per pixel: {line}"
         );
-        assert!(num(6) > 0.0 && num(6) >= num(5), "frame time: {line}");
-        assert!(num(7) > 10.0 && num(7) < 100.0, "PSNR: {line}");
-        assert!(num(10) >= 0.0 && num(10) <= num(12), "screen error: {line}");
+        let frame = num("frame_ms");
+        assert!(frame > 0.0 && frame >= num("gpu_ms"), "frame time: {line}");
+        assert!(
+            num("frame_ms_p25") > 0.0 && num("frame_ms_p25") <= num("frame_ms_p75"),
+            "frame time's quartiles: {line}"
+        );
+        let psnr = num("psnr_db");
+        assert!(psnr > 10.0 && psnr < 100.0, "PSNR: {line}");
+        let sse = num("sse_mean_px");
+        assert!(
+            sse >= 0.0 && sse <= num("sse_max_px"),
+            "screen error: {line}"
+        );
         // The LOD update's change along the path's first steps: brute force, with no level of
         // detail, is the control at exactly 0.
-        assert!(num(19) >= 0.0, "LOD change: {line}");
-        assert_eq!(
-            num(19) == 0.0,
-            cells[0] == "bruteforce",
-            "LOD change: {line}"
-        );
+        let lod = num("lod_change_levels");
+        assert!(lod >= 0.0, "LOD change: {line}");
+        assert_eq!(lod == 0.0, cells[0] == "bruteforce", "LOD change: {line}");
     }
     // Some row of every mode is on a front; the fastest row always is.
     for m in ["warped", "geomipmap", "bruteforce"] {
@@ -452,6 +464,11 @@ fn compare_times_the_settings_in_rounds() {
         assert_eq!(x.frames, 3, "{x:?}");
         assert_eq!(y.frames, 3, "{y:?}");
         assert!(x.frame_ms > 0.0 && x.frame_ms.is_finite(), "{x:?}");
+        // The frame time's quartiles over the timed frames, whichever way they were timed.
+        for r in [x, y] {
+            let (p25, p75) = (r.frame_ms_p25.unwrap(), r.frame_ms_p75.unwrap());
+            assert!(0.0 < p25 && p25 <= p75 && p75.is_finite(), "{r:?}");
+        }
         assert_eq!((&x.setting, x.triangles), (&y.setting, y.triangles));
         assert_eq!(x.psnr_db.to_bits(), y.psnr_db.to_bits(), "{}", x.setting);
         assert_eq!(

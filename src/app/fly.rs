@@ -22,6 +22,7 @@ use crate::app::output::{Fixed, write_atomic, write_image};
 use crate::app::path::Flight;
 use crate::app::progress::Progress;
 use crate::error::{Error, Result, Role};
+use crate::eval::percentile;
 use crate::gpu::frame_io::PassTimes;
 use crate::gpu::uniforms::View;
 use crate::gpu::{
@@ -158,12 +159,6 @@ pub struct StreamSummary {
     pub stand_in_frames: usize,
     /// Pages the pool holds.
     pub pages: usize,
-}
-
-fn percentile(v: &[f64], q: f64) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    s[((s.len() as f64 * q) as usize).min(s.len() - 1)]
 }
 
 /// The most frames one flight renders.

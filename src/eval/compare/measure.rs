@@ -5,7 +5,7 @@ use super::sweep::Setting;
 use super::{MAX_REFERENCE_HALVINGS, Options, REFERENCE_CONVERGED_DB};
 use crate::camera::Camera;
 use crate::error::Result;
-use crate::eval::metrics;
+use crate::eval::{metrics, percentile};
 use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::PassTimes;
 use crate::gpu::uniforms::View;
@@ -57,11 +57,6 @@ pub(super) fn renderer(
     )
 }
 
-pub(super) fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 /// Measures `s` after a warm-up: its image and positions against `truth`, and its times over
 /// `timed` frames drawn one after another (at least the one whose image is kept; a row timed in
 /// rounds, `rounds`, has its times replaced there).
@@ -97,6 +92,8 @@ fn measure(
         cpu_stage_us: 0.0,
         gpu_ms: 0.0,
         frame_ms: 0.0,
+        frame_ms_p25: None,
+        frame_ms_p75: None,
         psnr_db: metrics::psnr(&last.rgba, &truth.rgba),
         ssim: metrics::ssim(&truth.rgba, &last.rgba, width).unwrap_or(0.0),
         flip_mean: metrics::flip_mean(&truth.rgba, &last.rgba, width).unwrap_or(1.0),
@@ -155,9 +152,14 @@ impl Timed {
     /// The row's times: the medians of these frames (DESIGN.md's frame time: CPU stage plus GPU
     /// passes).
     pub fn apply(&self, row: &mut Row) {
-        row.cpu_stage_us = median(self.cpu_us.clone());
-        row.gpu_ms = median(self.gpu_ms.clone());
+        row.cpu_stage_us = percentile(&self.cpu_us, 0.5);
+        row.gpu_ms = percentile(&self.gpu_ms, 0.5);
         row.frame_ms = row.gpu_ms + row.cpu_stage_us * 1e-3;
+        let frames: Vec<f64> = (self.gpu_ms.iter().zip(&self.cpu_us))
+            .map(|(gpu, cpu)| gpu + cpu * 1e-3)
+            .collect();
+        row.frame_ms_p25 = Some(percentile(&frames, 0.25));
+        row.frame_ms_p75 = Some(percentile(&frames, 0.75));
         row.passes_ms = PassTimes::median(&self.passes.iter().collect::<Vec<_>>());
         row.frames = self.cpu_us.len() as u32;
     }

@@ -28,6 +28,13 @@ pub struct Row {
     pub cpu_stage_us: f64,
     pub gpu_ms: f64,
     pub frame_ms: f64,
+    /// The lower and upper quartile of the timed frames' times (each frame's CPU stage plus GPU
+    /// passes): two rows whose ranges overlap differ by less than this machine's spread from
+    /// frame to frame. `None` in a report written before they were kept.
+    #[serde(default)]
+    pub frame_ms_p25: Option<f64>,
+    #[serde(default)]
+    pub frame_ms_p75: Option<f64>,
     pub psnr_db: f64,
     pub ssim: f64,
     pub flip_mean: f64,
@@ -50,7 +57,7 @@ pub struct Row {
     pub passes_ms: PassTimes,
 }
 
-pub const CSV_COLUMNS: [&str; 20] = [
+pub const CSV_COLUMNS: [&str; 22] = [
     "mode",
     "setting",
     "triangles",
@@ -58,6 +65,8 @@ pub const CSV_COLUMNS: [&str; 20] = [
     "cpu_stage_us",
     "gpu_ms",
     "frame_ms",
+    "frame_ms_p25",
+    "frame_ms_p75",
     "psnr_db",
     "ssim",
     "flip_mean",
@@ -84,6 +93,8 @@ struct CsvRow<'a> {
     cpu_stage_us: Fixed<1>,
     gpu_ms: Fixed<3>,
     frame_ms: Fixed<3>,
+    frame_ms_p25: Option<Fixed<3>>,
+    frame_ms_p75: Option<Fixed<3>>,
     psnr_db: Fixed<3>,
     ssim: Fixed<4>,
     flip_mean: Fixed<4>,
@@ -109,6 +120,8 @@ impl Row {
             cpu_stage_us: Fixed(self.cpu_stage_us),
             gpu_ms: Fixed(self.gpu_ms),
             frame_ms: Fixed(self.frame_ms),
+            frame_ms_p25: self.frame_ms_p25.map(Fixed),
+            frame_ms_p75: self.frame_ms_p75.map(Fixed),
             psnr_db: Fixed(self.psnr_db.min(PSNR_CAP_DB)),
             ssim: Fixed(self.ssim),
             flip_mean: Fixed(self.flip_mean),
@@ -292,6 +305,8 @@ pub(crate) mod tests {
             cpu_stage_us: 0.0,
             gpu_ms: ms,
             frame_ms: ms,
+            frame_ms_p25: Some(ms),
+            frame_ms_p75: Some(ms),
             psnr_db: db,
             ssim: 0.5,
             flip_mean: 0.1,

@@ -41,6 +41,8 @@ pub struct Dominance {
     pub matched_on_time: usize,
     /// The GeoMipMap rows not matched on triangles and error.
     pub misses: Vec<Miss>,
+    /// The GeoMipMap rows not matched on frame time and PSNR.
+    pub time_misses: Vec<TimeMiss>,
     /// Over every GeoMipMap row that warped's error reaches: the triangles warped needs for the
     /// row's error between its rows ([`Miss::warped_triangles_interpolated`]; where warped's
     /// fewest-triangle row already has no more error, that row's triangles, a bound), as a
@@ -73,6 +75,53 @@ pub struct Miss {
     /// alone can read a miss by a few per cent as up to 1.4× (less where a row at a GeoMipMap
     /// budget lies between them).
     pub warped_triangles_interpolated: Option<f64>,
+}
+
+/// A GeoMipMap row no warped row matches on frame time and PSNR: warped's fastest row with as
+/// much PSNR (`None`: none has as much) and warped's best PSNR within the row's frame time
+/// (`None`: no warped row is as fast), by how much warped misses; and whether the miss lies
+/// within the machine's spread from frame to frame.
+#[derive(Clone, Debug, Serialize)]
+pub struct TimeMiss {
+    pub setting: String,
+    pub frame_ms: f64,
+    pub psnr_db: f64,
+    pub warped_setting: Option<String>,
+    pub warped_frame_ms: Option<f64>,
+    /// `warped_frame_ms` as a multiple of the row's.
+    pub time_ratio: Option<f64>,
+    pub warped_psnr_within_db: Option<f64>,
+    /// Whether the two rows' interquartile ranges of frame time overlap (`Row::frame_ms_p25`,
+    /// `frame_ms_p75`): their medians lie closer than the frames of either spread. `None` where
+    /// either row has no quartiles, or no warped row has as much PSNR.
+    pub within_spread: Option<bool>,
+}
+
+impl TimeMiss {
+    fn of(g: &Row, warped: &[&Row]) -> TimeMiss {
+        let fastest = warped
+            .iter()
+            .filter(|w| w.psnr_db >= g.psnr_db)
+            .min_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
+        let quartiles = |r: &Row| r.frame_ms_p25.zip(r.frame_ms_p75);
+        TimeMiss {
+            setting: g.setting.clone(),
+            frame_ms: g.frame_ms,
+            psnr_db: g.psnr_db,
+            warped_setting: fastest.map(|w| w.setting.clone()),
+            warped_frame_ms: fastest.map(|w| w.frame_ms),
+            time_ratio: fastest.map(|w| w.frame_ms / g.frame_ms),
+            warped_psnr_within_db: warped
+                .iter()
+                .filter(|w| w.frame_ms <= g.frame_ms)
+                .map(|w| w.psnr_db)
+                .reduce(f64::max),
+            within_spread: fastest.and_then(|w| {
+                let ((w25, w75), (g25, g75)) = (quartiles(w)?, quartiles(g)?);
+                Some(w25 <= g75 && g25 <= w75)
+            }),
+        }
+    }
 }
 
 /// The triangles at which `warped`'s error, interpolated log-log between the rows of its front
@@ -112,6 +161,7 @@ pub fn dominance(rows: &[Row]) -> Option<Dominance> {
         matched_on_triangles: 0,
         matched_on_time: 0,
         misses: Vec::new(),
+        time_misses: Vec::new(),
         need: None,
     };
     let fewest = warped
@@ -161,6 +211,9 @@ pub fn dominance(rows: &[Row]) -> Option<Dominance> {
             .iter()
             .any(|w| w.frame_ms <= g.frame_ms && w.psnr_db >= g.psnr_db);
         d.matched_on_time += usize::from(on_time);
+        if !on_time {
+            d.time_misses.push(TimeMiss::of(g, &warped));
+        }
     }
     Some(d)
 }
@@ -284,8 +337,40 @@ pub fn summary_markdown(title: &str, s: &Summary) -> String {
                 m.setting, m.triangles, m.sse_mean_px
             );
         }
+        if !d.time_misses.is_empty() {
+            out.push_str("\nMissed on frame time and PSNR:\n");
+        }
+        for m in &d.time_misses {
+            let _ = writeln!(out, "{}", time_miss_line(m));
+        }
     }
     out
+}
+
+/// One line of `summary.md` for a row missed on frame time and PSNR.
+fn time_miss_line(m: &TimeMiss) -> String {
+    let needed = match (&m.warped_setting, m.warped_frame_ms, m.time_ratio) {
+        (Some(set), Some(ms), Some(ratio)) => {
+            let spread = match m.within_spread {
+                Some(true) => ", the two rows' frame times' interquartile ranges overlap",
+                Some(false) => ", beyond the two rows' interquartile ranges",
+                None => "",
+            };
+            format!(
+                "warped's fastest with as much PSNR, {set}, takes {ms:.2} ms ({ratio:.3}×){spread}"
+            )
+        }
+        _ => "no warped row has as much PSNR".into(),
+    };
+    let within = m
+        .warped_psnr_within_db
+        .map_or("no warped row is as fast".into(), |db| {
+            format!("warped's best within its time {db:.2} dB")
+        });
+    format!(
+        "- {}: {:.2} dB at {:.2} ms; {needed}; {within}",
+        m.setting, m.psnr_db, m.frame_ms
+    )
 }
 
 #[cfg(test)]
@@ -389,6 +474,76 @@ mod tests {
             md.contains("0.52–2.00×, geometric mean 0.886 over 3 rows"),
             "{md}"
         );
+    }
+
+    /// A row missed on frame time and PSNR names warped's fastest row with as much PSNR, by how
+    /// much it is slower, warped's best PSNR within the row's time, and whether the two rows'
+    /// interquartile ranges of frame time overlap.
+    #[test]
+    fn time_misses_say_by_how_much_and_whether_the_spread_covers_it() {
+        let at = |mode: &str, ms: f64, db: f64, quartiles: (f64, f64)| Row {
+            frame_ms_p25: Some(quartiles.0),
+            frame_ms_p75: Some(quartiles.1),
+            ..row(mode, ms, db, 1.0)
+        };
+        let rows = vec![
+            at("warped", 10.0, 25.0, (9.5, 10.5)),
+            at("warped", 20.4, 30.0, (19.8, 21.0)),
+            at("warped", 30.0, 31.0, (29.0, 31.0)),
+            // 30 dB takes warped 20.4 ms, 1.02×; the quartiles overlap.
+            at("geomipmap", 20.0, 29.5, (19.0, 20.5)),
+            // 31 dB takes warped 30 ms, 2×; apart.
+            at("geomipmap", 15.0, 30.5, (14.5, 15.5)),
+            // Faster than any warped row, and more PSNR than any.
+            at("geomipmap", 5.0, 40.0, (4.0, 6.0)),
+            // Matched: warped's 10 ms row has as much.
+            at("geomipmap", 12.0, 24.0, (11.0, 13.0)),
+        ];
+        let d = dominance(&rows).unwrap();
+        assert_eq!(d.matched_on_time, 1);
+        let got: Vec<_> = d
+            .time_misses
+            .iter()
+            .map(|m| {
+                (
+                    m.frame_ms,
+                    m.warped_frame_ms,
+                    m.time_ratio.map(|r| (r * 1000.0).round() / 1000.0),
+                    m.warped_psnr_within_db,
+                    m.within_spread,
+                )
+            })
+            .collect();
+        assert_eq!(
+            got,
+            [
+                (20.0, Some(20.4), Some(1.02), Some(25.0), Some(true)),
+                (15.0, Some(30.0), Some(2.0), Some(25.0), Some(false)),
+                (5.0, None, None, None, None),
+            ]
+        );
+        let md = summary_markdown("t", &summarise(&rows));
+        assert!(md.contains("Missed on frame time and PSNR:"), "{md}");
+        assert!(
+            md.contains("takes 20.40 ms (1.020×), the two rows' frame times' interquartile ranges overlap; warped's best within its time 25.00 dB"),
+            "{md}"
+        );
+        assert!(md.contains("(2.000×), beyond the two rows'"), "{md}");
+        assert!(
+            md.contains("no warped row has as much PSNR; no warped row is as fast"),
+            "{md}"
+        );
+        // A report without quartiles (written before they were kept) cannot tell.
+        let old: Vec<Row> = rows
+            .iter()
+            .map(|r| Row {
+                frame_ms_p25: None,
+                frame_ms_p75: None,
+                ..r.clone()
+            })
+            .collect();
+        let d = dominance(&old).unwrap();
+        assert!(d.time_misses.iter().all(|m| m.within_spread.is_none()));
     }
 
     /// The interpolation follows warped's front: a row with more triangles and more error than
