@@ -6,8 +6,8 @@ pub mod metrics;
 pub mod plot;
 
 /// The `q` quantile of `v` (not empty) by nearest rank: the value at `⌊len·q⌋` in order, so
-/// that the median of an odd count is its middle value and the quartiles of 15 frames lie three
-/// from either end.
+/// that the median of an odd count is its middle value, and each quartile of 15 frames has three
+/// frames beyond it.
 pub fn percentile(v: &[f64], q: f64) -> f64 {
     let mut s = v.to_vec();
     s.sort_by(f64::total_cmp);
