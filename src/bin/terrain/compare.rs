@@ -15,7 +15,7 @@ pub struct Args {
     #[arg(long, value_name = "N|WxH", default_value = "256", value_parser = args::size)]
     size: (u32, u32),
     /// Modes to compare, comma-separated [default: warped,geomipmap,bruteforce; a planet's
-    /// clipmaps; a tile pyramid's warped].
+    /// clipmaps; a tile pyramid's warped,geomipmap].
     #[arg(long, value_delimiter = ',', value_parser = args::mesh_mode)]
     modes: Vec<Mode>,
     /// Timed frames per setting, one of each setting a round (see --keep-mib); medians are reported.
