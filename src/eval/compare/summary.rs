@@ -78,48 +78,57 @@ pub struct Miss {
 }
 
 /// A GeoMipMap row no warped row matches on frame time and PSNR: warped's fastest row with as
-/// much PSNR (`None`: none has as much) and warped's best PSNR within the row's frame time
-/// (`None`: no warped row is as fast), by how much warped misses; and whether the miss lies
-/// within the machine's spread from frame to frame.
+/// much PSNR and warped's best PSNR within the row's frame time (`None`: no warped row is as
+/// fast), by how much warped misses.
 #[derive(Clone, Debug, Serialize)]
 pub struct TimeMiss {
     pub setting: String,
     pub frame_ms: f64,
     pub psnr_db: f64,
-    pub warped_setting: Option<String>,
-    pub warped_frame_ms: Option<f64>,
-    /// `warped_frame_ms` as a multiple of the row's.
-    pub time_ratio: Option<f64>,
+    /// `None`: no warped row has as much PSNR.
+    pub warped_as_good: Option<AsGood>,
     pub warped_psnr_within_db: Option<f64>,
+}
+
+/// [`TimeMiss::warped_as_good`]: warped's fastest row with the missed row's PSNR or more.
+#[derive(Clone, Debug, Serialize)]
+pub struct AsGood {
+    pub setting: String,
+    pub frame_ms: f64,
+    /// `frame_ms` as a multiple of the missed row's.
+    pub time_ratio: f64,
     /// Whether the two rows' interquartile ranges of frame time overlap (`Row::frame_ms_p25`,
-    /// `frame_ms_p75`): their medians lie closer than the frames of either spread. `None` where
-    /// either row has no quartiles, or no warped row has as much PSNR.
+    /// `frame_ms_p75`): their medians lie closer than the frames of either spread, and the
+    /// machine's spread from frame to frame covers the miss. `None` where either row has no
+    /// quartiles.
     pub within_spread: Option<bool>,
 }
 
 impl TimeMiss {
     fn of(g: &Row, warped: &[&Row]) -> TimeMiss {
-        let fastest = warped
-            .iter()
-            .filter(|w| w.psnr_db >= g.psnr_db)
-            .min_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
         let quartiles = |r: &Row| r.frame_ms_p25.zip(r.frame_ms_p75);
+        let as_good = |w: &Row| AsGood {
+            setting: w.setting.clone(),
+            frame_ms: w.frame_ms,
+            time_ratio: w.frame_ms / g.frame_ms,
+            within_spread: quartiles(w)
+                .zip(quartiles(g))
+                .map(|((w25, w75), (g25, g75))| w25 <= g75 && g25 <= w75),
+        };
         TimeMiss {
             setting: g.setting.clone(),
             frame_ms: g.frame_ms,
             psnr_db: g.psnr_db,
-            warped_setting: fastest.map(|w| w.setting.clone()),
-            warped_frame_ms: fastest.map(|w| w.frame_ms),
-            time_ratio: fastest.map(|w| w.frame_ms / g.frame_ms),
+            warped_as_good: warped
+                .iter()
+                .filter(|w| w.psnr_db >= g.psnr_db)
+                .min_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms))
+                .map(|w| as_good(w)),
             warped_psnr_within_db: warped
                 .iter()
                 .filter(|w| w.frame_ms <= g.frame_ms)
                 .map(|w| w.psnr_db)
                 .reduce(f64::max),
-            within_spread: fastest.and_then(|w| {
-                let ((w25, w75), (g25, g75)) = (quartiles(w)?, quartiles(g)?);
-                Some(w25 <= g75 && g25 <= w75)
-            }),
         }
     }
 }
@@ -349,19 +358,20 @@ pub fn summary_markdown(title: &str, s: &Summary) -> String {
 
 /// One line of `summary.md` for a row missed on frame time and PSNR.
 fn time_miss_line(m: &TimeMiss) -> String {
-    let needed = match (&m.warped_setting, m.warped_frame_ms, m.time_ratio) {
-        (Some(set), Some(ms), Some(ratio)) => {
-            let spread = match m.within_spread {
+    let needed = m
+        .warped_as_good
+        .as_ref()
+        .map_or("no warped row has as much PSNR".into(), |w| {
+            let spread = match w.within_spread {
                 Some(true) => ", the two rows' frame times' interquartile ranges overlap",
                 Some(false) => ", beyond the two rows' interquartile ranges",
                 None => "",
             };
             format!(
-                "warped's fastest with as much PSNR, {set}, takes {ms:.2} ms ({ratio:.3}×){spread}"
+                "warped's fastest with as much PSNR, {}, takes {:.2} ms ({:.3}×){spread}",
+                w.setting, w.frame_ms, w.time_ratio
             )
-        }
-        _ => "no warped row has as much PSNR".into(),
-    };
+        });
     let within = m
         .warped_psnr_within_db
         .map_or("no warped row is as fast".into(), |db| {
@@ -505,12 +515,13 @@ mod tests {
             .time_misses
             .iter()
             .map(|m| {
+                let w = m.warped_as_good.as_ref();
                 (
                     m.frame_ms,
-                    m.warped_frame_ms,
-                    m.time_ratio.map(|r| (r * 1000.0).round() / 1000.0),
+                    w.map(|w| w.frame_ms),
+                    w.map(|w| (w.time_ratio * 1000.0).round() / 1000.0),
                     m.warped_psnr_within_db,
-                    m.within_spread,
+                    w.and_then(|w| w.within_spread),
                 )
             })
             .collect();
@@ -543,7 +554,8 @@ mod tests {
             })
             .collect();
         let d = dominance(&old).unwrap();
-        assert!(d.time_misses.iter().all(|m| m.within_spread.is_none()));
+        let spread = |m: &TimeMiss| m.warped_as_good.as_ref().and_then(|w| w.within_spread);
+        assert!(d.time_misses.iter().all(|m| spread(m).is_none()));
     }
 
     /// The interpolation follows warped's front: a row with more triangles and more error than
