@@ -150,12 +150,7 @@ impl Scene {
         )?;
         within("stream.fade_frames", st.fade_frames as f64, 0.0, 1000.0)?;
         within("stream.threads", st.threads as f64, 1.0, 64.0)?;
-        open_range(
-            "reference.step",
-            self.reference.step,
-            0.0,
-            1.0 + f64::EPSILON,
-        )?;
+        up_to_one("reference.step", self.reference.step)?;
         let l = &self.light;
         if let Some(az) = l.sun_azimuth_deg {
             finite_all("light.sun_azimuth_deg", &[az])?;
@@ -207,20 +202,10 @@ impl Scene {
         within("sketch.water_level_m", self.sketch.water_level_m, -1e6, 1e6)?;
         let i = &self.importance;
         open_range("importance.error_px", i.error_px, 0.0, 1e4)?;
-        open_range(
-            "importance.error_flat_share",
-            i.error_flat_share,
-            0.0,
-            1.0 + f64::EPSILON,
-        )?;
+        up_to_one("importance.error_flat_share", i.error_flat_share)?;
         positive("importance.max_per_m", i.max_per_m)?;
-        open_range("importance.floor", i.floor, 0.0, 1.0 + f64::EPSILON)?;
-        open_range(
-            "importance.backface_floor",
-            i.backface_floor,
-            0.0,
-            1.0 + f64::EPSILON,
-        )?;
+        up_to_one("importance.floor", i.floor)?;
+        up_to_one("importance.backface_floor", i.backface_floor)?;
         if let Some(p) = &self.path {
             positive("path.speed_mps", Some(p.speed_mps))?;
             if p.keys.len() < 2 {
@@ -313,6 +298,15 @@ fn open_range(key: &str, v: f64, lo: f64, hi: f64) -> std::result::Result<(), St
         Ok(())
     } else {
         Err(format!("{key} = {v}: must be in ({lo}, {hi})"))
+    }
+}
+
+/// (0, 1]: a share or a weight that may be whole but not nothing.
+fn up_to_one(key: &str, v: f64) -> std::result::Result<(), String> {
+    if v.is_finite() && v > 0.0 && v <= 1.0 {
+        Ok(())
+    } else {
+        Err(format!("{key} = {v}: must be in (0, 1]"))
     }
 }
 

@@ -702,6 +702,14 @@ mod tests {
             blamed(&["warp.mesh=64", "detail.gain=3"]),
             "--set detail.gain=3: must be in [0, 1]"
         );
+        // A share may be whole (1 passes) but not more, and its range reads as one.
+        assert!(set(&["importance.floor=1"]).is_ok());
+        assert_eq!(
+            blamed(&["importance.floor=1.01"]),
+            "--set importance.floor=1.01: must be in (0, 1]"
+        );
+        assert!(blamed(&["importance.floor=0"]).ends_with("must be in (0, 1]"));
+        assert!(blamed(&["importance.floor=nan"]).ends_with("must be in (0, 1]"));
         assert!(blamed(&["detail.octave=3"]).starts_with("--set detail.octave=3: unknown field"));
         // A fault of the file itself is still the file's, with its line, beside an override.
         let bad = format!("{MIN}[detail]\nseed = \"x\"\n");
