@@ -4,6 +4,7 @@
 //! the warped mode against GeoMipMap row by row ([`Dominance`]).
 
 use super::report::{PSNR_CAP_DB, Row, TARGET_PSNR_DB, TARGET_SSE_PX};
+use crate::gpu::terrain::TerrainPass;
 use serde::Serialize;
 use std::fmt::Write;
 
@@ -85,6 +86,8 @@ pub struct TimeMiss {
     pub setting: String,
     pub frame_ms: f64,
     pub psnr_db: f64,
+    /// Where the row's frame time goes; `None` where its passes were not timed.
+    pub split: Option<FrameSplit>,
     /// `None`: no warped row has as much PSNR.
     pub warped_as_good: Option<AsGood>,
     pub warped_psnr_within_db: Option<f64>,
@@ -102,6 +105,35 @@ pub struct AsGood {
     /// machine's spread from frame to frame covers the miss. `None` where either row has no
     /// quartiles.
     pub within_spread: Option<bool>,
+    /// Where its frame time goes; `None` where its passes were not timed.
+    pub split: Option<FrameSplit>,
+}
+
+/// Where a row's frame time goes, so that a miss shows which part of the frame makes it: at
+/// the frame's floor both modes' terrain passes shade each pixel once and take about as long,
+/// and warped's CPU stage and compute passes are what it pays beyond GeoMipMap's. Each part is
+/// its median over the timed frames, so the three need not add up to `frame_ms` exactly.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FrameSplit {
+    /// The CPU stage: warped's sketch map, importance and warp; GeoMipMap's block selection.
+    pub cpu_ms: f64,
+    /// The GPU passes other than the terrain's (warped's warp & zoom, mesh split and normals).
+    pub other_passes_ms: f64,
+    /// The terrain pass: the mesh drawn and every pixel shaded.
+    pub terrain_ms: f64,
+}
+
+impl FrameSplit {
+    /// `None` where the row's passes were not timed (an adapter without timestamp queries, or a
+    /// report read back by `--replot`, which keeps no pass times).
+    fn of(r: &Row) -> Option<FrameSplit> {
+        let terrain_ms = r.passes_ms.get(TerrainPass::NAME)?;
+        Some(FrameSplit {
+            cpu_ms: r.cpu_stage_us / 1000.0,
+            other_passes_ms: r.passes_ms.total() - terrain_ms,
+            terrain_ms,
+        })
+    }
 }
 
 impl TimeMiss {
@@ -114,11 +146,13 @@ impl TimeMiss {
             within_spread: quartiles(w)
                 .zip(quartiles(g))
                 .map(|((w25, w75), (g25, g75))| w25 <= g75 && g25 <= w75),
+            split: FrameSplit::of(w),
         };
         TimeMiss {
             setting: g.setting.clone(),
             frame_ms: g.frame_ms,
             psnr_db: g.psnr_db,
+            split: FrameSplit::of(g),
             warped_as_good: warped
                 .iter()
                 .filter(|w| w.psnr_db >= g.psnr_db)
@@ -377,8 +411,25 @@ fn time_miss_line(m: &TimeMiss) -> String {
         .map_or("no warped row is as fast".into(), |db| {
             format!("warped's best within its time {db:.2} dB")
         });
+    let parts = |s: &FrameSplit| {
+        format!(
+            "{:.2} + {:.2} + {:.2} ms",
+            s.cpu_ms, s.other_passes_ms, s.terrain_ms
+        )
+    };
+    let split = match (
+        m.warped_as_good.as_ref().and_then(|w| w.split.as_ref()),
+        &m.split,
+    ) {
+        (Some(w), Some(g)) => format!(
+            "; CPU stage + other GPU passes + terrain pass: warped {}, GeoMipMap {}",
+            parts(w),
+            parts(g)
+        ),
+        _ => String::new(),
+    };
     format!(
-        "- {}: {:.2} dB at {:.2} ms; {needed}; {within}",
+        "- {}: {:.2} dB at {:.2} ms; {needed}; {within}{split}",
         m.setting, m.psnr_db, m.frame_ms
     )
 }
@@ -387,6 +438,7 @@ fn time_miss_line(m: &TimeMiss) -> String {
 mod tests {
     use super::*;
     use crate::eval::compare::report::tests::row;
+    use crate::gpu::frame_io::PassTimes;
 
     #[test]
     fn summary_finds_times_to_targets_and_errors_at_the_common_budget() {
@@ -544,6 +596,9 @@ mod tests {
             md.contains("no warped row has as much PSNR; no warped row is as fast"),
             "{md}"
         );
+        // Rows without pass times (no timestamp queries, or `--replot`) split nothing.
+        assert!(d.time_misses.iter().all(|m| m.split.is_none()), "{md}");
+        assert!(!md.contains("terrain pass"), "{md}");
         // A report without quartiles (written before they were kept) cannot tell.
         let old: Vec<Row> = rows
             .iter()
@@ -556,6 +611,55 @@ mod tests {
         let d = dominance(&old).unwrap();
         let spread = |m: &TimeMiss| m.warped_as_good.as_ref().and_then(|w| w.within_spread);
         assert!(d.time_misses.iter().all(|m| spread(m).is_none()));
+    }
+
+    /// A miss at the frame's floor: warped's terrain pass is no slower than GeoMipMap's, and
+    /// the split shows that its CPU stage and compute passes make the miss.
+    #[test]
+    fn a_time_miss_shows_where_each_rows_frame_goes() {
+        let timed =
+            |mode: &str, ms: f64, db: f64, cpu_us: f64, passes: &[(&'static str, f64)]| Row {
+                cpu_stage_us: cpu_us,
+                passes_ms: PassTimes(passes.to_vec()),
+                ..row(mode, ms, db, 1.0)
+            };
+        let warped_passes = [
+            ("warp_zoom", 0.16),
+            ("mesh_split", 0.05),
+            ("normals", 0.04),
+            ("terrain", 21.97),
+        ];
+        let rows = vec![
+            timed("warped", 22.53, 60.3, 304.0, &warped_passes),
+            timed("geomipmap", 22.02, 59.3, 23.0, &[("terrain", 22.0)]),
+        ];
+        let d = dominance(&rows).unwrap();
+        let [m] = &d.time_misses[..] else {
+            panic!("one miss: {:?}", d.time_misses)
+        };
+        let w = m.warped_as_good.as_ref().unwrap();
+        let close = |s: &FrameSplit, want: [f64; 3]| {
+            let got = [s.cpu_ms, s.other_passes_ms, s.terrain_ms];
+            got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-9)
+        };
+        let ws = w.split.as_ref().unwrap();
+        assert!(close(ws, [0.304, 0.25, 21.97]), "{ws:?}");
+        let gs = m.split.as_ref().unwrap();
+        assert!(close(gs, [0.023, 0.0, 22.0]), "{gs:?}");
+        let md = summary_markdown("t", &summarise(&rows));
+        assert!(
+            md.contains(
+                "; CPU stage + other GPU passes + terrain pass: warped 0.30 + 0.25 + 21.97 ms, \
+                 GeoMipMap 0.02 + 0.00 + 22.00 ms"
+            ),
+            "{md}"
+        );
+        let json = serde_json::to_value(&d).unwrap();
+        assert_eq!(json["time_misses"][0]["split"]["terrain_ms"], 22.0);
+        assert_eq!(
+            json["time_misses"][0]["warped_as_good"]["split"]["cpu_ms"],
+            0.304
+        );
     }
 
     /// The interpolation follows warped's front: a row with more triangles and more error than
