@@ -6,17 +6,20 @@ use super::context::GpuContext;
 use super::uniforms::FrameUniforms;
 use crate::error::{Error, Result};
 use crate::sketch::Atlas;
-use serde::Serialize;
+use serde::de::{Deserializer, MapAccess, Visitor};
+use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 
 /// Milliseconds of each pass that ran, by the pass's name, in the order they ran; empty where
-/// the adapter cannot time passes. JSON: an object `{ "warp_zoom": 1.2, … }`.
+/// the adapter cannot time passes. JSON: an object `{ "warp_zoom": 1.2, … }`, read back in its
+/// order (`compare --replot`). A name is the pass's own `NAME` when timed, owned when read back.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct PassTimes(pub Vec<(&'static str, f64)>);
+pub struct PassTimes(pub Vec<(Cow<'static, str>, f64)>);
 
 impl PassTimes {
     /// The time of the pass called `name`, if it ran and was timed.
     pub fn get(&self, name: &str) -> Option<f64> {
-        self.0.iter().find(|(n, _)| *n == name).map(|&(_, ms)| ms)
+        self.0.iter().find(|(n, _)| n == name).map(|&(_, ms)| ms)
     }
 
     pub fn total(&self) -> f64 {
@@ -33,7 +36,7 @@ impl PassTimes {
             v.sort_by(f64::total_cmp);
             v[v.len() / 2]
         };
-        PassTimes(last.0.iter().map(|&(n, _)| (n, median(n))).collect())
+        PassTimes(last.0.iter().map(|(n, _)| (n.clone(), median(n))).collect())
     }
 }
 
@@ -45,6 +48,29 @@ impl Serialize for PassTimes {
             map.serialize_entry(name, ms)?;
         }
         map.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for PassTimes {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<PassTimes, D::Error> {
+        struct Passes;
+        impl<'de> Visitor<'de> for Passes {
+            type Value = PassTimes;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an object of pass names and milliseconds")
+            }
+            fn visit_map<M: MapAccess<'de>>(
+                self,
+                mut m: M,
+            ) -> std::result::Result<PassTimes, M::Error> {
+                let mut passes = Vec::new();
+                while let Some((name, ms)) = m.next_entry::<String, f64>()? {
+                    passes.push((Cow::Owned(name), ms));
+                }
+                Ok(PassTimes(passes))
+            }
+        }
+        d.deserialize_map(Passes)
     }
 }
 
@@ -191,7 +217,7 @@ impl Timer {
             let k = 2 * (self.slot(name) - first) as usize;
             ticks[k + 1].saturating_sub(ticks[k]) as f64 * self.period_ns * 1e-6
         };
-        Ok(PassTimes(ran.iter().map(|&n| (n, ms(n))).collect()))
+        Ok(PassTimes(ran.iter().map(|&n| (n.into(), ms(n))).collect()))
     }
 }
 
@@ -351,4 +377,32 @@ pub(crate) fn read_buffer<T>(
     };
     buffer.unmap();
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `compare --replot` reads `report.json`'s pass times back: the same names, times and order,
+    /// not the alphabetical order of a map.
+    #[test]
+    fn pass_times_read_back_as_written() {
+        let timed = PassTimes(vec![
+            ("warp_zoom".into(), 0.156),
+            ("mesh_split".into(), 0.054),
+            ("normals".into(), 0.038),
+            ("terrain".into(), 21.97),
+        ]);
+        let json = serde_json::to_string(&timed).unwrap();
+        assert_eq!(
+            json,
+            r#"{"warp_zoom":0.156,"mesh_split":0.054,"normals":0.038,"terrain":21.97}"#
+        );
+        let back: PassTimes = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, timed);
+        assert_eq!(back.get("terrain"), Some(21.97));
+        let none: PassTimes = serde_json::from_str("{}").unwrap();
+        assert_eq!(none, PassTimes::default());
+        assert!(serde_json::from_str::<PassTimes>(r#"{"terrain":"slow"}"#).is_err());
+    }
 }

@@ -52,8 +52,8 @@ pub struct Row {
     #[serde(default)]
     pub lod_change_levels: Option<f64>,
     /// Per-pass GPU medians by pass name (JSON only; empty where the adapter has no timestamp
-    /// queries). Not read back by `--replot`, which needs none of them.
-    #[serde(skip_deserializing)]
+    /// queries). Read back by `--replot`: `summary.md` splits a frame-time miss by them.
+    #[serde(default)]
     pub passes_ms: PassTimes,
 }
 

@@ -124,8 +124,7 @@ pub struct FrameSplit {
 }
 
 impl FrameSplit {
-    /// `None` where the row's passes were not timed (an adapter without timestamp queries, or a
-    /// report read back by `--replot`, which keeps no pass times).
+    /// `None` where the row's passes were not timed (an adapter without timestamp queries).
     fn of(r: &Row) -> Option<FrameSplit> {
         let terrain_ms = r.passes_ms.get(TerrainPass::NAME)?;
         Some(FrameSplit {
@@ -596,7 +595,7 @@ mod tests {
             md.contains("no warped row has as much PSNR; no warped row is as fast"),
             "{md}"
         );
-        // Rows without pass times (no timestamp queries, or `--replot`) split nothing.
+        // Rows without pass times (no timestamp queries) split nothing.
         assert!(d.time_misses.iter().all(|m| m.split.is_none()), "{md}");
         assert!(!md.contains("terrain pass"), "{md}");
         // A report without quartiles (written before they were kept) cannot tell.
@@ -620,7 +619,7 @@ mod tests {
         let timed =
             |mode: &str, ms: f64, db: f64, cpu_us: f64, passes: &[(&'static str, f64)]| Row {
                 cpu_stage_us: cpu_us,
-                passes_ms: PassTimes(passes.to_vec()),
+                passes_ms: PassTimes(passes.iter().map(|&(n, ms)| (n.into(), ms)).collect()),
                 ..row(mode, ms, db, 1.0)
             };
         let warped_passes = [
