@@ -44,7 +44,7 @@ fn main() -> anyhow::Result<()> {
         let atlas = scene::load_atlas(&scene)?;
         let detail = scene::detail_of(&scene, &atlas);
         let mut cameras = vec![scene::camera_of(&scene, &atlas)?];
-        let flight = Flight::of_scene(&scene)?;
+        let flight = Flight::of_scene(&scene, &atlas)?;
         for k in 0..40 {
             let t = flight.duration_s() * k as f64 / 39.0;
             cameras.push(flight.camera(t, &scene, &atlas)?);

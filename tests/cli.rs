@@ -248,7 +248,10 @@ fn malformed_scenes_fail_naming_the_key() {
             format!("{sketch}[camera]\nposition = [0.0, 0.0]\nlook_at = [1.0, 1.0, 1.0]\n"),
             "line 4",
         ),
-        (sketch.to_string(), "camera"),
+        (
+            format!("{sketch}[camera]\nlook_at = [1.0, 1.0, 1.0]\n"),
+            "camera: look_at and altitude_m need a place",
+        ),
         ("this is not toml".to_string(), "line 1"),
     ];
     for (k, (text, cause)) in cases.iter().enumerate() {

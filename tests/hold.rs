@@ -112,7 +112,7 @@ fn a_forgotten_or_unheld_stage_depends_on_its_camera_alone() {
 /// Mean LOD change per frame along the first `frames` cameras of the scene's path, 8-bit levels.
 fn lod_change_along_path(scene: &Scene, frames: usize) -> f64 {
     let mut r = Renderer::new(scene, Mode::Warped, View::Shaded).unwrap();
-    let path = Flight::of_scene(scene).unwrap();
+    let path = Flight::of_scene(scene, r.atlas()).unwrap();
     let cameras = path.cameras(frames, 15.0, scene, r.atlas()).unwrap();
     r.render(&cameras[0]).unwrap();
     let mut sum = 0.0;

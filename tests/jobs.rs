@@ -393,7 +393,11 @@ fn the_bundled_jobs_file_and_flight_load() {
     );
     let scene = terrain::scene::Scene::load(&manifest_dir().join("sketches/jacksboro-flight.toml"))
         .unwrap();
-    let path = terrain::app::path::CameraPath::of_scene(&scene).unwrap();
+    let path = terrain::app::path::CameraPath::of_scene(
+        &scene,
+        &terrain::scene::load_atlas(&scene).unwrap(),
+    )
+    .unwrap();
     assert!(
         (9000.0..10000.0).contains(&path.length_m()),
         "{}",

@@ -434,7 +434,7 @@ fn held_rings_are_seen_from_where_the_camera_moved() {
     let a = planet_scene(46.5, 9.8, 3000.0, -25.0, 64);
     let mut b = a.clone();
     b.camera.lon_deg = Some(9.8 + 0.03); // 2.3 km east
-    b.camera.heading_deg = 70.0;
+    b.camera.heading_deg = Some(70.0);
     let mut r = Renderer::new(&a, Mode::Clipmaps, View::Shaded).expect("renderer");
     let (ca, cb) = (
         terrain::scene::camera_of(&a, &r.atlas).expect("camera"),

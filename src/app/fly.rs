@@ -204,7 +204,7 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
     let mut r = Renderer::new(scene, o.mode, o.view)?;
     let atlas = r.atlas().clone();
     // A planet's flight runs in equal time from key to key; a sketch's path at constant speed.
-    let flight = Flight::of_scene(scene)?;
+    let flight = Flight::of_scene(scene, &atlas)?;
     let (times, frames_note) = frame_times(flight.duration_s(), o);
     let cameras = times
         .iter()

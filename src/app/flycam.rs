@@ -134,8 +134,8 @@ impl PlanetFlyCamera {
             lat: c.lat_deg.unwrap_or(0.0).to_radians(),
             lon: c.lon_deg.unwrap_or(0.0).to_radians(),
             altitude: c.altitude_m.unwrap_or(1.0),
-            yaw: c.heading_deg.to_radians(),
-            pitch: c.pitch_deg.to_radians().clamp(-MAX_PITCH, MAX_PITCH),
+            yaw: c.heading().to_radians(),
+            pitch: c.pitch().to_radians().clamp(-MAX_PITCH, MAX_PITCH),
             radius,
         }
     }
@@ -174,6 +174,7 @@ impl PlanetFlyCamera {
         PathKey {
             position: None,
             look_at: None,
+            map_xy: None,
             lat_deg: Some(self.lat.to_degrees()),
             lon_deg: Some(self.lon.to_degrees()),
             altitude_m: Some(self.altitude),
@@ -195,8 +196,8 @@ impl PlanetFlyCamera {
         c.lat_deg = Some(self.lat.to_degrees());
         c.lon_deg = Some(self.lon.to_degrees());
         c.altitude_m = Some(self.altitude);
-        c.heading_deg = self.yaw.to_degrees();
-        c.pitch_deg = self.pitch.to_degrees();
+        c.heading_deg = Some(self.yaw.to_degrees());
+        c.pitch_deg = Some(self.pitch.to_degrees());
         (c.width, c.height) = (width, height);
         crate::scene::camera_of(&s, atlas)
     }

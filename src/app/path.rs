@@ -15,8 +15,8 @@
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::scene::ground_under;
 use crate::scene::{PathKey, PathSection, Scene};
+use crate::scene::{ground_under, place};
 use crate::sketch::Atlas;
 use glam::{DVec2, DVec3};
 
@@ -67,9 +67,11 @@ impl CameraPath {
         Ok(path)
     }
 
-    /// The scene's path, or without one a default pass: the scene's camera flown straight ahead
-    /// (its horizontal view direction) for 10 s at the default speed, keeping its view direction.
-    pub fn of_scene(scene: &Scene) -> Result<CameraPath> {
+    /// The scene's path (its keys placed in world metres by `scene::place`); without one, a
+    /// scene whose camera has a place flies it straight ahead (its horizontal view direction)
+    /// for 10 s at the default speed, keeping its view direction, and a scene without one orbits
+    /// the sketch (`scene::place::default_path`) in 10 s.
+    pub fn of_scene(scene: &Scene, atlas: &Atlas) -> Result<CameraPath> {
         if scene.planet().is_some() {
             return Err(Error::value(
                 "path",
@@ -77,10 +79,20 @@ impl CameraPath {
             ));
         }
         if let Some(p) = &scene.path {
-            return CameraPath::new(p);
+            let keys = p
+                .keys
+                .iter()
+                .enumerate()
+                .map(|(k, key)| place::resolve_key(scene, atlas, k, key))
+                .collect::<Result<Vec<_>>>()?;
+            return CameraPath::new(&PathSection { keys, ..p.clone() });
         }
-        let eye = scene.camera.eye();
-        let look = scene.camera.target();
+        if !scene.camera.is_placed() {
+            let mut orbit = CameraPath::new(&place::default_path(scene, atlas))?;
+            orbit.speed_mps = orbit.length_m() / place::DEFAULT_PATH_S;
+            return Ok(orbit);
+        }
+        let (eye, look) = place::pose(scene, atlas)?;
         let speed = 150.0;
         let heading = (look - eye).truncate().try_normalize().unwrap_or(DVec2::Y);
         let step = (heading * speed * 10.0).extend(0.0);
@@ -210,10 +222,10 @@ pub enum Flight {
 impl Flight {
     /// The scene's `[path]`, or without one its camera flown straight ahead (see
     /// [`CameraPath::of_scene`] and [`PlanetFlight::of_scene`]).
-    pub fn of_scene(scene: &Scene) -> Result<Flight> {
+    pub fn of_scene(scene: &Scene, atlas: &Atlas) -> Result<Flight> {
         Ok(match scene.planet() {
             Some(p) => Flight::Planet(PlanetFlight::of_scene(scene, p.radius_m)?),
-            None => Flight::Path(CameraPath::of_scene(scene)?),
+            None => Flight::Path(CameraPath::of_scene(scene, atlas)?),
         })
     }
 
@@ -307,20 +319,20 @@ impl PlanetFlight {
         );
         let altitude = c.altitude_m.unwrap_or(1.0);
         let angle = altitude.clamp(10.0, 0.1 * radius) / radius;
-        let (lat2, lon2, track) =
-            crate::planet::travel(lat, lon, c.heading_deg.to_radians(), angle);
+        let (lat2, lon2, track) = crate::planet::travel(lat, lon, c.heading().to_radians(), angle);
         let key = |lat: f64, lon: f64, heading: f64| PathKey {
             position: None,
             look_at: None,
+            map_xy: None,
             lat_deg: Some(lat.to_degrees()),
             lon_deg: Some(lon.to_degrees()),
             altitude_m: Some(altitude),
             heading_deg: Some(heading),
-            pitch_deg: Some(c.pitch_deg),
+            pitch_deg: Some(c.pitch()),
         };
         Ok(PlanetFlight {
             keys: vec![
-                key(lat, lon, c.heading_deg),
+                key(lat, lon, c.heading()),
                 key(lat2, lon2, track.to_degrees()),
             ],
             duration_s: PLANET_PASS_S,
@@ -380,8 +392,8 @@ impl PlanetFlight {
         c.lat_deg = Some(lat);
         c.lon_deg = Some(lon);
         c.altitude_m = Some(altitude);
-        c.heading_deg = heading;
-        c.pitch_deg = pitch;
+        c.heading_deg = Some(heading);
+        c.pitch_deg = Some(pitch);
         crate::scene::camera_of(&s, atlas)
     }
 }
@@ -397,6 +409,7 @@ mod tests {
         let key = |lat: f64, lon: f64, alt: f64, heading: f64| PathKey {
             position: None,
             look_at: None,
+            map_xy: None,
             lat_deg: Some(lat),
             lon_deg: Some(lon),
             altitude_m: Some(alt),

@@ -154,23 +154,28 @@ pub fn detail_of(scene: &Scene, atlas: &Atlas) -> Detail {
     }
 }
 
-/// The scene's camera; the far distance defaults to the sketch's farthest corner. A camera below
-/// the sketch's surface is an error: every view from there shows the underside of the ground.
+/// The scene's camera (placed and aimed by `scene::place`); the far distance defaults to the
+/// sketch's farthest corner. A camera below the sketch's surface is an error: every view from
+/// there shows the underside of the ground.
 pub fn camera_of(scene: &Scene, atlas: &Atlas) -> Result<Camera> {
     if let Some(planet) = scene.planet() {
         return planet_camera(scene, atlas, planet.radius_m);
     }
     let c = &scene.camera;
-    let eye = c.eye();
+    let (eye, target) = super::place::pose(scene, atlas)?;
     if let Some(ground) = ground_under(atlas, eye.truncate())?
         && eye.z < ground
     {
-        return Err(Error::Camera(format!(
+        let why = format!(
             "camera.position is {:.1} m below the surface (ground or water: {ground:.1} m at {:.1}, {:.1})",
             ground - eye.z,
             eye.x,
             eye.y
-        )));
+        );
+        return Err(match &scene.source {
+            Some(path) => Error::scene(path, why),
+            None => Error::Camera(why),
+        });
     }
     let far = c.far_m.unwrap_or_else(|| {
         let (lo, hi) = (atlas.origin, atlas.max_corner());
@@ -181,7 +186,7 @@ pub fn camera_of(scene: &Scene, atlas: &Atlas) -> Result<Camera> {
             .flat_map(|c| z.map(|z| (c.extend(z) - eye).length()))
             .fold(1.0, f64::max)
     });
-    Camera::new(eye, c.target(), c.fov_y_deg, c.width, c.height, far)
+    Camera::new(eye, target, c.fov_y_deg, c.width, c.height, far)
 }
 
 /// A planet's camera: `altitude_m` above the ground at its nadir (the terrain function with
@@ -203,7 +208,7 @@ fn planet_camera(scene: &Scene, atlas: &Atlas, radius: f64) -> Result<Camera> {
         .ground(&detail, lat, lon, 0.01)?
         .max(atlas.water_m as f64);
     let eye = DVec3::new(0.0, 0.0, ground + c.altitude_m.unwrap_or(1.0));
-    let (h, p) = (c.heading_deg.to_radians(), c.pitch_deg.to_radians());
+    let (h, p) = (c.heading().to_radians(), c.pitch().to_radians());
     let forward = DVec3::new(h.sin() * p.cos(), h.cos() * p.cos(), p.sin());
     let high = atlas.max_m as f64 + detail.reach_m();
     let reach = |z: f64| ((radius + z).powi(2) - radius * radius).max(0.0).sqrt();

@@ -40,21 +40,15 @@ impl Scene {
             finite_all("sketch.height_range_m", &r)?;
         }
         let c = &self.camera;
-        let planar = [c.position.is_some(), c.look_at.is_some()];
-        let geo = [
-            c.lat_deg.is_some(),
-            c.lon_deg.is_some(),
-            c.altitude_m.is_some(),
-        ];
         if let Some(p) = self.planet() {
-            if planar.iter().any(|&b| b) {
+            if c.position.is_some() || c.look_at.is_some() || c.map_xy.is_some() {
                 return Err(
                     "camera: a planet's camera is placed by lat_deg, lon_deg and \
-                    altitude_m (with heading_deg, pitch_deg), not position and look_at"
+                    altitude_m (with heading_deg, pitch_deg), not position, map_xy or look_at"
                         .into(),
                 );
             }
-            if !geo.iter().all(|&b| b) {
+            if c.lat_deg.is_none() || c.lon_deg.is_none() || c.altitude_m.is_none() {
                 return Err(
                     "camera: a planet's camera needs lat_deg, lon_deg and altitude_m".into(),
                 );
@@ -65,8 +59,8 @@ impl Scene {
                     c.lat_deg.unwrap_or(0.0),
                     c.lon_deg.unwrap_or(0.0),
                     c.altitude_m.unwrap_or(1.0),
-                    c.heading_deg,
-                    c.pitch_deg,
+                    c.heading(),
+                    c.pitch(),
                 ],
             )?;
             within("planet.radius_m", p.radius_m, 1000.0, 1e9)?;
@@ -84,21 +78,20 @@ impl Scene {
                 );
             }
         } else {
-            if geo.iter().any(|&b| b) {
-                return Err(
-                    "camera: lat_deg, lon_deg and altitude_m place a planet's camera; \
-                    add a [planet] section, or give position and look_at"
-                        .into(),
-                );
-            }
-            let (Some(position), Some(look_at)) = (c.position, c.look_at) else {
-                return Err("camera: give position and look_at".into());
-            };
-            finite_all("camera.position", &position)?;
-            finite_all("camera.look_at", &look_at)?;
-            if position == look_at {
-                return Err("camera.look_at equals camera.position: no view direction".into());
-            }
+            planar_keys(
+                "camera",
+                &Keys {
+                    position: c.position,
+                    look_at: c.look_at,
+                    map_xy: c.map_xy,
+                    lat_deg: c.lat_deg,
+                    lon_deg: c.lon_deg,
+                    altitude_m: c.altitude_m,
+                    heading_deg: c.heading_deg,
+                    pitch_deg: c.pitch_deg,
+                },
+                false,
+            )?;
         }
         open_range("camera.fov_y_deg", c.fov_y_deg, 0.0, 180.0)?;
         within("camera.width", c.width as f64, 1.0, 16384.0)?;
@@ -223,6 +216,7 @@ impl Scene {
                 if planet {
                     if key.position.is_some()
                         || key.look_at.is_some()
+                        || key.map_xy.is_some()
                         || geo.iter().any(|g| g.is_none())
                     {
                         return Err(format!(
@@ -242,27 +236,114 @@ impl Scene {
                     )?;
                     continue;
                 }
-                let Some(position) = key.position else {
-                    return Err(format!(
-                        "path.keys[{k}]: give position (lat_deg, lon_deg and altitude_m place a planet's keys)"
-                    ));
-                };
-                if geo.iter().any(|g| g.is_some())
-                    || key.heading_deg.is_some()
-                    || key.pitch_deg.is_some()
-                {
-                    return Err(format!(
-                        "path.keys[{k}]: lat_deg, lon_deg, altitude_m, heading_deg and pitch_deg are a planet's keys"
-                    ));
-                }
-                finite_all(&format!("path.keys[{k}].position"), &position)?;
-                if let Some(l) = key.look_at {
-                    finite_all(&format!("path.keys[{k}].look_at"), &l)?;
-                }
+                planar_keys(
+                    &format!("path.keys[{k}]"),
+                    &Keys {
+                        position: key.position,
+                        look_at: key.look_at,
+                        map_xy: key.map_xy,
+                        lat_deg: key.lat_deg,
+                        lon_deg: key.lon_deg,
+                        altitude_m: key.altitude_m,
+                        heading_deg: key.heading_deg,
+                        pitch_deg: key.pitch_deg,
+                    },
+                    true,
+                )?;
             }
         }
         Ok(())
     }
+}
+
+/// The keys that place and aim a planar camera or path key.
+struct Keys {
+    position: Option<[f64; 3]>,
+    look_at: Option<[f64; 3]>,
+    map_xy: Option<[f64; 2]>,
+    lat_deg: Option<f64>,
+    lon_deg: Option<f64>,
+    altitude_m: Option<f64>,
+    heading_deg: Option<f64>,
+    pitch_deg: Option<f64>,
+}
+
+/// A planar camera's keys under `table`: at most one place (`position`, `map_xy`, or `lat_deg`
+/// with `lon_deg`), `altitude_m` with the last two and only with them, and one aim (`look_at`,
+/// or `heading_deg` and `pitch_deg`). A camera may leave out its place (`need_place` false): it
+/// then frames the sketch, from the side its heading and pitch say.
+fn planar_keys(table: &str, k: &Keys, need_place: bool) -> std::result::Result<(), String> {
+    let geo = k.lat_deg.is_some() || k.lon_deg.is_some();
+    let places = [k.position.is_some(), k.map_xy.is_some(), geo];
+    let placed = places.iter().filter(|&&b| b).count();
+    if placed > 1 {
+        return Err(format!(
+            "{table}: give one place: position, map_xy, or lat_deg and lon_deg"
+        ));
+    }
+    if geo && (k.lat_deg.is_none() || k.lon_deg.is_none()) {
+        return Err(format!("{table}: lat_deg and lon_deg go together"));
+    }
+    if placed == 0 {
+        if need_place {
+            return Err(format!(
+                "{table}: give position, map_xy or lat_deg and lon_deg (with altitude_m)"
+            ));
+        }
+        if k.look_at.is_some() || k.altitude_m.is_some() {
+            return Err(format!(
+                "{table}: look_at and altitude_m need a place: position, map_xy, or lat_deg \
+                 and lon_deg"
+            ));
+        }
+    }
+    if k.position.is_some() && k.altitude_m.is_some() {
+        return Err(format!(
+            "{table}.altitude_m: position gives the height itself; altitude_m goes with map_xy \
+             or lat_deg and lon_deg"
+        ));
+    }
+    if (k.map_xy.is_some() || geo) && k.altitude_m.is_none() {
+        return Err(format!(
+            "{table}: map_xy and lat_deg, lon_deg need altitude_m, the height above the ground \
+             there"
+        ));
+    }
+    if k.look_at.is_some() && (k.heading_deg.is_some() || k.pitch_deg.is_some()) {
+        return Err(format!(
+            "{table}: give look_at, or heading_deg and pitch_deg, not both"
+        ));
+    }
+    if let Some(p) = k.position {
+        finite_all(&format!("{table}.position"), &p)?;
+    }
+    if let Some(l) = k.look_at {
+        finite_all(&format!("{table}.look_at"), &l)?;
+        if k.position == Some(l) {
+            return Err(format!(
+                "{table}.look_at equals {table}.position: no view direction"
+            ));
+        }
+    }
+    if let Some(xy) = k.map_xy {
+        finite_all(&format!("{table}.map_xy"), &xy)?;
+    }
+    if let Some(lat) = k.lat_deg {
+        within(&format!("{table}.lat_deg"), lat, -90.0, 90.0)?;
+    }
+    if let Some(lon) = k.lon_deg {
+        within(&format!("{table}.lon_deg"), lon, -360.0, 360.0)?;
+    }
+    if let Some(a) = k.altitude_m {
+        within(&format!("{table}.altitude_m"), a, 0.01, 1e9)?;
+    }
+    if let Some(h) = k.heading_deg {
+        finite_all(&format!("{table}.heading_deg"), &[h])?;
+    }
+    if let Some(p) = k.pitch_deg {
+        within(&format!("{table}.pitch_deg"), p, -90.0, 90.0)?;
+    }
+    Ok(())
 }
 
 /// A planet camera's keys under `table` (`camera`, `path.keys[k]`): latitude, longitude,

@@ -12,11 +12,14 @@
 mod build;
 mod check;
 mod parse;
+pub mod place;
+mod starter;
 
 pub use build::{
     camera_of, detail_of, ground_under, light_of, load_atlas, scene_load_options, stream_config,
 };
-pub use parse::Fault;
+pub use parse::{Fault, is_sketch_path, scene_text};
+pub use starter::starter;
 
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -25,6 +28,8 @@ use std::path::{Path, PathBuf};
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     pub sketch: SketchSection,
+    /// Without it, the default view of the whole sketch (`scene::place`).
+    #[serde(default)]
     pub camera: CameraSection,
     #[serde(default)]
     pub detail: DetailSection,
@@ -49,6 +54,10 @@ pub struct Scene {
     /// The folder relative paths resolve against; not a key.
     #[serde(skip)]
     pub base_dir: PathBuf,
+    /// The file the scene was read from (a scene file, or a sketch standing for a scene), for
+    /// messages about it; not a key.
+    #[serde(skip)]
+    pub source: Option<PathBuf>,
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -87,23 +96,31 @@ crate::named_enum! {
     }
 }
 
+/// Where the camera stands and looks. A planar scene places it by `position` (world metres), by
+/// `map_xy` (the sketch file's own coordinates) or by `lat_deg` and `lon_deg`, each of the last
+/// two with `altitude_m`, and aims it by `look_at` or by `heading_deg` and `pitch_deg`; without a
+/// place it frames the whole sketch (`scene::place`). A planet's camera takes `lat_deg`,
+/// `lon_deg`, `altitude_m`, `heading_deg` and `pitch_deg`.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraSection {
-    /// A planar scene's eye and target (world metres); a planet's camera uses the keys below.
+    /// The eye in world metres (z the height above sea level, not above the ground).
     pub position: Option<[f64; 3]>,
+    /// The point looked at, world metres.
     pub look_at: Option<[f64; 3]>,
-    /// A planet's camera: the nadir's latitude and longitude, degrees.
+    /// The eye's x and y in the sketch file's own coordinate system (what `terrain info` prints
+    /// as its georeference), with `altitude_m`.
+    pub map_xy: Option<[f64; 2]>,
+    /// The eye's (a planet's: its nadir's) latitude and longitude, degrees; on a projected sketch
+    /// WGS 84, converted through the file's coordinate system.
     pub lat_deg: Option<f64>,
     pub lon_deg: Option<f64>,
-    /// Height above the ground (the terrain function at the nadir), metres.
+    /// Height above the ground or water under the eye, metres.
     pub altitude_m: Option<f64>,
-    /// View direction: 0 north, 90 east.
-    #[serde(default)]
-    pub heading_deg: f64,
-    /// View direction: 0 level, −90 straight down.
-    #[serde(default)]
-    pub pitch_deg: f64,
+    /// View direction: 0 north, 90 east (0 unless given; the default view: the side it looks from).
+    pub heading_deg: Option<f64>,
+    /// View direction: 0 level, −90 straight down (0 unless given; the default view: −35).
+    pub pitch_deg: Option<f64>,
     #[serde(default = "default_fov")]
     pub fov_y_deg: f64,
     #[serde(default = "default_size")]
@@ -113,19 +130,63 @@ pub struct CameraSection {
     /// Far distance in metres; by default the farthest corner of the sketch.
     pub far_m: Option<f64>,
 }
+impl Default for CameraSection {
+    fn default() -> Self {
+        CameraSection {
+            position: None,
+            look_at: None,
+            map_xy: None,
+            lat_deg: None,
+            lon_deg: None,
+            altitude_m: None,
+            heading_deg: None,
+            pitch_deg: None,
+            fov_y_deg: default_fov(),
+            width: default_size(),
+            height: default_size(),
+            far_m: None,
+        }
+    }
+}
 impl CameraSection {
-    /// A planar scene's eye (`Scene::check` makes sure it has one).
+    /// Places a planar scene's camera at `eye` looking at `target`, in place of whatever keys
+    /// placed it before.
+    pub fn aim(&mut self, eye: glam::DVec3, target: glam::DVec3) {
+        *self = CameraSection {
+            position: Some(eye.to_array()),
+            look_at: Some(target.to_array()),
+            ..CameraSection {
+                fov_y_deg: self.fov_y_deg,
+                width: self.width,
+                height: self.height,
+                far_m: self.far_m,
+                ..CameraSection::default()
+            }
+        };
+    }
+    /// `position`, for a camera placed by it (the origin otherwise; `scene::place::pose` places
+    /// every camera).
     pub fn eye(&self) -> glam::DVec3 {
         glam::DVec3::from(self.position.unwrap_or_default())
     }
-    /// A planar scene's target.
+    /// `look_at`, for a camera aimed by it (the origin otherwise).
     pub fn target(&self) -> glam::DVec3 {
         glam::DVec3::from(self.look_at.unwrap_or_default())
     }
-    /// Sets a planar scene's eye and target.
-    pub fn aim(&mut self, eye: glam::DVec3, target: glam::DVec3) {
-        self.position = Some(eye.to_array());
-        self.look_at = Some(target.to_array());
+    /// `heading_deg`, 0 (north) unless given.
+    pub fn heading(&self) -> f64 {
+        self.heading_deg.unwrap_or(0.0)
+    }
+    /// `pitch_deg`, 0 (level) unless given.
+    pub fn pitch(&self) -> f64 {
+        self.pitch_deg.unwrap_or(0.0)
+    }
+    /// Whether the keys place the camera (a planar scene without a place frames the sketch).
+    pub fn is_placed(&self) -> bool {
+        self.position.is_some()
+            || self.map_xy.is_some()
+            || self.lat_deg.is_some()
+            || self.lon_deg.is_some()
     }
 }
 
@@ -572,7 +633,9 @@ pub struct PathKey {
     pub position: Option<[f64; 3]>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub look_at: Option<[f64; 3]>,
-    /// A planet's key: where the camera stands and looks, as the camera's keys of the same names.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub map_xy: Option<[f64; 2]>,
+    /// Where the camera stands and looks, as the camera's keys of the same names.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lat_deg: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -591,6 +654,7 @@ impl PathKey {
         PathKey {
             position: Some(position),
             look_at,
+            map_xy: None,
             lat_deg: None,
             lon_deg: None,
             altitude_m: None,

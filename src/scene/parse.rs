@@ -46,10 +46,15 @@ impl Scene {
 
     /// Like [`Scene::load`], with `key.path=value` overrides (TOML values; bare words are strings)
     /// applied before the scene is checked, as `--set` gives them.
+    ///
+    /// `path` may name a sketch instead of a scene file ([`is_sketch_path`]): it is then read as
+    /// a scene with every default.
     pub fn load_with(path: &Path, overrides: &[String]) -> Result<Scene> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(Role::Scene, path, e))?;
-        let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
-        Scene::parse_with(&text, base, overrides).map_err(|f| f.into_error(path))
+        let (text, base) = scene_text(path)?;
+        let mut scene =
+            Scene::parse_with(&text, base, overrides).map_err(|f| f.into_error(path))?;
+        scene.source = Some(path.to_path_buf());
+        Ok(scene)
     }
 
     pub fn parse_with(
@@ -89,6 +94,7 @@ impl Scene {
             }
         };
         scene.base_dir = base_dir;
+        scene.rebase_overridden_paths(overrides);
         scene.check().map_err(|reason| {
             match overrides
                 .iter()
@@ -110,6 +116,54 @@ impl Scene {
         }
         Ok(scene)
     }
+}
+
+impl Scene {
+    /// A path a `--set` gives (`sketch.path`, `importance.max_map`) is the user's, typed in the
+    /// working folder: it resolves there, not against the scene file's folder.
+    fn rebase_overridden_paths(&mut self, overrides: &[String]) {
+        if self.base_dir.as_os_str().is_empty() {
+            return;
+        }
+        let Ok(cwd) = std::env::current_dir() else {
+            return;
+        };
+        for o in overrides {
+            let path = match override_key(o) {
+                "sketch.path" => self.sketch.path.as_mut(),
+                "importance.max_map" => self.importance.max_map.as_mut(),
+                _ => None,
+            };
+            if let Some(p) = path {
+                *p = cwd.join(&*p);
+            }
+        }
+    }
+}
+
+/// Whether a command's SCENE argument names a sketch rather than a scene file: anything but a
+/// `.toml` file (a sketch in any format, a glob of tiles, a `.vrt`, a tile pyramid's folder or
+/// its `pyramid.toml`).
+pub fn is_sketch_path(path: &Path) -> bool {
+    let toml = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    !toml || path.is_dir() || path.file_name() == Some(std::ffi::OsStr::new(crate::tiles::META))
+}
+
+/// The TOML a SCENE argument stands for and the folder its relative paths resolve against: a
+/// scene file's own text and folder, or for a sketch, a scene with every default naming it.
+pub fn scene_text(path: &Path) -> Result<(String, PathBuf)> {
+    if is_sketch_path(path) {
+        let sketch = match path.file_name() == Some(std::ffi::OsStr::new(crate::tiles::META)) {
+            true => path.parent().unwrap_or(Path::new(".")),
+            false => path,
+        };
+        let quoted = toml::Value::String(sketch.to_string_lossy().into_owned());
+        return Ok((format!("[sketch]\npath = {quoted}\n"), PathBuf::new()));
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(Role::Scene, path, e))?;
+    Ok((text, path.parent().unwrap_or(Path::new("")).to_path_buf()))
 }
 
 /// Deserialises a scene's text; the error names the line and the key's full dotted path.

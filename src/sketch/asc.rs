@@ -106,6 +106,7 @@ fn parse(path: &Path, text: &str) -> Result<RawGrid> {
         cell_x: cx,
         cell_y: cy,
         units: Units::Unknown,
+        epsg: None,
     };
 
     let mut data = vec![f32::NAN; w * h];

@@ -37,6 +37,8 @@ pub struct Georef {
     pub cell_x: f64,
     pub cell_y: f64,
     pub units: Units,
+    /// The coordinate system's EPSG code, where the file names one.
+    pub epsg: Option<u16>,
 }
 
 impl Georef {
@@ -56,6 +58,7 @@ impl Georef {
             cell_x: dx,
             cell_y: -dy,
             units,
+            epsg: None,
         })
     }
 
@@ -97,6 +100,85 @@ impl Georef {
     }
 }
 
+impl Georef {
+    /// The file's coordinates of a point given by latitude and longitude (degrees): a geographic
+    /// file's own, directly (in whatever datum the file uses); a projected file's through the
+    /// projection its EPSG code names, from WGS 84. `Err` says why the system cannot be converted.
+    pub fn from_lat_lon(&self, lat_deg: f64, lon_deg: f64) -> Result<[f64; 2], String> {
+        if self.units == Units::Degrees {
+            return Ok([lon_deg, lat_deg]);
+        }
+        let mut p = (lon_deg.to_radians(), lat_deg.to_radians(), 0.0);
+        let (wgs84, proj) = (wgs84()?, self.projection()?);
+        proj4rs::transform::transform(&wgs84, &proj, &mut p).map_err(|e| self.cannot(e))?;
+        finite_pair([p.0, p.1], || {
+            self.cannot("the point lies outside the projection")
+        })
+    }
+
+    /// The latitude and longitude (degrees) of a point in the file's coordinates: the inverse of
+    /// [`Georef::from_lat_lon`].
+    pub fn to_lat_lon(&self, x: f64, y: f64) -> Result<[f64; 2], String> {
+        if self.units == Units::Degrees {
+            return Ok([y, x]);
+        }
+        let mut p = (x, y, 0.0);
+        let (wgs84, proj) = (wgs84()?, self.projection()?);
+        proj4rs::transform::transform(&proj, &wgs84, &mut p).map_err(|e| self.cannot(e))?;
+        finite_pair([p.1.to_degrees(), p.0.to_degrees()], || {
+            self.cannot("the point lies outside the projection")
+        })
+    }
+
+    fn projection(&self) -> Result<proj4rs::Proj, String> {
+        match self.epsg {
+            Some(code) => proj4rs::Proj::from_epsg_code(code).map_err(|e| self.cannot(e)),
+            None if self.units == Units::Unknown => {
+                Err("the file does not say its coordinate system".into())
+            }
+            None => Err("the file's projected coordinate system has no EPSG code".into()),
+        }
+    }
+
+    fn cannot(&self, why: impl std::fmt::Display) -> String {
+        let code = self
+            .epsg
+            .map_or("the file's coordinate system".into(), |c| {
+                format!("EPSG:{c}")
+            });
+        format!("{code} cannot be converted from latitude and longitude: {why}")
+    }
+}
+
+fn wgs84() -> Result<proj4rs::Proj, String> {
+    proj4rs::Proj::from_proj_string("+proj=longlat +datum=WGS84 +no_defs")
+        .map_err(|e| format!("WGS 84: {e}"))
+}
+
+fn finite_pair(p: [f64; 2], why: impl FnOnce() -> String) -> Result<[f64; 2], String> {
+    if p.iter().all(|v| v.is_finite()) {
+        Ok(p)
+    } else {
+        Err(why())
+    }
+}
+
+/// The EPSG code a WKT coordinate system names for itself: its last `AUTHORITY["EPSG","…"]`
+/// (WKT 1) or `ID["EPSG",…]` (WKT 2), the outermost node's, which both write last.
+pub fn wkt_epsg(wkt: &str) -> Option<u16> {
+    let t = wkt.to_ascii_uppercase();
+    let at = ["AUTHORITY[\"EPSG\",", "ID[\"EPSG\","]
+        .iter()
+        .filter_map(|tag| t.rfind(tag).map(|k| k + tag.len()))
+        .max()?;
+    let digits: String = t[at..]
+        .trim_start_matches([' ', '"'])
+        .chars()
+        .take_while(char::is_ascii_digit)
+        .collect();
+    digits.parse().ok()
+}
+
 /// Converts a geographic cell size (degrees) to metres at `lat_deg`: (east–west, north–south).
 pub fn degrees_to_metres(cell_x_deg: f64, cell_y_deg: f64, lat_deg: f64) -> (f64, f64) {
     let m_per_deg = EARTH_RADIUS_M * std::f64::consts::PI / 180.0;
@@ -107,6 +189,15 @@ pub fn degrees_to_metres(cell_x_deg: f64, cell_y_deg: f64, lat_deg: f64) -> (f64
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_wkt_names_its_own_epsg_code_last() {
+        let wkt1 = r#"PROJCS["WGS 84 / UTM zone 16N",GEOGCS["WGS 84",AUTHORITY["EPSG","4326"]],UNIT["metre",1,AUTHORITY["EPSG","9001"]],AUTHORITY["EPSG","32616"]]"#;
+        assert_eq!(wkt_epsg(wkt1), Some(32616));
+        let wkt2 = r#"PROJCRS["NAD83 / UTM zone 16N",BASEGEOGCRS["NAD83",ID["EPSG",4269]],ID["EPSG",26916]]"#;
+        assert_eq!(wkt_epsg(wkt2), Some(26916));
+        assert_eq!(wkt_epsg("LOCAL_CS[\"arbitrary\"]"), None);
+    }
 
     #[test]
     fn degrees_to_metres_matches_jacksboro() {
@@ -136,6 +227,7 @@ mod tests {
             cell_x: 1.0 / 1200.0,
             cell_y: 1.0 / 1200.0,
             units: Units::Unknown,
+            epsg: None,
         };
         assert_eq!(g.resolved(1201, 1201).units, Units::Degrees);
         let (e, n) = g.spacing_m(1201, 1201);

@@ -38,6 +38,10 @@ const GT_MODEL_TYPE: u16 = 1024;
 const GT_RASTER_TYPE: u16 = 1025;
 const PROJ_LINEAR_UNITS: u16 = 3076;
 const PROJ_LINEAR_UNIT_SIZE: u16 = 3077;
+const GEOGRAPHIC_TYPE: u16 = 2048;
+const PROJECTED_CS_TYPE: u16 = 3072;
+/// GeoTIFF's code for a coordinate system the file defines itself rather than by EPSG code.
+const USER_DEFINED: u16 = 32767;
 
 pub fn read_file(path: &Path) -> Result<RawGrid> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
@@ -212,6 +216,14 @@ fn georef<R: Read + Seek>(
         },
         _ => Units::Unknown,
     };
+    let code = match units {
+        Units::Degrees => key(GEOGRAPHIC_TYPE),
+        _ => key(PROJECTED_CS_TYPE),
+    };
+    let epsg = match code {
+        Some(GeoValue::Short(c)) if c != USER_DEFINED && c != 0 => Some(c),
+        _ => None,
+    };
     let point = key(GT_RASTER_TYPE) == Some(GeoValue::Short(2));
     let tag = |dec: &mut Decoder<R>, t: u16| -> Option<Vec<f64>> {
         dec.get_tag_f64_vec(Tag::Unknown(t)).ok()
@@ -245,6 +257,7 @@ fn georef<R: Read + Seek>(
         cell_x: sx,
         cell_y: sy,
         units,
+        epsg,
     }))
 }
 

@@ -115,6 +115,7 @@ fn parse_named(path: &Path, named: &Path, bytes: &[u8], spacing_given: bool) -> 
         cell_x: cell,
         cell_y: cell,
         units: Units::Degrees,
+        epsg: None,
     };
     Ok(RawGrid::georeferenced(side, side, data, georef))
 }

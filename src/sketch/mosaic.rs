@@ -340,10 +340,8 @@ pub fn parse_vrt(
             }
         }
     }
-    let units = match child(root, "SRS").and_then(|n| n.text()) {
-        Some(wkt) => wkt_units(wkt),
-        None => Units::Unknown,
-    };
+    let srs = child(root, "SRS").and_then(|n| n.text());
+    let units = srs.map_or(Units::Unknown, wkt_units);
     let gt = child(root, "GeoTransform")
         .and_then(|n| n.text())
         .map(|t| {
@@ -358,10 +356,12 @@ pub fn parse_vrt(
             let gt: [f64; 6] = gt
                 .try_into()
                 .map_err(|_| bad("<GeoTransform> is not six numbers".into()))?;
-            Some(
-                Georef::from_geotransform(gt, h, units)
-                    .ok_or_else(|| bad("<GeoTransform> is rotated or not north-up".into()))?,
-            )
+            let g = Georef::from_geotransform(gt, h, units)
+                .ok_or_else(|| bad("<GeoTransform> is rotated or not north-up".into()))?;
+            Some(Georef {
+                epsg: srs.and_then(super::georef::wkt_epsg),
+                ..g
+            })
         }
         None => None,
     };

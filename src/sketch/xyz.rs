@@ -72,6 +72,7 @@ fn parse(path: &Path, text: &str) -> Result<RawGrid> {
         cell_x: dx,
         cell_y: dy,
         units: Units::Unknown,
+        epsg: None,
     };
     Ok(RawGrid::georeferenced(w, h, data, georef))
 }

@@ -576,6 +576,7 @@ fn meta_georef(g: Georef) -> MetaGeoref {
         south: g.south,
         cell_x: g.cell_x,
         cell_y: g.cell_y,
+        epsg: g.epsg,
     }
 }
 
@@ -591,6 +592,7 @@ pub fn georef_of(m: &MetaGeoref) -> Georef {
             "unknown" => Units::Unknown,
             s => s.parse().map_or(Units::Unknown, Units::Linear),
         },
+        epsg: m.epsg,
     }
 }
 

@@ -86,6 +86,9 @@ pub struct MetaGeoref {
     pub south: f64,
     pub cell_x: f64,
     pub cell_y: f64,
+    /// The coordinate system's EPSG code, where the source named one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub epsg: Option<u16>,
 }
 
 impl Meta {

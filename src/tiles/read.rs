@@ -232,7 +232,7 @@ pub fn raw_grid_within(dir: &Path, cells: usize) -> Result<RawGrid> {
             south: g.south + shift * g.cell_y,
             cell_x: g.cell_x * scale,
             cell_y: g.cell_y * scale,
-            units: g.units,
+            ..g
         }
     });
     Ok(RawGrid {

@@ -139,7 +139,7 @@ fn scene_key(scene: &Scene) -> String {
     s.camera.aim(glam::DVec3::ZERO, glam::DVec3::ZERO);
     let c = &mut s.camera;
     (c.lat_deg, c.lon_deg, c.altitude_m) = (None, None, None);
-    (c.heading_deg, c.pitch_deg) = (0.0, 0.0);
+    (c.heading_deg, c.pitch_deg) = (None, None);
     format!("{s:?}")
 }
 

@@ -85,8 +85,8 @@ fn random_planet_camera(
     c.lat_deg = Some(lat.to_degrees());
     c.lon_deg = Some(lon.to_degrees());
     c.altitude_m = Some(altitude);
-    c.heading_deg = 360.0 * rng.next();
-    c.pitch_deg = (-dip - 40.0 + 50.0 * rng.next()).max(-90.0);
+    c.heading_deg = Some(360.0 * rng.next());
+    c.pitch_deg = Some((-dip - 40.0 + 50.0 * rng.next()).max(-90.0));
     let camera = scene::camera_of(&s, atlas)?;
     Ok((s, camera))
 }

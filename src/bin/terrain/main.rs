@@ -25,6 +25,7 @@ mod compare;
 mod fly;
 mod info;
 mod render;
+mod scene;
 mod tiles;
 mod view;
 mod warp;
@@ -50,6 +51,9 @@ enum Command {
     /// Converts a sketch (a file or a glob of tiles) into a tile pyramid on disk, with bounded
     /// memory; resumable. Scenes name the pyramid's folder as their sketch.
     Tiles(tiles::Args),
+    /// Writes a starter scene for a sketch: the default camera written out, every key with a
+    /// comment, to edit.
+    Scene(scene::Args),
     /// Runs the CPU stage for the scene's camera; writes importance.png, mesh.png, ratio.png.
     Warp(warp::Args),
     /// Renders a snapshot of the scene from its camera (headless, on whatever adapter there is).
@@ -105,6 +109,7 @@ fn main() {
     let result = match cli.command {
         Command::Info(a) => info::run(a),
         Command::Tiles(a) => tiles::run(a),
+        Command::Scene(a) => scene::run(a),
         Command::Warp(a) => warp::run(a),
         Command::Render(a) => render::run(a),
         Command::Compare(a) => compare::run(a),

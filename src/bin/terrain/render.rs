@@ -11,6 +11,7 @@ use terrain::gpu::frame_io::PassTimes;
 use terrain::gpu::uniforms::View;
 use terrain::render::{Frame, Renderer};
 use terrain::scene;
+use terrain::scene::place::CameraReport;
 use terrain::scene::{Mode, Scene};
 
 #[derive(clap::Args)]
@@ -72,6 +73,8 @@ struct Report {
     gpu_memory_bytes: u64,
     frames: u32,
     output: PathBuf,
+    /// Where the camera stood and looked (docs/scene.md, [camera]).
+    camera: CameraReport,
     detail: Detail,
     /// The baselines' figures (absent for the other modes).
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
@@ -121,6 +124,7 @@ pub fn run(a: Args) -> Result<()> {
     }
     let mut r = Renderer::with_positions(&scene, mode, a.view, a.positions.is_some())?;
     let camera = scene::camera_of(&scene, r.atlas())?;
+    let camera_report = scene::place::camera_report(&scene, r.atlas(), &camera)?;
     let frames = frames(&mut r, &camera, &scene, a.repeat)?;
     let last = frames.last().context("no frame rendered")?;
     // The image and the positions land together or not at all.
@@ -170,6 +174,7 @@ pub fn run(a: Args) -> Result<()> {
         gpu_memory_bytes: r.gpu_bytes(),
         frames: a.repeat,
         output: a.output.clone(),
+        camera: camera_report,
         detail: Detail {
             octaves: d.octaves,
             amplitude_m: d.amplitude_m,

@@ -265,7 +265,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
 
     // The camera path once: each setting's LOD change per frame along it, and the path series.
     let flight = if path_frames > 0 {
-        let path = Flight::of_scene(&scene)?;
+        let path = Flight::of_scene(&scene, &atlas)?;
         let frames = o.path_frames.max(LOD_STEPS + 1);
         let cameras = path.cameras(frames, o.path_fps, &scene, &atlas)?;
         Some((path, cameras))

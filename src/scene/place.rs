@@ -1,0 +1,392 @@
+//! Where a planar scene's camera stands and looks: by world metres, by the sketch file's own
+//! coordinates or by latitude and longitude, or, with no place given, a view of the whole sketch.
+//!
+//! Rules:
+//! - World metres are measured from the sketch's south-west node (`sketch.origin_m` moves it), x
+//!   east, y north. A point in the file's coordinates (`map_xy`) maps to the world node for node,
+//!   as the sketch's heights do; `lat_deg`/`lon_deg` are first converted into the file's
+//!   coordinates (`Georef::from_lat_lon`), so a geographic sketch uses the very mapping its
+//!   metres use and a projected one its own projection.
+//! - `altitude_m` counts from the surface under the eye: the sketch's ground or water, and beyond
+//!   the sketch what `sketch.outside` puts there (the plain at the edges' mean height, the sea at
+//!   0 m; a void counts as the plain's height).
+//! - Aim: `look_at`, or `heading_deg` (0 north, 90 east) and `pitch_deg` (0 level, −90 down),
+//!   each 0 unless given.
+//! - Without a place, the camera frames the sketch ([`framing`]): it looks along `heading_deg`
+//!   (north) and `pitch_deg` (−35°) at the centre of the sketch's bounding box, from the least
+//!   distance at which the box's eight corners all lie inside the frame, but from beyond the
+//!   sketch's edge and above its highest ground.
+//!
+//! Rejected alternative: a fixed multiple of the sketch's diagonal. A long or a wide sketch, or a
+//! narrow frame, then leaves most of the image sky or cuts the sketch off; the fitted distance
+//! fills the frame's width or height, whichever binds, for any shape.
+
+use super::{CameraSection, Outside, PathKey, PathSection, Scene};
+use crate::error::{Error, Result};
+use crate::sketch::Atlas;
+use glam::{DVec2, DVec3};
+use serde::Serialize;
+
+/// The default view's pitch, degrees: steep enough that a square sketch fills a square frame's
+/// height as well as its width, shallow enough that its relief reads.
+pub const DEFAULT_PITCH_DEG: f64 = -40.0;
+/// The share of the frame the framed sketch may fill: a margin so its corners are not cut.
+const FILL: f64 = 0.95;
+/// The default path's duration, seconds.
+pub const DEFAULT_PATH_S: f64 = 10.0;
+/// Keys of the default orbit (the first and last at the same place).
+const ORBIT_KEYS: usize = 13;
+
+/// The eye and the point looked at, world metres, of a planar scene's camera over `atlas`.
+pub fn pose(scene: &Scene, atlas: &Atlas) -> Result<(DVec3, DVec3)> {
+    let c = &scene.camera;
+    let Some(eye) = eye_of(scene, atlas, "camera", &place_of_camera(c))? else {
+        return Ok(framing(
+            scene,
+            atlas,
+            c.heading(),
+            c.pitch_deg.unwrap_or(DEFAULT_PITCH_DEG),
+        ));
+    };
+    let target = match c.look_at {
+        Some(t) => DVec3::from(t),
+        None => eye + direction(c.heading(), c.pitch()) * aim_distance(atlas),
+    };
+    Ok((eye, target))
+}
+
+/// A path key resolved to world metres: its `position` and `look_at` (from its heading and
+/// pitch where it gives them), its other place keys cleared.
+pub fn resolve_key(scene: &Scene, atlas: &Atlas, k: usize, key: &PathKey) -> Result<PathKey> {
+    let place = Place {
+        position: key.position,
+        map_xy: key.map_xy,
+        lat_deg: key.lat_deg,
+        lon_deg: key.lon_deg,
+        altitude_m: key.altitude_m,
+    };
+    // `Scene::check` gives every planar key a place; the table names the key in messages.
+    let table = format!("path.keys[{k}]");
+    let eye = eye_of(scene, atlas, &table, &place)?.unwrap_or_default();
+    let look_at = match (key.look_at, key.heading_deg, key.pitch_deg) {
+        (Some(t), _, _) => Some(t),
+        (None, None, None) => None,
+        (None, h, p) => {
+            let d = direction(h.unwrap_or(0.0), p.unwrap_or(0.0));
+            Some((eye + d * aim_distance(atlas)).to_array())
+        }
+    };
+    Ok(PathKey::at(eye.to_array(), look_at))
+}
+
+/// The place keys a camera or a path key gives.
+struct Place {
+    position: Option<[f64; 3]>,
+    map_xy: Option<[f64; 2]>,
+    lat_deg: Option<f64>,
+    lon_deg: Option<f64>,
+    altitude_m: Option<f64>,
+}
+
+fn place_of_camera(c: &CameraSection) -> Place {
+    Place {
+        position: c.position,
+        map_xy: c.map_xy,
+        lat_deg: c.lat_deg,
+        lon_deg: c.lon_deg,
+        altitude_m: c.altitude_m,
+    }
+}
+
+/// The eye the place keys give (`None` without a place).
+fn eye_of(scene: &Scene, atlas: &Atlas, table: &str, p: &Place) -> Result<Option<DVec3>> {
+    if let Some(position) = p.position {
+        return Ok(Some(DVec3::from(position)));
+    }
+    let map = match (p.map_xy, p.lat_deg, p.lon_deg) {
+        (Some(xy), _, _) => xy,
+        (None, Some(lat), Some(lon)) => {
+            let g = georef(scene, atlas, table, "lat_deg")?;
+            g.from_lat_lon(lat, lon)
+                .map_err(|why| fault(scene, &format!("{table}.lat_deg"), &why))?
+        }
+        _ => return Ok(None),
+    };
+    let xy =
+        world_of_map(atlas, map).map_err(|why| fault(scene, &format!("{table}.map_xy"), &why))?;
+    let ground = surface_m(scene, atlas, xy)?;
+    Ok(Some(xy.extend(ground + p.altitude_m.unwrap_or(0.0))))
+}
+
+fn georef<'a>(
+    scene: &Scene,
+    atlas: &'a Atlas,
+    table: &str,
+    key: &str,
+) -> Result<&'a crate::sketch::georef::Georef> {
+    atlas.georef.as_ref().ok_or_else(|| {
+        fault(
+            scene,
+            &format!("{table}.{key}"),
+            "the sketch has no georeference (place the camera by position)",
+        )
+    })
+}
+
+/// One line naming the scene file (where known) and the key.
+fn fault(scene: &Scene, key: &str, why: &str) -> Error {
+    let reason = format!("{key}: {why}");
+    match &scene.source {
+        Some(path) => Error::scene(path, reason),
+        None => Error::Camera(reason),
+    }
+}
+
+/// World metres of a point in the sketch file's own coordinates.
+pub fn world_of_map(atlas: &Atlas, [x, y]: [f64; 2]) -> std::result::Result<DVec2, String> {
+    let g = atlas
+        .georef
+        .as_ref()
+        .ok_or("the sketch has no georeference: its file names no coordinates")?;
+    let world = atlas.origin
+        + DVec2::new(
+            (x - g.west) / g.cell_x * atlas.dx,
+            (y - g.south) / g.cell_y * atlas.dy,
+        );
+    if world.is_finite() {
+        Ok(world)
+    } else {
+        Err(format!("({x}, {y}) is not a finite point"))
+    }
+}
+
+/// The sketch file's own coordinates of a world point, where the sketch has a georeference.
+pub fn map_of_world(atlas: &Atlas, p: DVec2) -> Option<[f64; 2]> {
+    let g = atlas.georef.as_ref()?;
+    let d = p - atlas.origin;
+    Some([
+        g.west + d.x / atlas.dx * g.cell_x,
+        g.south + d.y / atlas.dy * g.cell_y,
+    ])
+}
+
+/// The surface under a world point: the sketch's ground or water, and beyond the sketch the
+/// plain (or the sea) `sketch.outside` draws there.
+pub fn surface_m(scene: &Scene, atlas: &Atlas, p: DVec2) -> Result<f64> {
+    let water = atlas.water_m as f64;
+    Ok(match super::ground_under(atlas, p)? {
+        Some(ground) => ground,
+        None if scene.sketch.outside == Outside::Ocean => water.max(0.0),
+        None => water.max(atlas.edge_mean_m as f64),
+    })
+}
+
+/// The unit view direction of a heading (0 north, 90 east) and pitch (0 level, −90 down).
+pub fn direction(heading_deg: f64, pitch_deg: f64) -> DVec3 {
+    let (h, p) = (heading_deg.to_radians(), pitch_deg.to_radians());
+    DVec3::new(h.sin() * p.cos(), h.cos() * p.cos(), p.sin())
+}
+
+/// Heading and pitch, degrees, of a view direction (heading 0 when looking straight up or down).
+pub fn heading_pitch(dir: DVec3) -> (f64, f64) {
+    let d = dir.normalize();
+    let heading = if d.truncate().length() > 1e-12 {
+        d.x.atan2(d.y).to_degrees().rem_euclid(360.0)
+    } else {
+        0.0
+    };
+    (heading, d.z.clamp(-1.0, 1.0).asin().to_degrees())
+}
+
+/// How far ahead a camera aimed by heading and pitch looks: any positive distance would do; a
+/// sketch-sized one keeps `look_at`'s digits meaningful when written out.
+fn aim_distance(atlas: &Atlas) -> f64 {
+    (atlas.max_corner() - atlas.origin).length().max(1.0)
+}
+
+/// The default view: the whole sketch seen along `heading_deg` and `pitch_deg`, as near as the
+/// frame allows ([`fit`]), from beyond the sketch's edge and above its highest ground.
+pub fn framing(scene: &Scene, atlas: &Atlas, heading_deg: f64, pitch_deg: f64) -> (DVec3, DVec3) {
+    let c = &scene.camera;
+    // Level or upward views cannot frame the ground from above: they look over it instead.
+    let pitch = pitch_deg.clamp(-89.0, -1.0);
+    let (lo, hi) = (atlas.origin, atlas.max_corner());
+    let water = atlas.water_m as f64;
+    let (z_lo, z_hi) = (
+        (atlas.min_m as f64).max(water),
+        (atlas.max_m as f64).max(water),
+    );
+    let centre = ((lo + hi) * 0.5).extend(0.5 * (z_lo + z_hi));
+    let corners: Vec<DVec3> = [lo.x, hi.x]
+        .into_iter()
+        .flat_map(|x| [lo.y, hi.y].map(|y| DVec2::new(x, y)))
+        .flat_map(|p| [z_lo, z_hi].map(|z| p.extend(z) - centre))
+        .collect();
+    let tan_y = (c.fov_y_deg.to_radians() * 0.5).tan() * FILL;
+    let frame = Frame {
+        forward: direction(heading_deg, pitch),
+        right: {
+            let h = heading_deg.to_radians();
+            DVec3::new(h.cos(), -h.sin(), 0.0)
+        },
+        tan: [tan_y * c.width as f64 / c.height as f64, tan_y],
+    };
+    let h = heading_deg.to_radians();
+    let along = DVec2::new(h.sin(), h.cos());
+    let half = 0.5 * ((hi.x - lo.x) * along.x.abs() + (hi.y - lo.y) * along.y.abs());
+    // Beyond the edge: the eye's ground position behind the sketch along the heading.
+    let beyond = |eye: DVec3| eye.truncate().dot(along) <= -1.02 * half;
+    let (offset, depth) = fit(&frame, &corners, beyond);
+    let mut eye = centre + offset;
+    let target = eye + frame.forward * depth;
+    // Above the highest ground, so no ridge stands between the eye and what it frames.
+    eye.z = eye.z.max(z_hi + 0.01 * (hi - lo).length());
+    (eye, target)
+}
+
+/// A view direction and the frame's half-extents (tangents of the half angles, the margin in).
+struct Frame {
+    forward: DVec3,
+    right: DVec3,
+    tan: [f64; 2],
+}
+
+/// The nearest eye, relative to the points' centre, whose frame holds every point (`points`,
+/// relative to the same centre) and which `allowed` accepts: the eye is `-forward · d + a · right
+/// + b · up`, and for each distance d the points fit when an offset (a, b) keeps each one's
+/// sideways and upward parts within the frame's tangent of its depth; those are intervals in a
+/// and b, so the least such d is found by bisection and (a, b) centred in their intervals, the
+/// points' image then centred in the frame. Returns the eye and the depth of the centre.
+fn fit(frame: &Frame, points: &[DVec3], allowed: impl Fn(DVec3) -> bool) -> (DVec3, f64) {
+    let up = frame.right.cross(frame.forward);
+    let axes = [frame.right, up];
+    let place = |d: f64| -> Option<DVec3> {
+        let mut eye = -frame.forward * d;
+        for (axis, tan) in axes.iter().zip(frame.tan) {
+            let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+            for q in points {
+                let depth = frame.forward.dot(*q) + d;
+                if depth <= 0.0 {
+                    return None;
+                }
+                let side = axis.dot(*q);
+                lo = lo.max(side - tan * depth);
+                hi = hi.min(side + tan * depth);
+            }
+            if lo > hi {
+                return None;
+            }
+            eye += *axis * (0.5 * (lo + hi));
+        }
+        allowed(eye).then_some(eye)
+    };
+    let extent = points.iter().map(|q| q.length()).fold(1.0, f64::max);
+    let mut far = extent;
+    while place(far).is_none() && far < 1e12 {
+        far *= 2.0;
+    }
+    let mut near = 0.0;
+    for _ in 0..64 {
+        let mid = 0.5 * (near + far);
+        match place(mid) {
+            Some(_) => far = mid,
+            None => near = mid,
+        }
+    }
+    let eye = place(far).unwrap_or(-frame.forward * far);
+    (eye, frame.forward.dot(-eye))
+}
+
+/// The default path: one orbit of the sketch's centre, from the default view's distance and
+/// height, looking at the centre, [`DEFAULT_PATH_S`] long (its speed set from its length).
+pub fn default_path(scene: &Scene, atlas: &Atlas) -> PathSection {
+    let pitch = scene.camera.pitch_deg.unwrap_or(DEFAULT_PITCH_DEG);
+    let start = scene.camera.heading();
+    // The widest of the four sides' framings, so the sketch stays whole from every side.
+    let (mut eye, mut target) = framing(scene, atlas, start, pitch);
+    for side in [90.0, 180.0, 270.0] {
+        let (e, t) = framing(scene, atlas, start + side, pitch);
+        if (e - t).truncate().length() > (eye - target).truncate().length() {
+            (eye, target) = (e, t);
+        }
+    }
+    let radius = (eye - target).truncate().length();
+    let keys = (0..ORBIT_KEYS)
+        .map(|k| {
+            let heading = start + 360.0 * k as f64 / (ORBIT_KEYS - 1) as f64;
+            let h = heading.to_radians();
+            let at = target.truncate() - DVec2::new(h.sin(), h.cos()) * radius;
+            PathKey::at(at.extend(eye.z).to_array(), Some(target.to_array()))
+        })
+        .collect();
+    PathSection {
+        // The chords' length; `CameraPath` measures the curve and the caller may rescale.
+        speed_mps: std::f64::consts::TAU * radius / DEFAULT_PATH_S,
+        duration_s: None,
+        keys,
+    }
+}
+
+/// The camera a frame used, as `render --json` reports it (`camera`).
+#[derive(Clone, Debug, Serialize)]
+pub struct CameraReport {
+    /// World metres.
+    pub position: [f64; 3],
+    pub look_at: [f64; 3],
+    /// Above the surface under the eye.
+    pub altitude_m: f64,
+    pub heading_deg: f64,
+    pub pitch_deg: f64,
+    /// Where the sketch has a georeference that converts.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lat_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lon_deg: Option<f64>,
+    /// The eye in the file's own coordinates, where the sketch has a georeference.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub map_xy: Option<[f64; 2]>,
+}
+
+/// The scene's camera over `atlas` in the keys people place it by. A planet's: its keys, its
+/// eye and target in the nadir's tangent frame (`camera`).
+pub fn camera_report(
+    scene: &Scene,
+    atlas: &Atlas,
+    camera: &crate::camera::Camera,
+) -> Result<CameraReport> {
+    if scene.planet().is_none() {
+        let (eye, target) = pose(scene, atlas)?;
+        return report(scene, atlas, eye, target);
+    }
+    let c = &scene.camera;
+    Ok(CameraReport {
+        position: camera.eye.to_array(),
+        look_at: (camera.eye + camera.forward).to_array(),
+        altitude_m: c.altitude_m.unwrap_or(0.0),
+        heading_deg: c.heading(),
+        pitch_deg: c.pitch(),
+        lat_deg: c.lat_deg,
+        lon_deg: c.lon_deg,
+        map_xy: None,
+    })
+}
+
+/// What a planar camera with eye `eye` looking at `target` is in the keys people place it by.
+pub fn report(scene: &Scene, atlas: &Atlas, eye: DVec3, target: DVec3) -> Result<CameraReport> {
+    let (heading_deg, pitch_deg) = heading_pitch(target - eye);
+    let map_xy = map_of_world(atlas, eye.truncate());
+    let lat_lon = match (&atlas.georef, map_xy) {
+        (Some(g), Some([x, y])) => g.to_lat_lon(x, y).ok(),
+        _ => None,
+    };
+    Ok(CameraReport {
+        position: eye.to_array(),
+        look_at: target.to_array(),
+        altitude_m: eye.z - surface_m(scene, atlas, eye.truncate())?,
+        heading_deg,
+        pitch_deg,
+        lat_deg: lat_lon.map(|l| l[0]),
+        lon_deg: lat_lon.map(|l| l[1]),
+        map_xy,
+    })
+}
