@@ -252,11 +252,11 @@ struct Frame {
 }
 
 /// The nearest eye, relative to the points' centre, whose frame holds every point (`points`,
-/// relative to the same centre) and which `allowed` accepts: the eye is `-forward · d + a · right
-/// + b · up`, and for each distance d the points fit when an offset (a, b) keeps each one's
-/// sideways and upward parts within the frame's tangent of its depth; those are intervals in a
-/// and b, so the least such d is found by bisection and (a, b) centred in their intervals, the
-/// points' image then centred in the frame. Returns the eye and the depth of the centre.
+/// relative to the same centre) and which `allowed` accepts. The eye is `a·right + b·up −
+/// d·forward`; for a distance d the points fit when some offset keeps each one's sideways and
+/// upward parts within the frame's tangent of its depth, which bounds a and b to intervals. The
+/// least such d is found by bisection, (a, b) centred in their intervals, so the points' image
+/// is centred in the frame. Returns the eye and the depth of the centre.
 fn fit(frame: &Frame, points: &[DVec3], allowed: impl Fn(DVec3) -> bool) -> (DVec3, f64) {
     let up = frame.right.cross(frame.forward);
     let axes = [frame.right, up];
@@ -302,21 +302,23 @@ fn fit(frame: &Frame, points: &[DVec3], allowed: impl Fn(DVec3) -> bool) -> (DVe
 pub fn default_path(scene: &Scene, atlas: &Atlas) -> PathSection {
     let pitch = scene.camera.pitch_deg.unwrap_or(DEFAULT_PITCH_DEG);
     let start = scene.camera.heading();
-    // The widest of the four sides' framings, so the sketch stays whole from every side.
-    let (mut eye, mut target) = framing(scene, atlas, start, pitch);
-    for side in [90.0, 180.0, 270.0] {
-        let (e, t) = framing(scene, atlas, start + side, pitch);
-        if (e - t).truncate().length() > (eye - target).truncate().length() {
-            (eye, target) = (e, t);
-        }
+    // Around the sketch's centre, at the widest of the four sides' framing distances and the
+    // highest of their heights, so the sketch stays whole from every side.
+    let centre = (atlas.origin + atlas.max_corner()) * 0.5;
+    let (mut radius, mut height): (f64, f64) = (0.0, f64::NEG_INFINITY);
+    for side in [0.0, 90.0, 180.0, 270.0] {
+        let (eye, _) = framing(scene, atlas, start + side, pitch);
+        radius = radius.max((eye.truncate() - centre).length());
+        height = height.max(eye.z);
     }
-    let radius = (eye - target).truncate().length();
+    let mid_z = 0.5 * (atlas.min_m as f64 + atlas.max_m as f64).max(atlas.water_m as f64);
+    let target = centre.extend(mid_z);
     let keys = (0..ORBIT_KEYS)
         .map(|k| {
             let heading = start + 360.0 * k as f64 / (ORBIT_KEYS - 1) as f64;
             let h = heading.to_radians();
-            let at = target.truncate() - DVec2::new(h.sin(), h.cos()) * radius;
-            PathKey::at(at.extend(eye.z).to_array(), Some(target.to_array()))
+            let at = centre - DVec2::new(h.sin(), h.cos()) * radius;
+            PathKey::at(at.extend(height).to_array(), Some(target.to_array()))
         })
         .collect();
     PathSection {

@@ -200,6 +200,35 @@ mod tests {
     }
 
     #[test]
+    fn a_system_without_a_known_epsg_code_is_refused_naming_it() {
+        let g = Georef {
+            west: 500000.0,
+            south: 4000000.0,
+            cell_x: 30.0,
+            cell_y: 30.0,
+            units: Units::Linear(1.0),
+            epsg: None,
+        };
+        let e = g.from_lat_lon(36.0, -84.0).unwrap_err();
+        assert!(e.contains("no EPSG code"), "{e}");
+        let unknown = Georef { epsg: Some(1), ..g };
+        let e = unknown.from_lat_lon(36.0, -84.0).unwrap_err();
+        assert!(e.starts_with("EPSG:1 cannot be converted"), "{e}");
+        // UTM 16N (EPSG:32616) both ways: the inverse returns the point.
+        let utm = Georef {
+            epsg: Some(32616),
+            ..g
+        };
+        let [x, y] = utm.from_lat_lon(36.639, -84.2306).unwrap();
+        assert!(
+            (x - 747598.308).abs() < 0.01 && (y - 4058399.281).abs() < 0.01,
+            "{x} {y}"
+        );
+        let [lat, lon] = utm.to_lat_lon(x, y).unwrap();
+        assert!((lat - 36.639).abs() < 1e-9 && (lon + 84.2306).abs() < 1e-9);
+    }
+
+    #[test]
     fn degrees_to_metres_matches_jacksboro() {
         let (e, n) = degrees_to_metres(0.000833333333, 0.000833333333, 36.59);
         assert!((e - 74.4).abs() < 0.5 && (n - 92.66).abs() < 0.1, "{e} {n}");
