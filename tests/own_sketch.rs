@@ -437,3 +437,71 @@ fn a_set_path_resolves_against_the_working_folder() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// The README's "Your own height map" commands, as written, on a committed UTM GeoTIFF in place
+/// of `my_dem.tif`, at a small size (`--size 32`, and `fly --frames 4`); `view` runs in
+/// tests/view.rs, under Xvfb.
+#[test]
+fn the_readme_commands_for_your_own_height_map_run() {
+    let dir = scratch("own-readme");
+    let readme = std::fs::read_to_string(manifest_dir().join("README.md")).unwrap();
+    let section = readme
+        .split_once("## Your own height map")
+        .expect("the README has the section")
+        .1
+        .split("\n## ")
+        .next()
+        .unwrap();
+    let block = |fence: &str| -> String {
+        let start = section
+            .find(fence)
+            .unwrap_or_else(|| panic!("no {fence} block"))
+            + fence.len();
+        section[start..].split("```").next().unwrap().to_string()
+    };
+    std::fs::write(dir.join("mine-jobs.toml"), block("```toml\n")).unwrap();
+    let tif = formats().join("utm-metres-Float32.tif");
+    let mut ran = Vec::new();
+    for line in block("```sh\n").lines() {
+        let command = line.split(" #").next().unwrap().trim();
+        let mut words: Vec<String> = command.split_whitespace().map(String::from).collect();
+        assert_eq!(words.first().map(String::as_str), Some("terrain"), "{line}");
+        words.remove(0);
+        for w in &mut words {
+            if w == "my_dem.tif" {
+                *w = tif.to_string_lossy().into_owned();
+            }
+        }
+        match words[0].as_str() {
+            "view" => continue,
+            "render" | "batch" => words.extend(["--size".into(), "32".into()]),
+            "fly" => words.extend(["--size", "32", "--frames", "4"].map(String::from)),
+            _ => {}
+        }
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_terrain"))
+            .current_dir(&dir)
+            .args(&words)
+            .env("TERRAIN_QUIET", "1")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "`{command}`: {err}");
+        ran.push(words[0].clone());
+    }
+    assert_eq!(ran, ["info", "render", "scene", "render", "fly", "batch"]);
+    for made in [
+        "out/mine.png",
+        "out/mine-east.png",
+        "mine.toml",
+        "out/mine-fly/frames.csv",
+    ] {
+        assert!(dir.join(made).is_file(), "{made} not written");
+    }
+    let shots = std::fs::read_dir(dir.join("out/mine-batch"))
+        .unwrap()
+        .flatten();
+    let pngs = shots
+        .filter(|e| e.path().extension().is_some_and(|x| x == "png"))
+        .count();
+    assert_eq!(pngs, 10);
+}
