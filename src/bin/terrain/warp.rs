@@ -62,6 +62,15 @@ struct Region {
 
 pub fn run(a: Args) -> Result<()> {
     let mut scene = Scene::load_with(&a.scene, &a.set)?;
+    if scene.planet().is_some() {
+        // The stage warps a plane; a planet draws with clipmaps, which have no CPU stage.
+        return Err(terrain::error::Error::scene(
+            &a.scene,
+            "a planet scene: `terrain warp` runs the warped mode's CPU stage over a planar sketch, \
+             and a planet draws with clipmaps",
+        )
+        .into());
+    }
     if let Some(m) = a.method {
         scene.warp.method = m;
     }
