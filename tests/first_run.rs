@@ -77,3 +77,110 @@ fn warp_refuses_a_planet() {
     );
     assert!(!dir.join("mesh.png").exists());
 }
+
+/// A 16-bit grey PNG of `n`² pixels whose values run from 10,000 to 50,000 (a DEM exported with
+/// its relief stretched over the range).
+fn write_png16(path: &Path, n: u32) {
+    let mut bytes = Vec::new();
+    let mut enc = png::Encoder::new(&mut bytes, n, n);
+    enc.set_color(png::ColorType::Grayscale);
+    enc.set_depth(png::BitDepth::Sixteen);
+    let mut w = enc.write_header().unwrap();
+    let px: Vec<u8> = (0..n * n)
+        .flat_map(|k| ((10_000 + 40_000 * k / (n * n - 1)) as u16).to_be_bytes())
+        .collect();
+    w.write_image_data(&px).unwrap();
+    drop(w);
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// The `warning:` lines of a run that succeeded.
+fn warnings(args: &[&str]) -> Vec<String> {
+    let (code, _, err) = terrain(args);
+    assert_eq!(code, 0, "{args:?}: {err}");
+    err.lines()
+        .filter(|l| l.starts_with("warning:"))
+        .map(String::from)
+        .collect()
+}
+
+#[test]
+fn a_png_without_units_is_warned_about_once_by_every_command() {
+    let dir = scratch("first-run-png-units");
+    let png = dir.join("dem.png");
+    write_png16(&png, 16);
+    let camera = "[camera]\nposition = [-20.0, -20.0, 60000.0]\nlook_at = [8.0, 8.0, 30000.0]\n";
+    let bare = dir.join("bare.toml");
+    std::fs::write(&bare, format!("[sketch]\npath = \"dem.png\"\n{camera}")).unwrap();
+    let (png, bare, d) = (
+        png.to_str().unwrap(),
+        bare.to_str().unwrap(),
+        dir.to_str().unwrap(),
+    );
+    let shot = dir.join("x.png");
+    let shot = shot.to_str().unwrap();
+    let pyramid = dir.join("pyramid");
+    let runs: [&[&str]; 4] = [
+        &["info", png],
+        &[
+            "warp",
+            bare,
+            "--out-dir",
+            d,
+            "--no-figures",
+            "--repeat",
+            "1",
+        ],
+        &["render", bare, "-o", shot, "--size", "16"],
+        &["tiles", png, "--out", pyramid.to_str().unwrap()],
+    ];
+    for args in runs {
+        let lines = warnings(args);
+        assert_eq!(lines.len(), 1, "{args:?}: {lines:?}");
+        for part in [
+            "dem.png",
+            "0 to 65535 m",
+            "1 m cells",
+            "sketch.height_range_m",
+            "sketch.spacing_m",
+            ".pgw",
+        ] {
+            assert!(
+                lines[0].contains(part),
+                "{args:?}: {:?} lacks {part:?}",
+                lines[0]
+            );
+        }
+    }
+    // Both units stated: no warning; the spacing stated alone: the warning names the heights' key.
+    let stated = dir.join("stated.toml");
+    let keys = "height_range_m = [100.0, 900.0]\nspacing_m = 30.0\n";
+    std::fs::write(
+        &stated,
+        format!("[sketch]\npath = \"dem.png\"\n{keys}{camera}"),
+    )
+    .unwrap();
+    let stated = stated.to_str().unwrap();
+    assert!(
+        warnings(&[
+            "warp",
+            stated,
+            "--out-dir",
+            d,
+            "--no-figures",
+            "--repeat",
+            "1"
+        ])
+        .is_empty()
+    );
+    std::fs::write(dir.join("dem.pgw"), "30\n0\n0\n-30\n15\n465\n").unwrap();
+    let lines = warnings(&["info", png]);
+    assert!(
+        lines.len() == 1 && lines[0].contains("height_range_m") && !lines[0].contains("spacing"),
+        "{lines:?}"
+    );
+    assert!(warnings(&["info", png, "--height-scale", "0.01"]).is_empty());
+    // Stated heights on cells of 1 m are a small map, not a wrong one.
+    std::fs::remove_file(dir.join("dem.pgw")).unwrap();
+    assert!(warnings(&["info", png, "--height-scale", "0.01"]).is_empty());
+}

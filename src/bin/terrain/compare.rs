@@ -4,7 +4,7 @@
 use crate::args;
 use anyhow::Result;
 use std::path::PathBuf;
-use terrain::scene::{Mode, Scene};
+use terrain::scene::Mode;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -47,7 +47,7 @@ pub fn run(a: Args) -> Result<()> {
         outln!("{n} rows redrawn in {}", a.out_dir.display());
         return Ok(());
     }
-    let scene = Scene::load_with(&a.scene, &a.set)?;
+    let scene = crate::load_scene(&a.scene, &a.set)?;
     let mut modes = a.modes;
     modes.dedup();
     if modes.is_empty() {

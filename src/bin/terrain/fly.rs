@@ -6,7 +6,7 @@ use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
 use terrain::gpu::uniforms::View;
-use terrain::scene::{Mode, Scene};
+use terrain::scene::Mode;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -59,7 +59,7 @@ struct Report {
 }
 
 pub fn run(a: Args) -> Result<()> {
-    let mut scene = Scene::load_with(&a.scene, &a.set)?;
+    let mut scene = crate::load_scene(&a.scene, &a.set)?;
     if let Some(size) = a.size {
         (scene.camera.width, scene.camera.height) = size;
     }

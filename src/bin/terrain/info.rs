@@ -100,6 +100,7 @@ pub fn run(a: Args) -> Result<()> {
         height_scale: a.height_scale,
         ..LoadOptions::default()
     };
+    crate::warn(&terrain::sketch::warnings(&a.file, &opts));
     let atlas = Atlas::load(&a.file, &opts)?;
     let r = Report {
         file: a.file.display().to_string(),

@@ -136,6 +136,29 @@ fn one_line(e: &anyhow::Error) -> String {
     line
 }
 
+/// The scene at `path` with its `--set` overrides, after warning about what its sketch leaves
+/// the loader to guess: every command that reads a scene loads it here.
+fn load_scene(path: &std::path::Path, set: &[String]) -> anyhow::Result<terrain::scene::Scene> {
+    let scene = terrain::scene::Scene::load_with(path, set)?;
+    warn_sketch(&scene);
+    Ok(scene)
+}
+
+/// Warns about what the scene's sketch leaves the loader to guess (a PNG's units).
+fn warn_sketch(scene: &terrain::scene::Scene) {
+    if let Some(sketch) = &scene.sketch.path {
+        let opts = terrain::scene::scene_load_options(scene);
+        warn(&terrain::sketch::warnings(&scene.resolve(sketch), &opts));
+    }
+}
+
+/// The library's warnings on stderr, one `warning:` line each (the library prints nothing).
+fn warn(lines: &[String]) {
+    for line in lines {
+        eprintln!("warning: {line}");
+    }
+}
+
 /// Prints `value` as one JSON object on stdout.
 fn print_json(value: &impl serde::Serialize) -> anyhow::Result<()> {
     outln!("{}", serde_json::to_string(value)?);

@@ -111,7 +111,7 @@ pub fn run(a: Args) -> Result<()> {
         let why = "--positions writes NumPy: give a .npy file name";
         return Err(Error::file(Role::Output, p, why).into());
     }
-    let mut scene = Scene::load_with(&a.scene, &a.set)?;
+    let mut scene = crate::load_scene(&a.scene, &a.set)?;
     let mode = a.mode.unwrap_or(scene.render.mode);
     if let Some(tau) = a.tau {
         scene.geomipmap.tau = tau;

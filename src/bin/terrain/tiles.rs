@@ -35,6 +35,7 @@ pub fn run(a: Args) -> Result<()> {
         },
         threads: a.threads,
     };
+    crate::warn(&terrain::sketch::warnings(&a.src, &opts.load));
     let s = build(&a.src, &a.out, &opts)?;
     if a.json {
         return crate::print_json(&s);

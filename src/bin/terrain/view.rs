@@ -32,7 +32,7 @@ pub struct Args {
 
 #[cfg(feature = "view")]
 pub fn run(a: Args) -> Result<()> {
-    let scene = terrain::scene::Scene::load_with(&a.scene, &a.set)?;
+    let scene = crate::load_scene(&a.scene, &a.set)?;
     let planet = scene.planet().is_some();
     let mode = match a.mode {
         Some(m) if planet && m != Mode::Clipmaps => anyhow::bail!(

@@ -5,7 +5,7 @@ use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
 use terrain::scene;
-use terrain::scene::{Scene, WarpMethod};
+use terrain::scene::WarpMethod;
 use terrain::stage::quality::{self, Quality};
 use terrain::stage::{CpuStage, StageTimes};
 
@@ -61,7 +61,7 @@ struct Region {
 }
 
 pub fn run(a: Args) -> Result<()> {
-    let mut scene = Scene::load_with(&a.scene, &a.set)?;
+    let mut scene = crate::load_scene(&a.scene, &a.set)?;
     if scene.planet().is_some() {
         // The stage warps a plane; a planet draws with clipmaps, which have no CPU stage.
         return Err(terrain::error::Error::scene(
