@@ -184,3 +184,19 @@ fn a_png_without_units_is_warned_about_once_by_every_command() {
     std::fs::remove_file(dir.join("dem.pgw")).unwrap();
     assert!(warnings(&["info", png, "--height-scale", "0.01"]).is_empty());
 }
+
+#[test]
+fn terrain_alone_prints_its_commands() {
+    let (code, out, err) = terrain(&[]);
+    assert_eq!(code, 2, "{out}{err}");
+    let help = format!("{out}{err}");
+    assert!(help.contains("Usage: terrain <COMMAND>"), "{help}");
+    for command in [
+        "info", "tiles", "warp", "render", "compare", "fly", "batch", "view",
+    ] {
+        assert!(
+            help.lines().any(|l| l.trim_start().starts_with(command)),
+            "{command} missing from {help}"
+        );
+    }
+}

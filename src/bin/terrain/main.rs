@@ -36,7 +36,8 @@ use terrain::error::Error;
 #[command(
     name = "terrain",
     version,
-    about = "Procedural terrain by geometry image warping"
+    about = "Procedural terrain by geometry image warping",
+    arg_required_else_help = true
 )]
 struct Cli {
     #[command(subcommand)]
@@ -83,9 +84,16 @@ fn main() {
         unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
     }
     // Usage errors as one line too, like every other bad input; help and version print in full.
+    // `terrain` alone prints the help (on stderr, exit 2) rather than a line about a missing
+    // command.
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
-        Err(e) if !e.use_stderr() => e.exit(),
+        Err(e)
+            if !e.use_stderr()
+                || e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand =>
+        {
+            e.exit()
+        }
         Err(e) => {
             // The cause is everything before clap's usage block, on one line.
             let text = e.to_string();
