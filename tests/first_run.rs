@@ -200,3 +200,18 @@ fn terrain_alone_prints_its_commands() {
         );
     }
 }
+
+#[test]
+fn a_usage_error_points_at_the_help_of_its_command() {
+    refused(
+        &["render", "--bogus"],
+        2,
+        &["--bogus", "(terrain render --help lists"],
+    );
+    refused(
+        &["tiles", "a.asc", "--threads", "many"],
+        2,
+        &["many", "(terrain tiles --help lists"],
+    );
+    refused(&["rendr"], 2, &["rendr", "(terrain --help lists"]);
+}

@@ -95,18 +95,7 @@ fn main() {
             e.exit()
         }
         Err(e) => {
-            // The cause is everything before clap's usage block, on one line.
-            let text = e.to_string();
-            let cause: Vec<&str> = text
-                .lines()
-                .take_while(|l| !l.starts_with("Usage:"))
-                .map(str::trim)
-                .filter(|l| !l.is_empty() && !l.starts_with("tip:") && !l.starts_with("For more"))
-                .collect();
-            eprintln!(
-                "{} (terrain --help lists the commands and options)",
-                cause.join(" ")
-            );
+            eprintln!("{}", usage_line(&e.to_string()));
             std::process::exit(USAGE);
         }
     };
@@ -126,6 +115,28 @@ fn main() {
         let usage = matches!(e.downcast_ref(), Some(Error::Override { .. }));
         std::process::exit(if usage { USAGE } else { 1 });
     }
+}
+
+/// A clap error as one line: the cause (everything before clap's usage block), then the help of
+/// the command given (`terrain render --help`), or the top level's where none is known.
+fn usage_line(text: &str) -> String {
+    use clap::CommandFactory;
+    let cause: Vec<&str> = text
+        .lines()
+        .take_while(|l| !l.starts_with("Usage:"))
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with("tip:") && !l.starts_with("For more"))
+        .collect();
+    // The top level takes no option but --help and --version, so a command is the first argument.
+    let first = std::env::args().nth(1).unwrap_or_default();
+    let help = match Cli::command().find_subcommand(&first) {
+        Some(c) => format!(
+            "terrain {} --help lists its arguments and options",
+            c.get_name()
+        ),
+        None => "terrain --help lists the commands and options".into(),
+    };
+    format!("{} ({help})", cause.join(" "))
 }
 
 /// The error and its causes on one line, each cause once: a library error prints its source
