@@ -132,7 +132,7 @@ fn a_png_without_units_is_warned_about_once_by_every_command() {
             "1",
         ],
         &["render", bare, "-o", shot, "--size", "16"],
-        &["tiles", png, "--out", pyramid.to_str().unwrap()],
+        &["tiles", png, "--out-dir", pyramid.to_str().unwrap()],
     ];
     for args in runs {
         let lines = warnings(args);
@@ -214,4 +214,27 @@ fn a_usage_error_points_at_the_help_of_its_command() {
         &["many", "(terrain tiles --help lists"],
     );
     refused(&["rendr"], 2, &["rendr", "(terrain --help lists"]);
+}
+
+#[test]
+fn tiles_names_its_folder_out_dir_like_every_command() {
+    let dir = scratch("first-run-tiles");
+    let asc = dir.join("small.asc");
+    let rows: String = (0..4).map(|r| format!("{r} 1 2 3\n")).collect();
+    std::fs::write(
+        &asc,
+        format!("ncols 4\nnrows 4\nxllcorner 0\nyllcorner 0\ncellsize 30\n{rows}"),
+    )
+    .unwrap();
+    let asc = asc.to_str().unwrap();
+    // `--out`, the earlier name, still works for scripts; the help shows the one name.
+    for (flag, folder) in [("--out-dir", "new"), ("--out", "old")] {
+        let out = dir.join(folder);
+        let (code, _, err) = terrain(&["tiles", asc, flag, out.to_str().unwrap()]);
+        assert_eq!(code, 0, "{flag}: {err}");
+        assert!(out.join("pyramid.toml").is_file(), "{flag}");
+    }
+    let (_, help, _) = terrain(&["tiles", "--help"]);
+    assert!(help.contains("--out-dir <OUT_DIR>"), "{help}");
+    assert!(!help.contains("--out <"), "{help}");
 }
