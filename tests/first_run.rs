@@ -238,3 +238,45 @@ fn tiles_names_its_folder_out_dir_like_every_command() {
     assert!(help.contains("--out-dir <OUT_DIR>"), "{help}");
     assert!(!help.contains("--out <"), "{help}");
 }
+
+/// The entries of a `--help` text's Arguments and Options sections that have no description.
+fn undescribed(help: &str) -> Vec<String> {
+    let mut section = "";
+    let mut bare = Vec::new();
+    for line in help.lines() {
+        if !line.starts_with(' ') {
+            section = line;
+            continue;
+        }
+        let entry = line.trim_start();
+        let listed = section == "Arguments:" || section == "Options:";
+        // An entry's name and its description are two spaces apart.
+        if listed && entry.starts_with(['-', '<', '[']) && !entry.trim_end().contains("  ") {
+            bare.push(entry.trim_end().to_string());
+        }
+    }
+    bare
+}
+
+#[test]
+fn every_argument_and_option_of_every_command_says_what_it_is() {
+    for command in [
+        "info", "tiles", "warp", "render", "compare", "fly", "batch", "view",
+    ] {
+        let (code, help, err) = terrain(&[command, "--help"]);
+        assert_eq!(code, 0, "{command}: {err}");
+        assert!(help.contains("Options:"), "{command}: {help}");
+        let bare = undescribed(&help);
+        assert!(
+            bare.is_empty(),
+            "terrain {command} --help: {bare:?} without a description"
+        );
+    }
+    let (_, help, _) = terrain(&["render", "--help"]);
+    assert!(
+        help.contains(
+            "A scene file (.toml), or a sketch (height map) to render with every default"
+        ),
+        "{help}"
+    );
+}

@@ -8,7 +8,9 @@ use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// The jobs file (.toml): a base scene, its random cameras and its jobs (docs/scene.md).
     jobs: PathBuf,
+    /// The folder the snapshots and manifest.jsonl are written to.
     #[arg(long)]
     out_dir: PathBuf,
     /// Renders share i of n (items k with k mod n = i), e.g. --shard 0/4.
@@ -20,6 +22,7 @@ pub struct Args {
     /// Merges the shard manifests in --out-dir into manifest.jsonl instead of rendering.
     #[arg(long, conflicts_with_all = ["shard", "resume"])]
     merge: bool,
+    /// Prints one JSON object on stdout instead of the summary line.
     #[arg(long)]
     json: bool,
 }

@@ -8,7 +8,9 @@ use terrain::scene::Mode;
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// A scene file (.toml), or a sketch (height map) to render with every default.
     scene: PathBuf,
+    /// The folder report.csv, report.json, summary.md and the figures are written to.
     #[arg(long)]
     out_dir: PathBuf,
     /// Image size: N (square) or WxH.
@@ -37,6 +39,7 @@ pub struct Args {
     /// Overrides a scene key (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
+    /// Prints one JSON object on stdout instead of the summary line.
     #[arg(long)]
     json: bool,
 }

@@ -23,6 +23,7 @@ pub struct Args {
     /// Threads encoding tiles (default: all cores).
     #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// Prints one JSON object on stdout instead of the summary line.
     #[arg(long)]
     json: bool,
 }

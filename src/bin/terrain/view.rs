@@ -7,6 +7,7 @@ use terrain::scene::Mode;
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// A scene file (.toml), or a sketch (height map) to render with every default.
     scene: PathBuf,
     /// The mode [default: the scene's; warped for the reference; clipmaps on a planet].
     #[arg(long, value_parser = args::mesh_mode)]

@@ -11,7 +11,9 @@ use terrain::stage::{CpuStage, StageTimes};
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// A scene file (.toml), or a sketch (height map) to render with every default.
     scene: PathBuf,
+    /// The folder importance.png, mesh.png and ratio.png are written to.
     #[arg(long)]
     out_dir: PathBuf,
     /// Overrides the scene's warp.method.
@@ -26,6 +28,7 @@ pub struct Args {
     /// Overrides a scene key, e.g. `--set warp.quad_px=4` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
+    /// Prints one JSON object on stdout instead of the summary line.
     #[arg(long)]
     json: bool,
 }
