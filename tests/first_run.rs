@@ -280,3 +280,21 @@ fn every_argument_and_option_of_every_command_says_what_it_is() {
         "{help}"
     );
 }
+
+#[test]
+fn the_licences_cargo_toml_names_are_in_the_tree() {
+    let manifest = std::fs::read_to_string(manifest_dir().join("Cargo.toml")).unwrap();
+    assert!(manifest.contains("license = \"MIT OR Apache-2.0\""));
+    let read = |name: &str| {
+        std::fs::read_to_string(manifest_dir().join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    let mit = read("LICENSE-MIT");
+    assert!(
+        mit.contains("Copyright (c) The terrain developers"),
+        "{mit}"
+    );
+    assert!(mit.contains("Permission is hereby granted, free of charge"));
+    let apache = read("LICENSE-APACHE");
+    assert!(apache.contains("Apache License") && apache.contains("Version 2.0, January 2004"));
+    assert!(apache.contains("END OF TERMS AND CONDITIONS"));
+}
