@@ -180,6 +180,21 @@ fn a_png_without_units_is_warned_about_once_by_every_command() {
         "{lines:?}"
     );
     assert!(warnings(&["info", png, "--height-scale", "0.01"]).is_empty());
+    // A PNG its header refuses gets the error's one line alone.
+    let rgb = dir.join("rgb.png");
+    let mut bytes = Vec::new();
+    let mut enc = png::Encoder::new(&mut bytes, 2, 2);
+    enc.set_color(png::ColorType::Rgb);
+    enc.write_header()
+        .unwrap()
+        .write_image_data(&[0; 12])
+        .unwrap();
+    std::fs::write(&rgb, bytes).unwrap();
+    refused(
+        &["info", rgb.to_str().unwrap()],
+        1,
+        &["rgb.png", "grayscale"],
+    );
     // Stated heights on cells of 1 m are a small map, not a wrong one.
     std::fs::remove_file(dir.join("dem.pgw")).unwrap();
     assert!(warnings(&["info", png, "--height-scale", "0.01"]).is_empty());

@@ -32,8 +32,8 @@ pub fn read_file(path: &Path, opts: &LoadOptions) -> Result<RawGrid> {
 }
 
 /// What reading the PNG at `path` with `opts` would guess about its units, as one line for the
-/// user, or `None` where the scene states its heights (or the file is no readable PNG: reading
-/// it says so). Without `sketch.height_range_m` or `sketch.height_scale` its values are taken as
+/// user, or `None` where the scene states its heights (or where the header alone refuses the
+/// file: reading it says why, in the one line of its error). Without `sketch.height_range_m` or `sketch.height_scale` its values are taken as
 /// metres (a 16-bit map's 0 to 65535), and the line adds the 1 m cells where neither
 /// `sketch.spacing_m` nor a world file gives the spacing (under stated heights those make a
 /// small map, not a wrong one). A height map exported as 16-bit grey often stretches its relief
@@ -44,7 +44,16 @@ pub fn units_warning(path: &Path, opts: &LoadOptions) -> Option<String> {
     }
     let file = std::fs::File::open(path).ok()?;
     let decoder = png::Decoder::new(std::io::BufReader::new(file));
-    let bits = match decoder.read_info().ok()?.info().bit_depth {
+    let reader = decoder.read_info().ok()?;
+    let info = reader.info();
+    let grey = matches!(
+        info.color_type,
+        png::ColorType::Grayscale | png::ColorType::GrayscaleAlpha
+    );
+    if !grey || RawGrid::check_size(path, info.width as i64, info.height as i64).is_err() {
+        return None;
+    }
+    let bits = match info.bit_depth {
         png::BitDepth::Sixteen => 16,
         _ => 8,
     };
