@@ -201,7 +201,7 @@ fn a_killed_build_resumes_to_the_same_files() {
         .args([
             "tiles",
             src.to_str().unwrap(),
-            "--out",
+            "--out-dir",
             killed.to_str().unwrap(),
             "--threads",
             "1",
@@ -225,7 +225,7 @@ fn a_killed_build_resumes_to_the_same_files() {
     let (code, stdout, stderr) = terrain(&[
         "tiles",
         src.to_str().unwrap(),
-        "--out",
+        "--out-dir",
         killed.to_str().unwrap(),
         "--json",
     ]);
@@ -242,7 +242,7 @@ fn a_killed_build_resumes_to_the_same_files() {
     let (code, _, stderr) = terrain(&[
         "tiles",
         src.to_str().unwrap(),
-        "--out",
+        "--out-dir",
         fresh.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "{stderr}");
@@ -263,7 +263,7 @@ fn a_killed_build_resumes_to_the_same_files() {
     let (code, stdout, _) = terrain(&[
         "tiles",
         src.to_str().unwrap(),
-        "--out",
+        "--out-dir",
         killed.to_str().unwrap(),
         "--json",
     ]);
@@ -282,7 +282,7 @@ fn folders_of_other_builds_and_damaged_tiles_are_refused_in_one_line() {
     let (code, _, stderr) = terrain(&[
         "tiles",
         two.to_str().unwrap(),
-        "--out",
+        "--out-dir",
         out.to_str().unwrap(),
     ]);
     assert_eq!(code, 1);
@@ -296,7 +296,7 @@ fn folders_of_other_builds_and_damaged_tiles_are_refused_in_one_line() {
     let (code, _, stderr) = terrain(&[
         "tiles",
         one.to_str().unwrap(),
-        "--out",
+        "--out-dir",
         other.to_str().unwrap(),
     ]);
     assert_eq!(code, 1);
@@ -320,7 +320,7 @@ fn folders_of_other_builds_and_damaged_tiles_are_refused_in_one_line() {
     let (code, _, stderr) = terrain(&[
         "tiles",
         dir.join("missing.asc").to_str().unwrap(),
-        "--out",
+        "--out-dir",
         dir.join("x").to_str().unwrap(),
     ]);
     assert_eq!(code, 1);

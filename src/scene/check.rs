@@ -1,6 +1,6 @@
 //! The ranges a parsed scene must keep, each fault naming its dotted key.
 
-use super::{MAX_OCTAVES, Scene};
+use super::{MAX_OCTAVES, Msaa, Scene};
 
 impl Scene {
     pub(super) fn check(&self) -> std::result::Result<(), String> {
@@ -71,6 +71,7 @@ impl Scene {
                 1.0,
                 256.0,
             )?;
+            planet_render(&self.render)?;
             if s.path.is_none() && s.synthetic.as_deref() != Some("planet") {
                 return Err(
                     "sketch: a planet needs `synthetic = \"planet\"` or a global sketch file"
@@ -342,6 +343,21 @@ fn planar_keys(table: &str, k: &Keys, need_place: bool) -> std::result::Result<(
     }
     if let Some(p) = k.pitch_deg {
         within(&format!("{table}.pitch_deg"), p, -90.0, 90.0)?;
+    }
+    Ok(())
+}
+
+/// What a planet's passes cannot draw yet, refused rather than left out of the picture: the
+/// detail's shadow and multisampling (`render.shadows` stays on by default everywhere, so a
+/// planet ignores it instead of refusing every scene that does not turn it off).
+fn planet_render(r: &super::RenderSection) -> std::result::Result<(), String> {
+    if r.detail_shadows {
+        return Err("render.detail_shadows = true: a planet draws no shadows yet".into());
+    }
+    if r.msaa == Msaa::X4 {
+        return Err(
+            "render.msaa = \"4x\": a planet is not multisampled yet (\"auto\" or \"off\")".into(),
+        );
     }
     Ok(())
 }

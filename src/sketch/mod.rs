@@ -264,6 +264,18 @@ fn read_at_depth(path: &Path, opts: &LoadOptions, depth: usize) -> Result<RawGri
     }
 }
 
+/// What reading the sketch at `path` with `opts` would take on trust where neither the file nor
+/// the options say (a PNG's units), one line each for the program to show: the library prints
+/// nothing. Cheap (a PNG's header); empty where nothing is guessed or the file cannot be read.
+pub fn warnings(path: &Path, opts: &LoadOptions) -> Vec<String> {
+    match Format::of(path) {
+        Ok(Format::Png) if !mosaic::is_glob(path) => {
+            png::units_warning(path, opts).into_iter().collect()
+        }
+        _ => Vec::new(),
+    }
+}
+
 /// Parses a sketch held in memory, the format told by `name`'s extension, as [`read_grid`] would
 /// read the file (a VRT's sources and a PNG's world file are still read from disk, beside
 /// `name`). For the fuzz harness and for callers that hold the bytes already.

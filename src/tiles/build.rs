@@ -222,7 +222,7 @@ fn start_or_resume(out: &Path, plan: &Plan) -> Result<()> {
                     Role::OutputFolder,
                     out,
                     "holds a pyramid of other sources or options (build.json); remove it or \
-                     choose another --out",
+                     choose another --out-dir",
                 ));
             }
             Ok(())

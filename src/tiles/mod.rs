@@ -1,5 +1,5 @@
 //! Tile pyramids: a sketch on disk as fixed-size tiles of every mip level, for sketches larger than
-//! memory (`terrain tiles SRC --out DIR` writes one; a scene's `sketch.path = "DIR"` reads it).
+//! memory (`terrain tiles SRC --out-dir DIR` writes one; a scene's `sketch.path = "DIR"` reads it).
 //!
 //! Rules:
 //! - Level 0 is the sketch's grid in metres, nodata filled; level l is the 2×2 box average of level

@@ -8,7 +8,9 @@ use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// The jobs file (.toml): a base scene, its random cameras and its jobs (docs/scene.md).
     jobs: PathBuf,
+    /// The folder the snapshots and manifest.jsonl are written to.
     #[arg(long)]
     out_dir: PathBuf,
     /// Renders share i of n (items k with k mod n = i), e.g. --shard 0/4.
@@ -20,6 +22,7 @@ pub struct Args {
     /// Merges the shard manifests in --out-dir into manifest.jsonl instead of rendering.
     #[arg(long, conflicts_with_all = ["shard", "resume"])]
     merge: bool,
+    /// Prints one JSON object on stdout instead of the summary line.
     #[arg(long)]
     json: bool,
 }
@@ -47,6 +50,11 @@ struct Merged {
 pub fn run(a: Args) -> Result<()> {
     if a.merge {
         return merge(&a);
+    }
+    // The jobs' base scene names the sketch; a jobs file that does not load is reported by the
+    // batch itself, in its one line.
+    if let Ok(base) = terrain::app::batch::Jobs::load(&a.jobs).and_then(|j| j.base_scene()) {
+        crate::warn_sketch(&base);
     }
     let o = terrain::app::batch::Options {
         shard: a.shard.unwrap_or((0, 1)),

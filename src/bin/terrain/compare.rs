@@ -4,11 +4,13 @@
 use crate::args;
 use anyhow::Result;
 use std::path::PathBuf;
-use terrain::scene::{Mode, Scene};
+use terrain::scene::Mode;
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// A scene file (.toml), or a sketch (height map) to render with every default.
     scene: PathBuf,
+    /// The folder report.csv, report.json, summary.md and the figures are written to.
     #[arg(long)]
     out_dir: PathBuf,
     /// Image size: N (square) or WxH.
@@ -37,6 +39,7 @@ pub struct Args {
     /// Overrides a scene key (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
+    /// Prints one JSON object on stdout instead of the summary line.
     #[arg(long)]
     json: bool,
 }
@@ -47,7 +50,7 @@ pub fn run(a: Args) -> Result<()> {
         outln!("{n} rows redrawn in {}", a.out_dir.display());
         return Ok(());
     }
-    let scene = Scene::load_with(&a.scene, &a.set)?;
+    let scene = crate::load_scene(&a.scene, &a.set)?;
     let mut modes = a.modes;
     modes.dedup();
     if modes.is_empty() {

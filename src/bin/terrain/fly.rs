@@ -6,15 +6,19 @@ use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
 use terrain::gpu::uniforms::View;
-use terrain::scene::{Mode, Scene};
+use terrain::scene::Mode;
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// A scene file (.toml), or a sketch (height map) to render with every default.
     scene: PathBuf,
+    /// The folder the frames, the animation and frames.csv are written to.
     #[arg(long)]
     out_dir: PathBuf,
+    /// Overrides the scene's render.mode.
     #[arg(long)]
     mode: Option<Mode>,
+    /// What the image shows: the shaded terrain, or a diagnostic view.
     #[arg(long, default_value_t = View::Shaded)]
     view: View,
     /// Frames spread evenly over the whole path (default: --fps frames per second of travel,
@@ -37,6 +41,7 @@ pub struct Args {
     /// Overrides a scene key (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
+    /// Prints one JSON object on stdout instead of the summary line.
     #[arg(long)]
     json: bool,
 }
@@ -59,7 +64,7 @@ struct Report {
 }
 
 pub fn run(a: Args) -> Result<()> {
-    let mut scene = Scene::load_with(&a.scene, &a.set)?;
+    let mut scene = crate::load_scene(&a.scene, &a.set)?;
     if let Some(size) = a.size {
         (scene.camera.width, scene.camera.height) = size;
     }

@@ -8,6 +8,8 @@ use terrain::sketch::{Atlas, LoadOptions};
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// A sketch file (any format of docs/formats.md), a quoted glob of tiles, or a tile
+    /// pyramid's folder.
     file: PathBuf,
     /// Grid spacing in metres, for formats that carry none (PNG).
     #[arg(long)]
@@ -15,6 +17,7 @@ pub struct Args {
     /// Metres per unit of the file's heights (0.001 for millimetres), as `sketch.height_scale`.
     #[arg(long)]
     height_scale: Option<f64>,
+    /// Prints one JSON object on stdout instead of the summary line.
     #[arg(long)]
     json: bool,
 }
@@ -100,6 +103,7 @@ pub fn run(a: Args) -> Result<()> {
         height_scale: a.height_scale,
         ..LoadOptions::default()
     };
+    crate::warn(&terrain::sketch::warnings(&a.file, &opts));
     let atlas = Atlas::load(&a.file, &opts)?;
     let r = Report {
         file: a.file.display().to_string(),

@@ -37,7 +37,8 @@ use terrain::error::Error;
 #[command(
     name = "terrain",
     version,
-    about = "Procedural terrain by geometry image warping"
+    about = "Procedural terrain by geometry image warping",
+    arg_required_else_help = true
 )]
 struct Cli {
     #[command(subcommand)]
@@ -87,22 +88,18 @@ fn main() {
         unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
     }
     // Usage errors as one line too, like every other bad input; help and version print in full.
+    // `terrain` alone prints the help (on stderr, exit 2) rather than a line about a missing
+    // command.
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
-        Err(e) if !e.use_stderr() => e.exit(),
+        Err(e)
+            if !e.use_stderr()
+                || e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand =>
+        {
+            e.exit()
+        }
         Err(e) => {
-            // The cause is everything before clap's usage block, on one line.
-            let text = e.to_string();
-            let cause: Vec<&str> = text
-                .lines()
-                .take_while(|l| !l.starts_with("Usage:"))
-                .map(str::trim)
-                .filter(|l| !l.is_empty() && !l.starts_with("tip:") && !l.starts_with("For more"))
-                .collect();
-            eprintln!(
-                "{} (terrain --help lists the commands and options)",
-                cause.join(" ")
-            );
+            eprintln!("{}", usage_line(&e.to_string()));
             std::process::exit(USAGE);
         }
     };
@@ -125,6 +122,28 @@ fn main() {
     }
 }
 
+/// A clap error as one line: the cause (everything before clap's usage block), then the help of
+/// the command given (`terrain render --help`), or the top level's where none is known.
+fn usage_line(text: &str) -> String {
+    use clap::CommandFactory;
+    let cause: Vec<&str> = text
+        .lines()
+        .take_while(|l| !l.starts_with("Usage:"))
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with("tip:") && !l.starts_with("For more"))
+        .collect();
+    // The top level takes no option but --help and --version, so a command is the first argument.
+    let first = std::env::args().nth(1).unwrap_or_default();
+    let help = match Cli::command().find_subcommand(&first) {
+        Some(c) => format!(
+            "terrain {} --help lists its arguments and options",
+            c.get_name()
+        ),
+        None => "terrain --help lists the commands and options".into(),
+    };
+    format!("{} ({help})", cause.join(" "))
+}
+
 /// The error and its causes on one line, each cause once: a library error prints its source
 /// already (`output x.png: No such file…`), which anyhow's `{:#}` would print again.
 fn one_line(e: &anyhow::Error) -> String {
@@ -139,6 +158,29 @@ fn one_line(e: &anyhow::Error) -> String {
         }
     }
     line
+}
+
+/// The scene at `path` with its `--set` overrides, after warning about what its sketch leaves
+/// the loader to guess: every command that reads a scene loads it here.
+fn load_scene(path: &std::path::Path, set: &[String]) -> anyhow::Result<terrain::scene::Scene> {
+    let scene = terrain::scene::Scene::load_with(path, set)?;
+    warn_sketch(&scene);
+    Ok(scene)
+}
+
+/// Warns about what the scene's sketch leaves the loader to guess (a PNG's units).
+fn warn_sketch(scene: &terrain::scene::Scene) {
+    if let Some(sketch) = &scene.sketch.path {
+        let opts = terrain::scene::scene_load_options(scene);
+        warn(&terrain::sketch::warnings(&scene.resolve(sketch), &opts));
+    }
+}
+
+/// The library's warnings on stderr, one `warning:` line each (the library prints nothing).
+fn warn(lines: &[String]) {
+    for line in lines {
+        eprintln!("warning: {line}");
+    }
 }
 
 /// Prints `value` as one JSON object on stdout.

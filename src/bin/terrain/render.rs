@@ -16,6 +16,7 @@ use terrain::scene::{Mode, Scene};
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// A scene file (.toml), or a sketch (height map) to render with every default.
     scene: PathBuf,
     /// The image: .png or .jpg (its folder is created).
     #[arg(short = 'o', long = "output")]
@@ -26,6 +27,7 @@ pub struct Args {
     /// Overrides the scene's render.mode.
     #[arg(long)]
     mode: Option<Mode>,
+    /// What the image shows: the shaded terrain, or a diagnostic view.
     #[arg(long, default_value_t = View::Shaded)]
     view: View,
     /// GeoMipMap's τ: the largest projected vertex error, pixels (overrides geomipmap.tau).
@@ -41,6 +43,7 @@ pub struct Args {
     /// as a NumPy .npy of f64, shape (height, width, 4).
     #[arg(long, value_name = "FILE.npy")]
     positions: Option<PathBuf>,
+    /// Prints one JSON object on stdout instead of the summary line.
     #[arg(long)]
     json: bool,
 }
@@ -114,7 +117,7 @@ pub fn run(a: Args) -> Result<()> {
         let why = "--positions writes NumPy: give a .npy file name";
         return Err(Error::file(Role::Output, p, why).into());
     }
-    let mut scene = Scene::load_with(&a.scene, &a.set)?;
+    let mut scene = crate::load_scene(&a.scene, &a.set)?;
     let mode = a.mode.unwrap_or(scene.render.mode);
     if let Some(tau) = a.tau {
         scene.geomipmap.tau = tau;

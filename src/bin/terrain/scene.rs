@@ -4,7 +4,7 @@ use anyhow::Result;
 use std::path::{Path, PathBuf};
 use terrain::app::output::write_atomic;
 use terrain::error::{Error, Role};
-use terrain::scene::{self, Scene};
+use terrain::scene;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -32,7 +32,7 @@ pub fn run(a: Args) -> Result<()> {
         let why = "is a scene already; give the sketch it names";
         return Err(Error::file(Role::Sketch, &a.sketch, why).into());
     }
-    let scene = Scene::load_with(&a.sketch, &a.set)?;
+    let scene = crate::load_scene(&a.sketch, &a.set)?;
     let atlas = scene::load_atlas(&scene)?;
     let named = match &a.output {
         Some(out) => relative_to(&a.sketch, out.parent().unwrap_or(Path::new(""))),

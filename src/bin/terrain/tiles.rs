@@ -1,4 +1,4 @@
-//! `terrain tiles SRC --out DIR`: a sketch converted into a tile pyramid on disk, streamed with
+//! `terrain tiles SRC --out-dir DIR`: a sketch converted into a tile pyramid on disk, streamed with
 //! bounded memory and resumable (run it again after a kill).
 
 use anyhow::Result;
@@ -11,8 +11,9 @@ pub struct Args {
     /// A sketch file, or a quoted glob of tiles (`'srtm/*.hgt'`).
     src: PathBuf,
     /// The pyramid's folder: created, or resumed where an interrupted run stopped.
-    #[arg(long)]
-    out: PathBuf,
+    // `--out`, its first name, kept for scripts that use it.
+    #[arg(long, alias = "out")]
+    out_dir: PathBuf,
     /// Grid spacing in metres, for formats that carry none (PNG without a world file).
     #[arg(long)]
     spacing_m: Option<f64>,
@@ -22,6 +23,7 @@ pub struct Args {
     /// Threads encoding tiles (default: all cores).
     #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// Prints one JSON object on stdout instead of the summary line.
     #[arg(long)]
     json: bool,
 }
@@ -35,13 +37,14 @@ pub fn run(a: Args) -> Result<()> {
         },
         threads: a.threads,
     };
-    let s = build(&a.src, &a.out, &opts)?;
+    crate::warn(&terrain::sketch::warnings(&a.src, &opts.load));
+    let s = build(&a.src, &a.out_dir, &opts)?;
     if a.json {
         return crate::print_json(&s);
     }
     outln!(
         "{}: {} × {} nodes from {} source file(s) in {} levels, {} tiles ({} written now), {:.1} MiB, {:.1} s",
-        a.out.display(),
+        a.out_dir.display(),
         s.width,
         s.height,
         s.sources,

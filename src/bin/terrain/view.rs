@@ -7,6 +7,7 @@ use terrain::scene::Mode;
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// A scene file (.toml), or a sketch (height map) to render with every default.
     scene: PathBuf,
     /// The mode [default: the scene's; warped for the reference; clipmaps on a planet].
     #[arg(long, value_parser = args::mesh_mode)]
@@ -32,7 +33,7 @@ pub struct Args {
 
 #[cfg(feature = "view")]
 pub fn run(a: Args) -> Result<()> {
-    let scene = terrain::scene::Scene::load_with(&a.scene, &a.set)?;
+    let scene = crate::load_scene(&a.scene, &a.set)?;
     let planet = scene.planet().is_some();
     let mode = match a.mode {
         Some(m) if planet && m != Mode::Clipmaps => anyhow::bail!(

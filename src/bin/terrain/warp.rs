@@ -5,13 +5,15 @@ use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
 use terrain::scene;
-use terrain::scene::{Scene, WarpMethod};
+use terrain::scene::WarpMethod;
 use terrain::stage::quality::{self, Quality};
 use terrain::stage::{CpuStage, StageTimes};
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// A scene file (.toml), or a sketch (height map) to render with every default.
     scene: PathBuf,
+    /// The folder importance.png, mesh.png and ratio.png are written to.
     #[arg(long)]
     out_dir: PathBuf,
     /// Overrides the scene's warp.method.
@@ -26,6 +28,7 @@ pub struct Args {
     /// Overrides a scene key, e.g. `--set warp.quad_px=4` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
+    /// Prints one JSON object on stdout instead of the summary line.
     #[arg(long)]
     json: bool,
 }
@@ -61,7 +64,16 @@ struct Region {
 }
 
 pub fn run(a: Args) -> Result<()> {
-    let mut scene = Scene::load_with(&a.scene, &a.set)?;
+    let mut scene = crate::load_scene(&a.scene, &a.set)?;
+    if scene.planet().is_some() {
+        // The stage warps a plane; a planet draws with clipmaps, which have no CPU stage.
+        return Err(terrain::error::Error::scene(
+            &a.scene,
+            "a planet scene: `terrain warp` runs the warped mode's CPU stage over a planar sketch, \
+             and a planet draws with clipmaps",
+        )
+        .into());
+    }
     if let Some(m) = a.method {
         scene.warp.method = m;
     }
