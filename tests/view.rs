@@ -18,7 +18,12 @@ type ViewTest = (&'static str, fn(), &'static [&'static str]);
 
 fn main() {
     let args = Arguments::from_args();
-    let tests: [ViewTest; 3] = [
+    let tests: [ViewTest; 4] = [
+        (
+            "view_flies_a_sketch_of_each_format_given_by_itself",
+            view_flies_a_sketch_of_each_format_given_by_itself,
+            &["xvfb-run"],
+        ),
         (
             "view_opens_draws_and_screenshots_itself_under_xvfb",
             view_opens_draws_and_screenshots_itself_under_xvfb,
@@ -63,6 +68,41 @@ fn has(program: &str) -> bool {
         .args(["-c", &format!("command -v {program}")])
         .output()
         .is_ok_and(|o| o.status.success())
+}
+
+/// A sketch of each reader's format (and a glob of tiles) in place of the scene: the window opens
+/// on the default view, draws two frames and shows ground in its screenshot.
+fn view_flies_a_sketch_of_each_format_given_by_itself() {
+    let dir = scratch("view-own");
+    let formats = manifest_dir().join("tests/data/formats");
+    let sketches = [
+        "utm-metres-Float32.tif",
+        "grid.asc",
+        "N36W084.hgt.zip",
+        "grid.xyz",
+        "mosaic.vrt",
+        "tiles/*.tif",
+        "cog-Int16.tif",
+    ];
+    for (k, name) in sketches.iter().enumerate() {
+        let shot = dir.join(format!("shot-{k}.png"));
+        let out = Command::new("xvfb-run")
+            .args(["-a", "-s", "-screen 0 640x480x24"])
+            .arg(env!("CARGO_BIN_EXE_terrain"))
+            .arg("view")
+            .arg(formats.join(name))
+            .args(["--size", "96x72", "--frames", "2", "--screenshot"])
+            .arg(&shot)
+            .output()
+            .expect("run xvfb-run");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "view {name} failed: {err}");
+        let (w, h, rgba) = read_png(&shot).expect("screenshot written");
+        assert_eq!((w, h), (96, 72), "{name}");
+        // Not one flat colour: the ground, lit and textured, is on screen.
+        let distinct: std::collections::HashSet<&[u8]> = rgba.chunks_exact(4).collect();
+        assert!(distinct.len() > 100, "{name}: {} colours", distinct.len());
+    }
 }
 
 fn view_opens_draws_and_screenshots_itself_under_xvfb() {

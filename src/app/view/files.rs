@@ -47,8 +47,11 @@ impl App {
             self.message = "nothing recorded: fly, then stop".into();
             return Ok(());
         };
-        let text = std::fs::read_to_string(&self.o.scene_path)
+        // A sketch given in place of the scene is named by its absolute path, as the flown scene
+        // lands in another folder.
+        let absolute = std::path::absolute(&self.o.scene_path)
             .map_err(|e| Error::io(Role::Scene, &self.o.scene_path, e))?;
+        let (text, _) = crate::scene::scene_text(&absolute)?;
         let out = scene_with_path(&text, &self.o.scene_path, &path)?;
         let stem = self.stem();
         let file = unused(&self.o.out_dir, |n| match n {
