@@ -103,18 +103,60 @@ impl Jobs {
         let base: toml::Table = base_text
             .parse()
             .map_err(|e: toml::de::Error| Error::scene(&scene_path, e.message()))?;
-        Ok(Jobs {
+        let jobs = Jobs {
             scene_path,
             base,
             explicit: file.job.into_iter().map(toml::Value::Table).collect(),
             random,
-        })
+        };
+        jobs.check_names().map_err(|reason| bad(path, reason))?;
+        Ok(jobs)
+    }
+
+    /// Two items of one name would write one file: refused before anything renders.
+    fn check_names(&self) -> std::result::Result<(), String> {
+        let mut seen = std::collections::HashMap::new();
+        let count = self.random.as_ref().map_or(0, |r| r.count);
+        for item in self.items_explicit() {
+            let k = item.index;
+            if let Some(i) = item
+                .name
+                .strip_prefix("random-")
+                .and_then(|i| i.parse::<usize>().ok())
+                .filter(|&i| i < count && item.name == format!("random-{i}"))
+            {
+                return Err(format!(
+                    "job[{k}].name = \"{}\": random camera {i} has that name",
+                    item.name
+                ));
+            }
+            if let Some(first) = seen.insert(item.name.clone(), k) {
+                return Err(format!(
+                    "job[{k}].name = \"{}\": job[{first}] has that name already",
+                    item.name
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Every item of the batch, in order.
     pub fn items(&self) -> Vec<Item> {
-        let mut out: Vec<Item> = self
-            .explicit
+        let mut out = self.items_explicit();
+        let n = out.len();
+        if let Some(r) = &self.random {
+            out.extend((0..r.count).map(|i| Item {
+                index: n + i,
+                name: format!("random-{i}"),
+                kind: ItemKind::Random(i),
+            }));
+        }
+        out
+    }
+
+    /// The `[[job]]` items, in order.
+    fn items_explicit(&self) -> Vec<Item> {
+        self.explicit
             .iter()
             .enumerate()
             .map(|(k, job)| Item {
@@ -126,16 +168,7 @@ impl Jobs {
                     .unwrap_or_else(|| format!("job-{k}")),
                 kind: ItemKind::Explicit(k),
             })
-            .collect();
-        let n = out.len();
-        if let Some(r) = &self.random {
-            out.extend((0..r.count).map(|i| Item {
-                index: n + i,
-                name: format!("random-{i}"),
-                kind: ItemKind::Random(i),
-            }));
-        }
-        out
+            .collect()
     }
 
     /// How many `[[job]]` tables the file gives.

@@ -16,6 +16,8 @@
 //!   the manifest's complete `ok` lines whose image exists, drops the rest (failed items, a line
 //!   torn by a kill) and renders what is missing, so nothing is lost or listed twice; it also
 //!   removes the temporary files a kill left mid-write for this shard's images.
+//! - Item names are unique, checked when the jobs file is read: two items of one name would
+//!   write one file.
 //!
 //! Rejected alternative: one process per snapshot (a shell loop over `terrain render`). Every
 //! launch opens the device and compiles the pipelines again; `batch` measures what that costs.
@@ -265,7 +267,6 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
         .append(true)
         .open(&manifest)
         .map_err(|e| Error::io(Role::Manifest, &manifest, e))?;
-    let mut names = HashSet::new();
     let mut cache = Cache {
         ctx: None,
         key: String::new(),
@@ -280,14 +281,7 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
             continue;
         }
         let t0 = Instant::now();
-        let result = if names.insert(item.name.clone()) {
-            render_item(&jobs, item, &mut cache, out_dir)
-        } else {
-            Err(Error::Job {
-                name: item.name.clone(),
-                reason: "its name is used by an earlier job".into(),
-            })
-        };
+        let result = render_item(&jobs, item, &mut cache, out_dir);
         let mut line = ManifestLine {
             index: item.index,
             name: item.name.clone(),
