@@ -387,6 +387,50 @@ fn bad_jobs_fail_alone_with_their_cause() {
     }
 }
 
+/// A job's `sketch.path` is relative to the jobs file, as docs/scene.md says of every path, not
+/// to the base scene's folder.
+#[test]
+fn a_jobs_sketch_is_relative_to_the_jobs_file() {
+    let dir = scratch("batch-job-paths");
+    let heights: Vec<String> = (0..33 * 33)
+        .map(|k| format!("{}", 100 + (k % 33) * 3 + (k / 33) * 2))
+        .collect();
+    let asc = format!(
+        "ncols 33\nnrows 33\nxllcorner 0\nyllcorner 0\ncellsize 30\nNODATA_value -9999\n{}\n",
+        heights.join(" ")
+    );
+    for sub in ["scenes", "jobs"] {
+        std::fs::create_dir_all(dir.join(sub)).unwrap();
+    }
+    std::fs::write(dir.join("scenes/small.asc"), &asc).unwrap();
+    std::fs::write(dir.join("jobs/mine.asc"), &asc).unwrap();
+    std::fs::write(
+        dir.join("scenes/base.toml"),
+        "[sketch]\npath = \"small.asc\"\n[camera]\nposition = [100.0, 50.0, 400.0]\nlook_at = [500.0, 900.0, 100.0]\nwidth = 16\nheight = 16\n[warp]\nmesh = 64\n",
+    )
+    .unwrap();
+    let jobs = dir.join("jobs/jobs.toml");
+    std::fs::write(
+        &jobs,
+        "scene = \"../scenes/base.toml\"\n[[job]]\nname = \"mine\"\nsketch = { path = \"mine.asc\" }\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let (code, _, err) = terrain(&[
+        "batch",
+        jobs.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        code,
+        0,
+        "{err}: {:?}",
+        std::fs::read_to_string(out.join("manifest.jsonl"))
+    );
+    assert!(out.join("mine.png").is_file());
+}
+
 #[test]
 fn the_bundled_jobs_file_and_flight_load() {
     let jobs =

@@ -103,10 +103,12 @@ impl Jobs {
         let base: toml::Table = base_text
             .parse()
             .map_err(|e: toml::de::Error| Error::scene(&scene_path, e.message()))?;
+        let mut explicit: Vec<toml::Value> = file.job.into_iter().map(toml::Value::Table).collect();
+        rebase_paths(&mut explicit, base_dir);
         let jobs = Jobs {
             scene_path,
             base,
-            explicit: file.job.into_iter().map(toml::Value::Table).collect(),
+            explicit,
             random,
         };
         jobs.check_names().map_err(|reason| bad(path, reason))?;
@@ -208,6 +210,24 @@ impl Jobs {
             .unwrap_or(Path::new(""))
             .to_path_buf();
         Scene::parse(&text, dir).map_err(|fault| fault.into_error(&self.scene_path))
+    }
+}
+
+/// The file keys a job may give (`sketch.path`, `importance.max_map`) made absolute against the
+/// jobs file's folder: a job's keys are relative to the file that names them, but the merged
+/// scene is read in the base scene's folder.
+fn rebase_paths(jobs: &mut [toml::Value], jobs_dir: &Path) {
+    for job in jobs {
+        for (section, key) in [("sketch", "path"), ("importance", "max_map")] {
+            let Some(toml::Value::String(p)) = job.get_mut(section).and_then(|s| s.get_mut(key))
+            else {
+                continue;
+            };
+            let joined = jobs_dir.join(p.as_str());
+            if let Ok(abs) = std::path::absolute(&joined) {
+                *p = abs.to_string_lossy().into_owned();
+            }
+        }
     }
 }
 
