@@ -4,6 +4,7 @@
 
 mod common;
 use common::*;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -385,6 +386,71 @@ fn bad_jobs_fail_alone_with_their_cause() {
         assert_eq!(err.trim_end().lines().count(), 1, "{err}");
         assert!(err.contains(cause), "{err}");
     }
+}
+
+/// Runs `terrain batch JOBS --out-dir OUT` with `more` arguments.
+fn batch(jobs: &Path, out: &Path, more: &[&str]) -> (i32, String, String) {
+    let mut args = vec![
+        "batch",
+        jobs.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ];
+    args.extend(more);
+    terrain(&args)
+}
+
+/// Every file of `dir`, by name.
+fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .map(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            (name, std::fs::read(e.path()).unwrap())
+        })
+        .collect()
+}
+
+#[test]
+fn set_size_and_mode_apply_to_every_item() {
+    let dir = scratch("batch-overrides");
+    base_scene(&dir, 16);
+    let jobs = jobs_file(
+        &dir,
+        "[random]\ncount = 1\nseed = 4\n[[job]]\nname = \"given\"\n",
+    );
+    let out = dir.join("out");
+    let args = [
+        "--set",
+        "camera.fov_y_deg=40",
+        "--set",
+        "detail.octaves=0",
+        "--size",
+        "20x12",
+        "--mode",
+        "geomipmap",
+    ];
+    let (code, _, err) = batch(&jobs, &out, &args);
+    assert_eq!(code, 0, "{err}");
+    let m = manifest(&out.join("manifest.jsonl"));
+    assert_eq!(m.len(), 2);
+    for l in &m {
+        assert_eq!(
+            (l["width"].as_u64(), l["height"].as_u64()),
+            (Some(20), Some(12)),
+            "{l}"
+        );
+        assert_eq!(l["mode"], "geomipmap", "{l}");
+    }
+    assert!((m[0]["camera"]["fov_y_deg"].as_f64().unwrap() - 40.0).abs() < 1e-9);
+    let before = files(&out);
+    // A bad override is a usage error, as in `render`.
+    let (code, _, err) = batch(&jobs, &out, &["--set", "detail.octaves=many"]);
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("--set detail.octaves=many"), "{err}");
+    assert_eq!(files(&out), before);
 }
 
 /// A job's `sketch.path` is relative to the jobs file, as docs/scene.md says of every path, not

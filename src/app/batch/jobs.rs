@@ -2,7 +2,7 @@
 //! `[random]` cameras, and the items they make, in order.
 
 use crate::error::{Error, Result, Role};
-use crate::scene::Scene;
+use crate::scene::{Fault, Mode, Scene};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -21,8 +21,19 @@ pub struct Jobs {
     base: toml::Table,
     explicit: Vec<toml::Value>,
     pub random: Option<Random>,
+    /// What the command line changes in every item's scene.
+    pub overrides: Overrides,
 }
 
+/// `batch --set`, `--size` and `--mode`: applied to every item's scene as `render` applies them
+/// to its one.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Overrides {
+    /// `key.path=value`, as `--set` gives them.
+    pub set: Vec<String>,
+    pub size: Option<(u32, u32)>,
+    pub mode: Option<Mode>,
+}
 /// One snapshot to take.
 #[derive(Clone, Debug)]
 pub struct Item {
@@ -110,6 +121,7 @@ impl Jobs {
             base,
             explicit,
             random,
+            overrides: Overrides::default(),
         };
         jobs.check_names().map_err(|reason| bad(path, reason))?;
         Ok(jobs)
@@ -194,22 +206,30 @@ impl Jobs {
             merge(&mut merged, key, value.clone());
         }
         let text = toml::to_string(&merged).map_err(|e| e.to_string())?;
-        let dir = self
-            .scene_path
-            .parent()
-            .unwrap_or(Path::new(""))
-            .to_path_buf();
-        Scene::parse(&text, dir).map_err(|fault| name_the_key(&text, &fault.to_string()))
+        self.scene_of(&text).map_err(|fault| match fault {
+            Fault::Text(reason) => name_the_key(&text, &reason),
+            fault => fault.to_string(),
+        })
     }
 
     pub fn base_scene(&self) -> Result<Scene> {
         let text = toml::to_string(&self.base).map_err(|e| Error::encode("base scene", e))?;
-        let dir = self
-            .scene_path
-            .parent()
-            .unwrap_or(Path::new(""))
-            .to_path_buf();
-        Scene::parse(&text, dir).map_err(|fault| fault.into_error(&self.scene_path))
+        self.scene_of(&text)
+            .map_err(|fault| fault.into_error(&self.scene_path))
+    }
+
+    /// A scene's TOML (the base's keys, a job's merged in) read in the base scene's folder, with
+    /// the command line's overrides.
+    fn scene_of(&self, text: &str) -> std::result::Result<Scene, Fault> {
+        let dir = self.scene_path.parent().unwrap_or(Path::new(""));
+        let mut scene = Scene::parse_with(text, dir.to_path_buf(), &self.overrides.set)?;
+        if let Some(size) = self.overrides.size {
+            (scene.camera.width, scene.camera.height) = size;
+        }
+        if let Some(mode) = self.overrides.mode {
+            scene.render.mode = mode;
+        }
+        Ok(scene)
     }
 }
 

@@ -36,7 +36,7 @@ mod jobs;
 mod manifest;
 mod random;
 
-pub use jobs::{Item, ItemKind, Jobs, JobsFile, MAX_RANDOM, Random, RandomSection};
+pub use jobs::{Item, ItemKind, Jobs, JobsFile, MAX_RANDOM, Overrides, Random, RandomSection};
 pub use manifest::{ManifestLine, PlanetKeys, Snapshot, SnapshotCamera, Status};
 pub use random::{RANDOM_HEIGHT_M, random_camera};
 use std::collections::HashSet;
@@ -48,6 +48,8 @@ pub struct Options {
     /// (i, n): this run renders items k with k mod n = i.
     pub shard: (usize, usize),
     pub resume: bool,
+    /// `--set`, `--size` and `--mode`, for every item.
+    pub overrides: Overrides,
 }
 
 pub struct Summary {
@@ -246,7 +248,13 @@ fn planet_keys(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<Option<P
 }
 
 pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
-    let jobs = Jobs::load(jobs_path)?;
+    let mut jobs = Jobs::load(jobs_path)?;
+    jobs.overrides = o.overrides.clone();
+    // A bad `--set` is a usage error, as in `render`: refused before anything is written. A
+    // fault of the base scene's own fails the items that have it.
+    if let Err(e @ Error::Override { .. }) = jobs.base_scene() {
+        return Err(e);
+    }
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
     let manifest = out_dir.join(manifest_name(o.shard));
     let done = if o.resume {
