@@ -142,6 +142,11 @@ fn shards_together_are_the_whole_batch_byte_for_byte() {
     ]);
     assert_eq!(code, 0, "{err}");
     assert!(stdout.contains("11 items, 0 missing, 0 failed"), "{stdout}");
+    assert_eq!(
+        std::fs::read(sharded.join("manifest.inputs.json")).unwrap(),
+        std::fs::read(sharded.join("manifest-0-of-4.inputs.json")).unwrap(),
+        "the merged manifest records the shards' inputs"
+    );
     let (a, b) = (pngs(&whole), pngs(&sharded));
     assert_eq!(a.len(), 11);
     assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
@@ -400,6 +405,20 @@ fn batch(jobs: &Path, out: &Path, more: &[&str]) -> (i32, String, String) {
     terrain(&args)
 }
 
+/// One line on stderr, exit 1, and `out` as it was.
+fn refused(r: (i32, String, String), out: &Path, before: &BTreeMap<String, Vec<u8>>, why: &str) {
+    let (code, _, err) = r;
+    assert_eq!(code, 1, "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains(why), "{err}");
+    assert_eq!(
+        &files(out),
+        before,
+        "the refused run changed {}",
+        out.display()
+    );
+}
+
 /// Every file of `dir`, by name.
 fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     std::fs::read_dir(dir)
@@ -410,6 +429,96 @@ fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
             (name, std::fs::read(e.path()).unwrap())
         })
         .collect()
+}
+
+/// `--resume` from other inputs (the seed, the base scene, the options) would keep the first
+/// batch's images as this one's: it is refused, saying what changed, for a shard too.
+#[test]
+fn resume_refuses_a_manifest_made_from_other_inputs() {
+    let dir = scratch("batch-resume-other");
+    base_scene(&dir, 16);
+    let jobs = jobs_file(&dir, "[random]\ncount = 2\nseed = 1\n");
+    let out = dir.join("out");
+    let (code, _, err) = batch(&jobs, &out, &[]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.join("manifest.inputs.json").is_file());
+    let before = files(&out);
+    jobs_file(&dir, "[random]\ncount = 2\nseed = 2\n");
+    refused(
+        batch(&jobs, &out, &["--resume"]),
+        &out,
+        &before,
+        "manifest.jsonl: was made from another jobs file (",
+    );
+    jobs_file(&dir, "[random]\ncount = 2\nseed = 1\n");
+    base_scene(&dir, 20);
+    refused(
+        batch(&jobs, &out, &["--resume"]),
+        &out,
+        &before,
+        "another base scene (",
+    );
+    base_scene(&dir, 16);
+    refused(
+        batch(&jobs, &out, &["--resume", "--size", "8"]),
+        &out,
+        &before,
+        "--size 8x8",
+    );
+    // The same inputs again: nothing left to render.
+    let (code, stdout, err) = batch(&jobs, &out, &["--resume"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("0 of 2 items rendered") && stdout.contains("2 already done"));
+
+    let sharded = dir.join("sharded");
+    let (code, _, err) = batch(&jobs, &sharded, &["--shard", "1/2"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(sharded.join("manifest-1-of-2.inputs.json").is_file());
+    let before = files(&sharded);
+    jobs_file(&dir, "[random]\ncount = 2\nseed = 2\n");
+    refused(
+        batch(&jobs, &sharded, &["--shard", "1/2", "--resume"]),
+        &sharded,
+        &before,
+        "manifest-1-of-2.jsonl: was made from another jobs file",
+    );
+}
+
+/// A second batch into a folder would replace the first one's manifest and leave its images
+/// unlisted: a run of other inputs is refused without `--resume` too; the same inputs render
+/// again.
+#[test]
+fn a_batch_never_replaces_another_batchs_manifest() {
+    let dir = scratch("batch-other-manifest");
+    base_scene(&dir, 16);
+    let first = jobs_file(&dir, "[[job]]\nname = \"first\"\n");
+    let other = dir.join("other.toml");
+    std::fs::write(
+        &other,
+        "scene = \"base.toml\"\n[[job]]\nname = \"second\"\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let (code, _, err) = batch(&first, &out, &[]);
+    assert_eq!(code, 0, "{err}");
+    let before = files(&out);
+    refused(batch(&other, &out, &[]), &out, &before, "jobs.toml, now ");
+    // A manifest that records no inputs is not known to be this batch's.
+    std::fs::remove_file(out.join("manifest.inputs.json")).unwrap();
+    let before = files(&out);
+    refused(
+        batch(&first, &out, &[]),
+        &out,
+        &before,
+        "no manifest.inputs.json",
+    );
+    std::fs::write(out.join("manifest.jsonl"), "").unwrap();
+    let (code, _, err) = batch(&first, &out, &[]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = batch(&first, &out, &[]);
+    assert_eq!(code, 0, "{err}");
+    let m = manifest(&out.join("manifest.jsonl"));
+    assert_eq!((m.len(), m[0]["name"].as_str()), (1, Some("first")));
 }
 
 #[test]
@@ -444,7 +553,17 @@ fn set_size_and_mode_apply_to_every_item() {
         assert_eq!(l["mode"], "geomipmap", "{l}");
     }
     assert!((m[0]["camera"]["fov_y_deg"].as_f64().unwrap() - 40.0).abs() < 1e-9);
+    // The options are part of the batch's inputs.
     let before = files(&out);
+    refused(
+        batch(&jobs, &out, &["--resume"]),
+        &out,
+        &before,
+        "other options (--set camera.fov_y_deg=40 --set detail.octaves=0 --size 20x12 --mode geomipmap, now no --set",
+    );
+    let (code, stdout, err) = batch(&jobs, &out, &[&args[..], &["--resume"]].concat());
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("2 already done"), "{stdout}");
     // A bad override is a usage error, as in `render`.
     let (code, _, err) = batch(&jobs, &out, &["--set", "detail.octaves=many"]);
     assert_eq!(code, 2, "{err}");
@@ -454,7 +573,7 @@ fn set_size_and_mode_apply_to_every_item() {
 }
 
 /// A job's `sketch.path` is relative to the jobs file, as docs/scene.md says of every path, not
-/// to the base scene's folder.
+/// to the base scene's folder; and the sketch is part of the batch's inputs.
 #[test]
 fn a_jobs_sketch_is_relative_to_the_jobs_file() {
     let dir = scratch("batch-job-paths");
@@ -482,12 +601,7 @@ fn a_jobs_sketch_is_relative_to_the_jobs_file() {
     )
     .unwrap();
     let out = dir.join("out");
-    let (code, _, err) = terrain(&[
-        "batch",
-        jobs.to_str().unwrap(),
-        "--out-dir",
-        out.to_str().unwrap(),
-    ]);
+    let (code, _, err) = batch(&jobs, &out, &[]);
     assert_eq!(
         code,
         0,
@@ -495,6 +609,21 @@ fn a_jobs_sketch_is_relative_to_the_jobs_file() {
         std::fs::read_to_string(out.join("manifest.jsonl"))
     );
     assert!(out.join("mine.png").is_file());
+    // A sketch written since is another input.
+    let later = std::time::SystemTime::now() + Duration::from_secs(60);
+    std::fs::File::options()
+        .append(true)
+        .open(dir.join("jobs/mine.asc"))
+        .unwrap()
+        .set_modified(later)
+        .unwrap();
+    let before = files(&out);
+    refused(
+        batch(&jobs, &out, &["--resume"]),
+        &out,
+        &before,
+        "mine.asc changed",
+    );
 }
 
 #[test]

@@ -17,7 +17,11 @@ pub struct Random {
 
 /// A parsed jobs file.
 pub struct Jobs {
+    pub path: PathBuf,
+    /// The jobs file's text and the base scene's, as read: what the items are made from.
+    pub text: String,
     pub scene_path: PathBuf,
+    pub scene_text: String,
     base: toml::Table,
     explicit: Vec<toml::Value>,
     pub random: Option<Random>,
@@ -34,6 +38,7 @@ pub struct Overrides {
     pub size: Option<(u32, u32)>,
     pub mode: Option<Mode>,
 }
+
 /// One snapshot to take.
 #[derive(Clone, Debug)]
 pub struct Item {
@@ -117,7 +122,10 @@ impl Jobs {
         let mut explicit: Vec<toml::Value> = file.job.into_iter().map(toml::Value::Table).collect();
         rebase_paths(&mut explicit, base_dir);
         let jobs = Jobs {
+            path: path.to_path_buf(),
+            text: text.to_string(),
             scene_path,
+            scene_text: base_text,
             base,
             explicit,
             random,

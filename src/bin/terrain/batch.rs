@@ -15,7 +15,8 @@ pub struct Args {
     /// Renders share i of n (items k with k mod n = i), e.g. --shard 0/4.
     #[arg(long, value_name = "I/N", value_parser = args::shard)]
     shard: Option<(usize, usize)>,
-    /// Skips items the manifest lists as done; retries failed ones.
+    /// Skips items the manifest lists as done; retries failed ones. Refused where the manifest
+    /// was made from other inputs (jobs file, base scene, sketches, --set, --size, --mode).
     #[arg(long)]
     resume: bool,
     /// Overrides a scene key in every item (repeatable).
