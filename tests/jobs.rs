@@ -4,6 +4,7 @@
 
 mod common;
 use common::*;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -141,6 +142,11 @@ fn shards_together_are_the_whole_batch_byte_for_byte() {
     ]);
     assert_eq!(code, 0, "{err}");
     assert!(stdout.contains("11 items, 0 missing, 0 failed"), "{stdout}");
+    assert_eq!(
+        std::fs::read(sharded.join("manifest.inputs.json")).unwrap(),
+        std::fs::read(sharded.join("manifest-0-of-4.inputs.json")).unwrap(),
+        "the merged manifest records the shards' inputs"
+    );
     let (a, b) = (pngs(&whole), pngs(&sharded));
     assert_eq!(a.len(), 11);
     assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
@@ -313,8 +319,7 @@ fn bad_jobs_fail_alone_with_their_cause() {
          [[job]]\nname = \"missing-sketch\"\nsketch = { path = \"nowhere.asc\" }\n\n\
          [[job]]\nname = \"underground\"\ncamera = { position = [500.0, 500.0, -50.0] }\n\n\
          [[job]]\nname = \"malformed\"\ncamera = { position = \"up\" }\n\n\
-         [[job]]\nname = \"../escape\"\n\n\
-         [[job]]\nname = \"ok\"\n",
+         [[job]]\nname = \"../escape\"\n",
     );
     let out = dir.join("out");
     let (code, _, err) = terrain(&[
@@ -325,7 +330,7 @@ fn bad_jobs_fail_alone_with_their_cause() {
     ]);
     assert_eq!(code, 1, "{err}");
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(err.contains("5 of 8 snapshots failed"), "{err}");
+    assert!(err.contains("4 of 7 snapshots failed"), "{err}");
     let m = manifest(&out.join("manifest.jsonl"));
     let by_name = |n: &str| m.iter().filter(|l| l["name"] == n).collect::<Vec<_>>();
     assert_eq!(by_name("ok")[0]["status"], "ok");
@@ -353,12 +358,20 @@ fn bad_jobs_fail_alone_with_their_cause() {
         "{}",
         cause("../escape", 0)
     );
-    assert!(cause("ok", 1).contains("earlier job"), "{}", cause("ok", 1));
     assert!(!out.join("escape.png").exists() && !dir.join("escape.png").exists());
 
-    // A jobs file that is not TOML, an unknown key and a bad shard fail whole, in one line.
+    // A jobs file that is not TOML, an unknown key, two items of one name and a bad shard fail
+    // whole, in one line, before anything renders.
     for (body, cause) in [
         ("[[job]\n", "jobs.toml"),
+        (
+            "[[job]]\nname = \"a\"\n[[job]]\n[[job]]\nname = \"a\"\n",
+            "job[2].name = \"a\": job[0] has that name already",
+        ),
+        (
+            "[random]\ncount = 3\n[[job]]\nname = \"random-2\"\n",
+            "random camera 2 has that name",
+        ),
         ("colour = 3\n", "colour"),
         ("[random]\ncount = 100000000000\n", "random.count"),
         ("", "--shard"),
@@ -378,6 +391,239 @@ fn bad_jobs_fail_alone_with_their_cause() {
         assert_eq!(err.trim_end().lines().count(), 1, "{err}");
         assert!(err.contains(cause), "{err}");
     }
+}
+
+/// Runs `terrain batch JOBS --out-dir OUT` with `more` arguments.
+fn batch(jobs: &Path, out: &Path, more: &[&str]) -> (i32, String, String) {
+    let mut args = vec![
+        "batch",
+        jobs.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ];
+    args.extend(more);
+    terrain(&args)
+}
+
+/// One line on stderr, exit 1, and `out` as it was.
+fn refused(r: (i32, String, String), out: &Path, before: &BTreeMap<String, Vec<u8>>, why: &str) {
+    let (code, _, err) = r;
+    assert_eq!(code, 1, "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains(why), "{err}");
+    assert_eq!(
+        &files(out),
+        before,
+        "the refused run changed {}",
+        out.display()
+    );
+}
+
+/// Every file of `dir`, by name.
+fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .map(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            (name, std::fs::read(e.path()).unwrap())
+        })
+        .collect()
+}
+
+/// `--resume` from other inputs (the seed, the base scene, the options) would keep the first
+/// batch's images as this one's: it is refused, saying what changed, for a shard too.
+#[test]
+fn resume_refuses_a_manifest_made_from_other_inputs() {
+    let dir = scratch("batch-resume-other");
+    base_scene(&dir, 16);
+    let jobs = jobs_file(&dir, "[random]\ncount = 2\nseed = 1\n");
+    let out = dir.join("out");
+    let (code, _, err) = batch(&jobs, &out, &[]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.join("manifest.inputs.json").is_file());
+    let before = files(&out);
+    jobs_file(&dir, "[random]\ncount = 2\nseed = 2\n");
+    refused(
+        batch(&jobs, &out, &["--resume"]),
+        &out,
+        &before,
+        "manifest.jsonl: was made from another jobs file (",
+    );
+    jobs_file(&dir, "[random]\ncount = 2\nseed = 1\n");
+    base_scene(&dir, 20);
+    refused(
+        batch(&jobs, &out, &["--resume"]),
+        &out,
+        &before,
+        "another base scene (",
+    );
+    base_scene(&dir, 16);
+    refused(
+        batch(&jobs, &out, &["--resume", "--size", "8"]),
+        &out,
+        &before,
+        "--size 8x8",
+    );
+    // The same inputs again: nothing left to render.
+    let (code, stdout, err) = batch(&jobs, &out, &["--resume"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("0 of 2 items rendered") && stdout.contains("2 already done"));
+
+    let sharded = dir.join("sharded");
+    let (code, _, err) = batch(&jobs, &sharded, &["--shard", "1/2"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(sharded.join("manifest-1-of-2.inputs.json").is_file());
+    let before = files(&sharded);
+    jobs_file(&dir, "[random]\ncount = 2\nseed = 2\n");
+    refused(
+        batch(&jobs, &sharded, &["--shard", "1/2", "--resume"]),
+        &sharded,
+        &before,
+        "manifest-1-of-2.jsonl: was made from another jobs file",
+    );
+}
+
+/// A second batch into a folder would replace the first one's manifest and leave its images
+/// unlisted: a run of other inputs is refused without `--resume` too; the same inputs render
+/// again.
+#[test]
+fn a_batch_never_replaces_another_batchs_manifest() {
+    let dir = scratch("batch-other-manifest");
+    base_scene(&dir, 16);
+    let first = jobs_file(&dir, "[[job]]\nname = \"first\"\n");
+    let other = dir.join("other.toml");
+    std::fs::write(
+        &other,
+        "scene = \"base.toml\"\n[[job]]\nname = \"second\"\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let (code, _, err) = batch(&first, &out, &[]);
+    assert_eq!(code, 0, "{err}");
+    let before = files(&out);
+    refused(batch(&other, &out, &[]), &out, &before, "jobs.toml, now ");
+    // A manifest that records no inputs is not known to be this batch's.
+    std::fs::remove_file(out.join("manifest.inputs.json")).unwrap();
+    let before = files(&out);
+    refused(
+        batch(&first, &out, &[]),
+        &out,
+        &before,
+        "no manifest.inputs.json",
+    );
+    std::fs::write(out.join("manifest.jsonl"), "").unwrap();
+    let (code, _, err) = batch(&first, &out, &[]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = batch(&first, &out, &[]);
+    assert_eq!(code, 0, "{err}");
+    let m = manifest(&out.join("manifest.jsonl"));
+    assert_eq!((m.len(), m[0]["name"].as_str()), (1, Some("first")));
+}
+
+#[test]
+fn set_size_and_mode_apply_to_every_item() {
+    let dir = scratch("batch-overrides");
+    base_scene(&dir, 16);
+    let jobs = jobs_file(
+        &dir,
+        "[random]\ncount = 1\nseed = 4\n[[job]]\nname = \"given\"\n",
+    );
+    let out = dir.join("out");
+    let args = [
+        "--set",
+        "camera.fov_y_deg=40",
+        "--set",
+        "detail.octaves=0",
+        "--size",
+        "20x12",
+        "--mode",
+        "geomipmap",
+    ];
+    let (code, _, err) = batch(&jobs, &out, &args);
+    assert_eq!(code, 0, "{err}");
+    let m = manifest(&out.join("manifest.jsonl"));
+    assert_eq!(m.len(), 2);
+    for l in &m {
+        assert_eq!(
+            (l["width"].as_u64(), l["height"].as_u64()),
+            (Some(20), Some(12)),
+            "{l}"
+        );
+        assert_eq!(l["mode"], "geomipmap", "{l}");
+    }
+    assert!((m[0]["camera"]["fov_y_deg"].as_f64().unwrap() - 40.0).abs() < 1e-9);
+    // The options are part of the batch's inputs.
+    let before = files(&out);
+    refused(
+        batch(&jobs, &out, &["--resume"]),
+        &out,
+        &before,
+        "other options (--set camera.fov_y_deg=40 --set detail.octaves=0 --size 20x12 --mode geomipmap, now no --set",
+    );
+    let (code, stdout, err) = batch(&jobs, &out, &[&args[..], &["--resume"]].concat());
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("2 already done"), "{stdout}");
+    // A bad override is a usage error, as in `render`.
+    let (code, _, err) = batch(&jobs, &out, &["--set", "detail.octaves=many"]);
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("--set detail.octaves=many"), "{err}");
+    assert_eq!(files(&out), before);
+}
+
+/// A job's `sketch.path` is relative to the jobs file, as docs/scene.md says of every path, not
+/// to the base scene's folder; and the sketch is part of the batch's inputs.
+#[test]
+fn a_jobs_sketch_is_relative_to_the_jobs_file() {
+    let dir = scratch("batch-job-paths");
+    let heights: Vec<String> = (0..33 * 33)
+        .map(|k| format!("{}", 100 + (k % 33) * 3 + (k / 33) * 2))
+        .collect();
+    let asc = format!(
+        "ncols 33\nnrows 33\nxllcorner 0\nyllcorner 0\ncellsize 30\nNODATA_value -9999\n{}\n",
+        heights.join(" ")
+    );
+    for sub in ["scenes", "jobs"] {
+        std::fs::create_dir_all(dir.join(sub)).unwrap();
+    }
+    std::fs::write(dir.join("scenes/small.asc"), &asc).unwrap();
+    std::fs::write(dir.join("jobs/mine.asc"), &asc).unwrap();
+    std::fs::write(
+        dir.join("scenes/base.toml"),
+        "[sketch]\npath = \"small.asc\"\n[camera]\nposition = [100.0, 50.0, 400.0]\nlook_at = [500.0, 900.0, 100.0]\nwidth = 16\nheight = 16\n[warp]\nmesh = 64\n",
+    )
+    .unwrap();
+    let jobs = dir.join("jobs/jobs.toml");
+    std::fs::write(
+        &jobs,
+        "scene = \"../scenes/base.toml\"\n[[job]]\nname = \"mine\"\nsketch = { path = \"mine.asc\" }\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let (code, _, err) = batch(&jobs, &out, &[]);
+    assert_eq!(
+        code,
+        0,
+        "{err}: {:?}",
+        std::fs::read_to_string(out.join("manifest.jsonl"))
+    );
+    assert!(out.join("mine.png").is_file());
+    // A sketch written since is another input.
+    let later = std::time::SystemTime::now() + Duration::from_secs(60);
+    std::fs::File::options()
+        .append(true)
+        .open(dir.join("jobs/mine.asc"))
+        .unwrap()
+        .set_modified(later)
+        .unwrap();
+    let before = files(&out);
+    refused(
+        batch(&jobs, &out, &["--resume"]),
+        &out,
+        &before,
+        "mine.asc changed",
+    );
 }
 
 #[test]

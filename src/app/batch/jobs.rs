@@ -2,7 +2,7 @@
 //! `[random]` cameras, and the items they make, in order.
 
 use crate::error::{Error, Result, Role};
-use crate::scene::Scene;
+use crate::scene::{Fault, Mode, Scene};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -17,10 +17,26 @@ pub struct Random {
 
 /// A parsed jobs file.
 pub struct Jobs {
+    pub path: PathBuf,
+    /// The jobs file's text and the base scene's, as read: what the items are made from.
+    pub text: String,
     pub scene_path: PathBuf,
+    pub scene_text: String,
     base: toml::Table,
     explicit: Vec<toml::Value>,
     pub random: Option<Random>,
+    /// What the command line changes in every item's scene.
+    pub overrides: Overrides,
+}
+
+/// `batch --set`, `--size` and `--mode`: applied to every item's scene as `render` applies them
+/// to its one.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Overrides {
+    /// `key.path=value`, as `--set` gives them.
+    pub set: Vec<String>,
+    pub size: Option<(u32, u32)>,
+    pub mode: Option<Mode>,
 }
 
 /// One snapshot to take.
@@ -103,18 +119,66 @@ impl Jobs {
         let base: toml::Table = base_text
             .parse()
             .map_err(|e: toml::de::Error| Error::scene(&scene_path, e.message()))?;
-        Ok(Jobs {
+        let mut explicit: Vec<toml::Value> = file.job.into_iter().map(toml::Value::Table).collect();
+        rebase_paths(&mut explicit, base_dir);
+        let jobs = Jobs {
+            path: path.to_path_buf(),
+            text: text.to_string(),
             scene_path,
+            scene_text: base_text,
             base,
-            explicit: file.job.into_iter().map(toml::Value::Table).collect(),
+            explicit,
             random,
-        })
+            overrides: Overrides::default(),
+        };
+        jobs.check_names().map_err(|reason| bad(path, reason))?;
+        Ok(jobs)
+    }
+
+    /// Two items of one name would write one file: refused before anything renders.
+    fn check_names(&self) -> std::result::Result<(), String> {
+        let mut seen = std::collections::HashMap::new();
+        let count = self.random.as_ref().map_or(0, |r| r.count);
+        for item in self.items_explicit() {
+            let k = item.index;
+            if let Some(i) = item
+                .name
+                .strip_prefix("random-")
+                .and_then(|i| i.parse::<usize>().ok())
+                .filter(|&i| i < count && item.name == format!("random-{i}"))
+            {
+                return Err(format!(
+                    "job[{k}].name = \"{}\": random camera {i} has that name",
+                    item.name
+                ));
+            }
+            if let Some(first) = seen.insert(item.name.clone(), k) {
+                return Err(format!(
+                    "job[{k}].name = \"{}\": job[{first}] has that name already",
+                    item.name
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Every item of the batch, in order.
     pub fn items(&self) -> Vec<Item> {
-        let mut out: Vec<Item> = self
-            .explicit
+        let mut out = self.items_explicit();
+        let n = out.len();
+        if let Some(r) = &self.random {
+            out.extend((0..r.count).map(|i| Item {
+                index: n + i,
+                name: format!("random-{i}"),
+                kind: ItemKind::Random(i),
+            }));
+        }
+        out
+    }
+
+    /// The `[[job]]` items, in order.
+    fn items_explicit(&self) -> Vec<Item> {
+        self.explicit
             .iter()
             .enumerate()
             .map(|(k, job)| Item {
@@ -126,16 +190,7 @@ impl Jobs {
                     .unwrap_or_else(|| format!("job-{k}")),
                 kind: ItemKind::Explicit(k),
             })
-            .collect();
-        let n = out.len();
-        if let Some(r) = &self.random {
-            out.extend((0..r.count).map(|i| Item {
-                index: n + i,
-                name: format!("random-{i}"),
-                kind: ItemKind::Random(i),
-            }));
-        }
-        out
+            .collect()
     }
 
     /// How many `[[job]]` tables the file gives.
@@ -159,22 +214,48 @@ impl Jobs {
             merge(&mut merged, key, value.clone());
         }
         let text = toml::to_string(&merged).map_err(|e| e.to_string())?;
-        let dir = self
-            .scene_path
-            .parent()
-            .unwrap_or(Path::new(""))
-            .to_path_buf();
-        Scene::parse(&text, dir).map_err(|fault| name_the_key(&text, &fault.to_string()))
+        self.scene_of(&text).map_err(|fault| match fault {
+            Fault::Text(reason) => name_the_key(&text, &reason),
+            fault => fault.to_string(),
+        })
     }
 
     pub fn base_scene(&self) -> Result<Scene> {
         let text = toml::to_string(&self.base).map_err(|e| Error::encode("base scene", e))?;
-        let dir = self
-            .scene_path
-            .parent()
-            .unwrap_or(Path::new(""))
-            .to_path_buf();
-        Scene::parse(&text, dir).map_err(|fault| fault.into_error(&self.scene_path))
+        self.scene_of(&text)
+            .map_err(|fault| fault.into_error(&self.scene_path))
+    }
+
+    /// A scene's TOML (the base's keys, a job's merged in) read in the base scene's folder, with
+    /// the command line's overrides.
+    fn scene_of(&self, text: &str) -> std::result::Result<Scene, Fault> {
+        let dir = self.scene_path.parent().unwrap_or(Path::new(""));
+        let mut scene = Scene::parse_with(text, dir.to_path_buf(), &self.overrides.set)?;
+        if let Some(size) = self.overrides.size {
+            (scene.camera.width, scene.camera.height) = size;
+        }
+        if let Some(mode) = self.overrides.mode {
+            scene.render.mode = mode;
+        }
+        Ok(scene)
+    }
+}
+
+/// The file keys a job may give (`sketch.path`, `importance.max_map`) made absolute against the
+/// jobs file's folder: a job's keys are relative to the file that names them, but the merged
+/// scene is read in the base scene's folder.
+fn rebase_paths(jobs: &mut [toml::Value], jobs_dir: &Path) {
+    for job in jobs {
+        for (section, key) in [("sketch", "path"), ("importance", "max_map")] {
+            let Some(toml::Value::String(p)) = job.get_mut(section).and_then(|s| s.get_mut(key))
+            else {
+                continue;
+            };
+            let joined = jobs_dir.join(p.as_str());
+            if let Ok(abs) = std::path::absolute(&joined) {
+                *p = abs.to_string_lossy().into_owned();
+            }
+        }
     }
 }
 

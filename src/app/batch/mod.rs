@@ -16,6 +16,11 @@
 //!   the manifest's complete `ok` lines whose image exists, drops the rest (failed items, a line
 //!   torn by a kill) and renders what is missing, so nothing is lost or listed twice; it also
 //!   removes the temporary files a kill left mid-write for this shard's images.
+//! - Beside each manifest, a record of what its items were made from (the `inputs` module): a
+//!   folder whose manifest was made from other inputs is refused, with `--resume` or without, so
+//!   a resumed batch never keeps another batch's images and no run replaces another's manifest.
+//! - Item names are unique, checked when the jobs file is read: two items of one name would
+//!   write one file.
 //!
 //! Rejected alternative: one process per snapshot (a shell loop over `terrain render`). Every
 //! launch opens the device and compiles the pipelines again; `batch` measures what that costs.
@@ -30,11 +35,13 @@ use crate::render::Renderer;
 use crate::scene::{self, Scene};
 use crate::sketch::Atlas;
 
+mod inputs;
 mod jobs;
 mod manifest;
 mod random;
 
-pub use jobs::{Item, ItemKind, Jobs, JobsFile, MAX_RANDOM, Random, RandomSection};
+pub use inputs::{Inputs, Stamp, record_path};
+pub use jobs::{Item, ItemKind, Jobs, JobsFile, MAX_RANDOM, Overrides, Random, RandomSection};
 pub use manifest::{ManifestLine, PlanetKeys, Snapshot, SnapshotCamera, Status};
 pub use random::{RANDOM_HEIGHT_M, random_camera};
 use std::collections::HashSet;
@@ -46,6 +53,8 @@ pub struct Options {
     /// (i, n): this run renders items k with k mod n = i.
     pub shard: (usize, usize),
     pub resume: bool,
+    /// `--set`, `--size` and `--mode`, for every item.
+    pub overrides: Overrides,
 }
 
 pub struct Summary {
@@ -101,8 +110,10 @@ fn remove_torn_writes(out_dir: &Path, items: &[Item], manifest: &Path) {
         return;
     };
     let mut ours: HashSet<String> = items.iter().map(|it| format!("{}.png", it.name)).collect();
-    if let Some(m) = manifest.file_name() {
-        ours.insert(m.to_string_lossy().into_owned());
+    for m in [manifest.to_path_buf(), record_path(manifest)] {
+        if let Some(m) = m.file_name() {
+            ours.insert(m.to_string_lossy().into_owned());
+        }
     }
     for e in entries.flatten() {
         let file = e.file_name().to_string_lossy().into_owned();
@@ -243,10 +254,29 @@ fn planet_keys(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<Option<P
     }))
 }
 
+/// The inputs of `jobs`'s items. Fails only on a bad `--set` (a usage error, as in `render`): a
+/// scene fault of the base or of a job fails the items that have it.
+fn inputs_of(jobs: &Jobs) -> Result<Inputs> {
+    let base = match jobs.base_scene() {
+        Err(e @ Error::Override { .. }) => return Err(e),
+        base => base.ok(),
+    };
+    let scenes: Vec<Scene> = base
+        .into_iter()
+        .chain((0..jobs.explicit_jobs()).filter_map(|k| jobs.job_scene(k).ok()))
+        .collect();
+    Ok(Inputs::of(jobs, &scenes))
+}
+
 pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
-    let jobs = Jobs::load(jobs_path)?;
+    let mut jobs = Jobs::load(jobs_path)?;
+    jobs.overrides = o.overrides.clone();
+    let inputs = inputs_of(&jobs)?;
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
+    inputs::check_folder(out_dir, &inputs)?;
     let manifest = out_dir.join(manifest_name(o.shard));
+    // The record first: a manifest with lines always has one.
+    inputs.write(&record_path(&manifest))?;
     let done = if o.resume {
         resume_from(&manifest, out_dir)?
     } else {
@@ -265,7 +295,6 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
         .append(true)
         .open(&manifest)
         .map_err(|e| Error::io(Role::Manifest, &manifest, e))?;
-    let mut names = HashSet::new();
     let mut cache = Cache {
         ctx: None,
         key: String::new(),
@@ -280,14 +309,7 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
             continue;
         }
         let t0 = Instant::now();
-        let result = if names.insert(item.name.clone()) {
-            render_item(&jobs, item, &mut cache, out_dir)
-        } else {
-            Err(Error::Job {
-                name: item.name.clone(),
-                reason: "its name is used by an earlier job".into(),
-            })
-        };
+        let result = render_item(&jobs, item, &mut cache, out_dir);
         let mut line = ManifestLine {
             index: item.index,
             name: item.name.clone(),
@@ -328,9 +350,14 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
 }
 
 /// Merges the shard manifests in `out_dir` into `manifest.jsonl`, one line per item in item
-/// order. Returns (lines, items missing, items failed).
+/// order, with the inputs they record (which must be one batch's). Returns (lines, items
+/// missing, items failed).
 pub fn merge_manifests(jobs_path: &Path, out_dir: &Path) -> Result<(usize, Vec<String>, usize)> {
     let jobs = Jobs::load(jobs_path)?;
+    let inputs = inputs::shards_inputs(out_dir)?;
+    if let Some(i) = &inputs {
+        inputs::check_folder(out_dir, i)?;
+    }
     let items = jobs.items();
     let mut lines: Vec<Option<ManifestLine>> = (0..items.len()).map(|_| None).collect();
     let entries =
@@ -372,7 +399,11 @@ pub fn merge_manifests(jobs_path: &Path, out_dir: &Path) -> Result<(usize, Vec<S
         text += &serde_json::to_string(v).map_err(|e| Error::encode("manifest line", e))?;
         text.push('\n');
     }
-    write_atomic(&out_dir.join("manifest.jsonl"), text.as_bytes())?;
+    let merged = out_dir.join("manifest.jsonl");
+    if let Some(i) = &inputs {
+        i.write(&record_path(&merged))?;
+    }
+    write_atomic(&merged, text.as_bytes())?;
     Ok((lines.iter().flatten().count(), missing, failed))
 }
 

@@ -5,6 +5,7 @@ use crate::args;
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
+use terrain::scene::Mode;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -16,9 +17,19 @@ pub struct Args {
     /// Renders share i of n (items k with k mod n = i), e.g. --shard 0/4.
     #[arg(long, value_name = "I/N", value_parser = args::shard)]
     shard: Option<(usize, usize)>,
-    /// Skips items the manifest lists as done; retries failed ones.
+    /// Skips items the manifest lists as done; retries failed ones. Refused where the manifest
+    /// was made from other inputs (jobs file, base scene, sketches, --set, --size, --mode).
     #[arg(long)]
     resume: bool,
+    /// Overrides a scene key in every item (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE", conflicts_with = "merge")]
+    set: Vec<String>,
+    /// Image size of every item: N (square) or WxH; default each item's scene's.
+    #[arg(long, value_name = "N|WxH", value_parser = args::size, conflicts_with = "merge")]
+    size: Option<(u32, u32)>,
+    /// Overrides every item's render.mode.
+    #[arg(long, conflicts_with = "merge")]
+    mode: Option<Mode>,
     /// Merges the shard manifests in --out-dir into manifest.jsonl instead of rendering.
     #[arg(long, conflicts_with_all = ["shard", "resume"])]
     merge: bool,
@@ -59,6 +70,11 @@ pub fn run(a: Args) -> Result<()> {
     let o = terrain::app::batch::Options {
         shard: a.shard.unwrap_or((0, 1)),
         resume: a.resume,
+        overrides: terrain::app::batch::Overrides {
+            set: a.set.clone(),
+            size: a.size,
+            mode: a.mode,
+        },
     };
     let s = terrain::app::batch::run(&a.jobs, &a.out_dir, &o)?;
     let r = Report {
