@@ -21,6 +21,8 @@ pub struct Jobs {
     /// The jobs file's text and the base scene's, as read: what the items are made from.
     pub text: String,
     pub scene_path: PathBuf,
+    /// The folder the base scene's relative paths resolve against.
+    scene_dir: PathBuf,
     pub scene_text: String,
     base: toml::Table,
     explicit: Vec<toml::Value>,
@@ -114,8 +116,8 @@ impl Jobs {
         };
         let base_dir = path.parent().unwrap_or(Path::new(""));
         let scene_path = base_dir.join(&file.scene);
-        let base_text = std::fs::read_to_string(&scene_path)
-            .map_err(|e| Error::io(Role::Scene, &scene_path, e))?;
+        // `scene =` may name a sketch, a scene with every default.
+        let (base_text, scene_dir) = crate::scene::scene_text(&scene_path)?;
         let base: toml::Table = base_text
             .parse()
             .map_err(|e: toml::de::Error| Error::scene(&scene_path, e.message()))?;
@@ -125,6 +127,7 @@ impl Jobs {
             path: path.to_path_buf(),
             text: text.to_string(),
             scene_path,
+            scene_dir,
             scene_text: base_text,
             base,
             explicit,
@@ -229,8 +232,7 @@ impl Jobs {
     /// A scene's TOML (the base's keys, a job's merged in) read in the base scene's folder, with
     /// the command line's overrides.
     fn scene_of(&self, text: &str) -> std::result::Result<Scene, Fault> {
-        let dir = self.scene_path.parent().unwrap_or(Path::new(""));
-        let mut scene = Scene::parse_with(text, dir.to_path_buf(), &self.overrides.set)?;
+        let mut scene = Scene::parse_with(text, self.scene_dir.clone(), &self.overrides.set)?;
         if let Some(size) = self.overrides.size {
             (scene.camera.width, scene.camera.height) = size;
         }
