@@ -128,7 +128,7 @@ impl Renderer {
         positions: bool,
     ) -> Result<Renderer> {
         ctx.check(&needs(scene, mode, &atlas))?;
-        let detail = scene::detail_of(scene, &atlas);
+        let detail = scene::detail_for(scene, &atlas, mode);
         let ledger = Ledger::default();
         let alloc = Alloc {
             device: &ctx.device,

@@ -127,9 +127,15 @@ pub fn ground_under(atlas: &Atlas, p: DVec2) -> Result<Option<f64>> {
     ))
 }
 
-/// The scene's detail parameters over `atlas`; unset octaves and amplitude follow the sketch
-/// (`detail::default_octaves`, `detail::default_amplitude_m`; docs/scene.md states the rule).
+/// The scene's detail parameters over `atlas` in its own `render.mode` ([`detail_for`]).
 pub fn detail_of(scene: &Scene, atlas: &Atlas) -> Detail {
+    detail_for(scene, atlas, scene.render.mode)
+}
+
+/// The scene's detail parameters over `atlas` drawn in `mode`; unset octaves and amplitude follow
+/// the sketch (`detail::default_octaves`, `detail::default_amplitude_m`), an unset bias the mode
+/// (`scene::default_bias`), never the sketch's storage; docs/scene.md states the rules.
+pub fn detail_for(scene: &Scene, atlas: &Atlas, mode: super::Mode) -> Detail {
     let d = &scene.detail;
     let d_atlas = atlas.d_atlas();
     Detail {
@@ -147,7 +153,7 @@ pub fn detail_of(scene: &Scene, atlas: &Atlas) -> Detail {
         seed: d.seed,
         bias: d
             .bias
-            .unwrap_or_else(|| crate::scene::default_bias(scene, atlas)),
+            .unwrap_or_else(|| crate::scene::default_bias(scene, mode)),
         d_atlas: atlas.d_atlas(),
         // Anchored to the sketch, so the same sketch anywhere on Earth has the same detail.
         lattice_origin_m: atlas.origin,

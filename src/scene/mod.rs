@@ -16,7 +16,8 @@ pub mod place;
 mod starter;
 
 pub use build::{
-    camera_of, detail_of, ground_under, light_of, load_atlas, scene_load_options, stream_config,
+    camera_of, detail_for, detail_of, ground_under, light_of, load_atlas, scene_load_options,
+    stream_config,
 };
 pub use parse::{Fault, is_sketch_path, scene_text};
 pub use starter::starter;
@@ -203,15 +204,27 @@ pub const MAX_OCTAVES: u32 = 24;
 /// no camera this renderer places (at least a metre above the ground) resolves a change.
 pub const FINEST_WAVELENGTH_M: f64 = 0.1;
 
-/// `detail.bias` when the scene does not set it: −1 on a sketch held in memory, so the mesh
+/// `detail.bias` when the scene does not set it, by the mode that draws and never by the
+/// sketch's storage, so a sketch and the tile pyramid converted from it draw one picture: −1 in
+/// the warped mode (and the reference, which draws every octave whatever the bias), so the mesh
 /// carries as geometry the octave whose wavelength is its vertex spacing (the split octave one
-/// above `log2(d_atlas / d_max)`); 0 over a tile pyramid, where GeoMipMap's grid is the sketch's
-/// own nodes and its δ, measured on the sketch alone, would not see an octave a negative bias
-/// puts into it; 0.5 on a planet.
+/// above `log2(d_atlas / d_max)`); 0 in GeoMipMap and brute force; 0.5 on a planet.
+///
+/// Why 0 for the baselines: over a tile pyramid GeoMipMap's grid is the sketch's own nodes
+/// (`geomipmap.k` 0) and its δ, measured on the sketch alone, would not see an octave a negative
+/// bias puts into it; so GeoMipMap takes that grid and bias in memory too
+/// (`lod::baseline::GEOMIPMAP_K`), and brute force, GeoMipMap at level 0, the same bias. With K
+/// up to 3 and −1 in memory instead, a sketch and its pyramid drew 32.6 dB apart with 24,559
+/// against 18,321 triangles (jacksboro at 128²), and 22.7 dB with 576,032 against 16,864 (87 × 61
+/// of its nodes as 10 m cells); with the shared default, 88.1 dB with equal triangles and
+/// identical. The price in memory, `terrain render --size 256` at the default τ against the
+/// reference: jacksboro 28.7 dB with 66,874 triangles at K 2 and −1, 27.4 dB with 40,210 here;
+/// jacksboro-high 43.7 dB, 13,195 against 43.4 dB, 12,996; gaussian 27.0 dB, 199,016 against
+/// 25.9 dB, 2,314. `geomipmap.k` and `detail.bias` still set the finer bake in memory.
 ///
 /// Why −1, with the geometric-error term (`importance.error`) that came on with it:
 /// `terrain compare --size 256 --modes warped,geomipmap --repeat 1 --path-frames 0`, llvmpipe,
-/// each against GeoMipMap's rows of the same run, since its bake follows the bias too. GeoMipMap
+/// each against GeoMipMap's rows of the same run, baked then at the same bias. GeoMipMap
 /// rows matched by a warped row with no more triangles and no more mean screen-space error, of
 /// the 75 on the five bundled views (the error to a fraction of a pixel, the sketch at level
 /// −o): 46 at −1 with the term, 43 without it, 37 at 0 with it, 44 at −2. (First chosen against
@@ -226,10 +239,10 @@ pub const FINEST_WAVELENGTH_M: f64 = 0.1;
 /// Rejected for planets: the clipmap rings slide with the nadir every frame, and from 2 m a bias
 /// of −1 swims 3.02 levels a frame at the default rings against 2.74 (up to twice as much at
 /// other ring settings), for +1.5 dB.
-pub fn default_bias(scene: &Scene, atlas: &crate::sketch::Atlas) -> f64 {
+pub fn default_bias(scene: &Scene, mode: Mode) -> f64 {
     if scene.planet().is_some() {
         0.5
-    } else if atlas.pyramid.is_some() {
+    } else if matches!(mode, Mode::Geomipmap | Mode::Bruteforce) {
         0.0
     } else {
         -1.0

@@ -452,7 +452,7 @@ fn ratio_histogram(
     out_dir: &Path,
     title: &str,
 ) -> Result<RatioReport> {
-    let detail = scene::detail_of(scene, atlas);
+    let detail = scene::detail_for(scene, atlas, Mode::Warped);
     let mut stage = CpuStage::new(scene, &detail)?;
     stage.run(atlas, camera);
     let mut ratios = Vec::new();

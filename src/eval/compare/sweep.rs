@@ -282,7 +282,7 @@ fn mesh_within(triangles: u64) -> u32 {
 fn view_mesh(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<u32> {
     let mut s = scene.clone();
     s.warp.mesh = MAX_MESH.max(s.warp.mesh);
-    let detail = crate::scene::detail_of(&s, atlas);
+    let detail = crate::scene::detail_for(&s, atlas, Mode::Warped);
     let mut stage = CpuStage::new(&s, &detail)?;
     stage.run(atlas, camera);
     Ok(stage.mesh)
