@@ -44,10 +44,6 @@ fn compare_reports_every_setting_with_every_column_filled() {
         // A held warp may not change at all over two steps; warped anew each frame, it must.
         "--set",
         "warp.hold=false",
-        // GeoMipMap's default grid, the sketch's own nodes, is too coarse on these smooth hills
-        // for a block to change level over two steps; one baked twice as fine does.
-        "--set",
-        "geomipmap.k=1",
     ]);
     assert_eq!(code, 0, "{err}");
     assert!(stdout.contains("frame time to 30 dB"), "{stdout}");

@@ -37,13 +37,7 @@ use std::time::Instant;
 /// The largest baked grid the default K allows (2^22 vertices: 64 MiB of vertices and normals).
 const MAX_DEFAULT_VERTICES: f64 = 4_194_304.0;
 
-/// GeoMipMap's K when `geomipmap.k` is unset, over either storage: the sketch's own nodes, the
-/// only grid it draws over a tile pyramid, so that a sketch and its pyramid draw one picture
-/// (`scene::default_bias` gives the figures).
-pub const GEOMIPMAP_K: u32 = 0;
-
-/// Brute force's K, the octaves baked into the grid: the finest grid (up to K = 3) within the
-/// vertex budget. GeoMipMap's is 0 ([`GEOMIPMAP_K`]).
+/// K, the octaves baked into the grid: the finest grid (up to K = 3) within the vertex budget.
 pub fn default_k(atlas: &Atlas) -> u32 {
     let side = (atlas.max_corner() - atlas.origin).max_element() / atlas.d_atlas();
     (0..=3u32)
@@ -231,10 +225,7 @@ impl Baselines {
                 (grid, blocks, None)
             }
             None => {
-                let k = scene.geomipmap.k.unwrap_or_else(|| match kind {
-                    Mode::Geomipmap => GEOMIPMAP_K,
-                    _ => default_k(s.atlas),
-                });
+                let k = scene.geomipmap.k.unwrap_or_else(|| default_k(s.atlas));
                 let (grid, bake) = bake(s, k, cells)?;
                 let blocks = Blocks::new(&grid);
                 (grid, blocks, Some(bake))

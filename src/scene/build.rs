@@ -153,7 +153,7 @@ pub fn detail_for(scene: &Scene, atlas: &Atlas, mode: super::Mode) -> Detail {
         seed: d.seed,
         bias: d
             .bias
-            .unwrap_or_else(|| crate::scene::default_bias(scene, mode)),
+            .unwrap_or_else(|| crate::scene::default_bias(scene, atlas, mode)),
         d_atlas: atlas.d_atlas(),
         // Anchored to the sketch, so the same sketch anywhere on Earth has the same detail.
         lattice_origin_m: atlas.origin,

@@ -204,23 +204,20 @@ pub const MAX_OCTAVES: u32 = 24;
 /// no camera this renderer places (at least a metre above the ground) resolves a change.
 pub const FINEST_WAVELENGTH_M: f64 = 0.1;
 
-/// `detail.bias` when the scene does not set it, by the mode that draws and never by the
-/// sketch's storage, so a sketch and the tile pyramid converted from it draw one picture: −1 in
-/// the warped mode (and the reference, which draws every octave whatever the bias), so the mesh
-/// carries as geometry the octave whose wavelength is its vertex spacing (the split octave one
-/// above `log2(d_atlas / d_max)`); 0 in GeoMipMap and brute force; 0.5 on a planet.
+/// `detail.bias` when the scene does not set it: −1 in the warped mode and the reference (which
+/// draws every octave whatever the bias) on either storage, so a sketch and the tile pyramid
+/// converted from it draw one picture, the mesh carrying as geometry the octave whose wavelength
+/// is its vertex spacing (the split octave one above `log2(d_atlas / d_max)`); 0.5 on a planet.
+/// The baselines are the exception: GeoMipMap over a tile pyramid draws the sketch's own nodes
+/// (`geomipmap.k` 0), whose δ, measured on the sketch alone, would not see an octave a negative
+/// bias puts into it, so it takes 0 there, and −1 with its finer bake in memory.
 ///
-/// Why 0 for the baselines: over a tile pyramid GeoMipMap's grid is the sketch's own nodes
-/// (`geomipmap.k` 0) and its δ, measured on the sketch alone, would not see an octave a negative
-/// bias puts into it; so GeoMipMap takes that grid and bias in memory too
-/// (`lod::baseline::GEOMIPMAP_K`), and brute force, GeoMipMap at level 0, the same bias. With K
-/// up to 3 and −1 in memory instead, a sketch and its pyramid drew 32.6 dB apart with 24,559
-/// against 18,321 triangles (jacksboro at 128²), and 22.7 dB with 576,032 against 16,864 (87 × 61
-/// of its nodes as 10 m cells); with the shared default, 88.1 dB with equal triangles and
-/// identical. The price in memory, `terrain render --size 256` at the default τ against the
-/// reference: jacksboro 28.7 dB with 66,874 triangles at K 2 and −1, 27.4 dB with 40,210 here;
-/// jacksboro-high 43.7 dB, 13,195 against 43.4 dB, 12,996; gaussian 27.0 dB, 199,016 against
-/// 25.9 dB, 2,314. `geomipmap.k` and `detail.bias` still set the finer bake in memory.
+/// Rejected: one GeoMipMap default for both storages (k 0, bias 0 in memory too). A sketch and
+/// its pyramid then draw one picture in GeoMipMap as well (jacksboro at 128², 88.1 dB with
+/// 18,321 triangles each, against 32.6 dB with 24,559 and 18,321), but the baseline every
+/// comparison measures the warped mode against grows weaker in memory (`terrain render --size
+/// 256` at the default τ against the reference: jacksboro 28.7 dB with 66,874 triangles drops
+/// to 27.4 dB with 40,210; gaussian 27.0 dB with 199,016 to 25.9 dB with 2,314).
 ///
 /// Why −1, with the geometric-error term (`importance.error`) that came on with it:
 /// `terrain compare --size 256 --modes warped,geomipmap --repeat 1 --path-frames 0`, llvmpipe,
@@ -239,10 +236,10 @@ pub const FINEST_WAVELENGTH_M: f64 = 0.1;
 /// Rejected for planets: the clipmap rings slide with the nadir every frame, and from 2 m a bias
 /// of −1 swims 3.02 levels a frame at the default rings against 2.74 (up to twice as much at
 /// other ring settings), for +1.5 dB.
-pub fn default_bias(scene: &Scene, mode: Mode) -> f64 {
+pub fn default_bias(scene: &Scene, atlas: &crate::sketch::Atlas, mode: Mode) -> f64 {
     if scene.planet().is_some() {
         0.5
-    } else if matches!(mode, Mode::Geomipmap | Mode::Bruteforce) {
+    } else if mode == Mode::Geomipmap && atlas.pyramid.is_some() {
         0.0
     } else {
         -1.0
