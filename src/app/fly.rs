@@ -7,7 +7,10 @@
 //! its end. Without `frames`, a path longer than [`DEFAULT_MAX_FRAMES`] at `fps` is spread over
 //! that many frames instead (and the command says so): the bundled flight at 30 fps would be
 //! 1149 frames and 651 MB, more than anyone asking for "a flythrough" expects. What will be
-//! written is said before the first frame. Every file is written atomically. MP4 is preferred
+//! written ([`Plan`]) goes to the caller before the first frame, for the command to say, with the
+//! files' count and size when there are more than [`MANY_FILES`]. Every file is written atomically. An earlier flight's frames in
+//! the folder are removed before the first is written, so a shorter flight never leaves a longer
+//! one's last frames beside its own. MP4 is preferred
 //! because the APNG of a long flight (363 MB for the bundled one) is more than browsers play
 //! smoothly; without ffmpeg, or where it fails, the APNG is made from the frames at the end.
 //!
@@ -199,36 +202,95 @@ pub fn frame_times(duration: f64, o: &Options) -> (Vec<f64>, Option<String>) {
     }
 }
 
-pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
+/// A flight that writes more files than this is said to, with their size, before it starts.
+pub const MANY_FILES: usize = 2000;
+
+/// What a flight will write, known before its first frame, so the command can say it first.
+pub struct Plan {
+    pub frames: usize,
+    /// Why the frame count differs from `fps` frames a second of travel, when it does.
+    pub frames_note: Option<String>,
+    /// The animation will be `animation.mp4` (else the APNG `animation.png`).
+    pub mp4: bool,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Plan {
+    /// Files written: the frames, the animation and `frames.csv`.
+    pub fn files(&self) -> usize {
+        self.frames + 2
+    }
+
+    /// Bytes written, roughly: a byte a pixel for each frame's PNG (a 512² frame of the bundled
+    /// flight weighs about 0.25 MB) plus its chunks' 250 or so, and as much again for an APNG (an
+    /// MP4 is far smaller).
+    pub fn bytes_estimate(&self) -> u64 {
+        let frame = self.width as u64 * self.height as u64 + 256;
+        let frames = frame * self.frames as u64;
+        if self.mp4 { frames } else { 2 * frames }
+    }
+}
+
+/// Whether `file` is one of a flight's frames (`frame-00042.png`), or one torn by a kill while
+/// written (`.frame-00042.png.PID.tmp`, see `output::write_atomic`).
+fn is_frame(file: &str) -> bool {
+    let frame = |f: &str| {
+        f.strip_prefix("frame-")
+            .and_then(|f| f.strip_suffix(".png"))
+            .is_some_and(|k| k.len() >= 5 && k.bytes().all(|b| b.is_ascii_digit()))
+    };
+    let torn = file
+        .strip_prefix('.')
+        .and_then(|f| f.strip_suffix(".tmp"))
+        .and_then(|f| f.rsplit_once('.'))
+        .is_some_and(|(f, pid)| {
+            !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit()) && frame(f)
+        });
+    frame(file) || torn
+}
+
+/// Removes an earlier flight's frames from `out_dir`, so that it never holds two flights'
+/// frames (nor an MP4 made of both); nothing else there is touched.
+fn remove_frames(out_dir: &Path) -> Result<()> {
+    let entries =
+        std::fs::read_dir(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
+    for e in entries.flatten() {
+        if is_frame(&e.file_name().to_string_lossy()) {
+            std::fs::remove_file(e.path()).map_err(|err| Error::io(Role::Output, e.path(), err))?;
+        }
+    }
+    Ok(())
+}
+
+/// Flies `scene`'s path into `out_dir`; `say` is given what will be written once it is known,
+/// before the first frame renders.
+pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) -> Result<Outcome> {
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
     let mut r = Renderer::new(scene, o.mode, o.view)?;
     let atlas = r.atlas().clone();
     // A planet's flight runs in equal time from key to key; a sketch's path at constant speed.
     let flight = Flight::of_scene(scene, &atlas)?;
     let (times, frames_note) = frame_times(flight.duration_s(), o);
+    let plan = Plan {
+        frames: times.len(),
+        frames_note,
+        mp4: o.mp4 && animation::ffmpeg_available(),
+        width: scene.camera.width,
+        height: scene.camera.height,
+    };
+    say(&plan);
     let cameras = times
         .iter()
         .map(|&t| flight.camera(t, scene, &atlas))
         .collect::<Result<Vec<_>>>()?;
     let (w, h) = (scene.camera.width, scene.camera.height);
-    let mp4 = o.mp4 && animation::ffmpeg_available();
+    let mp4 = plan.mp4;
     let apng_path = out_dir.join("animation.png");
     let mp4_path = out_dir.join("animation.mp4");
-    if let Some(note) = &frames_note {
-        eprintln!("fly: {note}");
-    }
-    eprintln!(
-        "fly: writing {} frames of {w}×{h} (frame-00000.png …), {} and frames.csv to {}",
-        cameras.len(),
-        if mp4 {
-            "animation.mp4"
-        } else {
-            "animation.png (APNG)"
-        },
-        out_dir.display()
-    );
     let mut progress = Progress::new("fly", cameras.len() as f64);
     r.render(&cameras[0])?; // warm-up
+    remove_frames(out_dir)?;
     let mut records = Vec::with_capacity(cameras.len());
     let writer = FrameWriter::new(w, h);
     for (k, (camera, &t)) in cameras.iter().zip(&times).enumerate() {
@@ -305,7 +367,7 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path) -> Result<Outcome> {
         animation: mp4.clone().unwrap_or(apng_path),
         mp4,
         mp4_note,
-        frames_note,
+        frames_note: plan.frames_note,
         elapsed_s: progress.elapsed().as_secs_f64(),
         gpu_memory_bytes: r.gpu_bytes(),
         stream,
@@ -360,5 +422,33 @@ impl FrameWriter {
             }
         }
         first
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_are_known_by_their_names_alone() {
+        for ours in [
+            "frame-00000.png",
+            "frame-123456.png",
+            ".frame-00042.png.4194303.tmp",
+        ] {
+            assert!(is_frame(ours), "{ours}");
+        }
+        for theirs in [
+            "frame-1.png",
+            "frame-notes.png",
+            "my-frame-00001.png",
+            "frame-00001.png.bak",
+            ".frame-00001.png.tmp",
+            ".frame-00001.png.x1.tmp",
+            "animation.png",
+            "frames.csv",
+        ] {
+            assert!(!is_frame(theirs), "{theirs}");
+        }
     }
 }

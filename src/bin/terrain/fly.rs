@@ -76,7 +76,7 @@ pub fn run(a: Args) -> Result<()> {
         mp4: !a.no_mp4,
         settle: a.settle,
     };
-    let o = terrain::app::fly::run(&scene, &opts, &a.out_dir)?;
+    let o = terrain::app::fly::run(&scene, &opts, &a.out_dir, |p| say_plan(p, &a.out_dir))?;
     if let Some(note) = &o.mp4_note {
         eprintln!("{note}");
     }
@@ -118,4 +118,30 @@ pub fn run(a: Args) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// What the flight will write, before its first frame: the frames, and how many files and
+/// bytes when they are many.
+fn say_plan(plan: &terrain::app::fly::Plan, out_dir: &std::path::Path) {
+    if let Some(note) = &plan.frames_note {
+        eprintln!("fly: {note}");
+    }
+    let animation = match plan.mp4 {
+        true => "animation.mp4",
+        false => "animation.png (APNG)",
+    };
+    eprintln!(
+        "fly: writing {} frames of {}×{} (frame-00000.png …), {animation} and frames.csv to {}",
+        plan.frames,
+        plan.width,
+        plan.height,
+        out_dir.display()
+    );
+    if plan.files() > terrain::app::fly::MANY_FILES {
+        eprintln!(
+            "fly: that is {} files, about {:.1} MB in all (--frames or --size chooses fewer or smaller)",
+            plan.files(),
+            plan.bytes_estimate() as f64 / 1e6
+        );
+    }
 }
