@@ -349,7 +349,9 @@ fn damage(tile: &Path) {
 }
 
 /// The bundled Jacksboro scene's text at 128², reading `sketch` (an absolute path), with `extra`
-/// appended.
+/// appended. Its `detail.bias` is set, so that a pyramid and the sketch in memory draw the same
+/// terrain function in GeoMipMap mode too: by default its bias over a pyramid is 0 and in memory
+/// −1 (docs/scene.md).
 fn jacksboro_text(sketch: &Path, extra: &str) -> String {
     let text = std::fs::read_to_string(common::manifest_dir().join("sketches/jacksboro.toml"))
         .unwrap()
@@ -358,7 +360,12 @@ fn jacksboro_text(sketch: &Path, extra: &str) -> String {
             &format!("path = {:?}", sketch.display().to_string()),
         )
         .replace("width = 512", "width = 128")
-        .replace("height = 512", "height = 128");
+        .replace("height = 512", "height = 128")
+        .replace("gain = 0.45", "gain = 0.45\nbias = 0.0");
+    assert!(
+        text.contains("bias = 0.0"),
+        "the bundled scene's [detail] changed"
+    );
     format!("{text}\n{extra}\n")
 }
 
