@@ -505,3 +505,40 @@ fn the_readme_commands_for_your_own_height_map_run() {
         .count();
     assert_eq!(pngs, 10);
 }
+
+/// A jobs file's `scene =` and `warp` take a sketch as the other commands do.
+#[test]
+fn a_jobs_file_and_warp_take_a_sketch_for_a_scene() {
+    let dir = scratch("own-jobs");
+    let asc = formats().join("grid.asc");
+    let jobs = dir.join("jobs.toml");
+    let text = format!(
+        "scene = {:?}\n\n[random]\ncount = 2\nseed = 3\n",
+        asc.to_string_lossy()
+    );
+    std::fs::write(&jobs, text).unwrap();
+    let out = dir.join("out");
+    let (code, _, err) = terrain(&[
+        "batch",
+        jobs.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+        "--size",
+        "16",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    for k in 0..2 {
+        assert!(out.join(format!("random-{k}.png")).is_file());
+    }
+    let warp = dir.join("warp");
+    let (code, out, err) = terrain(&[
+        "warp",
+        asc.to_str().unwrap(),
+        "--out-dir",
+        warp.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(json["cells_visible"].as_u64().unwrap() > 0, "{json}");
+}
