@@ -103,6 +103,27 @@ fn view_flies_a_sketch_of_each_format_given_by_itself() {
         let distinct: std::collections::HashSet<&[u8]> = rgba.chunks_exact(4).collect();
         assert!(distinct.len() > 100, "{name}: {} colours", distinct.len());
     }
+    // Left alone, the window tours the default orbit: later frames see the sketch from elsewhere.
+    let later = dir.join("later.png");
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24"])
+        .arg(env!("CARGO_BIN_EXE_terrain"))
+        .arg("view")
+        .arg(formats.join(sketches[0]))
+        .args(["--size", "96x72", "--frames", "40", "--screenshot"])
+        .arg(&later)
+        .output()
+        .expect("run xvfb-run");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (first, last) = (read_png(&dir.join("shot-0.png")), read_png(&later));
+    let (first, last) = (first.unwrap().2, last.unwrap().2);
+    // Below the figures at the top, the terrain moved.
+    let terrain = |img: &[u8]| img[40 * 96 * 4..].to_vec();
+    assert_ne!(terrain(&first), terrain(&last), "the view did not tour");
 }
 
 fn view_opens_draws_and_screenshots_itself_under_xvfb() {

@@ -47,11 +47,15 @@ pub struct FlyCamera {
 
 impl FlyCamera {
     pub fn from_camera(c: &Camera) -> FlyCamera {
-        let f = c.forward;
+        FlyCamera::looking(c.eye, c.forward)
+    }
+
+    /// A camera at `eye` looking along `dir`.
+    pub fn looking(eye: DVec3, dir: DVec3) -> FlyCamera {
         FlyCamera {
-            eye: c.eye,
-            yaw: f.x.atan2(f.y),
-            pitch: f.z.clamp(-1.0, 1.0).asin().clamp(-MAX_PITCH, MAX_PITCH),
+            eye,
+            yaw: dir.x.atan2(dir.y),
+            pitch: dir.z.clamp(-1.0, 1.0).asin().clamp(-MAX_PITCH, MAX_PITCH),
         }
     }
 

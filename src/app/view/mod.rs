@@ -10,7 +10,8 @@
 //! quits. The figures on screen: mode, view, frame time per pass, triangles, height above the
 //! ground. Over a planet the same keys fly great circles (`flycam::PlanetFlyCamera`) in clipmaps
 //! mode (1/2/3 do nothing), and a recorded path is a planet's `[path]`: the camera's keys and the
-//! time flown.
+//! time flown. A sketch given with no camera place and no `[path]` tours its default orbit
+//! (`scene::place::default_path`) until a key or the mouse takes over.
 //!
 //! Rules: the frame is rendered headless by the same renderers as every other command (one
 //! device, renderers rebuilt only when the mode, the view or the window's size changes), then
@@ -25,6 +26,7 @@
 
 use crate::app::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder, PlanetFlyCamera};
 use crate::app::hud;
+use crate::app::path::CameraPath;
 use crate::error::{Error, Result};
 
 mod files;
@@ -78,6 +80,9 @@ struct App {
     drag: Option<(f64, f64)>,
     last: Instant,
     frames: u64,
+    /// A sketch shown with no camera place and no `[path]` tours its default orbit until a key
+    /// or the mouse takes over: the path, and the seconds flown along it.
+    tour: Option<(CameraPath, f64)>,
     shots: u32,
     presented: Vec<u8>,
     recorder: Option<PathRecorder>,
@@ -183,6 +188,14 @@ impl App {
         self.last = now;
         let motion = self.motion();
         let floor = self.floor();
+        if !self.held.is_empty() || self.drag.is_some() {
+            self.tour = None;
+        }
+        if let (Some((path, t)), Flyer::Plane(c)) = (&mut self.tour, &mut self.cam) {
+            *t = (*t + dt).rem_euclid(path.duration_s());
+            let s = *t * path.speed_mps;
+            *c = FlyCamera::looking(path.position(s), path.direction(s));
+        }
         match &mut self.cam {
             Flyer::Plane(c) => c.step(dt, &motion, floor),
             Flyer::Planet(c) => c.step(dt, &motion),
@@ -445,6 +458,10 @@ pub fn run(scene: Scene, o: Options) -> Result<()> {
         // Enough for every mode the window can switch to (the warped mode's mesh the largest).
         None => (Flyer::Plane(FlyCamera::from_camera(&camera)), Mode::Warped),
     };
+    let tour = match scene.planet().is_none() && scene.path.is_none() && !scene.camera.is_placed() {
+        true => Some((CameraPath::of_scene(&scene, &atlas)?, 0.0)),
+        false => None,
+    };
     let ctx = GpuContext::new(&crate::render::needs(&scene, largest, &atlas))?;
     let event_loop = EventLoop::new().map_err(|e| Error::NoDisplay {
         cause: no_display(&e.to_string()),
@@ -467,6 +484,7 @@ pub fn run(scene: Scene, o: Options) -> Result<()> {
         drag: None,
         last: Instant::now(),
         frames: 0,
+        tour,
         shots: 0,
         presented: Vec::new(),
         recorder: None,
