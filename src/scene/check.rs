@@ -1,6 +1,6 @@
 //! The ranges a parsed scene must keep, each fault naming its dotted key.
 
-use super::{MAX_OCTAVES, Msaa, Scene};
+use super::{MAX_OCTAVES, Msaa, Placement, Scene};
 
 impl Scene {
     pub(super) fn check(&self) -> std::result::Result<(), String> {
@@ -79,20 +79,7 @@ impl Scene {
                 );
             }
         } else {
-            planar_keys(
-                "camera",
-                &Keys {
-                    position: c.position,
-                    look_at: c.look_at,
-                    map_xy: c.map_xy,
-                    lat_deg: c.lat_deg,
-                    lon_deg: c.lon_deg,
-                    altitude_m: c.altitude_m,
-                    heading_deg: c.heading_deg,
-                    pitch_deg: c.pitch_deg,
-                },
-                false,
-            )?;
+            planar_keys("camera", &c.placement(), false)?;
         }
         open_range("camera.fov_y_deg", c.fov_y_deg, 0.0, 180.0)?;
         within("camera.width", c.width as f64, 1.0, 16384.0)?;
@@ -237,43 +224,18 @@ impl Scene {
                     )?;
                     continue;
                 }
-                planar_keys(
-                    &format!("path.keys[{k}]"),
-                    &Keys {
-                        position: key.position,
-                        look_at: key.look_at,
-                        map_xy: key.map_xy,
-                        lat_deg: key.lat_deg,
-                        lon_deg: key.lon_deg,
-                        altitude_m: key.altitude_m,
-                        heading_deg: key.heading_deg,
-                        pitch_deg: key.pitch_deg,
-                    },
-                    true,
-                )?;
+                planar_keys(&format!("path.keys[{k}]"), &key.placement(), true)?;
             }
         }
         Ok(())
     }
 }
 
-/// The keys that place and aim a planar camera or path key.
-struct Keys {
-    position: Option<[f64; 3]>,
-    look_at: Option<[f64; 3]>,
-    map_xy: Option<[f64; 2]>,
-    lat_deg: Option<f64>,
-    lon_deg: Option<f64>,
-    altitude_m: Option<f64>,
-    heading_deg: Option<f64>,
-    pitch_deg: Option<f64>,
-}
-
 /// A planar camera's keys under `table`: at most one place (`position`, `map_xy`, or `lat_deg`
 /// with `lon_deg`), `altitude_m` with the last two and only with them, and one aim (`look_at`,
 /// or `heading_deg` and `pitch_deg`). A camera may leave out its place (`need_place` false): it
 /// then frames the sketch, from the side its heading and pitch say.
-fn planar_keys(table: &str, k: &Keys, need_place: bool) -> std::result::Result<(), String> {
+fn planar_keys(table: &str, k: &Placement, need_place: bool) -> std::result::Result<(), String> {
     let geo = k.lat_deg.is_some() || k.lon_deg.is_some();
     let places = [k.position.is_some(), k.map_xy.is_some(), geo];
     let placed = places.iter().filter(|&&b| b).count();

@@ -182,6 +182,19 @@ impl CameraSection {
     pub fn pitch(&self) -> f64 {
         self.pitch_deg.unwrap_or(0.0)
     }
+    /// The keys that place and aim it.
+    pub(crate) fn placement(&self) -> Placement {
+        Placement {
+            position: self.position,
+            look_at: self.look_at,
+            map_xy: self.map_xy,
+            lat_deg: self.lat_deg,
+            lon_deg: self.lon_deg,
+            altitude_m: self.altitude_m,
+            heading_deg: self.heading_deg,
+            pitch_deg: self.pitch_deg,
+        }
+    }
     /// Whether the keys place the camera (a planar scene without a place frames the sketch).
     pub fn is_placed(&self) -> bool {
         self.position.is_some()
@@ -189,6 +202,19 @@ impl CameraSection {
             || self.lat_deg.is_some()
             || self.lon_deg.is_some()
     }
+}
+
+/// The keys a planar camera and a path key share to place and aim it, checked by
+/// `Scene::check` and resolved by `scene::place`.
+pub(crate) struct Placement {
+    pub position: Option<[f64; 3]>,
+    pub look_at: Option<[f64; 3]>,
+    pub map_xy: Option<[f64; 2]>,
+    pub lat_deg: Option<f64>,
+    pub lon_deg: Option<f64>,
+    pub altitude_m: Option<f64>,
+    pub heading_deg: Option<f64>,
+    pub pitch_deg: Option<f64>,
 }
 
 fn default_fov() -> f64 {
@@ -659,6 +685,20 @@ pub struct PathKey {
 }
 
 impl PathKey {
+    /// The keys that place and aim it.
+    pub(crate) fn placement(&self) -> Placement {
+        Placement {
+            position: self.position,
+            look_at: self.look_at,
+            map_xy: self.map_xy,
+            lat_deg: self.lat_deg,
+            lon_deg: self.lon_deg,
+            altitude_m: self.altitude_m,
+            heading_deg: self.heading_deg,
+            pitch_deg: self.pitch_deg,
+        }
+    }
+
     /// A planar key at `position`.
     pub fn at(position: [f64; 3], look_at: Option<[f64; 3]>) -> PathKey {
         PathKey {

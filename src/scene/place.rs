@@ -21,7 +21,7 @@
 //! narrow frame, then leaves most of the image sky or cuts the sketch off; the fitted distance
 //! fills the frame's width or height, whichever binds, for any shape.
 
-use super::{CameraSection, Outside, PathKey, PathSection, Scene};
+use super::{Outside, PathKey, PathSection, Placement, Scene};
 use crate::error::{Error, Result};
 use crate::sketch::Atlas;
 use glam::{DVec2, DVec3};
@@ -40,7 +40,7 @@ const ORBIT_KEYS: usize = 13;
 /// The eye and the point looked at, world metres, of a planar scene's camera over `atlas`.
 pub fn pose(scene: &Scene, atlas: &Atlas) -> Result<(DVec3, DVec3)> {
     let c = &scene.camera;
-    let Some(eye) = eye_of(scene, atlas, "camera", &place_of_camera(c))? else {
+    let Some(eye) = eye_of(scene, atlas, "camera", &c.placement())? else {
         return Ok(framing(
             scene,
             atlas,
@@ -58,16 +58,9 @@ pub fn pose(scene: &Scene, atlas: &Atlas) -> Result<(DVec3, DVec3)> {
 /// A path key resolved to world metres: its `position` and `look_at` (from its heading and
 /// pitch where it gives them), its other place keys cleared.
 pub fn resolve_key(scene: &Scene, atlas: &Atlas, k: usize, key: &PathKey) -> Result<PathKey> {
-    let place = Place {
-        position: key.position,
-        map_xy: key.map_xy,
-        lat_deg: key.lat_deg,
-        lon_deg: key.lon_deg,
-        altitude_m: key.altitude_m,
-    };
     // `Scene::check` gives every planar key a place; the table names the key in messages.
     let table = format!("path.keys[{k}]");
-    let eye = eye_of(scene, atlas, &table, &place)?.unwrap_or_default();
+    let eye = eye_of(scene, atlas, &table, &key.placement())?.unwrap_or_default();
     let look_at = match (key.look_at, key.heading_deg, key.pitch_deg) {
         (Some(t), _, _) => Some(t),
         (None, None, None) => None,
@@ -79,27 +72,8 @@ pub fn resolve_key(scene: &Scene, atlas: &Atlas, k: usize, key: &PathKey) -> Res
     Ok(PathKey::at(eye.to_array(), look_at))
 }
 
-/// The place keys a camera or a path key gives.
-struct Place {
-    position: Option<[f64; 3]>,
-    map_xy: Option<[f64; 2]>,
-    lat_deg: Option<f64>,
-    lon_deg: Option<f64>,
-    altitude_m: Option<f64>,
-}
-
-fn place_of_camera(c: &CameraSection) -> Place {
-    Place {
-        position: c.position,
-        map_xy: c.map_xy,
-        lat_deg: c.lat_deg,
-        lon_deg: c.lon_deg,
-        altitude_m: c.altitude_m,
-    }
-}
-
 /// The eye the place keys give (`None` without a place).
-fn eye_of(scene: &Scene, atlas: &Atlas, table: &str, p: &Place) -> Result<Option<DVec3>> {
+fn eye_of(scene: &Scene, atlas: &Atlas, table: &str, p: &Placement) -> Result<Option<DVec3>> {
     if let Some(position) = p.position {
         return Ok(Some(DVec3::from(position)));
     }
