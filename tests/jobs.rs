@@ -173,7 +173,7 @@ fn shards_together_are_the_whole_batch_byte_for_byte() {
     }
 }
 
-/// A scheduler's job script passes `--resume` from the first run on (the README's Slurm and
+/// A scheduler's job script passes `--resume` from the first run on (docs/batch.md's Slurm and
 /// Kubernetes examples): with no manifest yet, it renders everything.
 #[test]
 fn resume_on_a_fresh_folder_starts_the_batch() {

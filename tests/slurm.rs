@@ -1,7 +1,7 @@
-//! The README's Slurm array job, run as written on a single-node Slurm
+//! docs/batch.md's Slurm array job, run as written on a single-node Slurm
 //! (`scripts/slurm-single-node.sh`): four shards submitted with `sbatch`, run by Slurm, merged by
-//! the dependent job the README's comment gives; the merged manifest and every image equal a
-//! one-machine `terrain batch` of the same jobs file. The one change to the README's text is the
+//! the dependent job the page's comment gives; the merged manifest and every image equal a
+//! one-machine `terrain batch` of the same jobs file. The one change to the page's text is the
 //! output folder: `/shared/snapshots` becomes this test's scratch folder.
 //!
 //! Manifests are compared with the measured fields left out (`cpu_stage_us`, `gpu_ms`,
@@ -21,7 +21,7 @@ use std::process::Command;
 fn main() {
     let args = Arguments::from_args();
     let trial = skippable_trial(
-        "the_readmes_slurm_array_job_merges_to_the_one_machine_batch",
+        "the_documented_slurm_array_job_merges_to_the_one_machine_batch",
         slurm_array_job,
         missing(),
         "TERRAIN_REQUIRE_SLURM_TESTS",
@@ -65,13 +65,13 @@ impl Drop for Cluster {
     }
 }
 
-/// The README's array script and its merge command, out of the README's text.
-fn readme_slurm() -> (String, String) {
-    let readme = std::fs::read_to_string(manifest_dir().join("README.md")).unwrap();
-    let after = readme
+/// docs/batch.md's array script and its merge command, out of the page's text.
+fn documented_slurm() -> (String, String) {
+    let page = std::fs::read_to_string(manifest_dir().join("docs/batch.md")).unwrap();
+    let after = page
         .split("A Slurm array job:")
         .nth(1)
-        .expect("the README has a Slurm array job");
+        .expect("docs/batch.md has a Slurm array job");
     let block = after
         .split("```sh\n")
         .nth(1)
@@ -110,7 +110,7 @@ fn slurm_array_job() {
     )
     .unwrap();
     let snapshots = dir.join("snapshots");
-    let (script, merge) = readme_slurm();
+    let (script, merge) = documented_slurm();
     let here = |text: &str| text.replace("/shared/snapshots", snapshots.to_str().unwrap());
     std::fs::write(dir.join("array.sh"), here(&script)).unwrap();
 
@@ -125,7 +125,7 @@ fn slurm_array_job() {
         "cluster: {}",
         String::from_utf8_lossy(&up.stderr)
     );
-    // Slurm's jobs inherit the submitter's environment: `terrain` on the PATH, as the README assumes.
+    // Slurm's jobs inherit the submitter's environment: `terrain` on the PATH, as docs/batch.md assumes.
     let bin = PathBuf::from(env!("CARGO_BIN_EXE_terrain"));
     let path = format!(
         "{}:{}",
@@ -151,7 +151,7 @@ fn slurm_array_job() {
     };
     let array = sh("sbatch --parsable array.sh");
     let array_id = array.split(';').next().unwrap().to_string();
-    // The README's merge job, waited for: it runs once every shard has finished well, and is
+    // The page's merge job, waited for: it runs once every shard has finished well, and is
     // cancelled (failing this test rather than hanging it) if one failed.
     let merge = here(&merge).replace("<array job id>", &array_id).replacen(
         "sbatch ",

@@ -18,7 +18,12 @@ type ViewTest = (&'static str, fn(), &'static [&'static str]);
 
 fn main() {
     let args = Arguments::from_args();
-    let tests: [ViewTest; 4] = [
+    let tests: [ViewTest; 5] = [
+        (
+            "the_readme_view_commands_run_as_written",
+            the_readme_view_commands_run_as_written,
+            &["xvfb-run"],
+        ),
         (
             "view_flies_a_sketch_of_each_format_given_by_itself",
             view_flies_a_sketch_of_each_format_given_by_itself,
@@ -124,6 +129,33 @@ fn view_flies_a_sketch_of_each_format_given_by_itself() {
     // Below the figures at the top, the terrain moved.
     let terrain = |img: &[u8]| img[40 * 96 * 4..].to_vec();
     assert_ne!(terrain(&first), terrain(&last), "the view did not tour");
+}
+
+/// The README's `terrain view` lines as written (its stand-in sketch for `my_dem.tif`), each
+/// drawing a few frames to a screenshot: tests/documents.rs runs every other README command.
+fn the_readme_view_commands_run_as_written() {
+    let dir = scratch("view-readme");
+    let lines: Vec<String> = readme_commands()
+        .into_iter()
+        .filter(|c| c.starts_with("terrain view "))
+        .collect();
+    assert!(!lines.is_empty(), "the README shows no view command");
+    for (k, line) in lines.iter().enumerate() {
+        let line = line.replace("my_dem.tif", "tests/data/formats/utm-metres-Float32.tif");
+        let shot = dir.join(format!("shot-{k}.png"));
+        let out = Command::new("xvfb-run")
+            .args(["-a", "-s", "-screen 0 640x480x24"])
+            .arg(env!("CARGO_BIN_EXE_terrain"))
+            .args(line.split_whitespace().skip(1))
+            .args(["--size", "64x48", "--frames", "2", "--screenshot"])
+            .arg(&shot)
+            .current_dir(manifest_dir())
+            .output()
+            .expect("run xvfb-run");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "`{line}` failed: {err}");
+        assert!(read_png(&shot).is_some(), "`{line}` wrote no screenshot");
+    }
 }
 
 fn view_opens_draws_and_screenshots_itself_under_xvfb() {

@@ -207,3 +207,19 @@ pub fn skippable_trial(
         _ => trial,
     }
 }
+
+/// Every command line of the README's `sh` blocks, in order, comments dropped.
+pub fn readme_commands() -> Vec<String> {
+    let readme = std::fs::read_to_string(manifest_dir().join("README.md")).unwrap();
+    let mut commands = Vec::new();
+    for block in readme.split("```sh\n").skip(1) {
+        let body = block.split("```").next().unwrap();
+        for line in body.lines() {
+            let command = line.split(" #").next().unwrap().trim();
+            if !command.is_empty() {
+                commands.push(command.to_string());
+            }
+        }
+    }
+    commands
+}

@@ -1,0 +1,227 @@
+//! The documents hold: every relative link in README.md and docs/ resolves to a file (and a named
+//! heading) in the repository, and every command in the README's `sh` blocks runs as written, at
+//! a small size, from a folder that sees the checkout's `sketches/` and `tests/`.
+
+mod common;
+use common::*;
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// README.md and every page of docs/.
+fn documents() -> Vec<PathBuf> {
+    let mut docs = vec![manifest_dir().join("README.md")];
+    let mut pages: Vec<PathBuf> = std::fs::read_dir(manifest_dir().join("docs"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "md"))
+        .collect();
+    pages.sort();
+    docs.extend(pages);
+    docs
+}
+
+/// The targets of a page's markdown links and images, `](target)`, outside code blocks.
+fn links(text: &str) -> Vec<String> {
+    let mut found = Vec::new();
+    let mut fenced = false;
+    for line in text.lines() {
+        if line.trim_start().starts_with("```") {
+            fenced = !fenced;
+            continue;
+        }
+        if fenced {
+            continue;
+        }
+        let mut rest = line;
+        while let Some(at) = rest.find("](") {
+            let tail = &rest[at + 2..];
+            let Some(end) = tail.find(')') else { break };
+            found.push(tail[..end].to_string());
+            rest = &tail[end..];
+        }
+    }
+    found
+}
+
+/// GitHub's anchor for a heading: lower case, punctuation dropped, spaces to hyphens.
+fn anchor(heading: &str) -> String {
+    heading
+        .trim()
+        .to_lowercase()
+        .chars()
+        .filter(|c| c.is_alphanumeric() || *c == ' ' || *c == '-' || *c == '_')
+        .map(|c| if c == ' ' { '-' } else { c })
+        .collect()
+}
+
+fn anchors(text: &str) -> BTreeSet<String> {
+    let mut fenced = false;
+    let mut set = BTreeSet::new();
+    for line in text.lines() {
+        if line.trim_start().starts_with("```") {
+            fenced = !fenced;
+        } else if !fenced && line.starts_with('#') {
+            set.insert(anchor(line.trim_start_matches('#')));
+        }
+    }
+    set
+}
+
+/// Why a link of `page` does not resolve, if it does not.
+fn broken(page: &Path, target: &str) -> Option<String> {
+    if target.starts_with("http://") || target.starts_with("https://") {
+        return None;
+    }
+    let (file, fragment) = match target.split_once('#') {
+        Some((f, a)) => (f, Some(a)),
+        None => (target, None),
+    };
+    let resolved = if file.is_empty() {
+        page.to_path_buf()
+    } else {
+        page.parent().unwrap().join(file)
+    };
+    let root = manifest_dir().canonicalize().unwrap();
+    let Ok(real) = resolved.canonicalize() else {
+        return Some(format!("{target}: no such file"));
+    };
+    if !real.starts_with(&root) {
+        return Some(format!("{target}: outside the repository"));
+    }
+    if let Some(fragment) = fragment {
+        let text = std::fs::read_to_string(&real).unwrap_or_default();
+        if !anchors(&text).contains(fragment) {
+            return Some(format!("{target}: no heading #{fragment}"));
+        }
+    }
+    None
+}
+
+#[test]
+fn every_relative_link_in_the_readme_and_docs_resolves() {
+    let mut bad = Vec::new();
+    let mut checked = 0;
+    for page in documents() {
+        let text = std::fs::read_to_string(&page).unwrap();
+        for target in links(&text) {
+            checked += 1;
+            if let Some(why) = broken(&page, &target) {
+                bad.push(format!("{}: {why}", page.display()));
+            }
+        }
+    }
+    assert!(
+        checked > 40,
+        "only {checked} links found: is the parser right?"
+    );
+    assert!(bad.is_empty(), "broken links:\n{}", bad.join("\n"));
+}
+
+#[test]
+fn the_link_checker_finds_a_missing_file_and_a_missing_heading() {
+    let readme = manifest_dir().join("README.md");
+    assert!(broken(&readme, "docs/scene.md").is_none());
+    assert!(broken(&readme, "docs/no-such-page.md").is_some());
+    assert!(broken(&readme, "#the-two-commands").is_none());
+    assert!(broken(&readme, "#no-such-heading").is_some());
+    assert_eq!(
+        anchor(" `terrain tiles SRC`: big, fast!"),
+        "terrain-tiles-src-big-fast"
+    );
+}
+
+/// README lines not run here, each with the reason.
+const NOT_RUN_HERE: [(&str, &str); 3] = [
+    ("cargo test --release", "this test runs inside it"),
+    (
+        "cargo install --path .",
+        "installs into ~/.cargo/bin; it builds the same binary the tests run",
+    ),
+    (
+        "terrain view",
+        "a window: tests/view.rs runs the README's view commands under Xvfb",
+    ),
+];
+
+/// The options a test adds to keep a command small.
+fn small(words: &[&str]) -> Vec<&'static str> {
+    match words.get(1).copied() {
+        Some("render") => vec!["--size", "24"],
+        Some("fly") => vec!["--size", "16", "--frames", "3"],
+        Some("compare") => vec!["--size", "16", "--repeat", "1", "--path-frames", "3"],
+        Some("batch") if words.iter().any(|w| w.contains("random-snapshots")) => {
+            vec!["--size", "16", "--shard", "0/25"]
+        }
+        Some("batch") => vec!["--size", "16"],
+        _ => vec![],
+    }
+}
+
+/// A folder to run the README's commands in: the checkout's sketches and test data linked in,
+/// `terrain` on the PATH, and the README's `mine-jobs.toml` written out.
+fn readme_folder() -> (PathBuf, String) {
+    let dir = scratch("readme-commands");
+    for linked in ["sketches", "tests"] {
+        std::os::unix::fs::symlink(manifest_dir().join(linked), dir.join(linked)).unwrap();
+    }
+    let bin = dir.join("bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    std::os::unix::fs::symlink(env!("CARGO_BIN_EXE_terrain"), bin.join("terrain")).unwrap();
+    let readme = std::fs::read_to_string(manifest_dir().join("README.md")).unwrap();
+    let jobs = readme
+        .split("```toml\n")
+        .skip(1)
+        .map(|b| b.split("```").next().unwrap())
+        .find(|b| b.starts_with("scene = \"mine.toml\""))
+        .expect("the README's mine-jobs.toml");
+    std::fs::write(dir.join("mine-jobs.toml"), jobs).unwrap();
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap());
+    (dir, path)
+}
+
+#[test]
+fn every_command_in_the_readme_runs_as_written() {
+    let (dir, path) = readme_folder();
+    let tif = "tests/data/formats/utm-metres-Float32.tif";
+    let mut ran = 0;
+    for command in readme_commands() {
+        if let Some((_, why)) = NOT_RUN_HERE.iter().find(|(c, _)| command.starts_with(c)) {
+            eprintln!("not run here: `{command}`: {why}");
+            continue;
+        }
+        let line = command
+            .replace("cargo run --release -- ", "terrain ")
+            .replace("my_dem.tif", tif);
+        let words: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!(
+            words[0], "terrain",
+            "a README command that is not terrain's: {command}"
+        );
+        let full = format!("{line} {}", small(&words).join(" "));
+        let out = Command::new("sh")
+            .args(["-c", &full])
+            .current_dir(&dir)
+            .env("PATH", &path)
+            .env("TERRAIN_QUIET", "1")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "`{full}` failed: {err}");
+        for made in outputs(&words) {
+            assert!(dir.join(made).exists(), "`{full}` wrote no {made}");
+        }
+        ran += 1;
+    }
+    assert!(ran >= 15, "only {ran} README commands ran");
+}
+
+/// What a command line says it writes: `-o FILE` and `--out-dir DIR`.
+fn outputs<'a>(words: &[&'a str]) -> Vec<&'a str> {
+    words
+        .windows(2)
+        .filter(|w| w[0] == "-o" || w[0] == "--out-dir")
+        .map(|w| w[1])
+        .collect()
+}
