@@ -225,3 +225,95 @@ fn outputs<'a>(words: &[&'a str]) -> Vec<&'a str> {
         .map(|w| w[1])
         .collect()
 }
+
+/// The repository's own text: the README, docs, code, shaders, tests, scripts and scenes (not
+/// vendored code, fixtures or snapshots).
+fn own_text_files() -> Vec<PathBuf> {
+    let root = manifest_dir();
+    let mut files = vec![
+        root.join("README.md"),
+        root.join("Cargo.toml"),
+        root.join(".ci/run"),
+    ];
+    let mut dirs: Vec<PathBuf> = [
+        "docs", "src", "shaders", "tests", "benches", "examples", "scripts", "sketches", "fuzz",
+    ]
+    .iter()
+    .map(|d| root.join(d))
+    .collect();
+    let skipped = [
+        root.join("tests/data"),
+        root.join("tests/snapshots"),
+        root.join("fuzz/seeds"),
+    ];
+    while let Some(dir) = dirs.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap().flatten() {
+            let path = entry.path();
+            if path.is_dir() && !skipped.contains(&path) {
+                dirs.push(path);
+            } else if path.extension().is_some_and(|x| {
+                ["rs", "md", "wgsl", "sh", "py", "toml"].contains(&x.to_str().unwrap_or(""))
+            }) {
+                files.push(path);
+            }
+        }
+    }
+    files
+}
+
+/// Where `line` names an internal work step ("st" "op 41") or a document outside the repository
+/// (the outside design page in capitals, or a paper by its file's number).
+fn outside_reference(line: &str) -> Option<&'static str> {
+    let lower = line.to_lowercase();
+    let step = ["st", "op"].concat();
+    let bytes = lower.as_bytes();
+    for (at, _) in lower.match_indices(&step) {
+        let before = at.checked_sub(1).map(|i| bytes[i]);
+        if before.is_some_and(|b| b.is_ascii_alphanumeric()) {
+            continue;
+        }
+        let rest = &lower[at + step.len()..];
+        let rest = rest.strip_prefix('s').unwrap_or(rest);
+        if rest
+            .strip_prefix(' ')
+            .is_some_and(|r| r.starts_with(|c: char| c.is_ascii_digit()))
+        {
+            return Some("an internal work step");
+        }
+    }
+    if line.contains(&["DES", "IGN.md"].concat()) {
+        return Some("a design document outside the repository");
+    }
+    if lower.contains(&["seed", " 00"].concat()) {
+        return Some("a paper by its file's number");
+    }
+    None
+}
+
+#[test]
+fn nothing_cites_a_work_step_or_a_document_outside_the_repository() {
+    let mut found = Vec::new();
+    for file in own_text_files() {
+        let Ok(text) = std::fs::read_to_string(&file) else {
+            continue;
+        };
+        for (k, line) in text.lines().enumerate() {
+            if let Some(what) = outside_reference(line) {
+                found.push(format!("{}:{}: {what}: {line}", file.display(), k + 1));
+            }
+        }
+    }
+    assert!(found.is_empty(), "{}", found.join("\n"));
+}
+
+#[test]
+fn the_reference_check_tells_a_work_step_from_ordinary_words() {
+    let step = ["St", "op 43"].concat();
+    assert!(outside_reference(&format!("since {step}'s build")).is_some());
+    assert!(outside_reference(&format!("two {}s 41", &step[..4])).is_some());
+    assert!(outside_reference("they stop when no stand-in is left").is_none());
+    assert!(outside_reference("a stopwatch 3 s").is_none());
+    assert!(outside_reference("the backstop 3").is_none());
+    assert!(outside_reference("docs/design.md, Importance").is_none());
+    assert!(outside_reference(&["see DES", "IGN.md"].concat()).is_some());
+}
