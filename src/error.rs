@@ -110,6 +110,9 @@ pub enum Error {
     /// path whose keys coincide); `key` names it as the scene file spells it.
     #[error("{key}: {}", Line(reason))]
     Value { key: &'static str, reason: String },
+    /// A height query at a point or along a ray that cannot be answered (not finite).
+    #[error("height query: {}", Line(.0))]
+    Query(String),
     /// One job of a batch that cannot run as the jobs file gives it.
     #[error("job {name:?}: {}", Line(reason))]
     Job { name: String, reason: String },

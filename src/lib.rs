@@ -21,6 +21,7 @@ pub mod light;
 pub mod lod;
 pub mod names;
 pub mod planet;
+pub mod query;
 pub mod render;
 pub mod scene;
 pub mod sketch;

@@ -335,19 +335,6 @@ fn every_format_reads() {
     );
 }
 
-/// Reads a `.npy` of f64 as written by `render --positions`: (shape, values).
-fn read_npy(path: &Path) -> (String, Vec<f64>) {
-    let b = std::fs::read(path).unwrap();
-    assert_eq!(&b[..8], b"\x93NUMPY\x01\x00");
-    let n = u16::from_le_bytes([b[8], b[9]]) as usize;
-    let header = String::from_utf8(b[10..10 + n].to_vec()).unwrap();
-    let values = b[10 + n..]
-        .chunks_exact(8)
-        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
-        .collect();
-    (header, values)
-}
-
 #[test]
 fn render_writes_world_positions_that_agree_between_modes() {
     let dir = scratch("positions");

@@ -223,3 +223,16 @@ pub fn readme_commands() -> Vec<String> {
     }
     commands
 }
+
+/// Reads a `.npy` of f64 as written by `render --positions`: (shape, values).
+pub fn read_npy(path: &std::path::Path) -> (String, Vec<f64>) {
+    let b = std::fs::read(path).unwrap();
+    assert_eq!(&b[..8], b"\x93NUMPY\x01\x00");
+    let n = u16::from_le_bytes([b[8], b[9]]) as usize;
+    let header = String::from_utf8(b[10..10 + n].to_vec()).unwrap();
+    let values = b[10 + n..]
+        .chunks_exact(8)
+        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    (header, values)
+}

@@ -23,6 +23,7 @@ mod args;
 mod batch;
 mod compare;
 mod fly;
+mod height;
 mod info;
 mod render;
 mod scene;
@@ -57,6 +58,9 @@ enum Command {
     Scene(scene::Args),
     /// Runs the CPU stage for the scene's camera; writes importance.png, mesh.png, ratio.png.
     Warp(warp::Args),
+    /// The terrain's height and normal at a point, as the reference draws it: for placing
+    /// objects on the ground.
+    Height(height::Args),
     /// Renders a snapshot of the scene from its camera (headless, on whatever adapter there is).
     Render(render::Args),
     /// Every mode over a sweep of its quality setting against the reference image; writes
@@ -108,6 +112,7 @@ fn main() {
         Command::Tiles(a) => tiles::run(a),
         Command::Scene(a) => scene::run(a),
         Command::Warp(a) => warp::run(a),
+        Command::Height(a) => height::run(a),
         Command::Render(a) => render::run(a),
         Command::Compare(a) => compare::run(a),
         Command::Fly(a) => fly::run(a),

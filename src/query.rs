@@ -1,0 +1,365 @@
+//! Height queries: the terrain function the reference mode ray-marches, evaluated on the CPU in
+//! f64, for placing objects on the ground, collision and picking.
+//!
+//! Rules:
+//! - The surface at a point is the sketch, bicubic (Catmull–Rom) on the pyramid level of the
+//!   caller's footprint (linear between two levels), plus each octave k weighted by its pixel
+//!   share `b_k = clamp(o_px − k + 1, 0, 1)`, and the water's flat surface over it: the
+//!   reference's surface (docs/design.md, Procedural detail). A footprint of 0 asks for the
+//!   finest: level 0 and every octave whole.
+//! - Beyond the sketch lies what `sketch.outside` draws there: the plain at the mean height of
+//!   the sketch's edges, the sea, or nothing (`None`).
+//! - A streamed sketch is read from its tiles at the level asked for, as a settled frame draws it.
+//! - Nothing non-finite leaves a query: a non-finite point or direction is an error.
+//!
+//! Rejected: answering from the mesh a mode drew, which changes with the camera and the mode;
+//! the terrain function is what every mode converges to and what the reference draws.
+
+use crate::detail::Detail;
+use crate::error::{Error, Result};
+use crate::scene::{Outside, Scene};
+use crate::sketch::Atlas;
+use glam::{DVec2, DVec3};
+
+/// The ground of a planar scene: its sketch, detail and what lies beyond the sketch.
+pub struct Ground<'a> {
+    atlas: &'a Atlas,
+    detail: &'a Detail,
+    outside: Outside,
+}
+
+impl<'a> Ground<'a> {
+    /// The ground of `scene` over `atlas` with `detail` (`scene::detail_of` gives the scene's
+    /// own).
+    pub fn new(scene: &Scene, atlas: &'a Atlas, detail: &'a Detail) -> Ground<'a> {
+        Ground {
+            atlas,
+            detail,
+            outside: scene.sketch.outside,
+        }
+    }
+
+    /// The surface's height at world point `p` for a footprint of `footprint_m` metres (0: the
+    /// finest), or `None` where nothing is drawn (beyond the sketch with `outside = "void"`).
+    pub fn height_at(&self, p: DVec2, footprint_m: f64) -> Result<Option<f64>> {
+        finite_point(p)?;
+        if !self.inside(p) {
+            return Ok(self.beyond());
+        }
+        let land = self.sketch_at(p, footprint_m)? + self.octaves_at(p, footprint_m).0;
+        Ok(Some(land.max(self.atlas.water_m as f64)))
+    }
+
+    /// The surface's unit normal at `p` (straight up on water and beyond the sketch), or `None`
+    /// where nothing is drawn.
+    pub fn normal_at(&self, p: DVec2, footprint_m: f64) -> Result<Option<DVec3>> {
+        let Some(z) = self.height_at(p, footprint_m)? else {
+            return Ok(None);
+        };
+        if !self.inside(p) || z <= self.atlas.water_m as f64 {
+            return Ok(Some(DVec3::Z));
+        }
+        let g = self.sketch_gradient(p, footprint_m)? + self.octaves_at(p, footprint_m).1;
+        Ok(Some(DVec3::new(-g.x, -g.y, 1.0).normalize()))
+    }
+
+    /// Where the ray from `origin` along `direction` first meets the surface, marched as the
+    /// reference marches a pixel's ray: the footprint at distance t is `t · pixel_scale` (0: the
+    /// finest everywhere). `None` where it meets nothing.
+    pub fn ray_cast(
+        &self,
+        origin: DVec3,
+        direction: DVec3,
+        pixel_scale: f64,
+    ) -> Result<Option<DVec3>> {
+        if !origin.is_finite() || !direction.is_finite() || direction.length_squared() == 0.0 {
+            return Err(Error::Query(format!(
+                "a ray needs a finite origin and a non-zero direction, not {origin} along {direction}"
+            )));
+        }
+        let dir = direction.normalize();
+        if let Some(hit) = self.march(origin, dir, pixel_scale)? {
+            return Ok(Some(hit));
+        }
+        Ok(self.beyond_hit(origin, dir))
+    }
+
+    fn inside(&self, p: DVec2) -> bool {
+        let (lo, hi) = (self.atlas.origin, self.atlas.max_corner());
+        p.x >= lo.x && p.y >= lo.y && p.x <= hi.x && p.y <= hi.y
+    }
+
+    /// The height `sketch.outside` puts beyond the sketch.
+    fn beyond(&self) -> Option<f64> {
+        let water = self.atlas.water_m as f64;
+        match self.outside {
+            Outside::Void => None,
+            Outside::Ocean => Some(water.max(0.0)),
+            Outside::Plain => Some(water.max(self.atlas.edge_mean_m as f64)),
+        }
+    }
+
+    /// The pyramid level (fractional) a footprint reads, as the shaders' `atlas_height`.
+    fn lod(&self, footprint_m: f64) -> f64 {
+        let top = (self.atlas.levels.len() - 1) as f64;
+        (footprint_m.max(1e-9) / self.atlas.d_atlas())
+            .log2()
+            .clamp(0.0, top)
+    }
+
+    fn texel(&self, p: DVec2) -> DVec2 {
+        (p - self.atlas.origin) / DVec2::new(self.atlas.dx, self.atlas.dy)
+    }
+
+    fn sketch_at(&self, p: DVec2, footprint_m: f64) -> Result<f64> {
+        self.blend_levels(p, footprint_m, |uv, l| {
+            bicubic(self.atlas, uv, l, catmull_rom, catmull_rom)
+        })
+    }
+
+    /// The sketch's gradient per metre: the bicubic's own derivatives.
+    fn sketch_gradient(&self, p: DVec2, footprint_m: f64) -> Result<DVec2> {
+        // The bicubic's derivative is per texel of its level: 2^l level-0 texels.
+        let per_level_texel = |l: usize| (1u64 << l) as f64;
+        let gx = self.blend_levels(p, footprint_m, |uv, l| {
+            Ok(bicubic(self.atlas, uv, l, catmull_rom_d, catmull_rom)? / per_level_texel(l))
+        })?;
+        let gy = self.blend_levels(p, footprint_m, |uv, l| {
+            Ok(bicubic(self.atlas, uv, l, catmull_rom, catmull_rom_d)? / per_level_texel(l))
+        })?;
+        Ok(DVec2::new(gx / self.atlas.dx, gy / self.atlas.dy))
+    }
+
+    /// `sample` on the footprint's two levels, blended linearly.
+    fn blend_levels(
+        &self,
+        p: DVec2,
+        footprint_m: f64,
+        sample: impl Fn(DVec2, usize) -> Result<f64>,
+    ) -> Result<f64> {
+        let lod = self.lod(footprint_m);
+        let l0 = lod.floor() as usize;
+        let t = lod - l0 as f64;
+        let uv = self.texel(p);
+        let a = sample(uv, l0)?;
+        if t <= 0.0 || l0 + 1 >= self.atlas.levels.len() {
+            return Ok(a);
+        }
+        Ok(a + (sample(uv, l0 + 1)? - a) * t)
+    }
+
+    /// The octaves' height and gradient at `p`, each weighted by its pixel share.
+    fn octaves_at(&self, p: DVec2, footprint_m: f64) -> (f64, DVec2) {
+        let o_px = if footprint_m > 0.0 {
+            (self.detail.d_atlas / footprint_m).log2() as f32
+        } else {
+            f32::INFINITY
+        };
+        let last = if o_px.is_infinite() {
+            self.detail.octaves
+        } else {
+            self.detail.last_octave(o_px)
+        };
+        let (mut h, mut g) = (0.0, DVec2::ZERO);
+        for k in 1..=last {
+            let b = (o_px - k as f32 + 1.0).clamp(0.0, 1.0) as f64;
+            let (v, grad) = self.detail.octave_world(k, p);
+            let w = self.detail.weight(k) * b;
+            h += w * v as f64;
+            g += w * grad.as_dvec2();
+        }
+        (h, g)
+    }
+
+    /// The lowest and highest the surface reaches over the sketch.
+    fn bounds(&self) -> (f64, f64) {
+        let reach = self.detail.reach_m();
+        let water = self.atlas.water_m as f64;
+        (
+            self.atlas.min_m as f64 - reach,
+            (self.atlas.max_m as f64 + reach).max(water),
+        )
+    }
+
+    /// The reference's march over the box of the sketch and its heights, then a bisection.
+    fn march(&self, eye: DVec3, dir: DVec3, pixel_scale: f64) -> Result<Option<DVec3>> {
+        let (z_lo, z_hi) = self.bounds();
+        let lo = self.atlas.origin.extend(z_lo);
+        let hi = self.atlas.max_corner().extend(z_hi);
+        let Some((t0, t1)) = slab(eye, dir, lo, hi) else {
+            return Ok(None);
+        };
+        let finest = self.detail.d_atlas / (self.detail.octaves as f64).exp2() / 4.0;
+        let above = |t: f64| -> Result<f64> {
+            let p = eye + dir * t;
+            let z = self.height_at(p.truncate(), t * pixel_scale)?;
+            Ok(p.z - z.unwrap_or(f64::NEG_INFINITY))
+        };
+        let (mut t_prev, mut t) = (t0, t0);
+        for step in 0..MAX_STEPS {
+            let t_here = t.min(t1);
+            let a = above(t_here)?;
+            // A ray entering the box through a side wall already under the surface comes from
+            // beyond the sketch: it met the plain or the sea there first, as the reference has it.
+            if a <= 0.0
+                && step == 0
+                && t0 > 0.0
+                && let Some(hit) = self.beyond_hit(eye, dir)
+            {
+                return Ok(Some(hit));
+            }
+            if a <= 0.0 {
+                return Ok(Some(eye + dir * self.bisect(t_prev, t_here, &above)?));
+            }
+            if t_here >= t1 {
+                return Ok(None);
+            }
+            t_prev = t_here;
+            t = t_here + a.max(t_here * pixel_scale).max(finest) * STEP;
+        }
+        Ok(None)
+    }
+
+    fn bisect(&self, mut lo: f64, mut hi: f64, above: &impl Fn(f64) -> Result<f64>) -> Result<f64> {
+        for _ in 0..48 {
+            let mid = 0.5 * (lo + hi);
+            if above(mid)? > 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Ok(0.5 * (lo + hi))
+    }
+
+    /// Where a ray that met nothing over the sketch meets the plain or the sea beyond it.
+    fn beyond_hit(&self, eye: DVec3, dir: DVec3) -> Option<DVec3> {
+        let z = self.beyond()?;
+        if dir.z >= 0.0 || eye.z <= z {
+            return None;
+        }
+        let hit = eye + dir * ((z - eye.z) / dir.z);
+        (!self.inside(hit.truncate())).then_some(hit)
+    }
+}
+
+/// The reference's march step, as a fraction of the height above the ground (`reference.step`'s
+/// default).
+const STEP: f64 = 0.25;
+const MAX_STEPS: usize = 1 << 16;
+
+fn finite_point(p: DVec2) -> Result<()> {
+    if p.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::Query(format!("the point {p} is not finite")))
+    }
+}
+
+/// The part `[t0, t1]` of the ray inside the box `lo`…`hi`, if any.
+fn slab(eye: DVec3, dir: DVec3, lo: DVec3, hi: DVec3) -> Option<(f64, f64)> {
+    let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+    for a in 0..3 {
+        if dir[a].abs() < 1e-15 {
+            if eye[a] < lo[a] || eye[a] > hi[a] {
+                return None;
+            }
+        } else {
+            let (ta, tb) = ((lo[a] - eye[a]) / dir[a], (hi[a] - eye[a]) / dir[a]);
+            t0 = t0.max(ta.min(tb));
+            t1 = t1.min(ta.max(tb));
+        }
+    }
+    (t0 <= t1).then_some((t0, t1))
+}
+
+/// Catmull–Rom weights of the four nodes around fraction `f`.
+pub(crate) fn catmull_rom(f: f64) -> [f64; 4] {
+    let (f2, f3) = (f * f, f * f * f);
+    [
+        -0.5 * f3 + f2 - 0.5 * f,
+        1.5 * f3 - 2.5 * f2 + 1.0,
+        -1.5 * f3 + 2.0 * f2 + 0.5 * f,
+        0.5 * f3 - 0.5 * f2,
+    ]
+}
+
+/// The weights' derivatives by `f`.
+fn catmull_rom_d(f: f64) -> [f64; 4] {
+    let f2 = f * f;
+    [
+        -1.5 * f2 + 2.0 * f - 0.5,
+        4.5 * f2 - 5.0 * f,
+        -4.5 * f2 + 4.0 * f + 0.5,
+        1.5 * f2 - f,
+    ]
+}
+
+/// The bicubic on level `l` at level-0 texel coordinates `uv`, nodes clamped to the level, with
+/// weights `wx` along x and `wy` along y (the Catmull–Rom weights or their derivatives).
+fn bicubic(
+    atlas: &Atlas,
+    uv: DVec2,
+    l: usize,
+    wx: fn(f64) -> [f64; 4],
+    wy: fn(f64) -> [f64; 4],
+) -> Result<f64> {
+    let level = &atlas.levels[l];
+    let s = (1u64 << l) as f64;
+    let x = (uv - DVec2::splat((s - 1.0) * 0.5)) / s;
+    let i = x.floor();
+    let f = x - i;
+    let (ax, ay) = (wx(f.x), wy(f.y));
+    let (w, h) = (level.width as i64, level.height as i64);
+    let mut sum = 0.0;
+    for (r, ayr) in ay.iter().enumerate() {
+        let j = (i.y as i64 - 1 + r as i64).clamp(0, h - 1) as usize;
+        for (c, axc) in ax.iter().enumerate() {
+            let ii = (i.x as i64 - 1 + c as i64).clamp(0, w - 1) as usize;
+            sum += ayr * axc * node(atlas, l, ii, j)? as f64;
+        }
+    }
+    Ok(sum)
+}
+
+/// Node (i, j) of level `l`: from memory, or from a streamed sketch's tile.
+fn node(atlas: &Atlas, l: usize, i: usize, j: usize) -> Result<f32> {
+    let level = &atlas.levels[l];
+    match &atlas.pyramid {
+        Some(pyramid) if level.data.is_empty() => pyramid.node(l, i, j),
+        _ => Ok(level.data[j * level.width + i]),
+    }
+}
+
+/// The ground of a planet: its global sketch and detail on the sphere of its radius.
+pub struct PlanetGround<'a> {
+    planet: crate::planet::Planet<'a>,
+    detail: &'a Detail,
+}
+
+impl<'a> PlanetGround<'a> {
+    /// The ground of a `[planet]` scene over its global `atlas` with `detail`.
+    pub fn new(radius_m: f64, atlas: &'a Atlas, detail: &'a Detail) -> PlanetGround<'a> {
+        PlanetGround {
+            planet: crate::planet::Planet {
+                radius: radius_m,
+                sketch: atlas,
+            },
+            detail,
+        }
+    }
+
+    /// The surface's height above the sphere at latitude and longitude (degrees) for a
+    /// footprint of `footprint_m` metres (0: the finest): the ground, or the sea over it.
+    pub fn height_at(&self, lat_deg: f64, lon_deg: f64, footprint_m: f64) -> Result<f64> {
+        if !lat_deg.is_finite() || !lon_deg.is_finite() || lat_deg.abs() > 90.0 {
+            return Err(Error::Query(format!(
+                "latitude {lat_deg}°, longitude {lon_deg}° is not a place on the planet"
+            )));
+        }
+        let footprint = if footprint_m > 0.0 { footprint_m } else { 1e-6 };
+        let (lat, lon) = (lat_deg.to_radians(), lon_deg.to_radians());
+        let ground = self.planet.ground(self.detail, lat, lon, footprint)?;
+        Ok(ground.max(self.planet.sketch.water_m as f64))
+    }
+}

@@ -1,0 +1,245 @@
+//! Height queries against the drawn ground: the reference mode's hit positions (`render
+//! --positions`) lie on the surface `terrain::query` and `terrain height` describe, at each
+//! pixel's footprint, on the bundled DEM (with and without octaves), a streamed tile pyramid of it,
+//! and a planet.
+
+mod common;
+use common::*;
+use glam::{DVec2, DVec3};
+use std::path::Path;
+use terrain::query::{Ground, PlanetGround};
+use terrain::scene::{self, Scene};
+
+/// The reference's ground pixels of `scene` at `size`²: (world point, footprint) each, sampled
+/// evenly down to at most 1,000, and the eye.
+fn reference_ground(
+    scene: &Path,
+    size: u32,
+    set: &[&str],
+    tag: &str,
+) -> (Vec<(DVec3, f64)>, DVec3) {
+    let dir = scratch(&format!("query-{tag}"));
+    let npy = dir.join("p.npy");
+    let png = dir.join("r.png");
+    let mut args: Vec<String> = vec![
+        "render".into(),
+        scene.display().to_string(),
+        "-o".into(),
+        png.display().to_string(),
+        "--mode".into(),
+        "reference".into(),
+        "--size".into(),
+        size.to_string(),
+        "--positions".into(),
+        npy.display().to_string(),
+        "--json".into(),
+        "--set".into(),
+        "render.msaa=off".into(),
+    ];
+    for s in set {
+        args.extend(["--set".to_string(), s.to_string()]);
+    }
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let (code, out, err) = terrain(&args);
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let eye: Vec<f64> = serde_json::from_value(json["camera"]["position"].clone()).unwrap();
+    let eye = DVec3::new(eye[0], eye[1], eye[2]);
+    let loaded = Scene::load_with(
+        scene,
+        &set.iter().map(|s| s.to_string()).collect::<Vec<_>>(),
+    )
+    .unwrap();
+    let fov = (loaded.camera.fov_y_deg.to_radians() / 2.0).tan();
+    let pixel_scale = 2.0 * fov / size as f64;
+    let (_, values) = read_npy(&npy);
+    let ground: Vec<DVec3> = values
+        .chunks_exact(4)
+        .filter(|p| p[3] == 1.0)
+        .map(|p| DVec3::new(p[0], p[1], p[2]))
+        .collect();
+    assert!(ground.len() > 1000, "only {} ground pixels", ground.len());
+    let stride = ground.len().div_ceil(1000);
+    let picked = ground
+        .into_iter()
+        .step_by(stride)
+        .map(|p| (p, p.distance(eye) * pixel_scale))
+        .collect();
+    (picked, eye)
+}
+
+/// The largest |z_reference − height_at| over the sampled pixels of a planar scene.
+fn planar_difference(scene_path: &Path, set: &[&str], tag: &str) -> f64 {
+    let (pixels, _) = reference_ground(scene_path, 160, set, tag);
+    let overrides: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    let scene = Scene::load_with(scene_path, &overrides).unwrap();
+    let atlas = scene::load_atlas(&scene).unwrap();
+    let detail = scene::detail_of(&scene, &atlas);
+    let ground = Ground::new(&scene, &atlas, &detail);
+    let mut worst: f64 = 0.0;
+    for (p, footprint) in pixels {
+        let z = ground.height_at(p.truncate(), footprint).unwrap().unwrap();
+        worst = worst.max((z - p.z).abs());
+    }
+    eprintln!("{tag}: largest difference {worst:.4} m");
+    worst
+}
+
+#[test]
+fn heights_equal_the_references_ground_on_the_bundled_dem_without_octaves() {
+    let scene = manifest_dir().join("sketches/jacksboro.toml");
+    let worst = planar_difference(&scene, &["detail.octaves=0"], "dem-bare");
+    assert!(worst <= 0.01, "{worst} m");
+}
+
+#[test]
+fn heights_equal_the_references_ground_on_the_bundled_dem_with_its_octaves() {
+    let scene = manifest_dir().join("sketches/jacksboro.toml");
+    let worst = planar_difference(&scene, &[], "dem-detail");
+    assert!(worst <= 0.01, "{worst} m");
+}
+
+#[test]
+fn heights_equal_the_references_ground_on_a_streamed_pyramid() {
+    let dir = scratch("query-pyramid-src");
+    let pyramid = dir.join("pyramid");
+    let dem = manifest_dir().join("sketches/jacksboro_fault_dem.asc");
+    let (code, _, err) = terrain(&[
+        "tiles",
+        dem.to_str().unwrap(),
+        "--out-dir",
+        pyramid.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(manifest_dir().join("sketches/jacksboro.toml"))
+        .unwrap()
+        .replace("jacksboro_fault_dem.asc", pyramid.to_str().unwrap());
+    let scene = dir.join("streamed.toml");
+    std::fs::write(&scene, text).unwrap();
+    let worst = planar_difference(&scene, &[], "pyramid");
+    assert!(worst <= 0.01, "{worst} m");
+}
+
+#[test]
+fn heights_equal_the_references_ground_on_a_planet() {
+    let path = manifest_dir().join("sketches/planet-10km.toml");
+    let (pixels, _) = reference_ground(&path, 128, &[], "planet");
+    let scene = Scene::load(&path).unwrap();
+    let atlas = scene::load_atlas(&scene).unwrap();
+    let detail = scene::detail_of(&scene, &atlas);
+    let radius = scene.planet.as_ref().unwrap().radius_m;
+    let ground = PlanetGround::new(radius, &atlas, &detail);
+    let c = &scene.camera;
+    let (lat, lon) = (
+        c.lat_deg.unwrap().to_radians(),
+        c.lon_deg.unwrap().to_radians(),
+    );
+    let tangent = terrain::planet::Tangent::at(lat, lon);
+    let nadir = terrain::planet::unit(lat, lon) * radius;
+    let mut worst: f64 = 0.0;
+    for (local, footprint) in pixels {
+        let world = nadir + tangent.world(local);
+        let (plat, plon) = terrain::planet::lat_lon(world);
+        let z = ground
+            .height_at(plat.to_degrees(), plon.to_degrees(), footprint)
+            .unwrap();
+        worst = worst.max((z - (world.length() - radius)).abs());
+    }
+    eprintln!("planet: largest difference {worst:.4} m");
+    assert!(worst <= 0.25, "{worst} m");
+}
+
+#[test]
+fn the_height_command_answers_what_the_library_does() {
+    let scene = manifest_dir().join("sketches/jacksboro.toml");
+    let (code, out, err) = terrain(&[
+        "height",
+        scene.to_str().unwrap(),
+        "--xy",
+        "15000,9000",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let loaded = Scene::load(&scene).unwrap();
+    let atlas = scene::load_atlas(&loaded).unwrap();
+    let detail = scene::detail_of(&loaded, &atlas);
+    let ground = Ground::new(&loaded, &atlas, &detail);
+    let z = ground
+        .height_at(DVec2::new(15000.0, 9000.0), 0.0)
+        .unwrap()
+        .unwrap();
+    assert_eq!(json["x"], 15000.0);
+    assert_eq!(json["y"], 9000.0);
+    assert_eq!(json["z"].as_f64().unwrap(), z);
+    let n = &json["normal"];
+    let len = (0..3).map(|k| n[k].as_f64().unwrap().powi(2)).sum::<f64>();
+    assert!((len - 1.0).abs() < 1e-9, "{n}");
+}
+
+#[test]
+fn a_ray_cast_down_lands_on_the_height() {
+    let scene = Scene::load(&manifest_dir().join("sketches/jacksboro.toml")).unwrap();
+    let atlas = scene::load_atlas(&scene).unwrap();
+    let detail = scene::detail_of(&scene, &atlas);
+    let ground = Ground::new(&scene, &atlas, &detail);
+    for (x, y) in [(15000.0, 9000.0), (3000.0, 20000.0), (25000.0, 1000.0)] {
+        let p = DVec2::new(x, y);
+        let z = ground.height_at(p, 0.0).unwrap().unwrap();
+        let hit = ground
+            .ray_cast(p.extend(5000.0), DVec3::NEG_Z, 0.0)
+            .unwrap()
+            .expect("a ray straight down meets the ground");
+        assert!(
+            (hit.z - z).abs() < 1e-3,
+            "({x}, {y}): {} against {z}",
+            hit.z
+        );
+        assert!(hit.truncate().distance(p) < 1e-6);
+    }
+    // Looking up, nothing; at a slant, the hit lies on the surface.
+    let up = ground.ray_cast(DVec3::new(15000.0, 9000.0, 3000.0), DVec3::Z, 0.0);
+    assert_eq!(up.unwrap(), None);
+    let slant = ground
+        .ray_cast(
+            DVec3::new(15000.0, 2000.0, 1500.0),
+            DVec3::new(0.0, 1.0, -0.1),
+            0.0,
+        )
+        .unwrap()
+        .expect("a slanting ray meets the ridge");
+    let under = ground.height_at(slant.truncate(), 0.0).unwrap().unwrap();
+    assert!((slant.z - under).abs() < 1e-3);
+}
+
+#[test]
+fn queries_refuse_what_is_not_a_place() {
+    let scene = Scene::load(&manifest_dir().join("sketches/jacksboro.toml")).unwrap();
+    let atlas = scene::load_atlas(&scene).unwrap();
+    let detail = scene::detail_of(&scene, &atlas);
+    let ground = Ground::new(&scene, &atlas, &detail);
+    assert!(ground.height_at(DVec2::new(f64::NAN, 0.0), 0.0).is_err());
+    assert!(ground.ray_cast(DVec3::ZERO, DVec3::ZERO, 0.0).is_err());
+    // Beyond the sketch lies the plain at its edges' mean height, flat.
+    let far = ground
+        .height_at(DVec2::new(-1e6, 0.0), 0.0)
+        .unwrap()
+        .unwrap();
+    assert_eq!(far, atlas.edge_mean_m.max(atlas.water_m) as f64);
+    let scene = manifest_dir().join("sketches/jacksboro.toml");
+    for (args, needle) in [
+        (vec!["--xy", "1,2,3"], "expected two numbers"),
+        (
+            vec!["--xy", "-1e7,0", "--set", "sketch.outside=void"],
+            "nothing is drawn",
+        ),
+        (vec!["--lat-lon", "95,0"], "lat"),
+    ] {
+        let mut all = vec!["height", scene.to_str().unwrap()];
+        all.extend(args.iter().copied());
+        let (code, _, err) = terrain(&all);
+        assert_ne!(code, 0, "{args:?}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+}
