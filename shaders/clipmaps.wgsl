@@ -1,5 +1,5 @@
-// Spherical clipmaps (seed 003): each ring vertex of the static hemisphere drawn this frame, and
-// the nadir, carried to the terrain. Its map coordinates come from its offset and the nadir
+// Spherical clipmaps (Clasen & Hege, *Terrain Rendering using Spherical Clipmaps*, 2006): each
+// ring vertex of the static hemisphere drawn this frame, and the nadir, carried to the terrain. Its map coordinates come from its offset and the nadir
 // (eq. 1–4, in the precise form of sphere.wgsl's `map_offset`), its height from the global
 // sketch at the pyramid level of its spacing (trilinear: continuous across rings and levels, so
 // none pops) plus the octaves up to its split octave. Output per vertex: (x, y, z, its

@@ -20,11 +20,11 @@
 // 27.86; 2: 25.21 / 25.21 / 27.89; 4: 25.18 / 25.23 / 27.87; 10⁴ (bump only where the ground is
 // seen straight on): 25.16 / 25.22 / 27.65.
 //
-// A departure from DESIGN.md, whose octave k contributes w_k·n_k·(g_k + (1 − g_k)·b_k): with the
-// fade the normal takes the bump share (1 − g_k)·b_k times this weight, in the mesh's normal and
-// in the terrain function's normal that coarse ground takes (terrain.wgsl's `coarse_normal`);
-// the geometry share and every height are as DESIGN.md defines them. `detail.bump_fade = false`
-// restores its definition.
+// A departure from `docs/design.md` (Procedural detail), whose octave k contributes w_k·n_k·(g_k +
+// (1 − g_k)·b_k): with the fade the normal takes the bump share (1 − g_k)·b_k times this weight, in
+// the mesh's normal and in the terrain function's normal that coarse ground takes (terrain.wgsl's
+// `coarse_normal`); the geometry share and every height are as `docs/design.md` defines them.
+// `detail.bump_fade = false` restores its definition.
 
 const FADE_SPECTRUM: f32 = 2.0;
 // The model's own factor, 1/1.6² (src/detail.rs's LATTICE_PER_CYCLE; tests/shaders.rs holds

@@ -11,8 +11,9 @@
 //!   crate (`SsimMode::Luma709`).
 //! - FLIP mean (flip-rs, NVIDIA's LDR-FLIP at 67.02 pixels per degree: a 0.7 m wide 4K display
 //!   seen from 0.7 m, FLIP's default).
-//! - The screen-space geometric error from position buffers (DESIGN.md: the distance in pixels
-//!   between where the mode's surface and the reference's surface appear).
+//! - The screen-space geometric error from position buffers (`docs/design.md`, Screen-space error
+//!   and τ: the distance in pixels between where the mode's surface and the reference's surface
+//!   appear).
 //! - The terrain's luminance, mean and standard deviation: linear Rec. 709 luminance
 //!   (0.2126 R + 0.7152 G + 0.0722 B of the sRGB-decoded values) over the pixels that show ground.
 //!   How much contrast the picture keeps: haze that flattens a view from 20 km lowers it.

@@ -1,4 +1,5 @@
-//! The scene file (TOML): DESIGN.md's keys and this project's additions, read strictly.
+//! The scene file (TOML): the keys of `docs/design.md` (Scene and jobs
+//! files) and this project's additions, read strictly.
 //!
 //! Rules: an unknown key is an error naming it (serde's `deny_unknown_fields`), a value of the
 //! wrong type names its full dotted key (`detail.octaves`, through `serde_path_to_error`), every
@@ -539,7 +540,7 @@ crate::named_enum! {
         Geomipmap = "geomipmap",
         Bruteforce = "bruteforce",
         Reference = "reference",
-        /// Spherical clipmaps (seed 003): planet scenes only.
+        /// Spherical clipmaps (Clasen & Hege 2006): planet scenes only.
         Clipmaps = "clipmaps",
     }
 }
@@ -609,7 +610,7 @@ crate::named_enum! {
     }
 }
 
-/// A planet and its spherical clipmaps (seed 003).
+/// A planet and its spherical clipmaps (Clasen & Hege, *Terrain Rendering using Spherical Clipmaps* (2006)).
 ///
 /// The defaults split the paper's triangles (512 × 20) the other way, 256 bearings × 40 rings a
 /// level: `terrain compare` on the three bundled planet views (256², llvmpipe) measures the same

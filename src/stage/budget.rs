@@ -1,6 +1,7 @@
 //! The warp's sample budget: the mesh a frame's importance asks for, so that a smaller image, a
 //! larger `quad_px` or a view with less in it draws fewer triangles, and `warp.mesh` is only the
-//! upper bound (DESIGN.md: "the warp's sample budget may follow from the demanded density").
+//! upper bound (`docs/design.md`, The warp: the warp's sample budget may follow from the demanded
+//! density).
 //!
 //! Rules:
 //! - Importance I is samples per metre per axis, so a sketch-map texel of side d0 asks for

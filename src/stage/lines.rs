@@ -1,7 +1,7 @@
 //! Line mappings: the one-dimensional warp that the row and column passes apply to every line
-//! (DESIGN.md's warp): weights `w_i = (I_i + I_{i+1})/2`, positions `u` their running sum scaled to
-//! `n−1`, output sample j interpolated inside the segment holding `u = j`. A mapping gives the
-//! fractional source index of each output sample, monotone, 0 and n−1 at the ends.
+//! (`docs/design.md`, The warp): weights `w_i = (I_i + I_{i+1})/2`, positions `u` their running sum
+//! scaled to `n−1`, output sample j interpolated inside the segment holding `u = j`. A mapping
+//! gives the fractional source index of each output sample, monotone, 0 and n−1 at the ends.
 //!
 //! Rules:
 //! - [`line_mapping`] maps one line; it is the reference and serves the guard's mean mapping.

@@ -1,5 +1,5 @@
 //! The warp: a row pass then a column pass over the sketch map's geometry image, moving its samples
-//! so that each segment gets output room in proportion to its importance (DESIGN.md's definition).
+//! so that each segment gets output room in proportion to its importance (`docs/design.md`, The warp).
 //!
 //! Rules:
 //! - One line's warp is a *mapping* (`stage::lines`): the fractional source index of each output
