@@ -1,5 +1,5 @@
 //! Names said once: an enum whose values users type (a mode, a view, a warp method) is declared
-//! with [`named_enum!`], which writes each variant's name in one place and derives from it the
+//! with [`named_enum!`](crate::named_enum), which writes each variant's name in one place and derives from it the
 //! scene file's spelling (serde), the command line's (clap's `ValueEnum`), reports and messages
 //! (`name()`, `Display`), and the error that lists the choices.
 //!

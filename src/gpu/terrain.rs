@@ -1,7 +1,7 @@
 //! The terrain pass (`shaders/terrain.wgsl`): the detailed geometry image as an indexed quad mesh
 //! read from its storage buffers (no vertex upload), and the sky as one full-screen triangle.
 //! Reversed-Z depth with an infinite far plane. Owns the colour and depth targets.
-//! - Single-sampled (by default), deferred ([`Deferred`]): the mesh writes a G-buffer, and the
+//! - Single-sampled (by default), deferred (`Deferred`): the mesh writes a G-buffer, and the
 //!   full-screen triangle shades each pixel from it, or draws the sky where no ground was written.
 //! - Multisampled (`render.msaa`) or with `render.deferred` off, forward: the mesh is shaded as
 //!   it is drawn, then the sky behind it ([`SKY_TEST`]). Multisampled, it draws into
@@ -127,7 +127,7 @@ pub struct Variant {
     pub detail_shadows: bool,
     /// Samples per pixel: 1, or 4 multisampled (`render.msaa`).
     pub samples: u32,
-    /// Shade from a G-buffer ([`Deferred`]): single-sampled frames only, where the adapter allows
+    /// Shade from a G-buffer (`Deferred`): single-sampled frames only, where the adapter allows
     /// (`GpuContext::deferred` decides).
     pub deferred: bool,
 }

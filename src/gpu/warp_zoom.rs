@@ -228,7 +228,7 @@ pub fn sketch_spacing(d_atlas: f32, o: f32) -> f32 {
 
 /// The octave whose pyramid level a vertex at `p` reads the sketch at, for a split octave `o`
 /// before its stop at the pixel octave: with a camera, the pixel octave `log2(d_atlas /
-/// footprint)` ([`pixel_octave`]), so that each vertex lies on the surface the picture is
+/// footprint)` (`pixel_octave`), so that each vertex lies on the surface the picture is
 /// compared with, at the reference's level there or finer (the footprint is taken at the nearest
 /// height the sketch can have, never farther than the reference's hit); a bake has no camera and
 /// reads level −o.
@@ -270,7 +270,7 @@ fn pixel_octave(f: &FrameUniforms, p: Vec2) -> Option<f32> {
 }
 
 /// The split octave of a vertex at `p` (frame metres) whose mesh gives `o`: no finer than the
-/// pixel octave there ([`pixel_octave`]), as the reference's surface holds no octave finer than
+/// pixel octave there (`pixel_octave`), as the reference's surface holds no octave finer than
 /// its pixel. A mesh finer than the pixels (far ground, a dense mesh from high up) otherwise
 /// carried octaves the reference does not draw, and its normals aliased them: at 256² from 20 km
 /// up (jacksboro-high) warped's PSNR fell from 50.5 dB at 92,450 triangles to 44.4 dB at 428,738

@@ -1,12 +1,12 @@
 //! The importance map: samples per metre wanted at each sketch map texel,
-//! `I = max(min(I_v·S_f·S_b, I_s), I_floor)` as DESIGN.md defines it.
+//! `I = max(min(I_v·S_f·S_b, I_s), I_floor)` as `docs/design.md` defines it (Importance).
 //!
 //! Rules:
 //! - `I_v = f_px / (C·d)`, with d clamped below by half the sketch map spacing: the warp is
 //!   piecewise linear between texels and cannot deliver a demand that varies inside one.
 //! - `S_f` is the product over the frustum's five planes of a smoothstep from 0 at `margin` metres
 //!   outside to 1 on the plane; the margin covers a texel's reach (1.5·d0), the detail's
-//!   displacement and 2 % of the distance ([`MARGIN_SHARE`]).
+//!   displacement and 2 % of the distance (`MARGIN_SHARE`).
 //!   Texels outside the atlas have `S_f = 0`: there is no terrain there to see.
 //! - `S_b` is 1 for front-facing and silhouette texels (n·v ≥ −0.05) and falls smoothly to
 //!   `backface_floor` at n·v = −0.35.
@@ -18,10 +18,10 @@
 //!   (`δ = κ s²/8` at spacing s). κ = the sketch map's largest second difference (|h_xx|, |h_yy|,
 //!   |h_xy|, one-sided at the map's edges, of the heights raised to the water's level) + the
 //!   detail's curvature at spacing `1/I_v`: the octaves
-//!   that are geometry there (DESIGN.md's split octave with the scene's bias) weighted by
+//!   that are geometry there (`docs/design.md`'s split octave, Procedural detail, with the scene's bias) weighted by
 //!   `0.31·w_k·(2π f_k)²`, 0.31 the noise's RMS; a prefix sum over octaves makes it one log2 per
 //!   texel and a sum over the few octaves of its row. Where the sketch map is coarser than the
-//!   atlas, + the sketch's curvature the map cannot see at that spacing ([`SubTexel`]: the
+//!   atlas, + the sketch's curvature the map cannot see at that spacing (`SubTexel`: the
 //!   levels' mean curvature at `1/I_v` less at the map's spacing, `Atlas::level_curvature`).
 //!   Measured (`terrain compare sketches/S.toml --out-dir D --modes warped --repeat 1
 //!   --path-frames 0`, 256², the triangles warped needs for each GeoMipMap row's mean
@@ -255,7 +255,7 @@ impl ErrorTerm {
 
     /// The sketch's pyramid levels' mean curvature (`Atlas::level_curvature` at this term's water
     /// level), so that a sketch map coarser than the atlas counts the curvature it cannot see
-    /// ([`SubTexel`]). Without it the term counts only what the map holds.
+    /// (`SubTexel`). Without it the term counts only what the map holds.
     pub fn set_sketch_levels(&mut self, curvature: &[f64]) {
         self.sketch_levels = curvature.iter().map(|&c| c as f32).collect();
     }
@@ -315,7 +315,7 @@ impl ErrorTerm {
 
     /// The octave level o at sample spacing `1 / samples_per_m` (0 for NaN; below 0 where the
     /// spacing is coarser than the first octave's, which [`ErrorTerm::curvature_at`] and
-    /// [`SubTexel`] tell apart):
+    /// `SubTexel` tell apart):
     /// `log2` to 2·10⁻⁵ of an octave in operations that vectorise. `f32::log2` is a library
     /// call per texel: with it the error term took the importance map (jacksboro near, 128²)
     /// from 41 to 193 µs.

@@ -249,7 +249,7 @@ fn warped_sweep(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<Vec<Set
 
 /// The warped rows at GeoMipMap's budgets (at `quad_px`, the scene's), run after the default
 /// sweep when both modes ran: for each GeoMipMap row, the largest fixed mesh (up to
-/// [`MAX_MESH`]) with no more triangles than the row drew, unless a warped row already drew as
+/// `MAX_MESH`) with no more triangles than the row drew, unless a warped row already drew as
 /// many (the module doc's rule).
 pub fn at_geomipmap_budgets(quad_px: f64, rows: &[Row]) -> Vec<Setting> {
     let drawn = |t: u64| rows.iter().any(|r| r.mode == "warped" && r.triangles == t);
