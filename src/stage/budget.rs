@@ -79,11 +79,9 @@ impl Budget {
     }
 }
 
-/// `Σ (I·d0)²`, summed in eight lanes: one running f64 sum is a chain of dependent additions
-/// (jacksboro near, `benches/cpu_stage.rs`, in runs of their own: the stage took 167 µs with it,
-/// 161 µs in lanes). Built for AVX-512 where the processor has it, the eight lanes one register
-/// (the baseline build's two-lane loop was 1.4–2 % of the stage on the high views); the same
-/// lanes in the same order, so the same bits.
+/// `Σ (I·d0)²`, summed in eight lanes: one running f64 sum is a chain of dependent additions.
+/// Built for AVX-512 where the processor has it, the eight lanes one register; the same lanes in
+/// the same order, so the same bits.
 pub fn cells_demanded(importance: &[f32], d0: f64) -> f64 {
     #[cfg(target_arch = "x86_64")]
     if crate::stage::simd::avx512() {
