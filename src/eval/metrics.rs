@@ -28,9 +28,9 @@
 //! pixel, one step of Newton's method on the reference's ground position as a function of the
 //! pixel (its 2×2 Jacobian by differences with the neighbouring ground pixels), the step held
 //! within a pixel each way. Rejected: the nearest pixel alone. It counts every error under half a
-//! pixel as 0 and every one just over as 1; from 20 km up (jacksboro-high at 256²) GeoMipMap's
-//! rows from 12k to 59k triangles all measured 0.000 px and warped's 0.000–0.002, so which mode
-//! won a row was decided by which pixels happened to round.
+//! pixel as 0 and every one just over as 1, so from high up, where the errors are small, which
+//! mode wins a row is decided by which pixels happen to round (docs/decisions.md, “Sub-pixel
+//! screen-space error”).
 //!
 //! Rejected alternative: projecting the mode's point onto the reference surface vertically. It
 //! needs the terrain function on the CPU per pixel and says nothing at silhouettes.
