@@ -1,5 +1,5 @@
-//! The importance map and the density ratio against `docs/design.md`'s definitions (Importance; Density
-//! ratio).
+//! The importance map and the density ratio against `docs/design.md`'s definitions (Importance;
+//! Density ratio).
 
 mod common;
 use common::*;

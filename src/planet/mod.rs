@@ -14,10 +14,10 @@
 //!   origin on the sphere of radius R. Positions handed to the GPU are metres in that frame, so
 //!   they are small near the camera whatever the planet.
 //! - Map coordinates of a point at angular distance a and bearing b (0 north, 90° east) from the
-//!   nadir come from the spherical direct problem in a form that keeps their relative precision
-//!   for small a ([`map_offset`]): the latitude's change by the half-angle tangent of the sines'
-//!   difference, the longitude's by atan2 of the point's coordinates in the nadir's meridian
-//!   plane. Clasen & Hege's equations (3)–(4) compute the absolute latitude `acos(p_z) − θ_v`, which in
+//!   nadir come from the spherical direct problem in a form that keeps their relative precision for
+//!   small a ([`map_offset`]): the latitude's change by the half-angle tangent of the sines'
+//!   difference, the longitude's by atan2 of the point's coordinates in the nadir's meridian plane.
+//!   Clasen & Hege's equations (3)–(4) compute the absolute latitude `acos(p_z) − θ_v`, which in
 //!   f32 loses everything below 1e-7 rad (0.6 m on the Earth), and its §5 replaces them near the
 //!   viewer by an empirical approximation with a blend to the exact form; this form is exact at
 //!   every distance, needs no blend, and its central meridian (b = 0) has a longitude offset of
