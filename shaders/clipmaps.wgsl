@@ -1,12 +1,12 @@
-// Spherical clipmaps (seed 003): each ring vertex of the static hemisphere drawn this frame, and
-// the nadir, carried to the terrain. Its map coordinates come from its offset and the nadir
-// (eq. 1–4, in the precise form of sphere.wgsl's `map_offset`), its height from the global
-// sketch at the pyramid level of its spacing (trilinear: continuous across rings and levels, so
-// none pops) plus the octaves up to its split octave. Output per vertex: (x, y, z, its
-// height before the sea covers it), metres in the nadir's tangent frame from the sphere's point
-// under the camera. (The split octave follows from the ring alone; the planet pass works it out
-// again, and keeps the unclamped height, which tells a lake from the geometry's rounding.)
-// Rust twin: src/gpu/clipmaps.rs (`vertex_cpu`).
+// Spherical clipmaps (Clasen & Hege, *Terrain Rendering using Spherical Clipmaps*, 2006): each ring
+// vertex of the static hemisphere drawn this frame, and the nadir, carried to the terrain. Its map
+// coordinates come from its offset and the nadir (eq. 1–4, in the precise form of sphere.wgsl's
+// `map_offset`), its height from the global sketch at the pyramid level of its spacing (trilinear:
+// continuous across rings and levels, so none pops) plus the octaves up to its split octave. Output
+// per vertex: (x, y, z, its height before the sea covers it), metres in the nadir's tangent frame
+// from the sphere's point under the camera. (The split octave follows from the ring alone; the
+// planet pass works it out again, and keeps the unclamped height, which tells a lake from the
+// geometry's rounding.) Rust twin: src/gpu/clipmaps.rs (`vertex_cpu`).
 
 #import frame
 @group(0) @binding(0) var<uniform> frame: Frame;

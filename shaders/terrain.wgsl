@@ -62,12 +62,10 @@ fn sky(in: SkyOut) -> FragOut {
 }
 
 // The aerial perspective travels with the vertex (`inscatter`, `through`): the air between the
-// eye and the ground varies smoothly over a triangle (the bundled views' PSNR against the
-// reference is the same to 0.01 dB), and a vertex is evaluated once where a forward frame shades
-// a pixel once for every triangle that covers it. Jacksboro 512², shadows off, terrain pass on an
-// H100 (forward, multisampled): warped 4.14 -> 3.54 ms, GeoMipMap 2.77 -> 2.10 ms. On llvmpipe,
-// which shades a vertex once per triangle, it cost more (warped 239 -> 312 ms, forward); the
-// GPU's count decided. Deferred, the air takes 24 of the G-buffer's 64 bytes a pixel.
+// eye and the ground varies smoothly over a triangle, and a vertex is evaluated once where a
+// forward frame shades a pixel once for every triangle that covers it (docs/decisions.md,
+// “Aerial perspective per vertex”). Deferred, the air takes 24 of the G-buffer's 64 bytes a
+// pixel.
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) local: vec3<f32>,
@@ -264,11 +262,8 @@ fn depth_fs(in: VsOut) -> @location(1) vec4<f32> {
 // GeoMipMap's coarse levels) or holds octaves more than one past the pixel's own (GeoMipMap's
 // baked grid seen from afar), blended between. There the mesh's facets point-sample the
 // sketch's pyramid and miss its relief between the mesh's spacing and the pixel's footprint, or
-// point-sample octaves the pixel averages.
-// Measured on jacksboro-high at 256² against the reference: warped 38.2 dB with the facets, 46.7
-// with the facets plus that band of the sketch's gradient, 48.0 with the terrain function's
-// normal; GeoMipMap 33.7, 41.0, 42.2. It costs what PIXEL_NORMALS costs, on those pixels only:
-// the terrain pass at 512² on llvmpipe 7–36 % slower on jacksboro-high, 0–18 % on jacksboro.
+// point-sample octaves the pixel averages. It costs what PIXEL_NORMALS costs, on those pixels
+// only (docs/decisions.md, “Terrain function's normal on coarse ground”).
 fn shading_normal(in: Surface, footprint: f32) -> vec3<f32> {
 #ifdef PIXEL_NORMALS
     return normalize(vec3<f32>(-surface_gradient(in.local.xy, footprint), 1.0));
@@ -276,12 +271,9 @@ fn shading_normal(in: Surface, footprint: f32) -> vec3<f32> {
     // Also where the mesh holds octaves more than one past the pixel's own (GeoMipMap's baked
     // grid seen from afar, and brute force's; the warped mesh's split stops at the pixel octave
     // of the vertex's nearest possible height, so only a fragment more than twice as far as that
-    // can pass it): its normal point-samples them and aliases. GeoMipMap at 256², blocks of 17,
-    // τ 0.5, against the reference: hills-high 43.65 → 49.79 dB, gaussian-high 49.85 → 60.30;
-    // blocks of 33: hills τ 0.5 24.88 → 25.24, τ 1 24.35 → 24.79, gaussian τ 1 26.91 → 26.99; the
-    // rest measured and every warped image measured unchanged. From the first octave past the
-    // pixel's, hills gained 0.94 dB but gaussian lost 0.42 at τ 4 (26.36 → 25.94), where the bump
-    // over the mesh's normal serves better than the terrain function's faded octaves.
+    // can pass it): its normal point-samples them and aliases. Not from the first octave past the
+    // pixel's: there the bump over the mesh's normal serves better than the terrain function's
+    // faded octaves (docs/decisions.md, “Terrain function's normal on coarse ground”).
     let excess = in.split - footprint_octave(footprint);
     let coarse_mesh = max(log2(in.spacing / frame.atlas.d_atlas), excess - 1.0);
     let coarse = select(clamp(coarse_mesh, 0.0, 1.0), 0.0, on_water(in.local.z));
@@ -314,33 +306,17 @@ fn mesh_normal(in: Surface, footprint: f32) -> vec3<f32> {
 // coarser or holds octaves well past the pixel's: the sketch's gradient and the octaves'. With
 // BUMP_FADE the octaves the mesh does not hold are faded as the bump is, for the same reason: the
 // ray meets the true surface away from where it meets the mesh, by the height the mesh lacks, and
-// drawn whole they are the reference's pattern shifted. Here the model's own factor (FADE_MODEL)
-// measured best, not the bump's fitted one. Measured at 256² (`terrain compare sketches/S.toml
-// --out-dir D --modes warped,geomipmap --repeat 1 --path-frames 0`), PSNR against the reference
-// at warped mesh 16 / 48 / 96 / 144 and GeoMipMap τ 4, blocks of 17 / τ 8, blocks of 33, by the
-// factor:
-// - gaussian: octaves whole 19.52 / 22.43 / 25.21 / 26.47 / 25.22 / 23.49 dB; 2: 25.26 / 25.87 /
-//   26.24 / 26.70 / 26.15 / 25.86; 1: 25.31 / 25.89 / 26.26 / 26.71 / 26.17 / 25.88; 0.39: 25.29
-//   / 25.92 / 26.29 / 26.72 / 26.20 / 25.92; 0.15: 24.42 / 25.72 / 26.21 / 26.70 / 26.12 /
-//   25.79; the sketch's gradient alone: 25.25 / 25.87 / 26.20 / 26.63 / 26.14 / 25.86.
-// - hills: whole 21.33 / 23.28 / 24.22 / 25.23 / 23.72 / 23.10; 2: 22.53 / 23.33 / 23.90 /
-//   25.05 / 23.59 / 23.30; 1: 22.66 / 23.56 / 24.15 / 25.14 / 23.79 / 23.49; 0.39: 22.78 / 23.86
-//   / 24.46 / 25.23 / 24.00 / 23.70; 0.15: 22.66 / 23.93 / 24.54 / 25.27 / 24.02 / 23.68; the
-//   sketch alone: 22.47 / 23.05 / 23.62 / 24.54 / 23.36 / 23.12. There the octaves are worth
-//   keeping, and the bump's factor fades too many.
-// The views from high up are unchanged to 0.01 dB (their ground is seen too steeply to fade).
-// With the kept factor FLIP fell by up to 0.077 (gaussian) and rose by at most 0.0007 (a few of
-// hills' rows); with the factor 2 it rose on hills by up to 0.008.
+// drawn whole they are the reference's pattern shifted. Here with the model's own factor
+// (FADE_MODEL), not the bump's fitted one, which fades too many of the octaves worth keeping
+// (docs/decisions.md, “Fade of the coarse normal's octaves”).
 fn coarse_normal(in: Surface, footprint: f32) -> vec3<f32> {
 #ifdef BUMP
 #ifdef BUMP_FADE
     // The split octave the mesh's spacing stands for: GeoMipMap's coarse blocks carry the bake's
-    // (`in.split`), which holds octaves between the bake's vertices that the block's lack. With
-    // the bake's split nothing faded there and GeoMipMap's images were as before (the command
-    // above, gaussian τ 8, blocks of 17: 22.72 dB against 25.83). In the warped mode it is
-    // `in.split` at the vertices; inside a triangle, the split of the spacing interpolated, at
-    // most about (ln 2/8)·Δ² octaves below `in.split` interpolated, Δ the vertices' difference
-    // (warped's PSNR the same to 0.01 dB either way).
+    // (`in.split`), which holds octaves between the bake's vertices that the block's lack: with
+    // the bake's split nothing would fade there. In the warped mode it is `in.split` at the
+    // vertices; inside a triangle, the split of the spacing interpolated, at most about
+    // (ln 2/8)·Δ² octaves below `in.split` interpolated, Δ the vertices' difference.
     let split = log2(frame.atlas.d_atlas / in.spacing) - frame.detail.bias;
     let gradient = sketch_gradient(in.local.xy, footprint) + octaves_gradient(in, footprint, normalize(in.normal), split, true);
     return normalize(vec3<f32>(-gradient, 1.0));

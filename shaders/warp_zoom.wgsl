@@ -46,14 +46,10 @@ fn mesh_xy(ij: vec2<i32>) -> vec2<f32> {
 // Where a vertex Φ puts at `p` is drawn: on the sketch's edge where `p` lies beyond it
 // (`on_sketch_edge`), in a region along x and y (and the bake's grid). A region turned by 45°
 // keeps its vertices where Φ puts them: its rows cross the sketch's edges at 45°, and a vertex
-// moved onto an edge across them can turn its cell over (on hills from 9 km up, looking
-// north-east, warped mesh 48² read 40.80 dB against the reference with its vertices beyond the
-// edge, 39.55 with them on it). Measured and rejected too: each moved along its column (the
-// region's t axis) to where the column meets the edge, so that a column's vertices beyond it
-// land on one point and the points lie along the edge in the columns' order: 37.48 dB, the
-// near corner, where the columns change from one edge to the other, and the far edges worst
-// (meshes 24² and 96²: 39.20 and 41.43 dB beyond, 37.44 and 40.59 clamped, 35.62 and 40.28
-// along the column).
+// moved onto an edge across them can turn its cell over. Rejected: each moved along its column
+// (the region's t axis) to where the column meets the edge, worst at the near corner, where the
+// columns change from one edge to the other (docs/decisions.md, “Turned region's vertices beyond
+// the sketch”).
 fn drawn_xy(p: vec2<f32>) -> vec2<f32> {
     if (frame.mesh.phi_s.y != 0.0) {
         return p;

@@ -1,6 +1,7 @@
 //! Procedural detail on the CPU: band-limited gradient noise octaves, the split octave, and the
-//! geometry/bump shares of each octave (DESIGN.md). The GPU twin is `shaders/noise.wgsl`, line for
-//! line: every function below that takes f32 and i32/u32 has a WGSL function of the same name.
+//! geometry/bump shares of each octave (`docs/design.md`, Procedural detail). The GPU twin is
+//! `shaders/shared/noise.wgsl`, line for line: every function below that takes f32 and i32/u32 has
+//! a WGSL function of the same name.
 //!
 //! Rules:
 //! - Octave k ≥ 1 has frequency `f_k = 2^(k−1)/d_atlas` and weight `A·g^(k−1)`. Its lattice has

@@ -1,7 +1,7 @@
 //! Names said once: an enum whose values users type (a mode, a view, a warp method) is declared
-//! with [`named_enum!`], which writes each variant's name in one place and derives from it the
-//! scene file's spelling (serde), the command line's (clap's `ValueEnum`), reports and messages
-//! (`name()`, `Display`), and the error that lists the choices.
+//! with [`named_enum!`](crate::named_enum), which writes each variant's name in one place and
+//! derives from it the scene file's spelling (serde), the command line's (clap's `ValueEnum`),
+//! reports and messages (`name()`, `Display`), and the error that lists the choices.
 //!
 //! Rejected alternative: `#[serde(rename_all = "kebab-case")]` plus `#[derive(clap::ValueEnum)]`.
 //! Each derives the same spelling by its own rule from the variant's identifier, so the two agree

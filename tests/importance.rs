@@ -1,10 +1,12 @@
-//! The importance map and the density ratio against DESIGN.md's definitions.
+//! The importance map and the density ratio against `docs/design.md`'s definitions (Importance;
+//! Density ratio).
 
 mod common;
 use common::*;
 
 /// Straight down from 1.5 km: the region lies inside the atlas. The tests hold the map against
-/// seed 004's factors, so the geometric-error term (on by default) is off in each.
+/// Dachsbacher & Stamminger's factors (*Rendering Procedural Terrain by Geometry Image Warping*,
+/// 2004), so the geometric-error term (on by default) is off in each.
 const DOWN: &str = "[sketch]\nsynthetic = \"flat\"\nsize = 129\n[camera]\nposition = [1920.0, 1920.0, 1500.0]\nlook_at = [1920.0, 1921.0, 0.0]\n";
 const BASE: &str = "[sketch]\nsynthetic = \"flat\"\nsize = 129\n[camera]\nposition = [1920.0, -400.0, 600.0]\nlook_at = [1920.0, 2500.0, 100.0]\n";
 const NO_ERROR: &str = "[importance]\nerror = false\n";

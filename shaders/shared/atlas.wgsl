@@ -2,8 +2,8 @@
 // The twin of src/gpu/warp_zoom.rs's `atlas_height`.
 //
 // The pyramid lives in a read-only storage buffer. A mip-mapped R32Float texture read with
-// textureLoad gave wrong heights on llvmpipe (GL) in 8×8 workgroups, in lane 7 of each row (off by
-// hundreds of metres against the CPU twin), and right ones with one invocation per workgroup;
+// textureLoad gives wrong heights on llvmpipe (GL) in 8×8 workgroups, in lane 7 of each row (off
+// by hundreds of metres against the CPU twin), and right ones with one invocation per workgroup;
 // vertices of one workgroup read different mip levels. Plain loads from a buffer agree with the
 // CPU twin to 1e-6 of the height range.
 //
@@ -95,8 +95,8 @@ fn mark(index: u32, m: u32) {
 // level r. The ancestor of tile t is t >> (r − l), clamped to level r's tiles; its page holds
 // every node a bicubic sample on level r reads there (the two-node border covers the half-texel
 // shift between levels). With `want`, the entry is marked missing when it stands in; the tile
-// read is marked used. No loop: an earlier version walked up the levels, and llvmpipe's
-// compiler spent minutes on the unrolled walks of a fragment shader.
+// read is marked used. No loop up the levels: llvmpipe's compiler spends minutes on such a loop
+// unrolled in a fragment shader.
 struct Lookup {
     level: u32,
     page_fade: u32,

@@ -12,24 +12,18 @@
 // mesh's own error nor, in GeoMipMap's coarse blocks, the octaves in neither its geometry nor its
 // bump, so the true shift is larger. `FADE_SPECTRUM` multiplies 2π²σ² by the octave's lattice
 // frequency squared (its noise frequency f_k is 1/1.6 of it: src/detail.rs's LATTICE_PER_CYCLE),
-// so the model is 1/1.6² ≈ 0.39. Measured on gaussian at 256²
-// (`terrain compare sketches/gaussian.toml --out-dir D --modes warped,geomipmap --repeat 1
-// --path-frames 0`, PSNR against the reference at warped mesh 96 / GeoMipMap τ 4, blocks of 17 /
-// warped mesh 264, with σ's shift as tan i of the missing height, before the slope's exact
-// geometry): bump whole 21.79 / 24.31 / 27.58 dB; 0.5: 25.01 / 24.95 / 27.79; 1: 25.19 / 25.12 /
-// 27.86; 2: 25.21 / 25.21 / 27.89; 4: 25.18 / 25.23 / 27.87; 10⁴ (bump only where the ground is
-// seen straight on): 25.16 / 25.22 / 27.65.
+// so the model is 1/1.6² ≈ 0.39; the fitted factor is 2 (docs/decisions.md, “Bump fade”).
 //
-// A departure from DESIGN.md, whose octave k contributes w_k·n_k·(g_k + (1 − g_k)·b_k): with the
-// fade the normal takes the bump share (1 − g_k)·b_k times this weight, in the mesh's normal and
-// in the terrain function's normal that coarse ground takes (terrain.wgsl's `coarse_normal`);
-// the geometry share and every height are as DESIGN.md defines them. `detail.bump_fade = false`
-// restores its definition.
+// A departure from `docs/design.md` (Procedural detail), whose octave k contributes w_k·n_k·(g_k +
+// (1 − g_k)·b_k): with the fade the normal takes the bump share (1 − g_k)·b_k times this weight, in
+// the mesh's normal and in the terrain function's normal that coarse ground takes (terrain.wgsl's
+// `coarse_normal`); the geometry share and every height are as `docs/design.md` defines them.
+// `detail.bump_fade = false` restores its definition.
 
 const FADE_SPECTRUM: f32 = 2.0;
 // The model's own factor, 1/1.6² (src/detail.rs's LATTICE_PER_CYCLE; tests/shaders.rs holds
 // them equal), for the terrain function's normal on coarse ground (terrain.wgsl's
-// `coarse_normal`), where it measured best.
+// `coarse_normal`; docs/decisions.md, “Fade of the coarse normal's octaves”).
 const FADE_MODEL: f32 = 0.390625;
 // The noise's RMS value per unit weight: src/detail.rs's NOISE_RMS (tests/shaders.rs holds them
 // equal).

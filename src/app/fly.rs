@@ -14,11 +14,10 @@
 //! because the APNG of a long flight (363 MB for the bundled one) is more than browsers play
 //! smoothly; without ffmpeg, or where it fails, the APNG is made from the frames at the end.
 //!
-//! Frames' PNGs are encoded on other threads ([`FrameWriter`]) while the next frame renders.
-//! Encoded in the render loop, a 512² PNG took longer than an H100 drew the frame, and the GPU,
-//! idle most of each frame, lowered its clocks after about 20 frames: every pass became five
-//! times slower (a planet flight's median 38.6 ms against 6.5–7 ms back to back), so the frame
-//! times measured the encoder, not the renderer.
+//! Frames' PNGs are encoded on other threads (`FrameWriter`) while the next frame renders.
+//! Encoded in the render loop, a PNG can take longer than a fast GPU draws the frame; the GPU,
+//! idle most of each frame, lowers its clocks, and the frame times would measure the encoder, not
+//! the renderer (docs/decisions.md, “PNG encoding off the render loop”).
 
 use crate::app::animation;
 use crate::app::output::{Fixed, write_atomic, write_image};

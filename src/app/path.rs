@@ -1,4 +1,4 @@
-//! Camera paths (the scene's `[path]`, DESIGN.md): a smooth curve through the key positions,
+//! Camera paths (the scene's `[path]`, `docs/scene.md`): a smooth curve through the key positions,
 //! travelled at constant speed, looking at each key's `look_at` or ahead along the curve.
 //!
 //! Rules: the curve is a centripetal Catmull-Rom spline through every key (the end keys

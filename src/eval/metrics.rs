@@ -11,8 +11,9 @@
 //!   crate (`SsimMode::Luma709`).
 //! - FLIP mean (flip-rs, NVIDIA's LDR-FLIP at 67.02 pixels per degree: a 0.7 m wide 4K display
 //!   seen from 0.7 m, FLIP's default).
-//! - The screen-space geometric error from position buffers (DESIGN.md: the distance in pixels
-//!   between where the mode's surface and the reference's surface appear).
+//! - The screen-space geometric error from position buffers (`docs/design.md`, Screen-space error
+//!   and τ: the distance in pixels between where the mode's surface and the reference's surface
+//!   appear).
 //! - The terrain's luminance, mean and standard deviation: linear Rec. 709 luminance
 //!   (0.2126 R + 0.7152 G + 0.0722 B of the sRGB-decoded values) over the pixels that show ground.
 //!   How much contrast the picture keeps: haze that flattens a view from 20 km lowers it.
@@ -27,9 +28,9 @@
 //! pixel, one step of Newton's method on the reference's ground position as a function of the
 //! pixel (its 2×2 Jacobian by differences with the neighbouring ground pixels), the step held
 //! within a pixel each way. Rejected: the nearest pixel alone. It counts every error under half a
-//! pixel as 0 and every one just over as 1; from 20 km up (jacksboro-high at 256²) GeoMipMap's
-//! rows from 12k to 59k triangles all measured 0.000 px and warped's 0.000–0.002, so which mode
-//! won a row was decided by which pixels happened to round.
+//! pixel as 0 and every one just over as 1, so from high up, where the errors are small, which
+//! mode wins a row is decided by which pixels happen to round (docs/decisions.md, “Sub-pixel
+//! screen-space error”).
 //!
 //! Rejected alternative: projecting the mode's point onto the reference surface vertically. It
 //! needs the terrain function on the CPU per pixel and says nothing at silhouettes.

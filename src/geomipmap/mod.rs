@@ -23,8 +23,8 @@
 //!   coarser one's, or the smaller of two equal ones), so the border follows the coarser neighbour.
 //!
 //! The jobs, one module each: the grid, its blocks and δ (here); culling and level choice
-//! ([`select`]); stitching templates ([`templates`]); the CPU twin of the morphing vertex shader
-//! ([`morph`]).
+//! (`select`); stitching templates (`templates`); the CPU twin of the morphing vertex shader
+//! (`morph`).
 
 mod morph;
 mod select;

@@ -15,25 +15,12 @@
 //!   pass run, and the indices are [`super::terrain::quad_indices`].
 //!
 //! Why: the mesh is a piecewise-linear interpolant of the surface, and on a cell the error of
-//! either split is largest about its diagonal's midpoint, which is where the two differ.
-//! Measured before building it, on the jacksboro DEM (Catmull-Rom between its nodes, a square
-//! grid of spacing s nodes, the mean vertical error over 8×8 points a cell, 57² cells; a
-//! throwaway numpy script): fixed a–c split 13.8 m at s = 4.13, the better split chosen from the
-//! exact centre height 11.2 m (−19 %, the best either split can do: 11.16), chosen from a
-//! centre estimated from the 4×4 vertices around the cell (no new height) 12.0 m (−13 %); 9.9 →
-//! 7.9 m at s = 3.13 and 5.5 → 4.4 m at s = 2.13 alike. So the centre is evaluated, one more
-//! height per vertex in warp & zoom. Measured again in the renderer (`terrain compare
-//! sketches/S.toml --out-dir D --modes warped,geomipmap --repeat 1 --path-frames 0`, the
-//! triangles warped needs for GeoMipMap's errors, geometric mean; a build whose split pass took
-//! the 4×4 estimate instead): jacksboro 0.342 fixed, 0.324 estimated, 0.292 evaluated;
-//! jacksboro-high 1.041, 0.874 (14 of 15 rows), 0.747; gaussian 0.385, 0.380, 0.294;
-//! gaussian-high 0.127, 0.090, 0.089. The estimate cannot see the octaves finer than the mesh,
-//! which is where gaussian's gain lies. GeoMipMap keeps its fixed split: its blocks' triangles are
-//! the ones its δ was computed for.
-//!
-//! Cost, on llvmpipe (jacksboro at 256², a 320² mesh, `terrain render ... --repeat 15 --json`,
-//! `passes_ms`): warp & zoom 13.0–13.2 ms against 6.0 without the centres; this pass 1.1 ms, 2.1
-//! as first written with its six indices stored one by one instead of from one array.
+//! either split is largest about its diagonal's midpoint, which is where the two differ. The
+//! centre is evaluated, one more height per vertex in warp & zoom, the pass's main cost: an
+//! estimate from the 4×4 vertices around the cell (no new height) cannot see the octaves finer
+//! than the mesh (docs/decisions.md, “Mesh split along the nearer diagonal”). GeoMipMap keeps its
+//! fixed split: its blocks' triangles are the ones its δ was computed for. A cell's six indices
+//! are stored from one array, not one by one.
 
 use super::alloc::Alloc;
 use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};

@@ -1,6 +1,6 @@
 //! The GPU half of a frame: warp & zoom → mesh split → normals → terrain (with the sky), one
 //! struct per pass, each owning its pipeline, bind-group layout and resources, each with a WGSL
-//! file of the same name in `shaders/`. [`renderer::Renderer`] runs them as a flat list.
+//! file of the same name in `shaders/`. [`crate::render::Renderer`] runs them as a flat list.
 
 pub mod alloc;
 pub mod clipmaps;

@@ -1,7 +1,7 @@
 //! The terrain pass (`shaders/terrain.wgsl`): the detailed geometry image as an indexed quad mesh
 //! read from its storage buffers (no vertex upload), and the sky as one full-screen triangle.
 //! Reversed-Z depth with an infinite far plane. Owns the colour and depth targets.
-//! - Single-sampled (by default), deferred ([`Deferred`]): the mesh writes a G-buffer, and the
+//! - Single-sampled (by default), deferred (`Deferred`): the mesh writes a G-buffer, and the
 //!   full-screen triangle shades each pixel from it, or draws the sky where no ground was written.
 //! - Multisampled (`render.msaa`) or with `render.deferred` off, forward: the mesh is shaded as
 //!   it is drawn, then the sky behind it ([`SKY_TEST`]). Multisampled, it draws into
@@ -23,12 +23,10 @@ pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// The sky's depth test in forward frames (and the planet pass's). The sky lies at depth 0, where
 /// reversed-Z clears the depth, and is drawn after the ground, so that it passes only where no
 /// ground was drawn and the depth test rejects the rest before its shader runs (nothing in
-/// `sky_fs` discards). Drawn first under the ground, as until stop 44, every pixel paid for the
-/// sky and then for the ground: on llvmpipe, the world beyond the sketch (`beyond`, lit and hazed)
-/// and the sky's colour took about a fifth of the terrain pass where the ground fills most of the
-/// picture (gaussian at 256², warped at mesh 61: 28.0 → 21.9 ms median with the sky left out;
-/// GeoMipMap τ 8, blocks of 17: 24.6 → 18.7). The images are the same bytes: the ground covered
-/// every sample it now keeps from the sky.
+/// `sky_fs` discards). The images are those of a sky drawn first under the ground: the ground
+/// covers every sample it keeps from the sky. Rejected: the sky first, where every pixel pays for
+/// the sky (the world beyond the sketch, lit and hazed) and then for the ground
+/// (docs/decisions.md, “Sky after the ground”).
 pub const SKY_TEST: wgpu::CompareFunction = wgpu::CompareFunction::GreaterEqual;
 
 pub struct TerrainPass {
@@ -65,17 +63,9 @@ pub const GBUFFER: [wgpu::TextureFormat; 4] = [wgpu::TextureFormat::Rgba32Uint; 
 /// triangle shades each pixel once, or draws the sky where no ground was written. Drawn forward,
 /// a rasteriser runs the fragment shader over every block of pixels a triangle touches (llvmpipe
 /// over 4×4 blocks, GPUs over 2×2 quads), so a fine mesh shades most pixels several times over,
-/// and the shading (the shadow ray, the bump octaves, the surface types) is most of the pass.
-/// Measured on llvmpipe at 256² (gaussian, warped at mesh 61², 7,200 triangles, against
-/// GeoMipMap τ 8 at blocks of 17, 7,297, medians of 5 runs alternately, `passes_ms`): with a
-/// fragment shader that returns at once both passes took 16.0 ms; with a loop made heavy to count
-/// the shader's runs, warped's took 40.0 ms above that and GeoMipMap's 30.5, the same share in
-/// every band of rows and 0.95× in the 16-pixel columns at the picture's sides; forward, their
-/// passes took 28.4 and 25.3 ms. Deferred, side by side with the forward build (three runs
-/// alternately): 26.1 → 17.9 ms and 22.6 → 19.4; jacksboro-high at 512², 190.7 → 84.3 and 151.5
-/// → 81.4; jacksboro at 512², whose fine mesh close up is bound by its triangles, 226.3 → 225.9
-/// and 109.8 → 100.7 (README). Multisampled frames stay forward: a G-buffer of samples would need
-/// shading per sample.
+/// and the shading (the shadow ray, the bump octaves, the surface types) is most of the pass
+/// (docs/decisions.md, “Deferred shading”). Multisampled frames stay forward: a G-buffer of
+/// samples would need shading per sample.
 struct Deferred {
     bind_group: wgpu::BindGroup,
     views: Vec<wgpu::TextureView>,
@@ -127,7 +117,7 @@ pub struct Variant {
     pub detail_shadows: bool,
     /// Samples per pixel: 1, or 4 multisampled (`render.msaa`).
     pub samples: u32,
-    /// Shade from a G-buffer ([`Deferred`]): single-sampled frames only, where the adapter allows
+    /// Shade from a G-buffer (`Deferred`): single-sampled frames only, where the adapter allows
     /// (`GpuContext::deferred` decides).
     pub deferred: bool,
 }

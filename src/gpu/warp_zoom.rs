@@ -228,30 +228,18 @@ pub fn sketch_spacing(d_atlas: f32, o: f32) -> f32 {
 
 /// The octave whose pyramid level a vertex at `p` reads the sketch at, for a split octave `o`
 /// before its stop at the pixel octave: with a camera, the pixel octave `log2(d_atlas /
-/// footprint)` ([`pixel_octave`]), so that each vertex lies on the surface the picture is
+/// footprint)` (`pixel_octave`), so that each vertex lies on the surface the picture is
 /// compared with, at the reference's level there or finer (the footprint is taken at the nearest
 /// height the sketch can have, never farther than the reference's hit); a bake has no camera and
 /// reads level −o.
 ///
-/// Measured (`terrain compare sketches/S.toml --out-dir D --modes warped --repeat 1
-/// --path-frames 0` at 256², the triangles warped needs for each GeoMipMap row's mean
-/// screen-space error, geometric mean over `report.csv`'s fixed rows, interpolated along
-/// warped's ladder):
-/// - at the vertex's own spacing (until stop 32), every vertex sat on the sketch smoothed over its
-///   cell, below each ridge the mesh could draw: jacksboro-high's 3,042-triangle mesh erred
-///   0.179 px against GeoMipMap's 0.113 px at 3,286 triangles;
-/// - at level −o (stop 32 to 36: the split octave's level, one level finer at the default bias),
-///   0.135 px; 1.47× GeoMipMap's triangles on jacksboro-high, 0.36 on jacksboro, 0.41 on
-///   gaussian, 0.16 on gaussian-high, 0.74 on hills;
-/// - at the pixel octave, 1.18, 0.34, 0.40, 0.13 and 0.71 (without the sub-texel curvature of
-///   `stage::importance`). PSNR at the same meshes rose by up to 0.6 dB on the near views and
-///   fell by up to 1.1 dB on jacksboro-high between 3,042 and 12,482 triangles, where the mesh's
-///   facets, still shaded there, point-sample more relief. Along the jacksboro and gaussian paths
-///   the LOD change per frame and the PSNR stayed within 0.001 levels and 0.02 dB: near the
-///   ground the split octave already stops at the pixel octave.
-/// - the finest level (no prefilter at all) gave 0.122 px at 3,042 triangles, but a tile pyramid
-///   then streams its finest tiles under every vertex; at the pixel octave it streams the tiles
-///   the shading of distant ground reads (`shaders/terrain.wgsl`, `shading_normal`) anyway.
+/// Rejected (docs/decisions.md, “Sketch level at the pixel octave”):
+/// - the vertex's own spacing: every vertex sits on the sketch smoothed over its cell, below each
+///   ridge the mesh could draw;
+/// - level −o (the split octave's level): more triangles for the same error from high up;
+/// - the finest level (no prefilter at all): a tile pyramid then streams its finest tiles under
+///   every vertex, where at the pixel octave it streams the tiles the shading of distant ground
+///   reads (`shaders/terrain.wgsl`, `shading_normal`) anyway.
 pub fn sketch_octave_in_view(f: &FrameUniforms, p: Vec2, o: f32) -> f32 {
     pixel_octave(f, p).unwrap_or(o)
 }
@@ -270,12 +258,10 @@ fn pixel_octave(f: &FrameUniforms, p: Vec2) -> Option<f32> {
 }
 
 /// The split octave of a vertex at `p` (frame metres) whose mesh gives `o`: no finer than the
-/// pixel octave there ([`pixel_octave`]), as the reference's surface holds no octave finer than
+/// pixel octave there (`pixel_octave`), as the reference's surface holds no octave finer than
 /// its pixel. A mesh finer than the pixels (far ground, a dense mesh from high up) otherwise
-/// carried octaves the reference does not draw, and its normals aliased them: at 256² from 20 km
-/// up (jacksboro-high) warped's PSNR fell from 50.5 dB at 92,450 triangles to 44.4 dB at 428,738
-/// while its screen-space error went on falling; with the stop it climbs to 51.1 and 57.6 dB (the
-/// near view, where it never binds, is unchanged). Taking the footprint at the nearest height
+/// carries octaves the reference does not draw, and its normals alias them (docs/decisions.md,
+/// “Split octave stops at the pixel octave”). Taking the footprint at the nearest height
 /// the sketch can have keeps the stop from binding more than it should, and reads the sketch once,
 /// at its final level: a streamed pyramid marks every tile it reads as wanted. A bake has no
 /// camera and no stop.

@@ -1,7 +1,7 @@
-//! Spherical clipmaps (seed 003, Clasen & Hege): a planet drawn from the static hemisphere of
-//! rings around the camera's nadir. A frame: choose the levels the view needs (§4.5), fill the
-//! planet's uniforms, then two named passes: `clipmaps` carries the drawn rings' vertices to the
-//! terrain, `planet` draws the sky and them.
+//! Spherical clipmaps (Clasen & Hege, *Terrain Rendering using Spherical Clipmaps* (2006)): a
+//! planet drawn from the static hemisphere of rings around the camera's nadir. A frame: choose the
+//! levels the view needs (§4.5), fill the planet's uniforms, then two named passes: `clipmaps`
+//! carries the drawn rings' vertices to the terrain, `planet` draws the sky and them.
 //!
 //! Rules: the hemisphere is built once per renderer and never uploaded again; the sun stands
 //! still in the world (where the scene's camera sees it at `light.sun_azimuth_deg` and
@@ -168,7 +168,7 @@ pub fn reframed(camera: &Camera, geo: Geo, radius: f64) -> Camera {
     }
 }
 
-/// The levels `camera` (at `geo`) sees of the planet (seed 003 §4.5).
+/// The levels `camera` (at `geo`) sees of the planet (Clasen & Hege 2006, §4.5).
 fn levels(atlas: &Atlas, radius: f64, detail: &Detail, camera: &Camera, geo: &Geo) -> Span {
     let planet = Planet {
         radius,

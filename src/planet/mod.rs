@@ -1,11 +1,11 @@
-//! Planets: the terrain function on a sphere and the geometry that carries a view to it (seed 003,
-//! Clasen & Hege, *Terrain Rendering using Spherical Clipmaps*).
+//! Planets: the terrain function on a sphere and the geometry that carries a view to it (Clasen &
+//! Hege, *Terrain Rendering using Spherical Clipmaps*, 2006).
 //!
 //! The terrain function of a planet of radius R at the unit vector u is `R + h(u)`, h being the
 //! global sketch (equirectangular: longitude −180…180 across, latitude −90…90 up, row 0 south,
 //! each texel the centre of its cell) sampled bicubically on the pyramid level of the footprint,
 //! plus the procedural octaves of [`noise`] on the sphere of radius R, each weighted as in the
-//! plane (DESIGN.md: g_k as geometry, b_k per pixel).
+//! plane (`docs/design.md`, Procedural detail: g_k as geometry, b_k per pixel).
 //!
 //! Rules:
 //! - World axes: x toward latitude 0, longitude 0; y toward longitude 90° E; z north. f64 on the
@@ -14,14 +14,14 @@
 //!   origin on the sphere of radius R. Positions handed to the GPU are metres in that frame, so
 //!   they are small near the camera whatever the planet.
 //! - Map coordinates of a point at angular distance a and bearing b (0 north, 90° east) from the
-//!   nadir come from the spherical direct problem in a form that keeps their relative precision
-//!   for small a ([`map_offset`]): the latitude's change by the half-angle tangent of the sines'
-//!   difference, the longitude's by atan2 of the point's coordinates in the nadir's meridian
-//!   plane. Seed 003's equations (3)–(4) compute the absolute latitude `acos(p_z) − θ_v`, which in
+//!   nadir come from the spherical direct problem in a form that keeps their relative precision for
+//!   small a ([`map_offset`]): the latitude's change by the half-angle tangent of the sines'
+//!   difference, the longitude's by atan2 of the point's coordinates in the nadir's meridian plane.
+//!   Clasen & Hege's equations (3)–(4) compute the absolute latitude `acos(p_z) − θ_v`, which in
 //!   f32 loses everything below 1e-7 rad (0.6 m on the Earth), and its §5 replaces them near the
 //!   viewer by an empirical approximation with a blend to the exact form; this form is exact at
 //!   every distance, needs no blend, and its central meridian (b = 0) has a longitude offset of
-//!   exactly 0 (seed 003's fig. 13 cannot happen).
+//!   exactly 0 (Clasen & Hege's fig. 13 cannot happen).
 //! - The sketch's texels wrap across the date line and continue across a pole on the opposite
 //!   meridian (row −1 is row 0 half the world away), so the bicubic has no seam at either.
 //!

@@ -1,4 +1,5 @@
-//! The static hemisphere of seed 003 §3.4: concentric rings around the viewer's nadir, built once.
+//! The static hemisphere of Clasen & Hege, *Terrain Rendering using Spherical Clipmaps* (2006),
+//! §3.4: concentric rings around the viewer's nadir, built once.
 //!
 //! Rules:
 //! - The bearing is cut into `phi_steps` equal steps. Level i covers angular distances θ̃ in
@@ -13,7 +14,7 @@
 //!   index buffer's edges). The bearing wraps, so there is no seam at θ̃'s zero meridian either.
 //!
 //! Rejected alternative: geometry clipmaps' square rings (Losasso and Hoppe). Squares on a sphere
-//! shrink to slivers toward a pole (seed 003 §3.1); rings around the nadir are the same
+//! shrink to slivers toward a pole (Clasen & Hege 2006, §3.1); rings around the nadir are the same
 //! everywhere.
 
 use super::hemisphere_point;
@@ -202,7 +203,7 @@ mod tests {
         }
     }
 
-    /// Seed 003 §4.5: from 2 m a ground camera draws deep levels and the horizon's; from orbit
+    /// Clasen & Hege 2006, §4.5: from 2 m a ground camera draws deep levels and the horizon's; from orbit
     /// only the coarse ones.
     #[test]
     fn the_visible_levels_follow_the_horizon_and_the_pixel() {

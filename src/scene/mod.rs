@@ -1,4 +1,5 @@
-//! The scene file (TOML): DESIGN.md's keys and this project's additions, read strictly.
+//! The scene file (TOML): the keys of `docs/design.md` (Scene and jobs
+//! files) and this project's additions, read strictly.
 //!
 //! Rules: an unknown key is an error naming it (serde's `deny_unknown_fields`), a value of the
 //! wrong type names its full dotted key (`detail.octaves`, through `serde_path_to_error`), every
@@ -238,30 +239,16 @@ pub const FINEST_WAVELENGTH_M: f64 = 0.1;
 /// (`geomipmap.k` 0), whose δ, measured on the sketch alone, would not see an octave a negative
 /// bias puts into it, so it takes 0 there, and −1 with its finer bake in memory.
 ///
-/// Rejected: one GeoMipMap default for both storages (k 0, bias 0 in memory too). A sketch and
-/// its pyramid then draw one picture in GeoMipMap as well (jacksboro at 128², 88.1 dB with
-/// 18,321 triangles each, against 32.6 dB with 24,559 and 18,321), but the baseline every
-/// comparison measures the warped mode against grows weaker in memory (`terrain render --size
-/// 256` at the default τ against the reference: jacksboro 28.7 dB with 66,874 triangles drops
-/// to 27.4 dB with 40,210; gaussian 27.0 dB with 199,016 to 25.9 dB with 2,314).
+/// Why −1: sampling an octave at its own wavelength aliases between vertices, but the vertices
+/// are then exact, and that outweighs it; with the geometric-error term a bias of 0 (the Nyquist
+/// octave) finds the ground flatter and asks for too few triangles (docs/decisions.md, “Detail
+/// bias −1”).
 ///
-/// Why −1, with the geometric-error term (`importance.error`) that came on with it:
-/// `terrain compare --size 256 --modes warped,geomipmap --repeat 1 --path-frames 0`, llvmpipe,
-/// each against GeoMipMap's rows of the same run, baked then at the same bias. GeoMipMap
-/// rows matched by a warped row with no more triangles and no more mean screen-space error, of
-/// the 75 on the five bundled views (the error to a fraction of a pixel, the sketch at level
-/// −o): 46 at −1 with the term, 43 without it, 37 at 0 with it, 44 at −2. (First chosen against
-/// the old defaults, 0.5 without the term, with the whole-pixel error, which from high up was
-/// noise.) Along the paths (held) the warped mode's PSNR rose
-/// (jacksboro 30.2 → 30.8 dB, gaussian 22.2 → 26.2 dB) and its LOD change per frame stayed far
-/// below the swimming goals (0.071 → 0.087 and 0.254 → 0.242 levels). Sampling an octave at its
-/// own wavelength aliases between vertices, but the vertices are then exact, and that outweighs
-/// it in every figure measured. A bias of 0 (the Nyquist octave) with the error term gave 28.9 dB
-/// on the jacksboro path: the error term then finds the ground flatter and asks for a third of
-/// the triangles.
-/// Rejected for planets: the clipmap rings slide with the nadir every frame, and from 2 m a bias
-/// of −1 swims 3.02 levels a frame at the default rings against 2.74 (up to twice as much at
-/// other ring settings), for +1.5 dB.
+/// Rejected: one GeoMipMap default for both storages (k 0, bias 0 in memory too): a sketch and
+/// its pyramid would then draw one picture in GeoMipMap as well, but the baseline every
+/// comparison measures the warped mode against grows weaker in memory (docs/decisions.md,
+/// “Detail bias −1”). For planets, −1: the clipmap rings slide with the nadir every frame, and
+/// −1 swims more for little PSNR.
 pub fn default_bias(scene: &Scene, atlas: &crate::sketch::Atlas, mode: Mode) -> f64 {
     if scene.planet().is_some() {
         0.5
@@ -539,7 +526,7 @@ crate::named_enum! {
         Geomipmap = "geomipmap",
         Bruteforce = "bruteforce",
         Reference = "reference",
-        /// Spherical clipmaps (seed 003): planet scenes only.
+        /// Spherical clipmaps (Clasen & Hege 2006): planet scenes only.
         Clipmaps = "clipmaps",
     }
 }
@@ -601,21 +588,20 @@ crate::named_enum! {
     /// Anti-aliasing (`render.msaa`): 4 samples per pixel, multisampled in the mesh modes (where
     /// the adapter's targets allow it) and four rays per pixel in the reference.
     pub enum Msaa ("msaa") {
-        /// 4× on a hardware GPU; off on a software rasterizer, where it costs 3.6× the terrain
-        /// pass (llvmpipe, jacksboro 512² warped: 352 -> 1273 ms; an H100: 4.69 -> 7.90 ms).
+        /// 4× on a hardware GPU; off on a software rasterizer, where it costs several times
+        /// the terrain pass (docs/decisions.md, “Multisampling on hardware only”).
         Auto = "auto",
         Off = "off",
         X4 = "4x",
     }
 }
 
-/// A planet and its spherical clipmaps (seed 003).
+/// A planet and its spherical clipmaps (Clasen & Hege, *Terrain Rendering using Spherical
+/// Clipmaps*, 2006).
 ///
 /// The defaults split the paper's triangles (512 × 20) the other way, 256 bearings × 40 rings a
-/// level: `terrain compare` on the three bundled planet views (256², llvmpipe) measures the same
-/// triangles at +0.1, +0.0 and +1.0 dB PSNR, 0.093 against 0.146 px mean screen-space error from
-/// 10 km and 0.49 against 0.75 px from 2 m, and a third less swimming from the ground: a ring's
-/// vertices a level apart matter more than its bearings.
+/// level: a ring's vertices a level apart matter more than its bearings (docs/decisions.md,
+/// “Planet rings”).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlanetSection {

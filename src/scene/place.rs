@@ -179,7 +179,7 @@ fn aim_distance(atlas: &Atlas) -> f64 {
 }
 
 /// The default view: the whole sketch seen along `heading_deg` and `pitch_deg`, as near as the
-/// frame allows ([`fit`]), from beyond the sketch's edge and above its highest ground.
+/// frame allows (`fit`), from beyond the sketch's edge and above its highest ground.
 pub fn framing(scene: &Scene, atlas: &Atlas, heading_deg: f64, pitch_deg: f64) -> (DVec3, DVec3) {
     let c = &scene.camera;
     // Level or upward views cannot frame the ground from above: they look over it instead.

@@ -1,6 +1,7 @@
 //! The warp's sample budget: the mesh a frame's importance asks for, so that a smaller image, a
 //! larger `quad_px` or a view with less in it draws fewer triangles, and `warp.mesh` is only the
-//! upper bound (DESIGN.md: "the warp's sample budget may follow from the demanded density").
+//! upper bound (`docs/design.md`, The warp: the warp's sample budget may follow from the demanded
+//! density).
 //!
 //! Rules:
 //! - Importance I is samples per metre per axis, so a sketch-map texel of side d0 asks for
@@ -78,11 +79,9 @@ impl Budget {
     }
 }
 
-/// `Σ (I·d0)²`, summed in eight lanes: one running f64 sum is a chain of dependent additions
-/// (jacksboro near, `benches/cpu_stage.rs`, in runs of their own: the stage took 167 µs with it,
-/// 161 µs in lanes). Built for AVX-512 where the processor has it, the eight lanes one register
-/// (the baseline build's two-lane loop was 1.4–2 % of the stage on the high views); the same
-/// lanes in the same order, so the same bits.
+/// `Σ (I·d0)²`, summed in eight lanes: one running f64 sum is a chain of dependent additions.
+/// Built for AVX-512 where the processor has it, the eight lanes one register; the same lanes in
+/// the same order, so the same bits.
 pub fn cells_demanded(importance: &[f32], d0: f64) -> f64 {
     #[cfg(target_arch = "x86_64")]
     if crate::stage::simd::avx512() {

@@ -3,12 +3,9 @@
 //!
 //! Why: the warped mesh follows the camera, so every vertex slides over the terrain each frame,
 //! and the geometric octaves near the mesh's sampling limit, sampled at new places, change the
-//! picture: on jacksboro's path at 256², a frame drawn with the last warp and with its own differ
-//! by 1.09 levels, by 0.024 with `detail.octaves = 0`. That change hardly grows with how far the
-//! mesh moved: an experiment that warped only every fourth frame changed the picture by 0.23
-//! levels per frame against 1.1–1.2 warping every frame, at 0.13 dB less PSNR (`terrain
-//! compare`, 16 path frames). Holding the warp while it still fits turns continuous swimming into
-//! rare updates, and the held frames skip the warp.
+//! picture. That change hardly grows with how far the mesh moved, so holding the warp while it
+//! still fits turns continuous swimming into rare updates, and the held frames skip the warp
+//! (docs/decisions.md, “Held warp”).
 //!
 //! Rules:
 //! - The sketch map's region is held too (`SketchMap::update` keeps its corner while it still
@@ -19,8 +16,8 @@
 //!   (`S_f ≥ 0.5` now). Where the demand changed by more than `warp.hold_drift` octaves on
 //!   texels that ask for more than [`SHARE`] of the cells in view (each texel weighted by I², its
 //!   cells) — the camera came closer, turned, or new ground came into view — it warps anew.
-//!   Counting texels instead let the few near the camera, which ask for most of the cells, drift
-//!   unseen: jacksboro's path never warped again in 24 frames and lost 0.65 dB.
+//!   Counted by texels, the few near the camera, which ask for most of the cells, would drift
+//!   unseen.
 //! - A snapshot must not depend on the frames before it: [`Hold::forget`] (through
 //!   `Renderer::forget`) drops the held warp, as `batch` does before each job.
 //!
@@ -33,9 +30,8 @@ use crate::stage::importance::ImportanceMap;
 /// The share of the cells in view whose demand may drift past the tolerance before the warp is redone.
 pub const SHARE: f32 = 0.05;
 
-/// The drift check computes the importance on every fourth row: a held frame then took 48 µs
-/// against 192 µs with the whole map (`benches/cpu_stage.rs`, `stage_held`, jacksboro near; 40 µs
-/// since the rows' AVX2 build), and the demand varies smoothly from row to row.
+/// The drift check computes the importance on every fourth row: a fraction of the whole map's
+/// time, and the demand varies smoothly from row to row.
 pub const ROW_STEP: usize = 4;
 
 /// The importance the held Φ was made for is the stage's importance map itself, which only a

@@ -1,7 +1,7 @@
 //! Line mappings: the one-dimensional warp that the row and column passes apply to every line
-//! (DESIGN.md's warp): weights `w_i = (I_i + I_{i+1})/2`, positions `u` their running sum scaled to
-//! `n−1`, output sample j interpolated inside the segment holding `u = j`. A mapping gives the
-//! fractional source index of each output sample, monotone, 0 and n−1 at the ends.
+//! (`docs/design.md`, The warp): weights `w_i = (I_i + I_{i+1})/2`, positions `u` their running sum
+//! scaled to `n−1`, output sample j interpolated inside the segment holding `u = j`. A mapping
+//! gives the fractional source index of each output sample, monotone, 0 and n−1 at the ends.
 //!
 //! Rules:
 //! - [`line_mapping`] maps one line; it is the reference and serves the guard's mean mapping.
@@ -13,16 +13,13 @@
 //! Why lanes across lines: a line's running sum is a chain of dependent additions, one per
 //! sample, that no vector width shortens, and finding each output's segment is a data-dependent
 //! load. Side by side, eight lines share each step of the chain and each lookup is one gather
-//! (with AVX2) or one carried pair (with AVX-512: `x86::mappings_avx512`).
-//! Measured on the 2-core development VM, jacksboro near at 128²: one line at a time took about
-//! 470 ns a line (`perf` put 63 % of the plain warp's 190 µs in it); eight lanes as plain Rust
-//! took 3.5 µs a group of eight in a throwaway criterion benchmark (LLVM leaves the lookups
-//! scalar), no better; the AVX2 kernel took the plain warp from 163 to 94 µs
-//! (`benches/cpu_stage.rs`, `warp_plain`, medians).
+//! (with AVX2) or one carried pair (with AVX-512: `x86::mappings_avx512`). Eight lanes as plain
+//! Rust are no faster than one line at a time: LLVM leaves the lookups scalar (docs/decisions.md,
+//! “Warp in lanes of eight”).
 //!
 //! Why intrinsics and not a SIMD crate: what pays here is the lookup by lane, a gather or a
-//! scatter of single lanes. `wide` has neither, and lanes without them measured no faster
-//! (above). A dispatching crate such as `pulp` would take over
+//! scatter of single lanes. `wide` has neither, and lanes without them are no faster (above). A
+//! dispatching crate such as `pulp` would take over
 //! the run-time choice of instruction set, which is a few lines here (as in the importance), but
 //! not the gathers' raw pointers, so the kernel would stay `unsafe` either way.
 
@@ -214,9 +211,8 @@ fn portable(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mut [[f64; LA
 
 /// Where each lane's line starts in a buffer of lines of `n` samples (line `first + l`; lines
 /// past the last repeat it), for [`lerp_lanes`]. Worked out once for a group of lines and used
-/// at each of its samples: worked out at every sample, its division (`values.len() / n`) and
-/// eight products stood in the warp's interpolation loops. Gain at the edge of the noise: plain
-/// warp 55–58 → 53–56 µs on the high views (`benches/cpu_stage.rs`, alternately, twice).
+/// at each of its samples, so that its division (`values.len() / n`) and eight products stay out
+/// of the warp's interpolation loops.
 #[derive(Clone, Copy, Debug)]
 pub struct LaneLines {
     len: usize,
@@ -300,17 +296,12 @@ fn ends(total: &[f64; LANES], out: &mut [[f64; LANES]]) {
 /// [`portable`] in x86 intrinsics. With AVX2 (`mappings`), four f64 lanes to a register, the two
 /// halves of the eight interleaved so that their chains of additions overlap; with AVX-512F
 /// (`mappings_avx512`), the eight in one register and each segment's ends scattered beside its
-/// index instead of gathered per output (its doc has the measurement). Measured
-/// with `benches/cpu_stage.rs` (128², medians), each build after the one before in one session:
-/// the AVX-512 mappings took the guarded warp 83 → 81 µs on jacksboro near and 92 → 87 µs from
-/// high up; gathering `lerp_avx512`'s pairs then took them to 73 and 81 µs, and the plain warp
-/// 72 → 62 µs on both. The same operations in the same order
-/// (no fused multiply-adds; `ceil` for line_mapping's floor-and-compare, equal on x ≥ 0), so the
+/// index instead of gathered per output. The same operations in the same order (no fused
+/// multiply-adds; `ceil` for line_mapping's floor-and-compare, equal on x ≥ 0), so the
 /// results are bit-identical, which `tests` checks.
 ///
 /// Why intrinsics: LLVM unrolls the lane loops of [`portable`] and then leaves the segment
-/// lookup scalar, for want of gathers (about 3.5 µs a group of eight lines of 128 on the
-/// development VM, no faster than eight calls of [`line_mapping`]).
+/// lookup scalar, for want of gathers, no faster than eight calls of [`line_mapping`].
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use super::{LANES, LaneLines, LaneScratch};
@@ -407,13 +398,9 @@ mod x86 {
     /// beside its index, and the output loop carries them forward in registers, taking the new
     /// pair in the lanes where a later segment starts (the running maximum's lanes that grow).
     /// Each output then loads two registers of pairs and parts them, where [`mappings`] gathers
-    /// `u` twice. On this VM (AMD EPYC, AVX-512) `perf` put 36 % of the kernel on the two gathers.
-    /// Side by side with the gathering kernel (`benches/cpu_stage.rs`, 128², medians, run
-    /// alternately, twice): plain warp 62–68 → 54–57 µs, guarded 48.5–50.3 → 44.0–44.5 on
-    /// jacksboro near and 75–77 → 67.7–68.3 on hills high. Measured and rejected on the way:
-    /// the ends scattered with `vscatterdpd` (guarded 50 → 57.5 µs near, 76 → 91 high: scatters
-    /// are slow on this processor), and each end as a scalar store of its own (1–3 µs faster
-    /// than gathering; a pair is one 128-bit store).
+    /// `u` twice. Rejected: the ends scattered with `vscatterdpd` (scatters are slow on AMD EPYC),
+    /// and each end as a scalar store of its own (a pair is one 128-bit store; docs/decisions.md,
+    /// “Warp in lanes of eight”).
     ///
     /// # Safety
     /// As [`mappings`], with AVX-512F as well.

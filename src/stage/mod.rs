@@ -142,12 +142,8 @@ impl Heading {
 }
 
 /// How far from its centre each heading reaches, in degrees: an axis 30° each way, a diagonal
-/// 15°. Measured (`terrain compare S --modes warped --size 128 --repeat 1 --path-frames 0`, with
-/// and without `warp.diagonal`, over the fixed warped rows, on jacksboro, hills and gaussian, ten
-/// headings from 25° to 45° either side of north): the turned region gained on average nothing
-/// at 25° (jacksboro west of north lost 0.28 dB), +0.10 dB at 30°, +0.15 at 35°, +0.21 at 40° and
-/// +0.33 at 45°. Equal reaches (22.5° each) turned the bundled flight's views 22–30° west of north
-/// and lost it 0.14 dB.
+/// 15°: the turned region gains nothing within 25° of an axis, and equal reaches (22.5° each)
+/// turn views that an axis serves better (docs/decisions.md, “Heading reaches”).
 fn reach(h: Heading) -> f64 {
     match h {
         Heading::North | Heading::East => 30.0,

@@ -1,5 +1,5 @@
-//! Quality figures of one warp (DESIGN.md): the density ratio over visible cells, flipped cells and
-//! non-finite values.
+//! Quality figures of one warp (`docs/design.md`, Density ratio): the density ratio over visible
+//! cells, flipped cells and non-finite values.
 //!
 //! For cell (s, t): obtained density `ρ_o = 1/sqrt(|Φ_s|·|Φ_t|)`, each side length the mean of the
 //! cell's two edges along that direction; demanded `ρ_d = k·I(centre)`, I sampled bilinearly from the

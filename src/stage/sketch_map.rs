@@ -325,18 +325,14 @@ pub struct Resampler {
 /// levels around the lattice's spacing.
 ///
 /// Each output row first interpolates the two source rows under it over the span of texels its
-/// taps touch (a contiguous loop), then takes the taps along x from that. Taking all four texels
-/// per output sample instead cost 108 µs per 128² map against 42 µs (`benches/cpu_stage.rs`,
-/// `sketch_map`, jacksboro near, medians). The row scratch grows to its span once. Gathering
-/// the taps along x eight at a time with AVX2 (each texel apart, the same bits) measured
-/// 24.1–24.4 µs against 24.4–24.7 µs for this loop, alternately in one session: within the
-/// noise, not kept. With AVX-512F, each output's two texels gathered as one 64-bit element
-/// (`x86::taps`) pays: 22.6 → 17.3 µs; taken from windows of 32 texels by permutes where eight
-/// outputs' texels fit one, 17.5 → 13.3 µs.
+/// taps touch (a contiguous loop), then takes the taps along x from that; taking all four texels
+/// per output sample costs more than twice as much. The row scratch grows to its span once. With
+/// AVX-512F the taps along x are gathered, each output's two texels as one 64-bit element, or
+/// taken by permutes from a window (`x86::taps`). Rejected: gathering them eight at a time with
+/// AVX2, each texel apart (no faster; docs/decisions.md, “Sketch map resampling”).
 ///
 /// Built for AVX-512 where the processor has it (`resample_avx512`), so that the rows' vertical
-/// interpolation runs sixteen lanes wide: in the baseline build it was 2–3 % of the stage on
-/// the high views. The same operations, so the same bits.
+/// interpolation runs sixteen lanes wide. The same operations, so the same bits.
 ///
 /// A region turned by `turn` is sampled by `resample_runs`, through the same dispatch.
 pub fn resample(
@@ -408,17 +404,12 @@ fn resample_rows(
 /// lattice column, one texel further along s each. Each run is sampled as an axis-aligned row is
 /// (the vertical interpolation over its span, then the taps along x, at the levels of `spacing`,
 /// as [`resample`] takes them), into a row of `r.skewed`, and then the texels are read from them
-/// in order.
+/// in order, as a slice's stride. A turned map makes twice the calls of an axis-aligned one, each
+/// half as long.
 ///
-/// Measured on the hills view (north-east, turned; `benches/cpu_stage.rs`, `sketch_map`,
-/// medians, one build after the other): each run's samples written straight to their texels
-/// took 27.6 µs, 8 of them in those writes, each to another cache line; written along the
-/// lattice rows and read back by checked indices, 28.7 µs; read as a slice's stride, 22.2 µs.
-/// Rejected: runs started on a 32-byte boundary, so that no group of eight stores straddles
-/// two cache lines (24.5 µs: the extra samples cost more). Of the 21.5 µs, the reordering takes
-/// 2.7 and the second level's pass 8.5 (each left out in a build made only to measure it). The
-/// axis-aligned map of the same view takes 7.3 µs from one level (its spacing falls on one), the
-/// other views' 10–12 µs from two: a turned map makes twice the calls, each half as long.
+/// Rejected: each run's samples written straight to their texels (each write to another cache
+/// line), and runs started on a 32-byte boundary (the extra samples cost more than the straddled
+/// stores; docs/decisions.md, “Sketch map resampling”).
 #[inline(always)]
 fn resample_runs(
     atlas: &Atlas,
@@ -604,18 +595,15 @@ fn taps(
 
 /// The taps along x in AVX-512F: eight outputs at a time, each one's two texels (side by side
 /// in the row) gathered as one 64-bit element and then parted, or permuted out of a window. The
-/// same operations in the same order as [`taps`], so the same bits (`tests`). With [`taps`] the
-/// sketch map took 22.6 µs (jacksboro near, 128², `benches/cpu_stage.rs`, `sketch_map`), 17.3 µs
-/// with the gather alone; [`taps`] built for AVX2 or AVX-512 by the compiler took 31 µs.
+/// same operations in the same order as [`taps`], so the same bits (`tests`). [`taps`] built for
+/// AVX2 or AVX-512 by the compiler is slower still than [`taps`] as it is.
 ///
 /// Where the eight taps' pairs lie within [`x86::WINDOW`] (32) texels of the first (a level's
 /// texels are at least half the spacing, so a step is at most about two texels), they come from
 /// two loads and two permutes instead of a gather; elsewhere (a region coarser than the coarsest
 /// level) from the gather. The row of texels is padded by a window, so that the row's last taps
-/// take the loads too. Side by side with the gather alone, run alternately twice (sketch map,
-/// medians): 17.5–17.6 → 13.0–13.5 µs jacksboro near, 16.3–16.6 → 12.2 gaussian near, 9.4–9.5 →
-/// 7.1–7.3 hills near, 16.4–16.9 → 12.2–12.7 hills high. Windows of 16 texels without the padding
-/// left the row's last blocks and a wider step to the gather: 15.0 µs on jacksboro near.
+/// take the loads too; windows of 16 texels without the padding would leave the row's last
+/// blocks and a wider step to the gather (docs/decisions.md, “Sketch map resampling”).
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use std::arch::x86_64::*;

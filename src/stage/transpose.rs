@@ -5,18 +5,13 @@
 //! registers where the processor has it, written out row by row of the output, so that each
 //! output row is filled in order; the rows and columns past the last whole block, and a
 //! processor without AVX2, one value at a time. Every build gives the same values (a transpose
-//! only moves them; tested).
+//! only moves them; tested). Φ's 4 × 4 blocks go two side by side, so that each input line is read
+//! whole.
 //!
-//! Measured (128², a standalone loop of each, medians of 21 × 1000 runs, not in the repository):
-//! one value at a time in tiles of 16 × 16, Φ in place, 4.5 µs for the importance and 3.5–4.4 µs
-//! for Φ, 11 µs of the warp across in `benches/cpu_stage.rs` (hills-east: 50–53 µs against
-//! 39–42 µs for the warp on the map transposed by hand). Blocks in registers, walked by input
-//! rows: no faster (4.5 µs), as the output's rows, 512 bytes apart, fall into a few of L1's sets
-//! and each block's half-filled lines are evicted before the next fills them; walked by output
-//! rows: 1.5 µs. Φ's 4 × 4 blocks by output rows, two side by side so that each input line is
-//! read whole: 3.0 µs (4.7 µs one at a time). Blocks written as plain Rust arrays for the compiler
-//! to vectorise: 5.5–6.8 µs. In the warp across, with these: 44–47 µs against 42 µs on the map
-//! transposed by hand (two runs), so the two transpositions cost 2–5 µs where they cost 11.
+//! Rejected (docs/decisions.md, “Transposition in blocks”): one value at a time in tiles, several
+//! times slower; blocks walked by input rows, no faster than that, as the output's rows (512 bytes
+//! apart at 128²) fall into a few of L1's sets and each block's half-filled lines are evicted
+//! before the next fills them; blocks as plain Rust arrays for the compiler to vectorise.
 
 /// `dst[i·n + j] = src[j·n + i]` for an n² map.
 pub fn importance(src: &[f32], dst: &mut [f32], n: usize) {

@@ -1,5 +1,6 @@
 //! The warp: a row pass then a column pass over the sketch map's geometry image, moving its samples
-//! so that each segment gets output room in proportion to its importance (DESIGN.md's definition).
+//! so that each segment gets output room in proportion to its importance (`docs/design.md`, The
+//! warp).
 //!
 //! Rules:
 //! - One line's warp is a *mapping* (`stage::lines`): the fractional source index of each output
@@ -14,152 +15,70 @@
 //!   increasing in x. A cell split along its diagonal from (s, t) to (s+1, t+1) is then sound;
 //!   the GPU splits a convex cell along the other diagonal where that lies nearer the surface
 //!   (`gpu::mesh_split`), and a merely non-convex cell keeps this one. A flipped triangle is a
-//!   fold on screen. The
-//!   guard gives the columns on either side of a folded cell (and one more each way) the *mean*
-//!   column mapping `b̄`, that of the row-warped importance summed across columns, and repeats until
-//!   nothing folds. A cell between two columns that both follow `b̄` is a convex trapezoid between
-//!   two rows of equal y and cannot fold, so the loop ends; the other columns keep their own warp.
-//!   When more than an eighth of the column pairs fold at the start ([`fallback_pairs`]: 16 of
-//!   127; near views), all columns go to `b̄` at once, because the rounds end there or nearly
-//!   there anyway. The census (`cargo run --release --example fold_census`: 527 cameras, the
-//!   bundled scenes, 40 along each one's flight, 240 at random over the three sketches): from 16
-//!   folded pairs on, the rounds alone left every column on `b̄` on 328 of 345 cameras and at
-//!   least 107 everywhere; the shortcut at 16 pairs changed 17 cameras, the share of visible
-//!   cells in [½, 1] by +0.002 points on the mean (from −2.3 to +2.0 on single cameras), in
-//!   [½, 2] never lower; at 8 pairs it sent up to 69 more columns to `b̄`. On the bundled views,
-//!   their `compare` paths and the bundled flight it changed no Φ. The columns are mapped,
-//!   passed and checked eight at a time, so that this is decided as soon as it is certain: on
-//!   jacksboro near the guarded warp took 459 µs mapping every column first (when lines were
-//!   mapped one by one).
-//!   Measured alternative: moving columns toward `b̄` by halves (λ = ½, ¼, …) took twice the
-//!   instructions for the same share of cells within [0.5, 2] (`warp` on the six demo scenes).
+//!   fold on screen. The guard gives the columns on either side of a folded cell (and one more
+//!   each way) the *mean* column mapping `b̄`, that of the row-warped importance summed across
+//!   columns, and repeats until nothing folds. A cell between two columns that both follow `b̄`
+//!   is a convex trapezoid between two rows of equal y and cannot fold, so the loop ends; the
+//!   other columns keep their own warp (docs/decisions.md, “Guarded warp”).
+//! - When more than an eighth of the column pairs fold at the start ([`fallback_pairs`]: 16 of
+//!   127; near views), all columns go to `b̄` at once: the rounds would end there, or nearly
+//!   there, anyway (docs/decisions.md, “Fold fallback at an eighth”). The columns are mapped,
+//!   passed and checked eight at a time, so that this is decided as soon as it is certain. No
+//!   exact test decides it sooner (a fold is known only from Φ), and a guess would change the
+//!   warp wherever it guessed wrong.
+//! - Where the near views fold: along the frustum's side edges, where the row warp crowds the
+//!   columns outside the view into slivers a fraction of a metre wide that lean with the edge, and
+//!   in the rows behind the camera, where the region's fixed bottom edge holds the row warp's
+//!   crowded samples. A sliver folds at any difference between its two columns' mappings, so
+//!   only the same mapping on both sides repairs it.
 //! - Orientation: the second pass is the one the guard may send to a single mean mapping, and a
 //!   mean mapping serves only a pass along the view's depth, whose demand (falling with distance)
 //!   is alike in every line; across the depth the frustum's edges move from line to line. So
 //!   where the view's depth runs along x, the warp runs across ([`Warp::run_across`]): columns
-//!   first, then rows, on the map transposed, Φ transposed back. The heading decides, and turns
-//!   the warp only past the diagonal by 25 % (`stage::TURN_RATIO`), so that a heading near 45°
-//!   does not flip the mesh from frame to frame. Measured with `terrain warp S --out-dir D --json`
-//!   (`sketches/hills.toml`'s camera turned to look east, from [500, 3500, 760] at
-//!   [7933, 3500, 400]): rows first, 81.2 % of visible cells within [½, 2] and 43.8 % within
-//!   [½, 1], demand met 0.58; across, 99.5 %, 82.7 % and 0.84, as looking north (99.8 %, 82.9 %,
-//!   0.88). `terrain compare` on it (`--modes warped,geomipmap --repeat 1 --path-frames 0`): rows
-//!   matched on triangles and error 8 → 13 of 15, interpolated need 0.895 → 0.423× GeoMipMap's.
-//!   The two transpositions cost about 5 µs (`stage::transpose`). Neither order serves a
-//!   heading near a diagonal (hills, looking north-east: demand met 0.70 either way): there the
-//!   stage turns the sketch map's region by 45° instead (`stage::sketch_map::Turn`, chosen by
-//!   `stage::heading_of`), and this warp runs rows first over it, unchanged; Φ lies along the
-//!   region's axes. The hills went to 0.86. A region turned to the exact heading was not built:
-//!   its lattice would turn with the camera, and the sketch map would swim.
+//!   first, then rows, on the map transposed, Φ transposed back (docs/decisions.md, “Warp across
+//!   the view's depth”). The heading decides, and turns the warp only past the diagonal by 25 %
+//!   (`stage::TURN_RATIO`), so that a heading near 45° does not flip the mesh from frame to
+//!   frame. Neither order serves a heading near a diagonal: there the stage turns the sketch
+//!   map's region by 45° instead (`stage::sketch_map::Turn`, chosen by `stage::heading_of`), and
+//!   this warp runs rows first over it, unchanged; Φ lies along the region's axes. A region turned
+//!   to the exact heading is not built: its lattice would turn with the camera, and the sketch map
+//!   would swim.
 //! - An optional limit on the importance gradient (`max_log2_step`) raises low importance next to
 //!   high, in log space, before warping: fewer folds to guard, at the cost of spreading cells.
 //! - All buffers are allocated once in [`Warp::new`], the two the warp across needs on the first
 //!   frame that runs across; a frame allocates nothing after.
+//! - One thread: a frame's warp is too short a piece of work to hand part of it to another
+//!   thread (docs/decisions.md, “One thread for the CPU stage”).
 //!
-//! Speed (`benches/cpu_stage.rs`, jacksboro near, 128², criterion medians on the 2-core
-//! development VM). Side by side with the warp that mapped one line at a time (commit 99bf083),
-//! run alternately in one session: guarded 206 → 97 µs, plain 174 → 83 µs. The steps, each
-//! build measured after the one before in another session: the AVX2 line mappings took the plain
-//! warp from 163 µs (lanes as plain Rust) to 94 µs and the guarded one from 174 to 123 µs; the
-//! gathered interpolations 94 → 83 µs plain, 123 → 109 µs guarded; eight fold checks at once
-//! 109 → 97 µs guarded. `run` is built for AVX-512 and AVX2 and chosen at run time: without that,
-//! the calls into the AVX2 kernels are not inlined and the guarded warp takes 163 µs; AVX2 alone
-//! gives 101 µs.
+//! Speed (docs/decisions.md, “Warp in lanes of eight”):
+//! - `run` is built for AVX-512 and AVX2 and chosen at run time: otherwise the calls into the AVX2
+//!   kernels are not inlined.
+//! - The all-mean pass interpolates columns put side by side instead of gathering them, and the
+//!   importance is read in place unless `max_log2_step` limits it (then a copy a frame).
+//! - The fold check takes eight column pairs at once (in AVX-512F where the processor has it,
+//!   `x86::pairs_unfolded`) and stops at the first block of 16 rows after which all eight have
+//!   folded. The first group's seven pairs wait for the second group, so that they too are
+//!   checked eight at once; the count only decides when the shortcut is taken, and it grows the
+//!   same.
+//! - The mean column mapping is made only where a fold needs it.
+//! - Stores of a group's last, partial lanes: `store_kept_apart` (a cold call) in the all-mean
+//!   pass and `store_columns`, where LLVM would otherwise merge both branches into a memcpy call
+//!   for every group; `store_kept` (inlined) in the row pass, whose f32 stores it serves better.
 //!
-//! Since then the all-mean pass interpolates columns put side by side instead of gathering, and
-//! the importance is read in place unless `max_log2_step` limits it (a 64 KiB copy a frame):
-//! both together took the guarded warp on jacksboro near from 93 to 83 µs, side by side with
-//! commit 9b07df8. Stop 33: the fold check of eight column pairs stops at the first block of 16
-//! rows after which all eight have folded (near views): 86.6 → 82.9 µs near, 94.4 → 92.0 µs high,
-//! one build after the other. Also measured in stop 33 and rejected: `side_by_side` as an 8×8
-//! AVX transpose in registers (eight whole loads, unpacks, shuffles and lane swaps), which made
-//! the guarded warp slower, 74 → 84 µs near; the row pass two groups of rows at a time, so that
-//! each column's stores fill a cache line (73–76 µs against 71–72 µs near, 77–84 against 80–81
-//! high, run alternately: no gain); and plain comparisons in place of f32::min in `turn_of`, within the noise. Measured
-//! and rejected before: the row pass gathering its
-//! importance from the group's lines side by side (4 KiB, in L1) instead of from the map
-//! (64 KiB): 83.6 against 84.5 µs, within the noise.
-//!
-//! Stop 34: the fold check of eight pairs in AVX-512F (`x86::pairs_unfolded`), each row's points
-//! parted into x and y lanes: guarded warp 80.4–81.0 → 70.3–73.5 µs on gaussian high, 85.3–86.1
-//! → 77.2–78.8 on hills high, 51.1–51.5 → 49.2–50.4 on jacksboro near (run alternately, twice);
-//! and the all-mean pass's last partial store a cold call apart (`store_kept_apart`: LLVM had
-//! merged the two branches into one memcpy call per group): 51.3–51.6 → 50.8 µs near. The same
-//! in the row pass and `store_columns` made the plain warp slower then, 63 → 64 µs. Stop 37:
-//! `perf` put 4 % of the whole stage on gaussian high in that memcpy, called from
-//! `store_columns` (the points are [f32; 2], so LLVM copies them by call); with
-//! `store_kept_apart` there, the plain warp took 51–53 µs against 52–58 and the guarded 61–64
-//! against 61–66 on the high views (`benches/cpu_stage.rs`, alternately, twice). The row pass's
-//! f32 stores, inlined, keep `store_kept`. Also in stop 37: the mean column mapping is made
-//! only where a fold needs it (gaussian high, where none folds: 62–63 → 60–61 µs), and the
-//! first group's seven pairs wait for the second group, so that they are checked eight at once
-//! like the rest (one at a time they took 1–3 µs: 63–64 → 62 µs jacksboro high, 40.5–41.5 →
-//! 38–39 near). The count only decides when the shortcut is taken, and it grows the same.
-//! Measured and rejected: the guard's rounds checking the changed columns' pairs eight at once
-//! too (the high views, three runs each: 59–66 µs and one run at 73, against 59–65: no
-//! faster; a round changes a few columns).
-//!
-//! Stop 35, measured and rejected for the row pass's interpolation of the importance (run
-//! alternately with the build before, guarded warp): the importance's two samples carried
-//! forward inside the mapping kernel, as it carries u's segment ends, instead of gathered
-//! (43.7–44.6 against 43.7–44.2 µs near: the extra scatter ate the gathers saved); and taken from
-//! the lines side by side by two permutes where the eight lanes' segments lie within three
-//! samples (slower: 43.1–45.0 → 44.9–45.7 µs near, 65.2–65.7 → 67.7–69.7 hills high).
-//!
-//! Where the time goes on near views: finding that more than half of the column pairs fold
-//! (the shortcut's threshold until stop 34) took mapping 9 of the 16 groups of columns, 33 µs of
-//! the guarded warp's 74 (a build that sent every column to the mean at once, made only to
-//! measure this, took 41.5 µs). No exact test decides it sooner (a fold is known only from Φ),
-//! and a guess would change the warp wherever it guessed wrong; the threshold of an eighth,
-//! reached after about three groups, took the guarded warp from 78 to 55 µs on jacksboro and
-//! gaussian near, 85 to 60 on hills (`terrain warp sketches/S.toml --out-dir D --json
-//! --no-figures --repeat 400`, alternately, twice each).
-//!
-//! Stop 42, measured and not kept: Φ, `row_x` and `row_importance` allocated on 64-byte
-//! boundaries, so that `store_columns`' 64-byte stores (where `perf` put a tenth of the warp on
-//! jacksboro high) never straddle two cache lines: on jacksboro high, guarded 58.8 → 58.0 µs,
-//! plain 48.5 → 48.1 (`benches/cpu_stage.rs`, medians, one build after the other, one run
-//! each), within the noise.
-//!
-//! Rejected alternative, measured: two threads. Rayon's `join` over halves of the rows, of the
-//! column mappings and of Φ's rows (the row pass written row-major and transposed) took 511 µs
-//! against 459 µs on one thread (guarded, jacksboro near, when lines were mapped one by one).
-//! Handing 50 µs of work to a second thread on this VM costs more than it saves: a worker parked
-//! between frames (thread::park, woken by unpark) made two halves of 50 µs take 152 µs against
-//! 100 µs on one thread, a scoped thread spawned per frame 116 µs; a worker that never sleeps
-//! would hold a core for the whole flight. Nor does waking the worker early pay: woken as the
-//! frame starts, so that its wake-up (4 µs median) overlaps the main thread's first work, and
-//! joined by spinning, two halves took 91 µs against 94 µs for the whole on one thread (medians
-//! of 500 frames 2 ms apart), and 5.8 ms at the 90th percentile, where the VM left the worker
-//! unscheduled (a standalone program, not in the repository).
-//!
-//! Rejected alternatives: extra row/column passes over the warped image (the grid is no longer
-//! axis-aligned, and a second pass can fold what the first left intact) and always smoothing the
-//! importance (it lowers the density ratio everywhere to fix folds that occur in a few places).
-//!
-//! Local repairs tried in place of the all-columns fallback, measured with `terrain warp` on the
-//! six bundled views (share of visible cells with density ratio in [½, 1] / [½, 2]; the fallback
-//! gives jacksboro 27.2 / 98.7 %, gaussian 77.8 / 97.6 %, hills 65.5 / 98.7 %, the plain warp
-//! 77.7 / 94.2 %, 83.4 / 94.3 %, 60.0 / 89.2 % with 177, 144 and 91 flipped cells). None kept a
-//! near view off the fallback, so none is built in:
-//! - Relaxing the column mappings beside folded cells (1-2-1 averages of neighbouring columns'
-//!   mappings, repeated 4, 16 or 64 rounds) before the fallback: the near views still end with all
-//!   128 columns on the mean, 2–20× slower; the high views guard 12–24 columns instead of 8.
-//! - Blending every column mapping toward the mean by λ = ¾, ½, ¼, ⅛ first: even at ⅛ the near
-//!   views fold on 68–128 columns.
-//! - Untangling Φ where it folds (the vertices within two cells of an unsound one moved to the mean
-//!   of their four neighbours, 16–256 Gauss-Seidel sweeps): 333 unsound cells remain on jacksboro,
-//!   most in the rows behind the camera, where the region's fixed bottom edge holds the row warp's
-//!   crowded samples.
-//! - Limiting the importance gradient outside the frustum only (2^−¼ … 2^−1 per texel): the near
-//!   views still fall back, and jacksboro's ratio shifts the wrong way (12–22 % in [½, 1]).
-//! - A power mean (p = 2, 4) of the columns' importance for the mean mapping: +1–3 points in
-//!   [½, 1] on the near views (jacksboro 30.7 %, hills 68.3 %), not the 70 % aimed at.
-//!
-//! Where the near views fold: along the frustum's side edges, where the row warp crowds the
-//! columns outside the view into slivers a fraction of a metre wide that lean with the edge, and
-//! in the rows behind the camera. A sliver folds at any difference between its two columns'
-//! mappings, which is why partial relaxation does not help there.
+//! Rejected alternatives:
+//! - Moving columns toward `b̄` by halves (λ = ½, ¼, …): twice the instructions for the same share
+//!   of cells within [½, 2] (docs/decisions.md, “Guarded warp”).
+//! - Local repairs in place of the all-columns fallback (relaxing or blending the column mappings
+//!   toward the mean, untangling Φ, limiting the importance gradient outside the frustum, a power
+//!   mean for `b̄`): none kept a near view off the fallback (docs/decisions.md, “Guarded warp”).
+//! - Extra row/column passes over the warped image: the grid is no longer axis-aligned, and a
+//!   second pass can fold what the first left intact.
+//! - Always smoothing the importance: it lowers the density ratio everywhere to fix folds that
+//!   occur in a few places.
+//! - Other arrangements of the lanes (an 8×8 transpose in registers for `side_by_side`, two groups
+//!   of rows at a time in the row pass, the row pass's importance gathered from lines side by side
+//!   or carried through the mapping kernel, the guard's rounds checking pairs eight at once,
+//!   buffers on 64-byte boundaries): none faster (docs/decisions.md, “Warp in lanes of eight”).
 
 use crate::scene::WarpMethod;
 use crate::stage::lines::{
@@ -328,7 +247,7 @@ impl Warp {
         // folded: every column then follows the mean, whatever the rest would do.
         let mut folded = 0;
         // The first group's pairs wait for the second group's first column, so that they too
-        // are checked eight at once (one at a time they took 1–3 µs).
+        // are checked eight at once.
         let first_later = n > LANES;
         for s0 in (0..n).step_by(LANES) {
             self.map_columns(s0, d0);
@@ -396,9 +315,8 @@ impl Warp {
         self.follows_mean.fill(true);
         let n = self.n;
         // Every lane reads the same two samples of its column, so the columns go side by side
-        // and each output row is a plain interpolation of two rows of lanes. Gathering them
-        // (`store_columns`, as a column with its own mapping must) made the guarded warp on
-        // jacksboro near 91 µs against 84 µs this way (`benches/cpu_stage.rs`, `warp_guarded`).
+        // and each output row is a plain interpolation of two rows of lanes, cheaper than
+        // gathering them (`store_columns`, as a column with its own mapping must).
         for s0 in (0..n).step_by(LANES) {
             side_by_side(&self.row_x, n, s0, &mut self.lanes_in);
             let kept = LANES.min(n - s0);
@@ -535,10 +453,9 @@ fn store_kept<T: Copy>(dst: &mut [T], v: &[T; LANES], kept: usize) {
 }
 
 /// [`store_kept`] for `all_to_mean`, with the last group's copy of run-time length a call apart:
-/// inline, LLVM merged the two branches there into one memcpy of `kept` lanes, called for every
-/// group (5 % of the guarded warp on jacksboro near); `store_columns` too (the module doc). In
-/// the row pass the merged copy is inlined and the faster (this form took the plain warp 63 →
-/// 64 µs).
+/// inline, LLVM merges the two branches there into one memcpy of `kept` lanes, called for every
+/// group; `store_columns` too (the module doc). In the row pass the merged copy is inlined and
+/// the faster.
 #[inline(always)]
 fn store_kept_apart<T: Copy>(dst: &mut [T], v: &[T; LANES], kept: usize) {
     if kept == LANES {
@@ -640,12 +557,11 @@ fn pairs_unfolded_lanes(phi: &[[f32; 2]], n: usize, s: usize) -> [bool; LANES] {
 }
 
 /// [`pairs_unfolded_lanes`] in AVX-512F: each row's eight points and the eight beside them,
-/// loaded whole and parted into x and y, so that the eight turns are plain vector arithmetic; the
-/// interleaved points left the lane loop to shuffles, and the check took 16 µs of the guarded
-/// warp's 85 on gaussian high (a build that skipped it, made only to measure this: 69 µs). The
-/// same operations in the same order, `f32::min`'s choice of the number over NaN included: the
-/// same results. Measured and rejected: the check made in `store_columns` from the points in
-/// registers as they are stored (arrays shifted by a lane, left to LLVM): 85 → 120 µs.
+/// loaded whole and parted into x and y, so that the eight turns are plain vector arithmetic
+/// (interleaved points leave the lane loop to shuffles). The same operations in the same order,
+/// `f32::min`'s choice of the number over NaN included: the same results. Rejected: the check
+/// made in `store_columns` from the points in registers as they are stored, slower
+/// (docs/decisions.md, “Warp in lanes of eight”).
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use super::LANES;

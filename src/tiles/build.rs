@@ -580,7 +580,7 @@ fn meta_georef(g: Georef) -> MetaGeoref {
     }
 }
 
-/// The inverse of [`meta_georef`].
+/// The inverse of `meta_georef`.
 pub fn georef_of(m: &MetaGeoref) -> Georef {
     Georef {
         west: m.west,

@@ -25,7 +25,7 @@ pub struct TileHeader {
 }
 
 impl TileHeader {
-    /// Parses the first [`HEADER_BYTES`] of a tile file.
+    /// Parses the first `HEADER_BYTES` of a tile file.
     pub fn parse(path: &Path, bytes: &[u8]) -> Result<TileHeader> {
         let bad = |why: &str| Error::file(Role::Sketch, path, format!("tile {why}"));
         if bytes.len() < HEADER_BYTES {

@@ -23,8 +23,8 @@ use std::sync::{Arc, Mutex};
 
 /// Tiles the point queries ([`Pyramid::bilinear`]) keep decoded. The ground under a moving
 /// camera stays in one tile for 256 nodes (7.7 km at 30 m), and a sample reads a single tile, so
-/// a few suffice. Reading and decoding a tile takes 301 µs, a query on a kept one 35 ns
-/// (`cargo bench --bench tiles`, medians on the 2-core development VM).
+/// a few suffice: reading and decoding a tile costs thousands of queries on a kept one
+/// (docs/decisions.md, “Recent tiles kept decoded”).
 const RECENT_TILES: usize = 4;
 
 /// A decoded tile of level `.0`, column `.1`, row `.2`.

@@ -1,4 +1,5 @@
-//! `terrain batch`: many snapshots from a jobs file (DESIGN.md), unattended, on one device.
+//! `terrain batch`: many snapshots from a jobs file (`docs/design.md`, Scene and jobs files),
+//! unattended, on one device.
 //!
 //! Rules:
 //! - Items are the file's `[[job]]` tables in order, then `[random].count` random cameras named

@@ -22,8 +22,8 @@ pub struct Args {
     json: bool,
 }
 
-/// `--json`: the keys DESIGN.md fixes (`width`, `height`, `spacing_m`, `min_m`, `max_m`,
-/// `nodata`) and the cell size per axis.
+/// `--json`: the keys `docs/design.md` fixes (Command line outputs: `width`, `height`,
+/// `spacing_m`, `min_m`, `max_m`, `nodata`) and the cell size per axis.
 #[derive(Serialize)]
 struct Report {
     file: String,

@@ -51,8 +51,9 @@ pub struct Args {
 /// Renders above this many pixels show a spinner: at 16384² a frame takes a minute on llvmpipe.
 const BIG_RENDER_PIXELS: u64 = 8 << 20;
 
-/// `--json`: the keys DESIGN.md fixes (`adapter`, `mode`, `triangles`, `cpu_stage_us`, `gpu_ms`,
-/// `frame_ms`) and the rest of what the frame tells; medians over the timed frames.
+/// `--json`: the keys `docs/design.md` fixes (Command line outputs: `adapter`, `mode`, `triangles`,
+/// `cpu_stage_us`, `gpu_ms`, `frame_ms`) and the rest of what the frame tells; medians over the
+/// timed frames.
 #[derive(Serialize)]
 struct Report {
     adapter: String,
@@ -76,7 +77,7 @@ struct Report {
     gpu_memory_bytes: u64,
     frames: u32,
     output: PathBuf,
-    /// Where the camera stood and looked (docs/scene.md, [camera]).
+    /// Where the camera stood and looked (`docs/scene.md`, `[camera]`).
     camera: CameraReport,
     detail: Detail,
     /// The baselines' figures (absent for the other modes).
@@ -90,7 +91,7 @@ struct Report {
     terrain_luminance_std: Option<f64>,
 }
 
-/// The detail used, defaults resolved from the sketch included (docs/scene.md, [detail]).
+/// The detail used, defaults resolved from the sketch included (`docs/scene.md`, `[detail]`).
 #[derive(Serialize)]
 struct Detail {
     octaves: u32,

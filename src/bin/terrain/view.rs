@@ -19,7 +19,7 @@ pub struct Args {
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     frames: Option<u64>,
     /// The folder screenshots (P) and recorded paths (R) go to, under names that never
-    /// overwrite: <scene>-view-<n>.png, <scene>-flown[-<n>].toml.
+    /// overwrite: `<scene>-view-<n>.png`, `<scene>-flown[-<n>].toml`.
     #[arg(long, default_value = ".")]
     out_dir: PathBuf,
     /// The first screenshot's file (P, or on quitting after --frames); later ones go to

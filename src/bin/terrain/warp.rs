@@ -33,7 +33,8 @@ pub struct Args {
     json: bool,
 }
 
-/// `--json`: the quality figures DESIGN.md fixes and the stage's times (median of the runs).
+/// `--json`: the quality figures `docs/design.md` fixes (Command line outputs) and the stage's
+/// times (median of the runs).
 #[derive(Serialize)]
 struct Report {
     method: WarpMethod,

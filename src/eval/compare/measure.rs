@@ -149,8 +149,8 @@ impl Timed {
         self.cpu_us.is_empty()
     }
 
-    /// The row's times: the medians of these frames (DESIGN.md's frame time: CPU stage plus GPU
-    /// passes).
+    /// The row's times: the medians of these frames (`docs/design.md`, Frame time: CPU stage plus
+    /// GPU passes).
     pub fn apply(&self, row: &mut Row) {
         row.cpu_stage_us = percentile(&self.cpu_us, 0.5);
         row.gpu_ms = percentile(&self.gpu_ms, 0.5);

@@ -5,11 +5,11 @@
 //! - One device for the whole run. The reference is ray-marched once per camera and its
 //!   convergence shown: the image at half the step differs from it by at least
 //!   [`REFERENCE_CONVERGED_DB`] PSNR, the step halved (up to three times) until it does.
-//! - Per setting: a warm-up frame, then a frame whose image and positions are measured. The
-//!   times are the medians of `repeat` frames (DESIGN.md's frame time: CPU stage plus GPU
-//!   passes) taken side by side once all are measured, a frame of every setting a round
-//!   ([`rounds`]); a setting whose renderer does not fit [`Options::keep_bytes`] has its frames
-//!   timed one after another as it is measured.
+//! - Per setting: a warm-up frame, then a frame whose image and positions are measured. The times
+//!   are the medians of `repeat` frames (`docs/design.md`, Frame time: CPU stage plus GPU passes)
+//!   taken side by side once all are measured, a frame of every setting a round ([`rounds`]); a
+//!   setting whose renderer does not fit [`Options::keep_bytes`] has its frames timed one after
+//!   another as it is measured.
 //! - Every renderer is built with its position attachment on, so all modes carry the same one
 //!   extra RGBA8 write per pixel. GeoMipMap settings of one block size share one baked grid.
 //! - The default sweep's warped rows at GeoMipMap's budgets (`sweep::at_geomipmap_budgets`) run

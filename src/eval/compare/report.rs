@@ -172,7 +172,8 @@ pub fn mark_fronts(rows: &mut [Row]) {
     }
 }
 
-/// `report.json`: everything one run measured. The keys DESIGN.md and the README name stay.
+/// `report.json`: everything one run measured. The keys `docs/design.md` (Command line
+/// outputs) and the README name stay.
 #[derive(Debug, Serialize)]
 pub struct Report {
     pub scene: String,

@@ -13,17 +13,9 @@
 //!
 //! Why: timed alone, one setting after another, a row's frames fall within a second or two,
 //! and this VM's speed drifts over a run by more than the differences `compare` is asked to
-//! tell apart. Measured (`render sketches/jacksboro.toml --size 256 --repeat 10 --json`, the
-//! median `gpu_ms` plus the CPU stage of 10 frames, four settings alternately, 8 times): warped
-//! at mesh 48 fixed 15.34 ms, GeoMipMap at τ 8 with blocks of 65 15.89 ms, blocks of 33
-//! 15.97 ms; four invocations of warped at mesh 48 alone ranged over 16.2–20.1 ms. Timed alone
-//! in `compare` (stop 44: five frames, three runs of the six bundled views), jacksboro's rows
-//! at τ 8 came out either way. Five rounds left frame-to-frame noise of 2–3 % in a row (the six
-//! views once: misses of 1.006–1.023× GeoMipMap's time); fifteen are the default. What they
-//! leave (stop 45, the six bundled views at 256²): GeoMipMap's τ 4 and τ 8 at blocks of 33 on
-//! gaussian-high, one renderer drawing the same 2,048 triangles, read 28.45 and 31.36 ms with
-//! 15 rounds, 27.57 and 28.58 ms with 45. The rounds remove a run's drift, not the spread of
-//! single frames on this VM.
+//! tell apart. Fifteen rounds are the default. The rounds remove a run's drift, not the spread of
+//! single frames on this VM (docs/decisions.md, “Timing in rounds”).
+//!
 //! Rejected alternative: one renderer per mode, its setting changed between frames: a warped
 //! renderer's buffers are sized for its `warp.mesh`, so that would time small meshes in buffers
 //! sized for another.

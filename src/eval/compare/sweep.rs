@@ -8,10 +8,9 @@
 //! - then, where GeoMipMap ran too, warped at GeoMipMap's budgets: for each GeoMipMap row, the
 //!   largest fixed mesh with no more triangles than it drew ([`at_geomipmap_budgets`]), unless a
 //!   warped row drew as many already. The acceptance asks, row by row, whether warped has less
-//!   error at no more triangles; on the ladder alone a warped curve below GeoMipMap's missed rows
-//!   that fell just above a rung (interpolated log-log between the rungs, warped needed 0.76–0.98×
-//!   the triangles of 13 of the 29 GeoMipMap rows it missed over the six bundled views), so the
-//!   answer depended on the ladder's spacing. A ladder twice as fine would double the warped rows
+//!   error at no more triangles; on the ladder alone a warped curve below GeoMipMap's misses rows
+//!   that fall just above a rung, so the answer would depend on the ladder's spacing
+//!   (docs/decisions.md, “Warped sweep”). A ladder twice as fine would double the warped rows
 //!   and still land beside GeoMipMap's counts, not on them.
 //! - GeoMipMap over τ 0.5, 1, 2, 4, 8 px at blocks of 17, 33 and 65 vertices;
 //! - brute force over grid spacings d_atlas/2^K for K = 0 up to the finest the device and the
@@ -21,17 +20,13 @@
 //!   paper's triangles split the other ways: 256 × 40 and 128 × 80.
 //!
 //! Rejected alternatives:
-//! - A fixed list of mesh bounds (64² … 1024² at `quad_px` 2, and `quad_px` 1 and 4 at 512²),
-//!   the sweep until stop 30. Every bound above the view's own demand draws the same mesh: on
-//!   the bundled views at 256², four of its ten warped rows repeated one another (92,450
-//!   triangles on gaussian and hills), while the lowest row (7,938 triangles) lay above
-//!   GeoMipMap's lowest (6,343) and the steps between 8k and 92k were an octave of triangles
-//!   apart, too coarse to tell whether warped beats GeoMipMap between them.
-//! - Bounds up to the view's own mesh, then `quad_px` ÷√2, ÷2, ÷2√2 above it. With the
-//!   geometric-error term the view asks for much less than `quad_px` alone would (jacksboro-high
-//!   at 256²: 32², 1,922 triangles), and lowering `quad_px` raises only the part of the
-//!   importance the error term does not set: its rows jumped from 1,922 to 7,938 to 40,898
-//!   triangles.
+//! - A fixed list of mesh bounds (64² … 1024² at `quad_px` 2, and `quad_px` 1 and 4 at 512²):
+//!   every bound above the view's own demand draws the same mesh, and its steps are too coarse
+//!   to tell whether warped beats GeoMipMap between them (docs/decisions.md, “Warped sweep”).
+//! - Bounds up to the view's own mesh, then `quad_px` ÷√2, ÷2, ÷2√2 above it: with the
+//!   geometric-error term lowering `quad_px` raises only the part of the importance the error
+//!   term does not set, so the rows jump by octaves of triangles (docs/decisions.md, “Warped
+//!   sweep”).
 //! - The full product of `quad_px` and mesh size. `quad_px` scales the view importance
 //!   everywhere alike, and the warp normalises importance to the mesh it has, so at a fixed mesh
 //!   it changes Φ only where the surface bound `I_s` or the floor clip the importance.
@@ -249,7 +244,7 @@ fn warped_sweep(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<Vec<Set
 
 /// The warped rows at GeoMipMap's budgets (at `quad_px`, the scene's), run after the default
 /// sweep when both modes ran: for each GeoMipMap row, the largest fixed mesh (up to
-/// [`MAX_MESH`]) with no more triangles than the row drew, unless a warped row already drew as
+/// `MAX_MESH`) with no more triangles than the row drew, unless a warped row already drew as
 /// many (the module doc's rule).
 pub fn at_geomipmap_budgets(quad_px: f64, rows: &[Row]) -> Vec<Setting> {
     let drawn = |t: u64| rows.iter().any(|r| r.mode == "warped" && r.triangles == t);

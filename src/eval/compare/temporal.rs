@@ -11,9 +11,8 @@
 //! control.
 //!
 //! Rejected alternative: reprojecting frame t − 1's error image (mode − reference) into frame t
-//! through the reference's positions and differencing. It was built and measured first: its
-//! floor from resampling the per-pixel detail's error (brute force scored 11.7 levels on the
-//! gaussian scene, GeoMipMap 12.0, warped 7.9) swamps what it was to find.
+//! through the reference's positions and differencing: its floor from resampling the per-pixel
+//! detail's error swamps what it is to find (docs/decisions.md, “LOD change between frames”).
 
 /// A change a viewer sees on a still image: 2 % of the 8-bit range.
 pub const VISIBLE_LEVELS: u8 = 5;
