@@ -119,13 +119,19 @@ adapter() {
   printf '%s' "$ADAPTER"
 }
 
-# The line above every table: what ran it, when, from which commit, and the command.
+# The line above every table: what ran it, when, from which commit, and the command. A second
+# argument, cpu, names the processor instead of the adapter, for tables that render nothing.
 head_line() {
-  local commit
+  local commit machine
+  if [ "${2:-}" = cpu ]; then
+    machine="$(nproc) cores, $(awk -F': ' '/model name/ { print $2; exit }' /proc/cpuinfo 2>/dev/null || echo 'CPU')"
+  else
+    machine=$(adapter)
+  fi
   commit=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
   if ! git diff --quiet HEAD 2>/dev/null; then commit="$commit+changes"; fi
   printf '\n*%s: %s, %s, commit %s; `scripts/evaluate.sh %s`*\n\n' \
-    "$1" "$(adapter)" "$(date -u +%F)" "$commit" "$1"
+    "$1" "$machine" "$(date -u +%F)" "$commit" "$1"
 }
 
 # `terrain compare` into $OUT/compare/KEY, once per run of this script for the same KEY.
@@ -222,7 +228,7 @@ HILLS_EAST=(--set 'camera.position=[500.0,3500.0,760.0]' --set 'camera.look_at=[
 # The tables, one function each (table-NAME).
 
 table-density-ratio() {
-  head_line density-ratio
+  head_line density-ratio cpu
   echo '| scene | method | visible cells | their demand met | ratio in [½, 2] | in [½, 1] | flipped | guarded columns |'
   echo '|---|---|---|---|---|---|---|---|'
   local v m
@@ -235,7 +241,7 @@ table-density-ratio() {
 }
 
 table-ratio-band() {
-  head_line ratio-band
+  head_line ratio-band cpu
   echo '| view | within √2 of the demand | cells in [0.71, 1) | in [1, 1.41) | median ratio | r in [1, 2] (demanded over obtained in [½, 1]) |'
   echo '|---|---|---|---|---|---|'
   local v
@@ -249,7 +255,7 @@ table-ratio-band() {
 }
 
 table-heading-sweep() {
-  head_line heading-sweep
+  head_line heading-sweep cpu
   local a d line1="| demand met, axes along x and y |" line2="| demand met, turned past 30° |" line3="| within [½, 1], axes / turned |"
   local -a set
   for a in 0 10 20 30 35 40 45; do
@@ -410,7 +416,7 @@ table-reference-convergence() {
 }
 
 table-cpu-stage() {
-  head_line cpu-stage
+  head_line cpu-stage cpu
   cargo bench --bench cpu_stage >>"$LOG" 2>&1
   echo '| view | stage | stage, held | sketch map | importance | warp (guarded) | warp (plain) |'
   echo '|---|---|---|---|---|---|---|'
@@ -435,7 +441,7 @@ table-cpu-stage() {
 }
 
 table-error-term-cost() {
-  head_line error-term-cost
+  head_line error-term-cost cpu
   echo '| jacksboro near | importance | stage |'
   echo '|---|---|---|'
   local e
@@ -502,7 +508,7 @@ EOF
 }
 
 table-tiles-read() {
-  head_line tiles-read
+  head_line tiles-read cpu
   cargo bench --bench tiles >>"$LOG" 2>&1
   echo '| benchmark | median |'
   echo '|---|---|'
@@ -646,7 +652,7 @@ table-planet-flight() {
 }
 
 table-fold-census() {
-  head_line fold-census
+  head_line fold-census cpu
   cargo run --release --example fold_census 2>>"$LOG"
 }
 
@@ -739,6 +745,6 @@ for t in "${WANTED[@]}"; do
 done
 {
   echo
-  echo "Time per table ($(adapter)):"
+  echo "Time per table${ADAPTER:+ ($ADAPTER)}:"
   printf '  %s\n' "${TIMES[@]}"
 } >&2
