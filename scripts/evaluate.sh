@@ -174,12 +174,12 @@ row() {
 }
 
 # Rounds a number to D decimals ("—" passes through).
-fix() { awk -v d="$1" -v x="$2" 'BEGIN { if (x == "—" || x == "null") print "—"; else printf "%.*f\n", d, x }'; }
+fix() { awk -v d="$1" -v x="${2:-}" 'BEGIN { if (x == "—" || x == "null" || x == "") print "—"; else printf "%.*f\n", d, x }'; }
 
 # The path's mean of FIELD for MODE (its setting at the scene's own quality).
 path_mean() {
   jq -r --arg m "$2" --arg f "$3" \
-    '[.path.modes[] | select(.mode == $m) | .[$f].mean] | if length == 0 then "—" else .[0] end' \
+    '[(.path.modes // [])[] | select(.mode == $m) | .[$f].mean] | if length == 0 then "—" else .[0] end' \
     "$1/report.json"
 }
 
@@ -311,10 +311,11 @@ table-compare-summary() {
     jq -r --arg v "$v" '
       def ms: if . == null then null else (. * 1 | round | tostring) + " ms" end;
       def best($m): [.rows[] | select(.mode == $m) | .psnr_db] | max | fx(1);
+      def name: {warped: "warped", geomipmap: "GeoMipMap", bruteforce: "brute force"}[.] // .;
       . as $r | .summary.budget_ms as $b
       | .summary.modes | to_entries[]
       | .key as $i | .value as $s
-      | "| \(if $i == 0 then $v else "" end) | \($s.mode) | \(if $s.ms_to_30db == null then "not reached (best \($r | best($s.mode)) dB)" else "\($s.ms_to_30db | ms) (\($s.setting_30db))" end) | \(if $s.ms_to_1px == null then "not reached" else "\($s.ms_to_1px | ms) (\($s.setting_1px))" end) | \($s.psnr_at_budget_db | fx(1)) dB, \($s.sse_at_budget_px | fx(2)) px\(if $i == 0 then " at \($b | ms)" else "" end) |"' \
+      | "| \(if $i == 0 then $v else "" end) | \($s.mode | name) | \(if $s.ms_to_30db == null then "not reached (best \($r | best($s.mode)) dB)" else "\($s.ms_to_30db | ms) (\($s.setting_30db))" end) | \(if $s.ms_to_1px == null then "not reached" else "\($s.ms_to_1px | ms) (\($s.setting_1px))" end) | \($s.psnr_at_budget_db | fx(1)) dB, \($s.sse_at_budget_px | fx(2)) px\(if $i == 0 then " at \($b | ms)" else "" end) |"' \
       "$dir/report.json"
   done
 }
