@@ -48,8 +48,8 @@ fn mesh_xy(ij: vec2<i32>) -> vec2<f32> {
 // keeps its vertices where Φ puts them: its rows cross the sketch's edges at 45°, and a vertex
 // moved onto an edge across them can turn its cell over. Rejected: each moved along its column
 // (the region's t axis) to where the column meets the edge, worst at the near corner, where the
-// columns change from one edge to the other (docs/decisions.md, “Turned region's vertices beyond
-// the sketch”).
+// columns change from one edge to the other (docs/decisions.md, “Mesh ends at the
+// sketch's edge”).
 fn drawn_xy(p: vec2<f32>) -> vec2<f32> {
     if (frame.mesh.phi_s.y != 0.0) {
         return p;

@@ -29,8 +29,8 @@
 //! pixel (its 2×2 Jacobian by differences with the neighbouring ground pixels), the step held
 //! within a pixel each way. Rejected: the nearest pixel alone. It counts every error under half a
 //! pixel as 0 and every one just over as 1, so from high up, where the errors are small, which
-//! mode wins a row is decided by which pixels happen to round (docs/decisions.md, “Sub-pixel
-//! screen-space error”).
+//! mode wins a row is decided by which pixels happen to round (docs/decisions.md, “Screen-space
+//! error to a fraction of a pixel”).
 //!
 //! Rejected alternative: projecting the mode's point onto the reference surface vertically. It
 //! needs the terrain function on the CPU per pixel and says nothing at silhouettes.

@@ -242,12 +242,12 @@ pub const FINEST_WAVELENGTH_M: f64 = 0.1;
 /// Why −1: sampling an octave at its own wavelength aliases between vertices, but the vertices
 /// are then exact, and that outweighs it; with the geometric-error term a bias of 0 (the Nyquist
 /// octave) finds the ground flatter and asks for too few triangles (docs/decisions.md, “Detail
-/// bias −1”).
+/// bias”).
 ///
 /// Rejected: one GeoMipMap default for both storages (k 0, bias 0 in memory too): a sketch and
 /// its pyramid would then draw one picture in GeoMipMap as well, but the baseline every
 /// comparison measures the warped mode against grows weaker in memory (docs/decisions.md,
-/// “Detail bias −1”). For planets, −1: the clipmap rings slide with the nadir every frame, and
+/// “Detail bias”). For planets, −1: the clipmap rings slide with the nadir every frame, and
 /// −1 swims more for little PSNR.
 pub fn default_bias(scene: &Scene, atlas: &crate::sketch::Atlas, mode: Mode) -> f64 {
     if scene.planet().is_some() {
@@ -589,7 +589,7 @@ crate::named_enum! {
     /// the adapter's targets allow it) and four rays per pixel in the reference.
     pub enum Msaa ("msaa") {
         /// 4× on a hardware GPU; off on a software rasterizer, where it costs several times
-        /// the terrain pass (docs/decisions.md, “Multisampling on hardware only”).
+        /// the terrain pass (docs/decisions.md, “Multisampling”).
         Auto = "auto",
         Off = "off",
         X4 = "4x",
@@ -601,7 +601,7 @@ crate::named_enum! {
 ///
 /// The defaults split the paper's triangles (512 × 20) the other way, 256 bearings × 40 rings a
 /// level: a ring's vertices a level apart matter more than its bearings (docs/decisions.md,
-/// “Planet rings”).
+/// “Clipmap rings”).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlanetSection {

@@ -25,7 +25,7 @@
 //!   levels' mean curvature at `1/I_v` less at the map's spacing, `Atlas::level_curvature`).
 //!   From high up the map's texels are several of the DEM's, whose mean curvature grows at each
 //!   finer level: without `SubTexel` the map calls flat the plateaus whose drainage the mesh then
-//!   misses (docs/decisions.md, “Geometric-error importance”).
+//!   misses (docs/decisions.md, “Geometric-error term”).
 //! - Computed in f32 relative to the region's corner, along its axes; world-scale values never
 //!   enter the loop. A turned region (`stage::sketch_map::Turn`) has the eye and the frustum's
 //!   planes turned into its frame, and each of its rows finds its own texels on the atlas
@@ -47,10 +47,10 @@
 //!
 //! Rejected alternatives:
 //! - The sketch's curvature as a constant everywhere: it adds to the near views too, where the
-//!   map is as fine as the sketch (docs/decisions.md, “Geometric-error importance”).
+//!   map is as fine as the sketch (docs/decisions.md, “Geometric-error term”).
 //! - Other shapes of the term (I_g's contrast halved or ¾ of it, the mean-error optimum
 //!   `√(I_g·I_v)`, κ's error projected across the ray) and the term off: none matches more
-//!   GeoMipMap rows on triangles and error (docs/decisions.md, “Geometric-error importance”).
+//!   GeoMipMap rows on triangles and error (docs/decisions.md, “Geometric-error term”).
 //! - One fused pass over eight texels at a time in `[f32; 8]` arrays (LLVM leaves it scalar);
 //!   fewer divisions per texel (the loop is bound by its other arithmetic, and the bits would
 //!   change); each row computed only over the texels possibly in view (row lengths that change

@@ -143,7 +143,7 @@ impl Heading {
 
 /// How far from its centre each heading reaches, in degrees: an axis 30° each way, a diagonal
 /// 15°: the turned region gains nothing within 25° of an axis, and equal reaches (22.5° each)
-/// turn views that an axis serves better (docs/decisions.md, “Heading reaches”).
+/// turn views that an axis serves better (docs/decisions.md, “Turned region”).
 fn reach(h: Heading) -> f64 {
     match h {
         Heading::North | Heading::East => 30.0,
