@@ -1,6 +1,7 @@
 #!/bin/sh
-# What each picture feature costs: the terrain pass of jacksboro at 512², before issue 14 and now,
-# feature by feature, each line adding to the one above (the README's cost table).
+# What each picture feature costs: the terrain pass of jacksboro at 512², in a build from before
+# the picture features (commit 3418a4d) and in this one, feature by feature, each line adding to
+# the one above (docs/evaluation.md, What each feature costs).
 #   OUT=/tmp NOW=target/release/terrain BEFORE=<a build of 3418a4d> REPEAT=30 sh scripts/feature-costs.sh
 j() { grep -o "\"$1\":[^,}]*" | head -1 | cut -d: -f2; }
 run() {

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Issue 14's picture figures on the bundled views, printed as Markdown tables.
+"""The picture figures on the bundled views (contrast, PSNR and SNR, the jagged edge), printed as
+Markdown tables.
 
   python3 scripts/picture-figures.py --terrain target/release/terrain [--before OLD] [--size 256]
 
@@ -10,7 +11,7 @@ reference's variance over the mean squared difference, dB: PSNR corrected for th
 contrast); and the jagged-edge
 error: PSNR of each mesh mode, multisampled off and 4x, against the reference supersampled 4x.
 With --before, the first two are also measured with another build (e.g. one from before the
-work) side by side. Needs numpy and Pillow.
+picture features, commit 3418a4d) side by side. Needs numpy and Pillow.
 """
 import argparse, os, subprocess, sys, tempfile
 import numpy as np
