@@ -317,3 +317,63 @@ fn the_reference_check_tells_a_work_step_from_ordinary_words() {
     assert!(outside_reference("docs/design.md, Importance").is_none());
     assert!(outside_reference(&["see DES", "IGN.md"].concat()).is_some());
 }
+
+/// The titles that pointers into docs/decisions.md name: the file's name, a comma and the title
+/// in curly quotes, a pointer possibly wrapped onto the next comment line.
+fn decision_pointers(text: &str) -> Vec<String> {
+    let joined: String = text
+        .lines()
+        .map(|l| {
+            let t = l.trim_start();
+            let t = ["//!", "///", "//", "#"]
+                .iter()
+                .find_map(|m| t.strip_prefix(m))
+                .unwrap_or(t);
+            t.trim().to_string()
+        })
+        .collect::<Vec<_>>()
+        .join(" ");
+    let mut titles = Vec::new();
+    for (at, _) in joined.match_indices("decisions.md") {
+        let rest = &joined[at..];
+        let Some(open) = rest.find('“') else {
+            continue;
+        };
+        if open > 40 {
+            continue;
+        }
+        let title = &rest[open + '“'.len_utf8()..];
+        if let Some(close) = title.find('”') {
+            titles.push(title[..close].to_string());
+        }
+    }
+    titles
+}
+
+#[test]
+fn every_pointer_into_the_decisions_names_an_entry() {
+    let decisions = std::fs::read_to_string(manifest_dir().join("docs/decisions.md")).unwrap();
+    let entries: BTreeSet<&str> = decisions
+        .lines()
+        .filter_map(|l| l.strip_prefix("## "))
+        .map(str::trim)
+        .collect();
+    let mut missing = Vec::new();
+    let mut pointers = 0;
+    for file in own_text_files() {
+        let Ok(text) = std::fs::read_to_string(&file) else {
+            continue;
+        };
+        for title in decision_pointers(&text) {
+            pointers += 1;
+            if !entries.contains(title.as_str()) {
+                missing.push(format!("{}: “{title}”", file.display()));
+            }
+        }
+    }
+    assert!(
+        pointers > 20,
+        "only {pointers} pointers found: is the parser right?"
+    );
+    assert!(missing.is_empty(), "no such entry:\n{}", missing.join("\n"));
+}
