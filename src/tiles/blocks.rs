@@ -24,7 +24,6 @@
 //! before GeoMipMap could stream would have none.
 
 use super::{META, Pyramid};
-use crate::app::progress::Progress;
 use crate::error::{Error, Result, Role};
 use crate::geomipmap::{MAX_LEVELS, block_stats};
 use std::hash::{Hash, Hasher};
@@ -60,7 +59,7 @@ pub fn block_stats_of(
         return Ok(stats);
     }
     let stats = measure(pyramid, cells, per_side, water)?;
-    if let Err(e) = crate::app::output::write_atomic(&path, &encode(&stats, key))
+    if let Err(e) = crate::io::write_atomic(&path, &encode(&stats, key))
         && std::env::var_os("TERRAIN_QUIET").is_none()
     {
         eprintln!("note: GeoMipMap's block figures are measured again next run: {e}");
@@ -277,7 +276,7 @@ pub fn measure(pyramid: &Pyramid, cells: usize, per_side: usize, water: f32) -> 
         strips.cols = (0..cells * per_side + 1)
             .map(|i| strips.taps(i, 0, m.levels[0][0]))
             .collect();
-        let mut progress = Progress::new("GeoMipMap blocks", per_side as f64);
+        let mut progress = crate::progress::start("GeoMipMap blocks", Some(per_side as f64));
         let batch = 16 * threads;
         for first in (0..per_side).step_by(batch) {
             let rows = first..(first + batch).min(per_side);
@@ -294,7 +293,7 @@ pub fn measure(pyramid: &Pyramid, cells: usize, per_side: usize, water: f32) -> 
         };
         let last_row = m.levels[0][1] - 1;
         let (_, tiles_y) = m.tiles(0);
-        let mut progress = Progress::new("GeoMipMap blocks", tiles_y as f64);
+        let mut progress = crate::progress::start("GeoMipMap blocks", Some(tiles_y as f64));
         let mut next = 0;
         for ty in 0..tiles_y {
             let rows: Vec<usize> = (next..per_side)

@@ -107,6 +107,7 @@ fn main() {
             std::process::exit(USAGE);
         }
     };
+    terrain::progress::set_reporter(Box::new(terrain::app::progress::Bars));
     let result = match cli.command {
         Command::Info(a) => info::run(a),
         Command::Tiles(a) => tiles::run(a),
