@@ -9,6 +9,10 @@
 //! procedural model both sides share. [`eval`] measures images against the reference
 //! (`compare`); [`app`] holds the jobs users run (fly, batch, the window) and what they share
 //! (outputs, progress, camera paths).
+//!
+//! Outside [`app`], [`eval`] and the binary the library prints nothing and writes no file it was
+//! not asked to: its notes go through the `log` crate (the binary prints them as `note:` lines),
+//! its long work reports to [`progress`], and neither reaches into [`app`] or [`eval`].
 
 pub mod app;
 pub mod camera;

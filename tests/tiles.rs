@@ -47,7 +47,6 @@ fn write_asc(
 }
 
 fn convert(src: &Path, out: &Path) -> terrain::tiles::BuildSummary {
-    unsafe { std::env::set_var("TERRAIN_QUIET", "1") };
     build(src, out, &BuildOptions::default())
         .unwrap_or_else(|e| panic!("tiles {}: {e}", src.display()))
 }
@@ -147,7 +146,6 @@ fn a_coarser_level_stands_in_for_a_pyramid_beyond_the_cell_limit() {
     let out = dir.join("pyramid");
     convert(&src, &out);
     let atlas = Atlas::load(&src, &LoadOptions::default()).unwrap();
-    unsafe { std::env::set_var("TERRAIN_QUIET", "1") };
     let g = terrain::tiles::read::raw_grid_within(&out, 150 * 150).unwrap();
     assert_eq!((g.width, g.height), (150, 150));
     assert_eq!((g.dx, g.dy), (60.0, 60.0));

@@ -59,10 +59,8 @@ pub fn block_stats_of(
         return Ok(stats);
     }
     let stats = measure(pyramid, cells, per_side, water)?;
-    if let Err(e) = crate::io::write_atomic(&path, &encode(&stats, key))
-        && std::env::var_os("TERRAIN_QUIET").is_none()
-    {
-        eprintln!("note: GeoMipMap's block figures are measured again next run: {e}");
+    if let Err(e) = crate::io::write_atomic(&path, &encode(&stats, key)) {
+        log::info!("GeoMipMap's block figures are measured again next run: {e}");
     }
     Ok(stats)
 }

@@ -25,6 +25,7 @@ mod compare;
 mod fly;
 mod height;
 mod info;
+mod notes;
 mod render;
 mod scene;
 mod tiles;
@@ -107,6 +108,8 @@ fn main() {
             std::process::exit(USAGE);
         }
     };
+    // The library prints nothing: its notes and progress are shown here.
+    notes::install();
     terrain::progress::set_reporter(Box::new(terrain::app::progress::Bars));
     let result = match cli.command {
         Command::Info(a) => info::run(a),
