@@ -555,6 +555,8 @@ fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path, water: f64)
     use terrain::lod::baseline::Baselines;
     use terrain::render::Renderer;
     use terrain::scene::Mode;
+    // Kept in the folder, as the binary asks (the library alone writes no file).
+    terrain::tiles::blocks::set_keep_figures(true);
     // k = 0: over a pyramid the grid is the sketch at its own spacing; the sketch in memory bakes
     // the same grid. 4 MiB of pages: the first frame stands in.
     let mut streamed = jacksboro_scene(pyr, "[geomipmap]\nk = 0\n[stream]\ngpu_mb = 4");
