@@ -13,7 +13,6 @@ fn bench_tiles(c: &mut Criterion) {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("sketches/jacksboro_fault_dem.asc");
     let out = std::env::temp_dir().join(format!("terrain-bench-tiles-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
-    unsafe { std::env::set_var("TERRAIN_QUIET", "1") };
     let opts = BuildOptions {
         load: Default::default(),
         threads: 1,

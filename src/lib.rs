@@ -9,6 +9,10 @@
 //! procedural model both sides share. [`eval`] measures images against the reference
 //! (`compare`); [`app`] holds the jobs users run (fly, batch, the window) and what they share
 //! (outputs, progress, camera paths).
+//!
+//! Outside [`app`], [`eval`] and the binary the library prints nothing and writes no file it was
+//! not asked to: its notes go through the `log` crate (the binary prints them as `note:` lines),
+//! its long work reports to [`progress`], and neither reaches into [`app`] or [`eval`].
 
 pub mod app;
 pub mod camera;
@@ -17,10 +21,12 @@ pub mod error;
 pub mod eval;
 pub mod geomipmap;
 pub mod gpu;
+pub mod io;
 pub mod light;
 pub mod lod;
 pub mod names;
 pub mod planet;
+pub mod progress;
 pub mod query;
 pub mod render;
 pub mod scene;

@@ -277,11 +277,9 @@ impl Renderer {
                 break;
             }
         }
-        if let Some(st) = frame.stream.filter(|s| s.stand_in)
-            && std::env::var_os("TERRAIN_QUIET").is_none()
-        {
-            eprintln!(
-                "note: {} tiles this view needs do not fit the {} pages of stream.gpu_mb: \
+        if let Some(st) = frame.stream.filter(|s| s.stand_in) {
+            log::info!(
+                "{} tiles this view needs do not fit the {} pages of stream.gpu_mb: \
                  coarser levels stand in for them",
                 st.missing,
                 self.stream_pages().unwrap_or(0)

@@ -1,28 +1,24 @@
-//! Writing outputs atomically: into a temporary file beside the target, then renamed over it, so a
-//! reader never sees half a file and a crash leaves the old one (or none), never a torn one.
+//! The program's outputs: images by extension, CSV rows, `.npy`, each written atomically and
+//! several together through [`crate::io`] (re-exported here).
 //!
 //! Rules:
 //! - Every writer creates the output's folder first: `-o out/x.png` on a fresh clone, where `out/`
 //!   does not exist, works like every `--out-dir`.
 //! - An image's format comes from its extension (`.png`, `.jpg`/`.jpeg`); any other extension is
 //!   refused before anything is rendered, never written as PNG bytes under a foreign name.
-//! - A command with several outputs stages them all ([`Staged`]) and renames them into place only
-//!   once every one is written, so when one fails (a missing folder that cannot be made, a full
-//!   disk) none is left behind.
+//! - A command with several outputs stages them all ([`Staged`], [`add_image`]) and renames them
+//!   into place only once every one is written, so when one fails none is left behind.
 //!
 //! CSV goes through the csv crate (rows as serde structs, so a header cannot drift from its
 //! cells). `.npy` is written by hand, 20 lines: npyz (0.8) writes the shape as `(32, 48, 4, )`,
 //! which NumPy reads but never writes, so files would differ from `numpy.save`'s and from what
 //! scripts that read the header text expect (the tests among them).
-//!
-//! Rejected alternative: the `tempfile` crate's `NamedTempFile::persist`. It renames one file;
-//! the all-or-nothing commit of several is what this module is for, and the temporary name
-//! beside the target (same file system, so `rename` is atomic) is two lines.
 
 use crate::app::progress::Progress;
 use crate::error::{Error, Result, Role};
+pub use crate::io::{Staged, create_folder, create_parent, write_atomic};
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Images above this many pixels show their encoding's progress.
 const PROGRESS_PIXELS: u64 = 8 << 20;
@@ -59,85 +55,16 @@ impl ImageFormat {
     }
 }
 
-fn temporary(path: &Path) -> PathBuf {
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
-    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
-}
-
-/// Creates the folder `path` will be written into.
-pub fn create_parent(path: &Path) -> Result<()> {
-    match path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        Some(dir) => create_folder(dir),
-        None => Ok(()),
-    }
-}
-
-/// Creates an output folder and its parents.
-pub fn create_folder(dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(Role::OutputFolder, dir, e))
-}
-
-fn write_temporary(path: &Path, bytes: &[u8]) -> Result<PathBuf> {
-    create_parent(path)?;
-    let tmp = temporary(path);
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()
-    })();
-    match result {
-        Ok(()) => Ok(tmp),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(Error::io(Role::Output, path, e))
-        }
-    }
-}
-
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let mut staged = Staged::default();
-    staged.add(path, bytes)?;
-    staged.commit()
-}
-
-/// Outputs written to temporary files, renamed into place together by [`Staged::commit`];
-/// dropped uncommitted, they are removed.
-#[derive(Default)]
-pub struct Staged {
-    files: Vec<(PathBuf, PathBuf)>,
-}
-
-impl Staged {
-    pub fn add(&mut self, path: &Path, bytes: &[u8]) -> Result<()> {
-        let tmp = write_temporary(path, bytes)?;
-        self.files.push((tmp, path.to_path_buf()));
-        Ok(())
-    }
-
-    /// Encodes an image in the format of `path`'s extension and stages it.
-    pub fn add_image(&mut self, path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<()> {
-        let bytes = encode_image(path, width, height, rgba)?;
-        self.add(path, &bytes)
-    }
-
-    /// Renames every staged file over its target.
-    pub fn commit(mut self) -> Result<()> {
-        for (tmp, path) in std::mem::take(&mut self.files) {
-            std::fs::rename(&tmp, &path).map_err(|e| {
-                let _ = std::fs::remove_file(&tmp);
-                Error::io(Role::Output, &path, e)
-            })?;
-        }
-        Ok(())
-    }
-}
-
-impl Drop for Staged {
-    fn drop(&mut self) {
-        for (tmp, _) in &self.files {
-            let _ = std::fs::remove_file(tmp);
-        }
-    }
+/// Encodes an image in the format of `path`'s extension and stages it.
+pub fn add_image(
+    staged: &mut Staged,
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgba: &[u8],
+) -> Result<()> {
+    let bytes = encode_image(path, width, height, rgba)?;
+    staged.add(path, &bytes)
 }
 
 /// Encodes 8-bit RGBA pixels in the format `path` names (PNG or JPEG).
@@ -252,6 +179,7 @@ pub fn write_npy_f64(path: &Path, shape: &[usize], values: &[f64]) -> Result<()>
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::PathBuf;
 
     fn scratch(name: &str) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
@@ -306,28 +234,6 @@ mod tests {
             "{e}"
         );
         assert!(!dir.join("d.webp").exists());
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
-
-    #[test]
-    fn staged_outputs_land_together_or_not_at_all() {
-        let dir = scratch("staged");
-        std::fs::create_dir_all(&dir).unwrap();
-        // A file where the second output's folder should be: that folder cannot be made.
-        std::fs::write(dir.join("blocked"), b"").unwrap();
-        let mut s = Staged::default();
-        s.add(&dir.join("one.txt"), b"1").unwrap();
-        assert!(s.add(&dir.join("blocked/two.txt"), b"2").is_err());
-        drop(s);
-        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
-        assert_eq!(left.len(), 1, "only `blocked` remains: {left:?}");
-
-        let mut s = Staged::default();
-        s.add(&dir.join("one.txt"), b"1").unwrap();
-        s.add(&dir.join("sub/two.txt"), b"2").unwrap();
-        assert!(!dir.join("one.txt").exists());
-        s.commit().unwrap();
-        assert_eq!(std::fs::read(dir.join("sub/two.txt")).unwrap(), b"2");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

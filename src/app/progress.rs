@@ -6,7 +6,8 @@
 //! draws nothing, so a plain line is printed at most every `LOG_EVERY` and at the end, and logs
 //! stay short. Items of unequal cost advance the bar by their `work`, so the estimate (indicatif's,
 //! from the rate of work done) weighs a 1024² setting of `compare` above a 256² one.
-//! `TERRAIN_QUIET` silences both (the tests set it).
+//! `TERRAIN_QUIET` silences both (the tests set it). [`Bars`] shows the library's progress
+//! ([`crate::progress`]) the same way; the binary installs it.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::{IsTerminal, Write};
@@ -163,6 +164,34 @@ impl Spinner {
             }
             None => {}
         }
+    }
+}
+
+/// The library's progress as bars (work with a total) and spinners (one long step).
+pub struct Bars;
+
+impl crate::progress::Progress for Bars {
+    fn start(&self, what: &str, total: Option<f64>) -> Box<dyn crate::progress::Task> {
+        match total {
+            Some(total) => Box::new(Progress::new(what, total)),
+            None => Box::new(Spinner::new(what)),
+        }
+    }
+}
+
+impl crate::progress::Task for Progress {
+    fn advance(&mut self, work: f64, item: &str) {
+        Progress::advance(self, work, item);
+    }
+
+    fn finish(self: Box<Self>) {
+        Progress::finish(&self);
+    }
+}
+
+impl crate::progress::Task for Spinner {
+    fn finish(self: Box<Self>) {
+        Spinner::finish(*self);
     }
 }
 

@@ -166,7 +166,7 @@ pub struct Baselines {
     capacity: (usize, usize),
     /// Visible blocks left out of the last frame because the buffers could not hold them.
     pub dropped: usize,
-    /// Whether stderr has said so (once per renderer).
+    /// Whether a note has said so (once per renderer).
     noted: bool,
     terrain: TerrainPass,
     readback: ColourReadback,
@@ -339,10 +339,10 @@ impl Baselines {
                 indices <= max_indices
             })
             .collect();
-        if !self.noted && std::env::var_os("TERRAIN_QUIET").is_none() {
+        if !self.noted {
             self.noted = true;
-            eprintln!(
-                "note: GeoMipMap sees {} blocks; its buffers hold {} blocks and {} indices, so the \
+            log::info!(
+                "GeoMipMap sees {} blocks; its buffers hold {} blocks and {} indices, so the \
                  farthest {} are left out",
                 sel.gpu.len(),
                 max_blocks,

@@ -292,7 +292,7 @@ pub fn parse_grid(name: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<RawGr
     }
 }
 
-/// Sketch files above this size show a spinner while they are read (about 2 s for an ASCII grid).
+/// Sketch files above this size report their reading as progress (about 2 s for an ASCII grid).
 const LARGE_FILE_BYTES: u64 = 64 << 20;
 
 /// The sketch formats by extension, for messages.
@@ -304,13 +304,11 @@ impl Atlas {
     /// Reads a sketch file, choosing the reader by its extension.
     pub fn load(path: &Path, opts: &LoadOptions) -> Result<Atlas> {
         // A large sketch takes seconds to parse and fill: say so while it does.
-        let spinner = std::fs::metadata(path)
+        let step = std::fs::metadata(path)
             .is_ok_and(|m| m.len() > LARGE_FILE_BYTES)
-            .then(|| {
-                crate::app::progress::Spinner::new(&format!("reading sketch {}", path.display()))
-            });
+            .then(|| crate::progress::start(&format!("reading sketch {}", path.display()), None));
         let atlas = Atlas::load_quietly(path, opts);
-        if let Some(s) = spinner {
+        if let Some(s) = step {
             s.finish();
         }
         atlas

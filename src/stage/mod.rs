@@ -5,7 +5,6 @@
 //! importance map, counts with the warp).
 
 pub mod budget;
-pub mod figures;
 pub mod hold;
 pub mod importance;
 pub mod lines;

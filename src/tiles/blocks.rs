@@ -15,20 +15,26 @@
 //! - Otherwise a block row's vertices are sampled from the texel rows under it, read as a
 //!   window (each tile then about tile·dy / (block·d) times).
 //! - Either way on as many threads as the machine has.
-//! - The figures are written to `geomipmap-<block>.bin` in the pyramid folder (atomically) and
-//!   read back on the next run while `pyramid.toml` and the water's level are unchanged; a
-//!   folder that cannot be written costs the measurement on every run, with a note.
+//! - The figures are read back from `geomipmap-<block>.bin` in the pyramid folder whenever it is
+//!   there and `pyramid.toml` and the water's level are unchanged. They are written there
+//!   (atomically) only when the program asks ([`set_keep_figures`]; the `terrain` binary does):
+//!   the library writes no file it was not asked to. A folder that cannot be written costs the
+//!   measurement on every run, with a note.
 //!
-//! Rejected: measuring δ in `terrain tiles` for every block size. The sizes a scene may ask for
-//! (17 to 129 vertices) would cost four passes for the one a user flies, and a pyramid made
-//! before GeoMipMap could stream would have none.
+//! Rejected alternatives:
+//! - Measuring δ in `terrain tiles` for every block size. The sizes a scene may ask for (17 to
+//!   129 vertices) would cost four passes for the one a user flies, and a pyramid made before
+//!   GeoMipMap could stream would have none.
+//! - Asking for the file through an argument of `Renderer::new`: the measurement runs under
+//!   every caller that builds a renderer from a scene, and whether a program may write into its
+//!   sketch's folder is the program's choice, made once, like its logger.
 
 use super::{META, Pyramid};
-use crate::app::progress::Progress;
 use crate::error::{Error, Result, Role};
 use crate::geomipmap::{MAX_LEVELS, block_stats};
 use std::hash::{Hash, Hasher};
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// δ per level and the height range of every block, row by row.
 #[derive(Clone, Debug, PartialEq)]
@@ -42,9 +48,17 @@ pub struct BlockStats {
 // Version 3: vertices past the edge on it (figures kept by version 2 are measured anew).
 const MAGIC: &[u8; 8] = b"TGMMB\x003\n";
 
+static KEEP: AtomicBool = AtomicBool::new(false);
+
+/// Whether figures measured from now on are kept in their pyramid's folder for the next run
+/// (off until a program turns it on).
+pub fn set_keep_figures(keep: bool) {
+    KEEP.store(keep, Ordering::Relaxed);
+}
+
 /// The figures of `per_side`² blocks of `cells` cells over `pyramid`'s level 0 with the water's
 /// surface at `water` metres: from the folder's file when it matches, else measured (with
-/// progress) and kept there.
+/// progress) and, when [`set_keep_figures`] asked, kept there.
 pub fn block_stats_of(
     pyramid: &Pyramid,
     cells: usize,
@@ -60,10 +74,10 @@ pub fn block_stats_of(
         return Ok(stats);
     }
     let stats = measure(pyramid, cells, per_side, water)?;
-    if let Err(e) = crate::app::output::write_atomic(&path, &encode(&stats, key))
-        && std::env::var_os("TERRAIN_QUIET").is_none()
+    if KEEP.load(Ordering::Relaxed)
+        && let Err(e) = crate::io::write_atomic(&path, &encode(&stats, key))
     {
-        eprintln!("note: GeoMipMap's block figures are measured again next run: {e}");
+        log::info!("GeoMipMap's block figures are measured again next run: {e}");
     }
     Ok(stats)
 }
@@ -277,7 +291,7 @@ pub fn measure(pyramid: &Pyramid, cells: usize, per_side: usize, water: f32) -> 
         strips.cols = (0..cells * per_side + 1)
             .map(|i| strips.taps(i, 0, m.levels[0][0]))
             .collect();
-        let mut progress = Progress::new("GeoMipMap blocks", per_side as f64);
+        let mut progress = crate::progress::start("GeoMipMap blocks", Some(per_side as f64));
         let batch = 16 * threads;
         for first in (0..per_side).step_by(batch) {
             let rows = first..(first + batch).min(per_side);
@@ -294,7 +308,7 @@ pub fn measure(pyramid: &Pyramid, cells: usize, per_side: usize, water: f32) -> 
         };
         let last_row = m.levels[0][1] - 1;
         let (_, tiles_y) = m.tiles(0);
-        let mut progress = Progress::new("GeoMipMap blocks", tiles_y as f64);
+        let mut progress = crate::progress::start("GeoMipMap blocks", Some(tiles_y as f64));
         let mut next = 0;
         for ty in 0..tiles_y {
             let rows: Vec<usize> = (next..per_side)

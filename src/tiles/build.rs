@@ -17,9 +17,8 @@
 
 use super::codec::{HEADER_BYTES, TileHeader, encode_tile};
 use super::{BORDER, FORMAT, META, Meta, MetaGeoref, SIDE, TILE, level_sizes, tile_path};
-use crate::app::output::write_atomic;
-use crate::app::progress::Progress;
 use crate::error::{Error, Result, Role};
+use crate::io::write_atomic;
 use crate::sketch::georef::{Georef, Units};
 use crate::sketch::mosaic::{self, TileExtent};
 use crate::sketch::{LoadOptions, fill, read_grid, scale_heights};
@@ -155,7 +154,7 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
         n => n,
     };
     remove_temporaries(out);
-    let mut progress = Progress::new("tiles", meta.tile_count() as f64);
+    let mut progress = crate::progress::start("tiles", Some(meta.tile_count() as f64));
     let mut written = 0;
     for l in 0..meta.levels.len() {
         let (_, bands) = meta.tiles(l);
@@ -247,7 +246,7 @@ fn start_or_resume(out: &Path, plan: &Plan) -> Result<()> {
 /// Copies each source into scratch (one in memory at a time), or reads back what a run before
 /// copied.
 fn copy_sources(sources: &[PathBuf], dir: &Path, load: &LoadOptions) -> Result<Vec<Scratch>> {
-    let mut progress = Progress::new("reading sources", sources.len() as f64);
+    let mut progress = crate::progress::start("reading sources", Some(sources.len() as f64));
     let mut out = Vec::with_capacity(sources.len());
     for (k, path) in sources.iter().enumerate() {
         let info = dir.join(format!("src-{k}.json"));

@@ -211,9 +211,9 @@ pub fn raw_grid_within(dir: &Path, cells: usize) -> Result<RawGrid> {
     let level = pyramid.level(l)?;
     let m = &pyramid.meta;
     let scale = (1u64 << l) as f64;
-    if l > 0 && std::env::var_os("TERRAIN_QUIET").is_none() {
-        eprintln!(
-            "note: sketch {}: {}×{} nodes exceed the in-memory limit of {} cells; level {l} \
+    if l > 0 {
+        log::info!(
+            "sketch {}: {}×{} nodes exceed the in-memory limit of {} cells; level {l} \
              ({}×{}, {:.3} m spacing) stands in",
             dir.display(),
             m.width,

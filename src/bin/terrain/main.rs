@@ -25,6 +25,7 @@ mod compare;
 mod fly;
 mod height;
 mod info;
+mod notes;
 mod render;
 mod scene;
 mod tiles;
@@ -107,6 +108,11 @@ fn main() {
             std::process::exit(USAGE);
         }
     };
+    // The library prints nothing: its notes and progress are shown here.
+    notes::install();
+    terrain::progress::set_reporter(Box::new(terrain::app::progress::Bars));
+    // GeoMipMap's block figures over a pyramid are kept in its folder for the next command.
+    terrain::tiles::blocks::set_keep_figures(true);
     let result = match cli.command {
         Command::Info(a) => info::run(a),
         Command::Tiles(a) => tiles::run(a),

@@ -133,7 +133,7 @@ pub fn run(a: Args) -> Result<()> {
     let last = frames.last().context("no frame rendered")?;
     // The image and the positions land together or not at all.
     let mut staged = Staged::default();
-    staged.add_image(&a.output, last.width, last.height, &last.rgba)?;
+    output::add_image(&mut staged, &a.output, last.width, last.height, &last.rgba)?;
     let mut luminance = None;
     if let Some(p) = &a.positions {
         let world = terrain::render::world_positions(&r.read_positions(&camera)?, &camera);

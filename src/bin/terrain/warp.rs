@@ -103,7 +103,7 @@ pub fn run(a: Args) -> Result<()> {
         &mut ratios,
     );
     if !a.no_figures {
-        terrain::stage::figures::write_all(&a.out_dir, &atlas, &stage, &ratios)?;
+        terrain::app::stage_figures::write_all(&a.out_dir, &atlas, &stage, &ratios)?;
     }
     let map = &stage.sketch_map;
     let r = Report {

@@ -6,7 +6,7 @@
 //! Ratio colours: < 1/4 blue, [1/4, 1/2) cyan, [1/2, 1) green, [1, 2] yellow-green, (2, 4] orange,
 //! > 4 red; cells out of view grey.
 
-use crate::app::output::Staged;
+use crate::app::output::{Staged, add_image};
 use crate::error::Result;
 use crate::sketch::Atlas;
 use crate::stage::CpuStage;
@@ -16,8 +16,7 @@ use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Stroke, Transform};
 
 const SIZE: u32 = 768;
 
-/// Writes the three figures into `dir`.
-/// The three figures, written together: all or none.
+/// Writes the three figures into `dir`, together: all or none.
 pub fn write_all(dir: &Path, atlas: &Atlas, stage: &CpuStage, ratios: &[f32]) -> Result<()> {
     let mut out = Staged::default();
     write_importance(&mut out, &dir.join("importance.png"), stage)?;
@@ -32,7 +31,7 @@ pub fn write_all(dir: &Path, atlas: &Atlas, stage: &CpuStage, ratios: &[f32]) ->
 }
 
 fn save(out: &mut Staged, path: &Path, p: &Pixmap) -> Result<()> {
-    out.add_image(path, p.width(), p.height(), p.data())
+    add_image(out, path, p.width(), p.height(), p.data())
 }
 
 /// World metres to pixels over the region.
@@ -70,7 +69,7 @@ fn write_importance(out: &mut Staged, path: &Path, stage: &CpuStage) -> Result<(
             rgba[(py * side + px) * 4..][..3].copy_from_slice(&c);
         }
     }
-    out.add_image(path, side as u32, side as u32, &rgba)
+    add_image(out, path, side as u32, side as u32, &rgba)
 }
 
 /// Height-tinted hillshade of the atlas over the region (light from the north-west).
