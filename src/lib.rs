@@ -21,6 +21,7 @@ pub mod error;
 pub mod eval;
 pub mod geomipmap;
 pub mod gpu;
+pub mod host;
 pub mod io;
 pub mod light;
 pub mod lod;

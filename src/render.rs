@@ -378,6 +378,41 @@ impl Renderer {
         })
     }
 
+    /// A host's frame, first half: the CPU work for `camera` and the frame's uniforms. Over a
+    /// streamed sketch, `after_frame` says a frame was recorded before, whose tile marks are now
+    /// read (its encoder must have been submitted) and whose missing tiles are queued.
+    pub(crate) fn host_prepare(&mut self, camera: &Camera, after_frame: bool) -> Result<CpuTimes> {
+        if let SketchGpu::Streamed(s) = &mut self.sketch
+            && after_frame
+        {
+            s.end_frame(&self.ctx)?;
+        }
+        let cpu = self.lod.prepare(&self.atlas, camera);
+        let uniforms = self.uniforms(camera);
+        self.ctx
+            .queue
+            .write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniforms));
+        Ok(cpu)
+    }
+
+    /// A host's frame, second half: the passes, recorded into the host's `encoder`, leaving the
+    /// frame in the renderer's own targets ([`Lod::output`]).
+    pub(crate) fn host_record(&mut self, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        if let SketchGpu::Streamed(s) = &mut self.sketch {
+            s.begin_frame(&self.ctx, encoder)?;
+        }
+        self.lod.record(&self.ctx, encoder, None);
+        if let SketchGpu::Streamed(s) = &self.sketch {
+            s.record_marks(encoder);
+        }
+        Ok(())
+    }
+
+    /// Where the last recorded frame lies, for the output pass.
+    pub(crate) fn output(&self) -> Option<crate::gpu::output::Source<'_>> {
+        self.lod.output()
+    }
+
     /// Bytes of GPU memory the renderer holds now: its uniforms, the atlas, the timer's
     /// queries and whatever the scheme allocated, as counted at allocation (see [`crate::gpu::alloc`]).
     pub fn gpu_bytes(&self) -> u64 {

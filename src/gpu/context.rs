@@ -87,6 +87,31 @@ impl GpuContext {
         })
     }
 
+    /// A context on a host's device: its adapter, features and limits as the device reports
+    /// them, refused in one error where they cannot hold what `needs` asks for. The host's
+    /// targets fix multisampling, so the renderer's own frame is multisampled only on hardware
+    /// (the formats it draws are multisampled wherever WebGPU runs).
+    pub fn from_device(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        needs: &Needs,
+    ) -> Result<GpuContext> {
+        let info = device.adapter_info();
+        let limits = device.limits();
+        check(&info.name, &limits, needs)?;
+        let software = info.device_type == wgpu::DeviceType::Cpu;
+        let lavapipe = info.backend == wgpu::Backend::Vulkan && software;
+        Ok(GpuContext {
+            device: device.clone(),
+            queue: queue.clone(),
+            timestamps: device.features().contains(wgpu::Features::TIMESTAMP_QUERY) && !lavapipe,
+            limits,
+            software,
+            msaa: if software { 1 } else { 4 },
+            adapter: info,
+        })
+    }
+
     /// Whether this device can hold what `needs` asks for (before anything is created: a buffer
     /// over a limit would otherwise be a validation error, which wgpu reports by panicking).
     pub fn check(&self, needs: &Needs) -> Result<()> {

@@ -8,6 +8,7 @@ pub mod context;
 pub mod frame_io;
 pub mod mesh_split;
 pub mod normals;
+pub mod output;
 pub mod planet;
 pub mod reference;
 pub mod shaders;

@@ -28,6 +28,15 @@ pub struct PlanetPass {
 
 impl PlanetPass {
     /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
+    /// The frame's colour and view distances, where positions were asked for.
+    pub fn output(&self) -> Option<super::output::Source<'_>> {
+        let (_, depth) = self.depth_copy.as_ref()?;
+        Some(super::output::Source::Targets {
+            colour: &self.colour_view,
+            depth,
+        })
+    }
+
     pub const NAME: &'static str = "planet";
 
     #[allow(clippy::too_many_arguments)]
@@ -118,12 +127,17 @@ impl PlanetPass {
         };
         let colour = target(
             COLOUR,
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            // Read by the output pass too, for a host's targets.
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::TEXTURE_BINDING,
             "colour",
         );
         let depth = target(DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT, "depth");
         let depth_copy = positions.then(|| {
-            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::TEXTURE_BINDING;
             let t = target(DEPTH_COPY, usage, "depth copy");
             let view = t.create_view(&Default::default());
             (t, view)

@@ -134,6 +134,14 @@ impl ReferencePass {
             .collect())
     }
 
+    /// The frame's display colour and hit positions.
+    pub fn output(&self) -> super::output::Source<'_> {
+        super::output::Source::Buffers {
+            colour: &self.colour,
+            position: &self.position,
+        }
+    }
+
     pub fn read_positions(&self, ctx: &GpuContext) -> Result<Vec<[f32; 4]>> {
         read_vec4(ctx, &self.position)
     }

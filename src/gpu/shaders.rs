@@ -21,7 +21,7 @@ const SHARED: [(&str, &str); 8] = [
 ];
 
 /// The passes' WGSL files, by name.
-pub const PASSES: [(&str, &str); 8] = [
+pub const PASSES: [(&str, &str); 9] = [
     ("warp_zoom", include_str!("../../shaders/warp_zoom.wgsl")),
     ("mesh_split", include_str!("../../shaders/mesh_split.wgsl")),
     ("normals", include_str!("../../shaders/normals.wgsl")),
@@ -33,10 +33,11 @@ pub const PASSES: [(&str, &str); 8] = [
         "planet_reference",
         include_str!("../../shaders/planet_reference.wgsl"),
     ),
+    ("output", include_str!("../../shaders/output.wgsl")),
 ];
 
 /// Every flag any pass tests, for validating all variants.
-pub const FLAGS: [&str; 15] = [
+pub const FLAGS: [&str; 16] = [
     "DETAIL",
     "CENTRES",
     "BUMP",
@@ -52,6 +53,7 @@ pub const FLAGS: [&str; 15] = [
     "STREAMED",
     "GRID_STREAMED",
     "DEFERRED",
+    "FROM_BUFFERS",
 ];
 
 /// The combined source of pass `name` with `flags` set.

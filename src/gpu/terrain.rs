@@ -330,13 +330,18 @@ impl TerrainPass {
         let target = |format, usage, label| target_of(format, usage, label, 1);
         let colour = target(
             COLOUR,
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            // Read by the output pass too, for a host's targets.
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::TEXTURE_BINDING,
             "colour",
         );
         let drawn = wgpu::TextureUsages::RENDER_ATTACHMENT;
         let depth = target_of(DEPTH, drawn, "depth", n);
         let depth_copy = variant.positions.then(|| {
-            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::TEXTURE_BINDING;
             target(DEPTH_COPY, usage, "depth copy")
         });
         let multisampled = multisampled.then(|| {
@@ -419,6 +424,15 @@ impl TerrainPass {
             )
         })?;
         super::frame_io::positions_from_depth(ctx, depth, view_proj, camera.near)
+    }
+
+    /// The frame's colour and view distances, where positions were asked for.
+    pub fn output(&self) -> Option<super::output::Source<'_>> {
+        let depth = self.depth_copy_view.as_ref()?;
+        Some(super::output::Source::Targets {
+            colour: &self.colour_view,
+            depth,
+        })
     }
 
     /// The warped variant draws a `mesh`² quad mesh this frame (at most the size it was built

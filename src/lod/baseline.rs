@@ -409,6 +409,10 @@ impl Lod for Baselines {
         &[TerrainPass::NAME]
     }
 
+    fn output(&self) -> Option<crate::gpu::output::Source<'_>> {
+        self.terrain.output()
+    }
+
     fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
         self.readback.read(ctx)
     }

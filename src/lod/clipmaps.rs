@@ -236,6 +236,10 @@ impl Lod for Clipmaps {
         &PASSES
     }
 
+    fn output(&self) -> Option<crate::gpu::output::Source<'_>> {
+        self.pass.output()
+    }
+
     fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
         self.readback.read(ctx)
     }

@@ -78,6 +78,9 @@ pub trait Lod: Any {
     ) -> &'static [&'static str];
     /// The image of the submitted frame: RGBA8 sRGB, rows top first.
     fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>>;
+    /// Where the recorded frame is left, for writing into a host's targets
+    /// ([`crate::gpu::output`]); `None` where the renderer was built without positions.
+    fn output(&self) -> Option<crate::gpu::output::Source<'_>>;
     /// Ground positions of the last frame's pixels, relative to `camera`'s ground point (w = 1
     /// on ground, 0 on sky).
     fn read_positions(&self, ctx: &GpuContext, camera: &Camera) -> Result<Vec<[f32; 4]>>;

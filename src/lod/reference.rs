@@ -101,6 +101,10 @@ impl Lod for Reference {
         &[ReferencePass::NAME]
     }
 
+    fn output(&self) -> Option<crate::gpu::output::Source<'_>> {
+        Some(self.pass.output())
+    }
+
     fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
         self.pass.read_image(ctx)
     }

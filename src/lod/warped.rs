@@ -232,6 +232,10 @@ impl Lod for Warped {
         }
     }
 
+    fn output(&self) -> Option<crate::gpu::output::Source<'_>> {
+        self.terrain.output()
+    }
+
     fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
         self.readback.read(ctx)
     }

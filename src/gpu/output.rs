@@ -1,0 +1,209 @@
+//! The output pass (`shaders/output.wgsl`): a finished frame written into a host's colour and
+//! depth targets, of the host's formats and sample count, inside the host's encoder.
+//!
+//! Rules: the frame is drawn into the renderer's own targets first, as for a snapshot, then one
+//! full-screen triangle writes each pixel's colour and its reversed-Z depth (from the view
+//! distance the frame kept, or the reference's hit position) into the host's views. The host's
+//! geometry, drawn with [`crate::host::Terrain::view_proj`], is then depth-tested against the
+//! terrain, before or after it. Rejected: building every pass's pipelines for the host's formats
+//! and sample count, a variant of each per host, where this one pass costs a full-screen
+//! triangle.
+
+use super::alloc::{Alloc, Buffer};
+use super::{bind, entry, shader_module, storage, uniform};
+use crate::error::Result;
+use wgpu::ShaderStages as S;
+
+/// Where a scheme leaves its finished frame.
+pub enum Source<'a> {
+    /// The mesh modes and the planet: the colour target (sRGB) and each pixel's view distance as
+    /// four bytes.
+    Targets {
+        colour: &'a wgpu::TextureView,
+        depth: &'a wgpu::TextureView,
+    },
+    /// The reference: display colour and hit positions (relative to the frame's origin, w = 1 on
+    /// ground), a vec4 per pixel.
+    Buffers {
+        colour: &'a wgpu::Buffer,
+        position: &'a wgpu::Buffer,
+    },
+}
+
+/// The host's targets: formats and samples per pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Targets {
+    pub colour: wgpu::TextureFormat,
+    pub depth: wgpu::TextureFormat,
+    pub samples: u32,
+}
+
+/// The uniform block of `output.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct OutputUniforms {
+    pub view_proj: [[f32; 4]; 4],
+    pub near: f32,
+    pub width: u32,
+    pub height: u32,
+    pub encode_srgb: u32,
+}
+
+pub struct OutputPass {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    uniforms: Buffer,
+    from_buffers: bool,
+    encode_srgb: bool,
+}
+
+impl OutputPass {
+    /// The pass's name: its WGSL file.
+    pub const NAME: &'static str = "output";
+
+    /// For frames left as `buffers` (the reference) or in targets, written into `targets`.
+    pub fn new(device: &Alloc, targets: Targets, from_buffers: bool) -> Result<OutputPass> {
+        let fs = S::FRAGMENT;
+        let texture = wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        };
+        let input = if from_buffers { storage(true) } else { texture };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(Self::NAME),
+            entries: &[
+                entry(0, fs, uniform()),
+                entry(1, fs, input),
+                entry(2, fs, input),
+            ],
+        });
+        let flags: &[&str] = if from_buffers { &["FROM_BUFFERS"] } else { &[] };
+        let module = shader_module(device, Self::NAME, flags)?;
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(Self::NAME),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(Self::NAME),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(targets.colour.into())],
+            }),
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: targets.depth,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: wgpu::MultisampleState {
+                count: targets.samples,
+                ..Default::default()
+            },
+            multiview_mask: None,
+            cache: None,
+        });
+        let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("output uniforms"),
+            size: std::mem::size_of::<OutputUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Ok(OutputPass {
+            pipeline,
+            layout,
+            uniforms,
+            from_buffers,
+            encode_srgb: !targets.colour.is_srgb(),
+        })
+    }
+
+    /// The frame's size and projection for the next [`OutputPass::record`].
+    pub fn prepare(&self, queue: &wgpu::Queue, camera: &crate::camera::Camera) {
+        let origin = super::uniforms::frame_origin(camera);
+        let view_proj = super::uniforms::view_proj(camera, origin).as_mat4();
+        let u = OutputUniforms {
+            view_proj: view_proj.to_cols_array_2d(),
+            near: camera.near as f32,
+            width: camera.width,
+            height: camera.height,
+            encode_srgb: self.encode_srgb as u32,
+        };
+        queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
+    }
+
+    /// Writes the frame left in `source` into the host's `colour` and `depth` views.
+    pub fn record(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        source: Source,
+        colour: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+    ) {
+        let inputs = match source {
+            Source::Targets { colour, depth } => [
+                wgpu::BindingResource::TextureView(colour),
+                wgpu::BindingResource::TextureView(depth),
+            ],
+            Source::Buffers { colour, position } => {
+                debug_assert!(self.from_buffers);
+                [colour.as_entire_binding(), position.as_entire_binding()]
+            }
+        };
+        let [a, b] = inputs;
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(Self::NAME),
+            layout: &self.layout,
+            entries: &[
+                bind(0, &self.uniforms),
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: a,
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: b,
+                },
+            ],
+        });
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(Self::NAME),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: colour,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}

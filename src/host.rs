@@ -1,0 +1,288 @@
+//! The host API: a terrain drawn with a host application's own device and queue, recorded into
+//! the host's encoder, into the host's colour and depth views, in the manner of vello, terra and
+//! glyphon.
+//!
+//! Rules:
+//! - The host owns the device, the queue and the targets. [`Description::required_limits`] and
+//!   [`Description::optional_features`] say what to create the device with; [`Terrain::new`]
+//!   refuses a device without them in one error.
+//! - A frame: [`Terrain::prepare`] with the camera in f64 world metres (the CPU stage, the
+//!   uniforms), then [`Terrain::record`] into the host's encoder; the host submits. The next
+//!   `prepare` comes after that submission (a streamed sketch then reads what the frame marked).
+//! - Depth is reversed-Z with an infinite far plane, written for every pixel (0 where there is
+//!   sky). Host geometry drawn with [`Terrain::view_proj`], positions relative to
+//!   [`Terrain::frame_origin`], depth compare `GreaterEqual` on a depth cleared to 0, is hidden
+//!   where the terrain is nearer, whether drawn before the terrain or after it.
+//! - A frame of another size builds the renderer again for it (its targets follow the camera).
+//! - [`Terrain::render_to_image`] is a read-back on top, for snapshots; it is not the frame's path.
+//!
+//! Rejected: the renderer opening its own device and handing the host pixels, a copy through
+//! the CPU every frame.
+
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::gpu::alloc::{Alloc, Ledger};
+use crate::gpu::context::GpuContext;
+use crate::gpu::frame_io::ColourReadback;
+use crate::gpu::output::OutputPass;
+pub use crate::gpu::output::Targets;
+use crate::gpu::uniforms::View;
+use crate::query::Ground;
+use crate::render::{Renderer, needs};
+use crate::scene::{self, Mode, Scene};
+use crate::sketch::Atlas;
+use glam::{DVec2, DVec3, Mat4};
+
+/// What a terrain is made from: a scene (sketch, detail, light, mode and its settings) with its
+/// sketch read.
+pub struct Description {
+    scene: Scene,
+    atlas: Atlas,
+    mode: Mode,
+}
+
+impl Description {
+    /// `scene` with its sketch read, drawn in the scene's own mode.
+    pub fn new(scene: Scene) -> Result<Description> {
+        let atlas = scene::load_atlas(&scene)?;
+        let mode = scene.render.mode;
+        Ok(Description { scene, atlas, mode })
+    }
+
+    /// The same terrain drawn in `mode`.
+    pub fn with_mode(mut self, mode: Mode) -> Description {
+        self.mode = mode;
+        self
+    }
+
+    /// The scene this terrain was described by.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The limits a device must have to draw this terrain: WebGPU's defaults, raised where the
+    /// sketch or the mesh needs larger storage bindings.
+    pub fn required_limits(&self) -> wgpu::Limits {
+        let storage = needs(&self.scene, self.mode, &self.atlas).storage_bytes;
+        let defaults = wgpu::Limits::default();
+        wgpu::Limits {
+            max_storage_buffer_binding_size: defaults.max_storage_buffer_binding_size.max(storage),
+            max_buffer_size: defaults.max_buffer_size.max(storage),
+            ..defaults
+        }
+    }
+
+    /// The features worth enabling where `available` has them: pass timing, and the vertex
+    /// stage's writes that GeoMipMap over a tile pyramid marks its tiles with.
+    pub fn optional_features(available: wgpu::Features) -> wgpu::Features {
+        available & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::VERTEX_WRITABLE_STORAGE)
+    }
+
+    /// The scene's own camera at `width` × `height`.
+    pub fn camera(&self, width: u32, height: u32) -> Result<Camera> {
+        let mut scene = self.scene.clone();
+        scene.camera.width = width;
+        scene.camera.height = height;
+        scene::camera_of(&scene, &self.atlas)
+    }
+}
+
+/// What one prepared frame costs on the CPU and draws.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FrameInfo {
+    /// The CPU stage, or the baselines' block selection, µs.
+    pub cpu_us: f64,
+    /// Triangles the last recorded frame drew.
+    pub triangles: u64,
+}
+
+/// A terrain a host draws with its own device.
+pub struct Terrain {
+    ctx: GpuContext,
+    targets: Targets,
+    scene: Scene,
+    mode: Mode,
+    renderer: Renderer,
+    output: OutputPass,
+    /// What the output pass and read-backs allocate (the renderer counts its own).
+    _ledger: Ledger,
+    /// Whether a frame was recorded since the renderer was built.
+    recorded: bool,
+}
+
+impl Terrain {
+    /// A terrain on the host's `device` and `queue`, drawing into targets of `targets`' formats.
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        targets: Targets,
+        description: Description,
+    ) -> Result<Terrain> {
+        let Description { scene, atlas, mode } = description;
+        let ctx = GpuContext::from_device(device, queue, &needs(&scene, mode, &atlas))?;
+        let ledger = Ledger::default();
+        let alloc = Alloc {
+            device: &ctx.device,
+            ledger: &ledger,
+        };
+        let output = OutputPass::new(&alloc, targets, mode == Mode::Reference)?;
+        let renderer = build(&ctx, &scene, atlas, mode)?;
+        Ok(Terrain {
+            ctx,
+            targets,
+            scene,
+            mode,
+            renderer,
+            output,
+            _ledger: ledger,
+            recorded: false,
+        })
+    }
+
+    /// The formats and samples this terrain draws into.
+    pub fn targets(&self) -> Targets {
+        self.targets
+    }
+
+    /// The CPU's part of a frame of `camera`: the level of detail, the uniforms. A camera of
+    /// another size than the last builds the renderer again for it.
+    pub fn prepare(&mut self, camera: &Camera) -> Result<FrameInfo> {
+        if (camera.width, camera.height) != (self.scene.camera.width, self.scene.camera.height) {
+            self.scene.camera.width = camera.width;
+            self.scene.camera.height = camera.height;
+            let atlas = self.renderer.atlas().clone();
+            self.renderer = build(&self.ctx, &self.scene, atlas, self.mode)?;
+            self.recorded = false;
+        }
+        let cpu = self.renderer.host_prepare(camera, self.recorded)?;
+        self.output.prepare(&self.ctx.queue, camera);
+        Ok(FrameInfo {
+            cpu_us: cpu.us,
+            triangles: 0,
+        })
+    }
+
+    /// Records the prepared frame into `encoder`, writing it into `colour` and `depth` (views of
+    /// textures of this terrain's [`Targets`], the size of the prepared camera's image).
+    pub fn record(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        colour: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+    ) -> Result<()> {
+        self.renderer.host_record(encoder)?;
+        let source = self.renderer.output().ok_or(Error::Internal(
+            "the renderer keeps no frame for a host's targets",
+        ))?;
+        self.output
+            .record(&self.ctx.device, encoder, source, colour, depth);
+        self.recorded = true;
+        Ok(())
+    }
+
+    /// The point the frame's positions are relative to, world metres: host geometry is drawn
+    /// at its world position less this.
+    pub fn frame_origin(camera: &Camera) -> DVec3 {
+        crate::gpu::uniforms::frame_origin(camera).extend(0.0)
+    }
+
+    /// The view-projection the terrain is drawn with, relative to [`Terrain::frame_origin`]:
+    /// right-handed, reversed-Z, infinite far plane.
+    pub fn view_proj(camera: &Camera) -> Mat4 {
+        let origin = crate::gpu::uniforms::frame_origin(camera);
+        crate::gpu::uniforms::view_proj(camera, origin).as_mat4()
+    }
+
+    /// The terrain's height at world point (x, y), as the reference draws it (the finest detail):
+    /// for standing things on the ground. `None` where nothing is drawn.
+    pub fn height_at(&self, x: f64, y: f64) -> Result<Option<f64>> {
+        let atlas = self.renderer.atlas();
+        let ground = Ground::new(&self.scene, atlas, &self.renderer.detail);
+        ground.height_at(DVec2::new(x, y), 0.0)
+    }
+
+    /// Draws `camera`'s frame into textures of its own and reads the colour back: RGBA, rows
+    /// top first, in the colour target's format (8 bits a channel).
+    pub fn render_to_image(&mut self, camera: &Camera) -> Result<Vec<u8>> {
+        if self.targets.samples != 1 || self.targets.colour.block_copy_size(None) != Some(4) {
+            return Err(Error::Internal(
+                "render_to_image reads single-sampled targets of four bytes a pixel",
+            ));
+        }
+        let device = self.ctx.device.clone();
+        let size = wgpu::Extent3d {
+            width: camera.width,
+            height: camera.height,
+            depth_or_array_layers: 1,
+        };
+        let texture = |format, usage, label| {
+            #[allow(clippy::disallowed_methods)]
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: self.targets.samples,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+        let colour = texture(self.targets.colour, usage, "host colour");
+        let depth = texture(self.targets.depth, usage, "host depth");
+        self.prepare(camera)?;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        clear(&mut encoder, &colour, &depth);
+        let (cv, dv) = (
+            colour.create_view(&Default::default()),
+            depth.create_view(&Default::default()),
+        );
+        self.record(&mut encoder, &cv, &dv)?;
+        let alloc = Alloc {
+            device: &device,
+            ledger: &self._ledger,
+        };
+        let readback = ColourReadback::new(&alloc, camera.width, camera.height);
+        readback.record(&mut encoder, &colour);
+        self.ctx.queue.submit([encoder.finish()]);
+        readback.read(&self.ctx)
+    }
+}
+
+/// The renderer of `scene` in `mode` over `atlas` on `ctx`, keeping each frame for the output
+/// pass.
+fn build(ctx: &GpuContext, scene: &Scene, atlas: Atlas, mode: Mode) -> Result<Renderer> {
+    Renderer::with_context(ctx.clone(), scene, atlas, mode, View::Shaded, true)
+}
+
+/// Clears a host's targets as a frame starts: black, and depth 0 (reversed-Z's far).
+pub fn clear(encoder: &mut wgpu::CommandEncoder, colour: &wgpu::Texture, depth: &wgpu::Texture) {
+    let (cv, dv) = (
+        colour.create_view(&Default::default()),
+        depth.create_view(&Default::default()),
+    );
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("clear"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: &cv,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: &dv,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(0.0),
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+}
