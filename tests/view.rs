@@ -18,7 +18,12 @@ type ViewTest = (&'static str, fn(), &'static [&'static str]);
 
 fn main() {
     let args = Arguments::from_args();
-    let tests: [ViewTest; 5] = [
+    let tests: [ViewTest; 6] = [
+        (
+            "the_host_example_draws_the_terrain_and_its_own_mast_in_a_window",
+            the_host_example_draws_the_terrain_and_its_own_mast_in_a_window,
+            &["xvfb-run"],
+        ),
         (
             "the_readme_view_commands_run_as_written",
             the_readme_view_commands_run_as_written,
@@ -156,6 +161,39 @@ fn the_readme_view_commands_run_as_written() {
         assert!(out.status.success(), "`{line}` failed: {err}");
         assert!(read_png(&shot).is_some(), "`{line}` wrote no screenshot");
     }
+}
+
+/// `examples/host.rs`, a host that owns its window, surface and device, draws frames under Xvfb
+/// and writes the last: the terrain, and its own red mast standing on it.
+fn the_host_example_draws_the_terrain_and_its_own_mast_in_a_window() {
+    let dir = scratch("view-host");
+    let shot = dir.join("host.png");
+    let example = std::path::Path::new(env!("CARGO_BIN_EXE_terrain"))
+        .with_file_name("examples")
+        .join("host");
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24"])
+        .arg(&example)
+        .arg(manifest_dir().join("sketches/jacksboro.toml"))
+        .args(["--frames", "3", "--screenshot"])
+        .arg(&shot)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .output()
+        .expect("run xvfb-run");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{} failed: {err}", example.display());
+    let (w, h, rgba) = read_png(&shot).expect("screenshot written");
+    assert_eq!((w, h), (480, 320));
+    let pixels: Vec<&[u8]> = rgba.chunks_exact(4).collect();
+    let mast = pixels.iter().filter(|p| p[..3] == [255, 0, 0]).count();
+    assert!(mast > 100, "{mast} pixels of the mast");
+    // Ground below the horizon: lit, textured, not the mast.
+    let ground: std::collections::HashSet<&[u8]> = pixels[(h as usize / 2) * w as usize..]
+        .iter()
+        .copied()
+        .filter(|p| p[..3] != [255, 0, 0])
+        .collect();
+    assert!(ground.len() > 500, "{} colours of ground", ground.len());
 }
 
 fn view_opens_draws_and_screenshots_itself_under_xvfb() {

@@ -1,0 +1,515 @@
+// A host creates its own resources, outside the library's ledger.
+#![allow(clippy::disallowed_methods)]
+
+//! A host application that embeds the terrain: its own window, surface, device and geometry.
+//!
+//! It opens a winit window, creates a wgpu surface and a device with what
+//! `terrain::host::Description` asks for, and each frame records the terrain into its own encoder,
+//! into the surface's texture and its own depth buffer, then draws a marker of its own: a red
+//! mast standing on the ground (placed with the height query) in front of the camera, hidden
+//! wherever the terrain is nearer. The camera circles the mast.
+//!
+//! `cargo run --release --example host -- [SCENE] [--frames N] [--screenshot FILE]`: SCENE
+//! defaults to sketches/jacksboro.toml; with `--frames N` it draws N frames, writes the last to
+//! FILE (PNG) and exits.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use terrain::camera::Camera;
+use terrain::host::{Description, Targets, Terrain};
+use winit::application::ApplicationHandler;
+use winit::event::WindowEvent;
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::window::{Window, WindowId};
+
+const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+struct Options {
+    scene: PathBuf,
+    frames: Option<u64>,
+    screenshot: Option<PathBuf>,
+}
+
+fn options() -> anyhow::Result<Options> {
+    let mut o = Options {
+        scene: PathBuf::from("sketches/jacksboro.toml"),
+        frames: None,
+        screenshot: None,
+    };
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--frames" => o.frames = Some(args.next().unwrap_or_default().parse()?),
+            "--screenshot" => o.screenshot = args.next().map(PathBuf::from),
+            _ if a.starts_with("--") => anyhow::bail!("unknown option {a}"),
+            _ => o.scene = PathBuf::from(a),
+        }
+    }
+    Ok(o)
+}
+
+/// What the host draws with: everything made once the window exists.
+struct Gpu {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    depth: wgpu::TextureView,
+    terrain: Terrain,
+    mast: Mast,
+    /// The scene's camera: the circle's start.
+    start: Camera,
+    /// The mast's foot, world metres.
+    foot: glam::DVec3,
+}
+
+struct App {
+    o: Options,
+    gpu: Option<Gpu>,
+    frame: u64,
+    error: Option<anyhow::Error>,
+}
+
+fn main() -> anyhow::Result<()> {
+    let o = options()?;
+    let event_loop = EventLoop::new()?;
+    let mut app = App {
+        o,
+        gpu: None,
+        frame: 0,
+        error: None,
+    };
+    event_loop.run_app(&mut app)?;
+    match app.error {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.gpu.is_some() {
+            return;
+        }
+        match Gpu::new(event_loop, &self.o.scene) {
+            Ok(gpu) => {
+                gpu.window.request_redraw();
+                self.gpu = Some(gpu);
+            }
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) => {
+                if let Some(gpu) = &mut self.gpu {
+                    gpu.resize(size.width, size.height);
+                }
+            }
+            WindowEvent::RedrawRequested => {
+                if let Err(e) = self.redraw(event_loop) {
+                    self.fail(event_loop, e);
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+impl App {
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
+        self.error = Some(e);
+        event_loop.exit();
+    }
+
+    fn redraw(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        let Some(gpu) = &mut self.gpu else {
+            return Ok(());
+        };
+        let last = self.o.frames.is_some_and(|n| self.frame + 1 >= n);
+        let shot = gpu.draw(self.frame, last && self.o.screenshot.is_some())?;
+        self.frame += 1;
+        if last {
+            if let (Some(path), Some((w, h, rgba))) = (&self.o.screenshot, shot) {
+                terrain::app::output::write_image(path, w, h, &rgba)?;
+            }
+            event_loop.exit();
+        } else {
+            gpu.window.request_redraw();
+        }
+        Ok(())
+    }
+}
+
+impl Gpu {
+    fn new(event_loop: &ActiveEventLoop, scene: &std::path::Path) -> anyhow::Result<Gpu> {
+        let attributes = Window::default_attributes()
+            .with_title("terrain: a host")
+            .with_inner_size(winit::dpi::PhysicalSize::new(480u32, 320u32));
+        let window = Arc::new(event_loop.create_window(attributes)?);
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
+                Box::new(event_loop.owned_display_handle()),
+            ));
+        let surface = instance.create_surface(window.clone())?;
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            compatible_surface: Some(&surface),
+            ..Default::default()
+        }))?;
+        let description = Description::new(terrain::scene::Scene::load(scene)?)?;
+        let (device, queue) =
+            pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+                label: Some("host"),
+                required_features: Description::optional_features(adapter.features()),
+                required_limits: description.required_limits(),
+                ..Default::default()
+            }))?;
+        let size = window.inner_size();
+        let caps = surface.get_capabilities(&adapter);
+        let (width, height) = (size.width.max(1), size.height.max(1));
+        let mut config = surface
+            .get_default_config(&adapter, width, height)
+            .ok_or_else(|| anyhow::anyhow!("the adapter cannot present to this window"))?;
+        if let Some(srgb) = caps.formats.iter().copied().find(|f| f.is_srgb()) {
+            config.format = srgb;
+        }
+        // Copies out of the surface, for the screenshot, where it allows them.
+        config.usage |= caps.usages & wgpu::TextureUsages::COPY_SRC;
+        let format = config.format;
+        surface.configure(&device, &config);
+        let start = description.camera(config.width, config.height)?;
+        let targets = Targets {
+            colour: format,
+            depth: DEPTH,
+            samples: 1,
+        };
+        let terrain = Terrain::new(&device, &queue, targets, description)?;
+        // The mast stands where the camera looks, a third of the way there, on the ground.
+        let look = start.eye + start.forward * 2000.0;
+        let ground = terrain.height_at(look.x, look.y)?.unwrap_or(0.0);
+        let foot = glam::DVec3::new(look.x, look.y, ground);
+        let mast = Mast::new(&device, format);
+        let depth = depth_view(&device, config.width, config.height);
+        Ok(Gpu {
+            window,
+            surface,
+            config,
+            device,
+            queue,
+            depth,
+            terrain,
+            mast,
+            start,
+            foot,
+        })
+    }
+
+    fn resize(&mut self, width: u32, height: u32) {
+        self.config.width = width.max(1);
+        self.config.height = height.max(1);
+        self.surface.configure(&self.device, &self.config);
+        self.depth = depth_view(&self.device, self.config.width, self.config.height);
+    }
+
+    /// The camera of frame `k`: the scene's, turned about the mast by half a degree a frame.
+    fn camera(&self, k: u64) -> anyhow::Result<Camera> {
+        let turn = glam::DQuat::from_rotation_z((k as f64 * 0.5).to_radians());
+        let eye = self.foot + turn * (self.start.eye - self.foot);
+        let target = self.foot + glam::DVec3::Z * 100.0;
+        let (w, h) = (self.config.width, self.config.height);
+        Ok(Camera::new(
+            eye,
+            target,
+            self.start.fov_y.to_degrees(),
+            w,
+            h,
+            self.start.far,
+        )?)
+    }
+
+    /// The surface's next texture, the surface configured again where it has changed.
+    fn next_texture(&mut self) -> anyhow::Result<wgpu::SurfaceTexture> {
+        for _ in 0..3 {
+            match self.surface.get_current_texture() {
+                wgpu::CurrentSurfaceTexture::Success(t)
+                | wgpu::CurrentSurfaceTexture::Suboptimal(t) => return Ok(t),
+                _ => self.surface.configure(&self.device, &self.config),
+            }
+        }
+        anyhow::bail!("the window's surface gives no texture to draw into")
+    }
+
+    /// Draws frame `k`; with `shot`, also reads it back (width, height, RGBA).
+    fn draw(&mut self, k: u64, shot: bool) -> anyhow::Result<Option<(u32, u32, Vec<u8>)>> {
+        let camera = self.camera(k)?;
+        self.terrain.prepare(&camera)?;
+        let frame = self.next_texture()?;
+        let view = frame.texture.create_view(&Default::default());
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        clear(&mut encoder, &view, &self.depth);
+        self.terrain.record(&mut encoder, &view, &self.depth)?;
+        self.mast.draw(
+            &self.queue,
+            &mut encoder,
+            &view,
+            &self.depth,
+            &camera,
+            self.foot,
+        );
+        let readback = shot
+            .then(|| Readback::record(&self.device, &mut encoder, &frame.texture))
+            .flatten();
+        self.queue.submit([encoder.finish()]);
+        let image = readback.map(|r| r.read(&self.device)).transpose()?;
+        self.queue.present(frame);
+        Ok(image)
+    }
+}
+
+fn depth_view(device: &wgpu::Device, width: u32, height: u32) -> wgpu::TextureView {
+    device
+        .create_texture(&wgpu::TextureDescriptor {
+            label: Some("host depth"),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        })
+        .create_view(&Default::default())
+}
+
+/// Clears colour to black and depth to 0, reversed-Z's far.
+fn clear(
+    encoder: &mut wgpu::CommandEncoder,
+    colour: &wgpu::TextureView,
+    depth: &wgpu::TextureView,
+) {
+    begin(encoder, colour, depth, true);
+}
+
+/// A render pass into the host's targets, cleared or loaded.
+fn begin<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    colour: &wgpu::TextureView,
+    depth: &wgpu::TextureView,
+    clear: bool,
+) -> wgpu::RenderPass<'e> {
+    let (c, d) = if clear {
+        (
+            wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+            wgpu::LoadOp::Clear(0.0),
+        )
+    } else {
+        (wgpu::LoadOp::Load, wgpu::LoadOp::Load)
+    };
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("host"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: colour,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: c,
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations {
+                load: d,
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
+}
+
+/// The host's own geometry: a red mast, 300 m tall and 60 m across, at a world point.
+struct Mast {
+    pipeline: wgpu::RenderPipeline,
+    uniforms: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+}
+
+const MAST: &str = r#"
+struct U { view_proj: mat4x4<f32>, foot: vec4<f32> }
+@group(0) @binding(0) var<uniform> u: U;
+@vertex
+fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    // Two quads crossing at the mast's axis, six vertices each.
+    let corner = array<vec2<f32>, 6>(vec2(-1.0, 0.0), vec2(1.0, 0.0), vec2(1.0, 1.0),
+                                     vec2(-1.0, 0.0), vec2(1.0, 1.0), vec2(-1.0, 1.0));
+    let c = corner[i % 6u];
+    var across = vec3<f32>(30.0 * c.x, 0.0, 0.0);
+    if (i >= 6u) {
+        across = vec3<f32>(0.0, 30.0 * c.x, 0.0);
+    }
+    let p = u.foot.xyz + across + vec3<f32>(0.0, 0.0, 300.0 * c.y);
+    return u.view_proj * vec4<f32>(p, 1.0);
+}
+@fragment
+fn fs() -> @location(0) vec4<f32> {
+    return vec4<f32>(1.0, 0.0, 0.0, 1.0);
+}
+"#;
+
+impl Mast {
+    fn new(device: &wgpu::Device, format: wgpu::TextureFormat) -> Mast {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("mast"),
+            source: wgpu::ShaderSource::Wgsl(MAST.into()),
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("mast"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(format.into())],
+            }),
+            primitive: Default::default(),
+            // Reversed-Z, as the terrain's depth: nearer is greater.
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            multiview_mask: None,
+            cache: None,
+        });
+        let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("mast"),
+            size: 80,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("mast"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniforms.as_entire_binding(),
+            }],
+        });
+        Mast {
+            pipeline,
+            uniforms,
+            bind_group,
+        }
+    }
+
+    fn draw(
+        &self,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        colour: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+        camera: &Camera,
+        foot: glam::DVec3,
+    ) {
+        // Positions relative to the terrain's frame origin, in f32 near the camera.
+        let local = (foot - Terrain::frame_origin(camera)).as_vec3();
+        let mut data = Terrain::view_proj(camera).to_cols_array().to_vec();
+        data.extend([local.x, local.y, local.z, 1.0]);
+        queue.write_buffer(&self.uniforms, 0, bytemuck::cast_slice(&data));
+        let mut pass = begin(encoder, colour, depth, false);
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.draw(0..12, 0..1);
+    }
+}
+
+/// A copy of the surface's texture for the screenshot, where the surface allows copies.
+struct Readback {
+    buffer: wgpu::Buffer,
+    width: u32,
+    height: u32,
+    row: u32,
+    bgra: bool,
+}
+
+impl Readback {
+    fn record(
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        texture: &wgpu::Texture,
+    ) -> Option<Readback> {
+        if !texture.usage().contains(wgpu::TextureUsages::COPY_SRC) {
+            return None;
+        }
+        let (width, height) = (texture.width(), texture.height());
+        let row = (width * 4).div_ceil(256) * 256;
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("screenshot"),
+            size: (row * height) as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        encoder.copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row),
+                    rows_per_image: None,
+                },
+            },
+            texture.size(),
+        );
+        let bgra = matches!(
+            texture.format(),
+            wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
+        );
+        Some(Readback {
+            buffer,
+            width,
+            height,
+            row,
+            bgra,
+        })
+    }
+
+    fn read(self, device: &wgpu::Device) -> anyhow::Result<(u32, u32, Vec<u8>)> {
+        self.buffer
+            .slice(..)
+            .map_async(wgpu::MapMode::Read, |r| r.expect("screenshot mapped"));
+        device.poll(wgpu::PollType::wait_indefinitely())?;
+        let bytes = self.buffer.slice(..).get_mapped_range()?;
+        let mut rgba = Vec::with_capacity((self.width * self.height * 4) as usize);
+        for y in 0..self.height as usize {
+            for px in bytes[y * self.row as usize..][..self.width as usize * 4].chunks_exact(4) {
+                let (r, b) = if self.bgra {
+                    (px[2], px[0])
+                } else {
+                    (px[0], px[2])
+                };
+                rgba.extend([r, px[1], b, 255]);
+            }
+        }
+        Ok((self.width, self.height, rgba))
+    }
+}
