@@ -20,7 +20,7 @@ use crate::lod::reference::Reference;
 use crate::lod::warped::Warped;
 use crate::lod::{CpuTimes, Lod, Shared};
 use crate::scene;
-use crate::scene::{Mode, Scene, Triangulation};
+use crate::scene::{Mode, Scene};
 use crate::sketch::Atlas;
 use crate::stage::StageTimes;
 use crate::tiles::cache::StreamStats;
@@ -71,24 +71,14 @@ pub struct Renderer {
     ledger: Ledger,
 }
 
-/// What a scene in `mode` needs of the adapter: the atlas, and the warped mode's mesh.
+/// What a scene in `mode` needs of the adapter: the atlas, and the mode's own largest binding
+/// ([`Lod::needs`]; one arm a mode, no wildcard, so a new mode has to answer).
 pub fn needs(scene: &Scene, mode: Mode, atlas: &Atlas) -> Needs {
     let largest = match mode {
-        // The detailed geometry image, a vec4 per vertex; with an adaptive triangulation the
-        // quad indices are bound too (`mesh_split`), six u32 a cell, 1.5× as large.
-        Mode::Warped => {
-            let m = scene.warp.mesh as u64;
-            let indices = match scene.warp.triangulation {
-                Triangulation::Adaptive => m.saturating_sub(1).pow(2) * 24,
-                Triangulation::Fixed => 0,
-            };
-            (m * m * 16).max(indices)
-        }
-        // The hemisphere's vertices carried to the terrain: a vec4 each.
-        Mode::Clipmaps => scene.planet().map_or(0, |p| {
-            crate::planet::rings::vertex_count(p.phi_steps, p.rings_per_level) * 16
-        }),
-        _ => 0,
+        Mode::Warped => Warped::needs(scene),
+        Mode::Clipmaps => crate::lod::clipmaps::Clipmaps::needs(scene),
+        Mode::Geomipmap | Mode::Bruteforce => Baselines::needs(scene),
+        Mode::Reference => Reference::needs(scene),
     };
     // A streamed pyramid's pool fits itself to the adapter's binding limit.
     let sketch = if atlas.pyramid.is_some() {

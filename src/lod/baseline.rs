@@ -361,6 +361,12 @@ impl Lod for Baselines {
         &[TerrainPass::NAME]
     }
 
+    /// Nothing beyond the sketch: the baked grid's size depends on the sketch and K, and
+    /// [`bake`] holds it to the adapter's limit itself, with advice.
+    fn needs(_: &crate::scene::Scene) -> u64 {
+        0
+    }
+
     /// Chooses the blocks for `camera` (GeoMipMap; brute force draws all, always).
     fn prepare(&mut self, _: &Atlas, camera: &Camera) -> CpuTimes {
         let start = Instant::now();

@@ -190,6 +190,13 @@ impl Lod for Clipmaps {
         &PASSES
     }
 
+    /// The hemisphere's vertices carried to the terrain: a vec4 each.
+    fn needs(scene: &crate::scene::Scene) -> u64 {
+        scene.planet().map_or(0, |p| {
+            crate::planet::rings::vertex_count(p.phi_steps, p.rings_per_level) * 16
+        })
+    }
+
     fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes {
         let start = Instant::now();
         if let Some(geo) = &camera.geo {

@@ -6,7 +6,8 @@
 //! submission and timing); a scheme owns its passes and buffers and answers the renderer through
 //! [`Lod`]: prepare on the CPU for a camera, fill its part of the frame's uniforms, record its
 //! passes (named, so the timer and the reports key them by name), give back its image. Adding a
-//! mode is one module here, its WGSL and its CPU twin.
+//! mode is one module here, its WGSL and its CPU twin. Each scheme states what it needs of the
+//! adapter ([`Lod::needs`], no default), so no mode is silently taken to need nothing.
 //!
 //! Rejected alternative: an enum of the modes with a `match` in every method (what this replaced:
 //! three renderer types each wrapped again, their submit–read–time code written three times). A
@@ -64,6 +65,11 @@ pub struct CpuTimes {
 pub trait Lod: Any {
     /// The passes it may record, in the order it records them (the timer's slots).
     fn passes(&self) -> &'static [&'static str];
+    /// Bytes of its largest storage binding beyond the sketch's, for `scene`: what the adapter
+    /// must bind before the scheme is built ([`crate::render::needs`]).
+    fn needs(scene: &Scene) -> u64
+    where
+        Self: Sized;
     /// The CPU work for `camera`: the warped mode's stage, GeoMipMap's block selection.
     fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes;
     /// Fills its part of the frame's uniform inputs (the rest is the renderer's).

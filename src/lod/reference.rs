@@ -68,6 +68,11 @@ impl Lod for Reference {
         &[ReferencePass::NAME]
     }
 
+    /// Nothing beyond the sketch: its colour and position buffers are a vec4 per pixel.
+    fn needs(_: &crate::scene::Scene) -> u64 {
+        0
+    }
+
     fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes {
         if let (Some(p), Some(geo)) = (&mut self.planet, &camera.geo) {
             let u =

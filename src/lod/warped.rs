@@ -160,6 +160,17 @@ impl Lod for Warped {
         PASSES[2 * self.mesh_split.is_some() as usize + self.normals.is_some() as usize]
     }
 
+    /// The detailed geometry image, a vec4 per vertex; with an adaptive triangulation the quad
+    /// indices are bound too (`mesh_split`), six u32 a cell, 1.5× as large.
+    fn needs(scene: &crate::scene::Scene) -> u64 {
+        let m = scene.warp.mesh as u64;
+        let indices = match scene.warp.triangulation {
+            Triangulation::Adaptive => m.saturating_sub(1).pow(2) * 24,
+            Triangulation::Fixed => 0,
+        };
+        (m * m * 16).max(indices)
+    }
+
     fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes {
         let stage = self.stage.run(atlas, camera);
         self.phi_on_gpu &= self.stage.held;
