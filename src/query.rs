@@ -19,6 +19,7 @@ use crate::detail::Detail;
 use crate::error::{Error, Result};
 use crate::scene::{Outside, Scene};
 use crate::sketch::Atlas;
+use crate::sketch::cubic::{catmull_rom, catmull_rom_d};
 use glam::{DVec2, DVec3};
 
 /// The ground of a planar scene: its sketch, detail and what lies beyond the sketch.
@@ -271,28 +272,6 @@ fn slab(eye: DVec3, dir: DVec3, lo: DVec3, hi: DVec3) -> Option<(f64, f64)> {
         }
     }
     (t0 <= t1).then_some((t0, t1))
-}
-
-/// Catmull–Rom weights of the four nodes around fraction `f`.
-pub(crate) fn catmull_rom(f: f64) -> [f64; 4] {
-    let (f2, f3) = (f * f, f * f * f);
-    [
-        -0.5 * f3 + f2 - 0.5 * f,
-        1.5 * f3 - 2.5 * f2 + 1.0,
-        -1.5 * f3 + 2.0 * f2 + 0.5 * f,
-        0.5 * f3 - 0.5 * f2,
-    ]
-}
-
-/// The weights' derivatives by `f`.
-fn catmull_rom_d(f: f64) -> [f64; 4] {
-    let f2 = f * f;
-    [
-        -1.5 * f2 + 2.0 * f - 0.5,
-        4.5 * f2 - 5.0 * f,
-        -4.5 * f2 + 4.0 * f + 0.5,
-        1.5 * f2 - f,
-    ]
 }
 
 /// The bicubic on level `l` at level-0 texel coordinates `uv`, nodes clamped to the level, with

@@ -5,7 +5,6 @@
 
 use super::alloc::{Alloc, Buffer};
 use super::stream::AtlasBinding;
-use super::warp_zoom::catmull_rom;
 use super::{bind, compute_pipeline, entry, storage, uniform};
 use crate::camera::Geo;
 use crate::detail::Detail;
@@ -13,6 +12,7 @@ use crate::error::Result;
 use crate::planet::noise::{SphereOctave, gradient_noise3, lattice_scale};
 use crate::planet::rings::{Rings, Span};
 use crate::planet::{Planet, Tangent};
+use crate::sketch::cubic::catmull_rom;
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, IVec2, Vec2, Vec3, Vec4};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};

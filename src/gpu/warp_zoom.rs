@@ -10,6 +10,7 @@ use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
 use crate::detail::{OctaveFrame, gradient_noise};
 use crate::error::Result;
 use crate::sketch::Atlas;
+use crate::sketch::cubic::catmull_rom;
 use glam::{IVec2, Vec2, Vec3};
 use wgpu::ShaderStages as S;
 
@@ -160,16 +161,6 @@ pub fn sketch_rect(f: &FrameUniforms) -> (Vec2, Vec2) {
     let lo = -Vec2::from(f.atlas.offset);
     let nodes = glam::UVec2::new(f.atlas.level[0][0], f.atlas.level[0][1]) - glam::UVec2::ONE;
     (lo, lo + nodes.as_vec2() / Vec2::from(f.atlas.inv_spacing))
-}
-
-pub(crate) fn catmull_rom(t: f32) -> [f32; 4] {
-    let (t2, t3) = (t * t, t * t * t);
-    [
-        -0.5 * t3 + t2 - 0.5 * t,
-        1.5 * t3 - 2.5 * t2 + 1.0,
-        -1.5 * t3 + 2.0 * t2 + 0.5 * t,
-        0.5 * t3 - 0.5 * t2,
-    ]
 }
 
 /// `atlas_level` in the shader: bicubic height on level l at level-0 texel coordinates.

@@ -205,7 +205,10 @@ impl Planet<'_> {
         let x = (uv - DVec2::splat((s - 1.0) * 0.5)) / s;
         let i = x.floor();
         let f = x - i;
-        let (wx, wy) = (catmull_rom(f.x), catmull_rom(f.y));
+        let (wx, wy) = (
+            crate::sketch::cubic::catmull_rom(f.x),
+            crate::sketch::cubic::catmull_rom(f.y),
+        );
         let mut h = 0.0;
         for (r, wyr) in wy.iter().enumerate() {
             for (c, wxc) in wx.iter().enumerate() {
@@ -234,16 +237,6 @@ impl Planet<'_> {
         }
         Ok(h)
     }
-}
-
-fn catmull_rom(f: f64) -> [f64; 4] {
-    let (f2, f3) = (f * f, f * f * f);
-    [
-        -0.5 * f3 + f2 - 0.5 * f,
-        1.5 * f3 - 2.5 * f2 + 1.0,
-        -1.5 * f3 + 2.0 * f2 + 0.5 * f,
-        0.5 * f3 - 0.5 * f2,
-    ]
 }
 
 #[cfg(test)]

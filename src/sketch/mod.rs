@@ -14,6 +14,7 @@
 //! milliseconds, the pyramid costs one build at load time (a third more memory).
 
 mod asc;
+pub mod cubic;
 pub mod fill;
 pub mod georef;
 mod geotiff;

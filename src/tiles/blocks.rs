@@ -183,7 +183,7 @@ impl Strips<'_> {
         let at = |k: i64| (f as i64 - 1 + k).clamp(0, len as i64 - 1) as usize;
         (
             [at(0), at(1), at(2), at(3)],
-            crate::gpu::warp_zoom::catmull_rom(u - f),
+            crate::sketch::cubic::catmull_rom(u - f),
         )
     }
 
