@@ -125,8 +125,8 @@ impl Terrain {
             device: &ctx.device,
             ledger: &ledger,
         };
-        let output = OutputPass::new(&alloc, targets, mode == Mode::Reference)?;
         let renderer = build(&ctx, &scene, atlas, mode)?;
+        let output = OutputPass::new(&alloc, targets, renderer.shader_key)?;
         Ok(Terrain {
             ctx,
             targets,

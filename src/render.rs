@@ -63,6 +63,8 @@ pub struct Renderer {
     pub samples: u32,
     /// The ground was shaded deferred (`render.deferred` where the frame and adapter allow).
     pub deferred: bool,
+    /// The shader variant of the scheme's passes, and of the output pass for a host.
+    pub(crate) shader_key: crate::gpu::shaders::Key,
     view: View,
     frame: Buffer,
     sketch: SketchGpu,
@@ -186,9 +188,11 @@ impl Renderer {
             Mode::Reference => Box::new(Reference::new(&shared)?),
         };
         let deferred = shared.deferred;
+        let shader_key = crate::lod::shader_key(&shared, mode);
         Ok(Renderer {
             samples,
             deferred,
+            shader_key,
             timer: Timer::new(&ctx, &alloc, lod.passes()),
             ctx,
             atlas,

@@ -4,6 +4,7 @@
 //! to and the f64 terrain function ([`crate::planet::Planet::ground`]) holds in turn.
 
 use super::alloc::{Alloc, Buffer};
+use super::shaders::Key;
 use super::stream::AtlasBinding;
 use super::{bind, compute_pipeline, entry, storage, uniform};
 use crate::camera::Geo;
@@ -179,7 +180,7 @@ impl ClipmapsPass {
         atlas: &AtlasBinding,
         planet: &wgpu::Buffer,
         rings: &Rings,
-        noise: bool,
+        key: Key,
     ) -> Result<ClipmapsPass> {
         let mut entries = vec![entry(0, S::COMPUTE, uniform())];
         entries.extend(atlas.entries(S::COMPUTE));
@@ -192,12 +193,7 @@ impl ClipmapsPass {
             label: Some("clipmaps"),
             entries: &entries,
         });
-        let mut flags = Vec::new();
-        if noise {
-            flags.push("NOISE");
-        }
-        atlas.flag(&mut flags);
-        let pipeline = compute_pipeline(device, "clipmaps", &flags, &layout)?;
+        let pipeline = compute_pipeline(device, "clipmaps", key, &layout)?;
         let points: Vec<[f32; 4]> = rings.vertices.iter().map(|v| v.to_array()).collect();
         let hemisphere = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("hemisphere"),

@@ -23,6 +23,7 @@
 //! are stored from one array, not one by one.
 
 use super::alloc::Alloc;
+use super::shaders::Key;
 use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
@@ -56,7 +57,7 @@ impl MeshSplitPass {
                 entry(5, S::COMPUTE, storage(false)),
             ],
         });
-        let pipeline = compute_pipeline(device, "mesh_split", &[], &layout)?;
+        let pipeline = compute_pipeline(device, "mesh_split", Key::NONE, &layout)?;
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("mesh_split"),
             layout: &layout,

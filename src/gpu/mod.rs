@@ -18,15 +18,16 @@ pub mod uniforms;
 pub mod warp_zoom;
 
 use crate::error::Result;
+use shaders::Key;
 
-/// A compute pipeline for pass `name` with `flags`, entry point `main`.
+/// A compute pipeline for pass `name` in variant `key`, entry point `main`.
 pub(crate) fn compute_pipeline(
     device: &wgpu::Device,
     name: &str,
-    flags: &[&str],
+    key: Key,
     layout: &wgpu::BindGroupLayout,
 ) -> Result<wgpu::ComputePipeline> {
-    let module = shader_module(device, name, flags)?;
+    let module = shader_module(device, name, key)?;
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(name),
         bind_group_layouts: &[Some(layout)],
@@ -47,9 +48,9 @@ pub(crate) fn compute_pipeline(
 pub(crate) fn shader_module(
     device: &wgpu::Device,
     name: &str,
-    flags: &[&str],
+    key: Key,
 ) -> Result<wgpu::ShaderModule> {
-    let source = shaders::compose(name, flags)?;
+    let source = shaders::compose(name, &key.defs())?;
     Ok(device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(name),
         source: wgpu::ShaderSource::Wgsl(source.into()),

@@ -1,6 +1,7 @@
 //! Normals of the detailed geometry image (`shaders/normals.wgsl`).
 
 use super::alloc::{Alloc, Buffer};
+use super::shaders::Key;
 use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
@@ -31,7 +32,7 @@ impl NormalsPass {
                 entry(4, S::COMPUTE, storage(false)),
             ],
         });
-        let pipeline = compute_pipeline(device, "normals", &[], &layout)?;
+        let pipeline = compute_pipeline(device, "normals", Key::NONE, &layout)?;
         let normals = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("normals"),
             size: (mesh * mesh) as u64 * 16,

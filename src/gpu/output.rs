@@ -10,6 +10,7 @@
 //! triangle.
 
 use super::alloc::{Alloc, Buffer};
+use super::shaders::Key;
 use super::{bind, entry, shader_module, storage, uniform};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
@@ -61,8 +62,10 @@ impl OutputPass {
     /// The pass's name: its WGSL file.
     pub const NAME: &'static str = "output";
 
-    /// For frames left as `buffers` (the reference) or in targets, written into `targets`.
-    pub fn new(device: &Alloc, targets: Targets, from_buffers: bool) -> Result<OutputPass> {
+    /// For frames left in buffers (the reference, `FROM_BUFFERS` in the scheme's `key`) or in
+    /// targets, written into `targets`.
+    pub fn new(device: &Alloc, targets: Targets, key: Key) -> Result<OutputPass> {
+        let from_buffers = key.contains(Key::FROM_BUFFERS);
         let fs = S::FRAGMENT;
         let texture = wgpu::BindingType::Texture {
             sample_type: wgpu::TextureSampleType::Float { filterable: false },
@@ -78,8 +81,7 @@ impl OutputPass {
                 entry(2, fs, input),
             ],
         });
-        let flags: &[&str] = if from_buffers { &["FROM_BUFFERS"] } else { &[] };
-        let module = shader_module(device, Self::NAME, flags)?;
+        let module = shader_module(device, Self::NAME, key)?;
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(Self::NAME),
             bind_group_layouts: &[Some(&layout)],

@@ -6,6 +6,7 @@
 //! z-fighting. Owns the colour and depth targets.
 
 use super::alloc::{Alloc, Buffer, Texture};
+use super::shaders::Key;
 use super::stream::AtlasBinding;
 use super::terrain::{COLOUR, DEPTH, DEPTH_COPY, RasterPipeline};
 use super::{bind, entry, shader_module, storage, uniform};
@@ -49,14 +50,11 @@ impl PlanetPass {
         vertices: &wgpu::Buffer,
         rings: &Rings,
         (width, height): (u32, u32),
-        flags: &[&'static str],
-        positions: bool,
+        key: Key,
     ) -> Result<PlanetPass> {
-        let mut flags = flags.to_vec();
-        atlas.flag(&mut flags);
+        let positions = key.contains(Key::POSITIONS);
         let mut targets = vec![Some(wgpu::ColorTargetState::from(COLOUR))];
         if positions {
-            flags.push("POSITIONS");
             targets.push(Some(DEPTH_COPY.into()));
         }
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -72,7 +70,7 @@ impl PlanetPass {
             ]
             .concat(),
         });
-        let module = shader_module(device, Self::NAME, &flags)?;
+        let module = shader_module(device, Self::NAME, key)?;
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("planet"),
             bind_group_layouts: &[Some(&layout)],

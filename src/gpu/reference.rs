@@ -4,6 +4,7 @@
 use super::alloc::{Alloc, Buffer};
 use super::context::GpuContext;
 use super::frame_io::read_vec4;
+use super::shaders::Key;
 use super::stream::AtlasBinding;
 use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
 use crate::error::Result;
@@ -20,31 +21,20 @@ pub struct ReferencePass {
     height: u32,
 }
 
-/// What the reference's shader is built with.
-pub struct Features {
-    /// The procedural octaves.
-    pub noise: bool,
-    /// The sketch's shadow (`render.shadows`).
-    pub shadows: bool,
-    /// The detail's shadow (`render.detail_shadows`).
-    pub detail_shadows: bool,
-    /// Four rays per pixel at the multisampling pattern's positions, averaged (`render.msaa`).
-    pub supersample: bool,
-    /// A planet: its uniform block (`shaders/planet_reference.wgsl` marches the sphere).
-    pub planet: Option<wgpu::Buffer>,
-}
-
 impl ReferencePass {
     /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
     pub const NAME: &'static str = "reference";
 
+    /// The pass in variant `key`; with `planet`, a planet's uniform block, marching the sphere
+    /// (`shaders/planet_reference.wgsl`).
     pub fn new(
         device: &Alloc,
         frame: &wgpu::Buffer,
         atlas: &AtlasBinding,
         width: u32,
         height: u32,
-        features: Features,
+        key: Key,
+        planet: Option<&wgpu::Buffer>,
     ) -> Result<ReferencePass> {
         let mut entries = vec![entry(0, S::COMPUTE, uniform())];
         entries.extend(atlas.entries(S::COMPUTE));
@@ -52,34 +42,18 @@ impl ReferencePass {
             entry(2, S::COMPUTE, storage(false)),
             entry(3, S::COMPUTE, storage(false)),
         ]);
-        if features.planet.is_some() {
+        if planet.is_some() {
             entries.push(entry(4, S::COMPUTE, uniform()));
         }
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("reference"),
             entries: &entries,
         });
-        let mut flags = Vec::new();
-        for (on, flag) in [
-            (features.noise, "NOISE"),
-            (features.shadows, "SHADOWS"),
-            (
-                features.shadows && features.detail_shadows && features.noise,
-                "DETAIL_SHADOWS",
-            ),
-            (features.supersample, "SUPERSAMPLE"),
-        ] {
-            if on {
-                flags.push(flag);
-            }
-        }
-        atlas.flag(&mut flags);
-        let flags = flags.as_slice();
-        let shader = match features.planet {
+        let shader = match planet {
             Some(_) => "planet_reference",
             None => "reference",
         };
-        let pipeline = compute_pipeline(device, shader, flags, &layout)?;
+        let pipeline = compute_pipeline(device, shader, key, &layout)?;
         let buffer = |label| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -92,7 +66,7 @@ impl ReferencePass {
         let mut binds = vec![bind(0, frame)];
         binds.extend(atlas.binds());
         binds.extend([bind(2, &colour), bind(3, &position)]);
-        if let Some(planet) = &features.planet {
+        if let Some(planet) = planet {
             binds.push(bind(4, planet));
         }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {

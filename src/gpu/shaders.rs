@@ -1,6 +1,7 @@
 //! The shader import step: each pass's WGSL file with its `#import name` lines replaced by
 //! `shaders/shared/name.wgsl`, and `#ifdef FLAG` / `#else` / `#endif` blocks kept or dropped by the
-//! variant's flags. That is all the preprocessing there is.
+//! variant's flags. That is all the preprocessing there is. A variant's flags are one [`Key`],
+//! derived per scene and mode in one place (`lod::shader_key`).
 //!
 //! Rules: an import is included once per shader; flags nest; an unknown import or an unbalanced
 //! block is an error naming the file and line (tests validate every variant with naga).
@@ -36,25 +37,90 @@ pub const PASSES: [(&str, &str); 9] = [
     ("output", include_str!("../../shaders/output.wgsl")),
 ];
 
-/// Every flag any pass tests, for validating all variants.
-pub const FLAGS: [&str; 16] = [
-    "DETAIL",
-    "CENTRES",
-    "BUMP",
-    "BUMP_FADE",
-    "NOISE",
-    "IMPORTANCE_VIEW",
-    "GEOMIPMAP",
-    "POSITIONS",
-    "PIXEL_NORMALS",
-    "SHADOWS",
-    "DETAIL_SHADOWS",
-    "SUPERSAMPLE",
-    "STREAMED",
-    "GRID_STREAMED",
-    "DEFERRED",
-    "FROM_BUFFERS",
-];
+/// A shader variant: a set of [`FLAGS`], a bit each. One key is derived per scene and mode
+/// ([`crate::lod::shader_key`]) and every pass of the scheme is composed with it; a pass ignores
+/// the flags its WGSL does not test.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Key(u32);
+
+/// The flags: a [`Key`] constant each, and their names in bit order.
+macro_rules! flags {
+    ($($flag:ident),* $(,)?) => {
+        #[allow(non_camel_case_types, clippy::upper_case_acronyms)]
+        enum Bit { $($flag),* }
+        impl Key {
+            $(pub const $flag: Key = Key(1 << Bit::$flag as u32);)*
+        }
+        /// Every flag any pass tests, for validating all variants.
+        pub const FLAGS: [&str; [$(stringify!($flag)),*].len()] = [$(stringify!($flag)),*];
+    };
+}
+
+flags!(
+    DETAIL,
+    CENTRES,
+    BUMP,
+    BUMP_FADE,
+    NOISE,
+    IMPORTANCE_VIEW,
+    GEOMIPMAP,
+    POSITIONS,
+    PIXEL_NORMALS,
+    SHADOWS,
+    DETAIL_SHADOWS,
+    SUPERSAMPLE,
+    STREAMED,
+    GRID_STREAMED,
+    DEFERRED,
+    FROM_BUFFERS,
+);
+
+impl Key {
+    pub const NONE: Key = Key(0);
+
+    /// The key of the flags named (every name one of [`FLAGS`]).
+    pub fn of(names: &[&str]) -> Key {
+        Key(FLAGS
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| names.contains(f))
+            .fold(0, |bits, (k, _)| bits | 1 << k))
+    }
+
+    /// Whether every flag of `flags` is set.
+    pub const fn contains(self, flags: Key) -> bool {
+        self.0 & flags.0 == flags.0
+    }
+
+    /// Whether any flag of `flags` is set.
+    pub const fn any(self, flags: Key) -> bool {
+        self.0 & flags.0 != 0
+    }
+
+    /// Sets `flags` where `on`.
+    pub fn set(&mut self, flags: Key, on: bool) {
+        if on {
+            self.0 |= flags.0;
+        }
+    }
+
+    /// The flags' names, for [`compose`].
+    pub fn defs(self) -> Vec<&'static str> {
+        FLAGS
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| self.0 & 1 << k != 0)
+            .map(|(_, f)| *f)
+            .collect()
+    }
+}
+
+impl std::ops::BitOr for Key {
+    type Output = Key;
+    fn bitor(self, other: Key) -> Key {
+        Key(self.0 | other.0)
+    }
+}
 
 /// The combined source of pass `name` with `flags` set.
 pub fn compose(name: &str, flags: &[&str]) -> Result<String> {
@@ -135,5 +201,15 @@ mod tests {
         assert!(with.contains("fn gradient_noise") && with.contains("octave_local("));
         assert!(!without.contains("fn gradient_noise") && !without.contains("octave_local("));
         assert_eq!(with.matches("struct Frame").count(), 1);
+    }
+
+    #[test]
+    fn a_key_names_its_flags() {
+        let key = Key::NOISE | Key::DEFERRED;
+        assert_eq!(key.defs(), ["NOISE", "DEFERRED"]);
+        assert_eq!(Key::of(&key.defs()), key);
+        assert!(key.contains(Key::NOISE) && !key.contains(Key::NOISE | Key::BUMP));
+        assert!(key.any(Key::NOISE | Key::BUMP) && !key.any(Key::BUMP));
+        assert_eq!(FLAGS.len(), 16);
     }
 }

@@ -66,13 +66,6 @@ impl AtlasBinding {
             ),
         ))
     }
-
-    /// Adds the shader flag the binding needs.
-    pub fn flag(&self, flags: &mut Vec<&'static str>) {
-        if self.marks.is_some() {
-            flags.push("STREAMED");
-        }
-    }
 }
 
 /// What the scene asks of the stream (the `[stream]` keys, resolved).

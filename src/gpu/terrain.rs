@@ -9,6 +9,7 @@
 //!   single-sampled pass of the terrain's depth alone.
 
 use super::alloc::{Alloc, Buffer, Texture};
+use super::shaders::Key;
 use super::stream::AtlasBinding;
 use super::{bind, entry, shader_module, storage, uniform};
 use crate::error::Result;
@@ -79,47 +80,32 @@ struct Multisampled {
     _targets: Vec<Texture>,
 }
 
-/// The normals the terrain is lit with.
-pub enum Shading {
-    /// The mesh's vertex normals (this buffer, mesh² vec4), plus bump detail with `bump`.
-    MeshNormals(wgpu::Buffer),
-    /// The terrain function's normal at each pixel, sampled from the atlas (as the reference
-    /// shades); no vertex normals are bound or computed.
-    PixelNormals,
-    /// A streamed GeoMipMap grid's normals, from its vertices evaluated in the vertex shader (the
-    /// normals pass's central differences), plus bump detail with `bump`.
-    GridNormals,
-}
-
-/// Which variant of the shaders to build.
+/// Which variant of the shaders to build, and the buffers it reads.
+///
+/// The normals the terrain is lit with follow from the key: the mesh's vertex normals
+/// (`normals`, mesh² vec4); with `PIXEL_NORMALS`, the terrain function's normal at each pixel,
+/// sampled from the atlas as the reference shades (no vertex normals bound or computed); with
+/// `GRID_STREAMED`, a streamed GeoMipMap grid's normals from its vertices evaluated in the vertex
+/// shader (the normals pass's central differences).
 pub struct Variant {
-    pub noise: bool,
-    pub bump: bool,
-    /// With `bump`: each bump octave weighted by a fitted power of its expected correlation
-    /// (`detail.bump_fade`).
-    pub bump_fade: bool,
-    /// Where the light's normals come from.
-    pub shading: Shading,
+    /// The shaders' flags ([`crate::lod::shader_key`]); `DEFERRED` shades from a G-buffer
+    /// ([`Deferred`]), single-sampled frames only.
+    pub key: Key,
+    /// The mesh's vertex normals, unless the key lights the terrain otherwise.
+    pub normals: Option<wgpu::Buffer>,
     /// The importance debug view's buffer (n² f32), only when that view is drawn.
     pub importance: Option<wgpu::Buffer>,
     /// GeoMipMap: the per-frame block records and the most indices a frame can draw. The index
     /// buffer is then rewritten every frame instead of holding the warped mesh's quads.
     pub geomipmap: Option<(wgpu::Buffer, u64)>,
     /// Also write each pixel's depth, from which its ground position is recovered (for
-    /// screen-space error).
+    /// screen-space error); multisampled, in a pass of its own.
     pub positions: bool,
     /// The sketch's pyramid: the surface types read its curvature, the shadow ray and pixel
     /// normals its heights.
     pub atlas: AtlasBinding,
-    /// The sketch shadows itself (`render.shadows`).
-    pub shadows: bool,
-    /// The detail shadows itself too (`render.detail_shadows`, with shadows and noise).
-    pub detail_shadows: bool,
     /// Samples per pixel: 1, or 4 multisampled (`render.msaa`).
     pub samples: u32,
-    /// Shade from a G-buffer (`Deferred`): single-sampled frames only, where the adapter allows
-    /// (`GpuContext::deferred` decides).
-    pub deferred: bool,
 }
 
 impl TerrainPass {
@@ -138,60 +124,33 @@ impl TerrainPass {
         height: u32,
         variant: &Variant,
     ) -> Result<TerrainPass> {
+        let key = variant.key;
         let mut entries = vec![entry(0, S::VERTEX_FRAGMENT, uniform())];
-        let mut flags = Vec::new();
         match detailed {
             Some(_) => {
                 entries.extend(variant.atlas.entries(S::FRAGMENT));
                 entries.push(entry(3, S::VERTEX, storage(true)));
             }
-            None => {
-                entries.extend(variant.atlas.entries(S::VERTEX_FRAGMENT));
-                flags.push("GRID_STREAMED");
-            }
+            None => entries.extend(variant.atlas.entries(S::VERTEX_FRAGMENT)),
         }
-        variant.atlas.flag(&mut flags);
-        if variant.noise {
-            flags.push("NOISE");
-        }
-        match variant.shading {
-            Shading::MeshNormals(_) => entries.push(entry(4, S::VERTEX, storage(true))),
-            Shading::PixelNormals => flags.push("PIXEL_NORMALS"),
-            Shading::GridNormals => {}
-        }
-        // Pixel normals hold every octave already: no bump on top of them.
-        if variant.bump && !matches!(variant.shading, Shading::PixelNormals) {
-            flags.push("BUMP");
-            if variant.bump_fade {
-                flags.push("BUMP_FADE");
-            }
-        }
-        if variant.shadows {
-            flags.push("SHADOWS");
-            if variant.detail_shadows && variant.noise {
-                flags.push("DETAIL_SHADOWS");
-            }
+        if variant.normals.is_some() {
+            entries.push(entry(4, S::VERTEX, storage(true)));
         }
         if variant.importance.is_some() {
             entries.push(entry(5, S::FRAGMENT, storage(true)));
-            flags.push("IMPORTANCE_VIEW");
         }
         if variant.geomipmap.is_some() {
             entries.push(entry(6, S::VERTEX, storage(true)));
-            flags.push("GEOMIPMAP");
         }
         let multisampled = variant.samples > 1;
-        if variant.deferred {
-            if multisampled {
-                return Err(crate::error::Error::Internal(
-                    "deferred shading asked of a multisampled frame",
-                ));
-            }
-            flags.push("DEFERRED");
+        let deferred = key.contains(Key::DEFERRED);
+        if deferred && multisampled {
+            return Err(crate::error::Error::Internal(
+                "deferred shading asked of a multisampled frame",
+            ));
         }
         let mut targets = vec![Some(wgpu::ColorTargetState::from(COLOUR))];
-        if variant.positions && !multisampled {
-            flags.push("POSITIONS");
+        if key.contains(Key::POSITIONS) {
             targets.push(Some(DEPTH_COPY.into()));
         }
 
@@ -199,11 +158,10 @@ impl TerrainPass {
             label: Some("terrain"),
             entries: &entries,
         });
-        let module = shader_module(device, "terrain", &flags)?;
+        let module = shader_module(device, "terrain", key)?;
         // Multisampled with positions: the same shaders with the depth copy's entry point.
         let depth_module = if variant.positions && multisampled {
-            flags.push("POSITIONS");
-            Some(shader_module(device, "terrain", &flags)?)
+            Some(shader_module(device, "terrain", key | Key::POSITIONS)?)
         } else {
             None
         };
@@ -230,7 +188,7 @@ impl TerrainPass {
         };
         let ground_test = Some((true, wgpu::CompareFunction::Greater));
         let n = variant.samples;
-        let (ground, screen, gbuffer) = if variant.deferred {
+        let (ground, screen, gbuffer) = if deferred {
             let gbuffer_layout =
                 device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                     label: Some("terrain g-buffer"),
@@ -272,7 +230,7 @@ impl TerrainPass {
         if let Some(detailed) = detailed {
             bind_entries.push(bind(3, detailed));
         }
-        if let Shading::MeshNormals(normals) = &variant.shading {
+        if let Some(normals) = &variant.normals {
             bind_entries.push(bind(4, normals));
         }
         if let Some(buffer) = &variant.importance {

@@ -4,6 +4,7 @@
 //! the tests to hold the GPU to the CPU stage's definitions.
 
 use super::alloc::{Alloc, Buffer};
+use super::shaders::Key;
 use super::stream::AtlasBinding;
 use super::uniforms::FrameUniforms;
 use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
@@ -37,9 +38,9 @@ impl WarpZoomPass {
         atlas: &AtlasBinding,
         n: u32,
         mesh: u32,
-        detail: bool,
-        centres: bool,
+        key: Key,
     ) -> Result<WarpZoomPass> {
+        let centres = key.contains(Key::CENTRES);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("warp_zoom"),
             entries: &[
@@ -57,15 +58,7 @@ impl WarpZoomPass {
             ]
             .concat(),
         });
-        let mut flags = Vec::new();
-        if detail {
-            flags.push("DETAIL");
-        }
-        if centres {
-            flags.push("CENTRES");
-        }
-        atlas.flag(&mut flags);
-        let pipeline = compute_pipeline(device, "warp_zoom", &flags, &layout)?;
+        let pipeline = compute_pipeline(device, "warp_zoom", key, &layout)?;
         let phi = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("phi"),
             size: (n * n) as u64 * 8,

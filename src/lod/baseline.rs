@@ -26,7 +26,8 @@ use crate::gpu::alloc::Buffer;
 use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::{ColourReadback, Timer, read_vec4, uniform_buffer};
 use crate::gpu::normals::NormalsPass;
-use crate::gpu::terrain::{Shading, TerrainPass, Variant};
+use crate::gpu::shaders::Key;
+use crate::gpu::terrain::{TerrainPass, Variant};
 use crate::gpu::uniforms::{BlockUniforms, FrameInputs, FrameUniforms};
 use crate::gpu::warp_zoom::WarpZoomPass;
 use crate::scene::Mode;
@@ -76,8 +77,8 @@ pub fn grid_of(atlas: &Atlas, k: u32, cells: usize) -> Grid {
 }
 
 /// Bakes the terrain function over [`grid_of`]'s grid; its normals too unless the scene lights
-/// the terrain per pixel.
-pub fn bake(s: &Shared, k: u32, cells: usize) -> Result<(Grid, Bake)> {
+/// the terrain per pixel; warp & zoom in the scheme's variant `key`.
+pub fn bake(s: &Shared, key: Key, k: u32, cells: usize) -> Result<(Grid, Bake)> {
     let (ctx, device, atlas, detail) = (s.ctx, &s.alloc, s.atlas, s.detail);
     let start = Instant::now();
     let mut grid = grid_of(atlas, k, cells);
@@ -102,15 +103,7 @@ pub fn bake(s: &Shared, k: u32, cells: usize) -> Result<(Grid, Bake)> {
     let uniforms = FrameUniforms::for_bake(atlas, detail, atlas.origin, n as u32);
     ctx.queue
         .write_buffer(&frame, 0, bytemuck::bytes_of(&uniforms));
-    let warp_zoom = WarpZoomPass::new(
-        device,
-        &frame,
-        s.atlas_binding,
-        n as u32,
-        n as u32,
-        detail.octaves > 0,
-        false,
-    )?;
+    let warp_zoom = WarpZoomPass::new(device, &frame, s.atlas_binding, n as u32, n as u32, key)?;
     let phi: Vec<[f32; 2]> = (0..n * n)
         .map(|v| {
             [
@@ -218,6 +211,7 @@ impl Baselines {
         let start = Instant::now();
         let (scene, detail) = (s.scene, s.detail);
         let device = &s.alloc;
+        let key = super::shader_key(s, kind);
         let cells = scene.geomipmap.block as usize - 1;
         let (grid, blocks, bake) = match &s.atlas.pyramid {
             Some(pyramid) => {
@@ -226,7 +220,7 @@ impl Baselines {
             }
             None => {
                 let k = scene.geomipmap.k.unwrap_or_else(|| default_k(s.atlas));
-                let (grid, bake) = bake(s, k, cells)?;
+                let (grid, bake) = bake(s, key, k, cells)?;
                 let blocks = Blocks::new(&grid);
                 (grid, blocks, Some(bake))
             }
@@ -251,24 +245,17 @@ impl Baselines {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let noise = detail.octaves > 0;
         let variant = Variant {
-            noise,
-            bump: noise && scene.detail.bump,
-            bump_fade: noise && scene.detail.bump && scene.detail.bump_fade,
-            shading: match bake.as_ref().and_then(|b| b.normals.as_ref()) {
-                Some(normals) => Shading::MeshNormals(wgpu::Buffer::clone(normals)),
-                None if bake.is_none() && !scene.render.pixel_normals => Shading::GridNormals,
-                None => Shading::PixelNormals,
-            },
+            key,
+            normals: bake
+                .as_ref()
+                .and_then(|b| b.normals.as_ref())
+                .map(|normals| wgpu::Buffer::clone(normals)),
             importance: None,
             geomipmap: Some((wgpu::Buffer::clone(&block_buffer), capacity.1 as u64)),
             positions: s.positions,
             atlas: s.atlas_binding.clone(),
-            shadows: s.scene.render.shadows,
-            detail_shadows: s.scene.render.detail_shadows,
             samples: s.samples,
-            deferred: s.deferred,
         };
         let n = grid.n as u32;
         let (width, height) = (scene.camera.width, scene.camera.height);

@@ -59,25 +59,15 @@ impl Clipmaps {
         let rings = Rings::new(p.phi_steps, p.rings_per_level);
         let device = &s.alloc;
         let planet_uniforms = PlanetUniforms::buffer(device);
-        let noise = s.detail.octaves > 0;
+        let key = super::shader_key(s, crate::scene::Mode::Clipmaps);
         let clipmaps = ClipmapsPass::new(
             device,
             s.frame,
             s.atlas_binding,
             &planet_uniforms,
             &rings,
-            noise,
+            key,
         )?;
-        let mut flags = Vec::new();
-        if noise {
-            flags.push("NOISE");
-            if s.scene.detail.bump {
-                flags.push("BUMP");
-                if s.scene.detail.bump_fade {
-                    flags.push("BUMP_FADE");
-                }
-            }
-        }
         let size = (s.scene.camera.width, s.scene.camera.height);
         let pass = PlanetPass::new(
             device,
@@ -88,8 +78,7 @@ impl Clipmaps {
             &clipmaps.vertices,
             &rings,
             size,
-            &flags,
-            s.positions,
+            key,
         )?;
         Ok(Clipmaps {
             rings,

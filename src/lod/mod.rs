@@ -6,7 +6,8 @@
 //! submission and timing); a scheme owns its passes and buffers and answers the renderer through
 //! [`Lod`]: prepare on the CPU for a camera, fill its part of the frame's uniforms, record its
 //! passes (named, so the timer and the reports key them by name), give back its image. Adding a
-//! mode is one module here, its WGSL and its CPU twin. Each scheme states what it needs of the
+//! mode is one module here, its WGSL and its CPU twin. The shader variant of every pass is
+//! [`shader_key`]'s, per scene and mode: a flag is derived there and nowhere else. Each scheme states what it needs of the
 //! adapter ([`Lod::needs`], no default), so no mode is silently taken to need nothing.
 //!
 //! Rejected alternative: an enum of the modes with a `match` in every method (what this replaced:
@@ -24,8 +25,9 @@ use crate::error::Result;
 use crate::gpu::alloc::Alloc;
 use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::Timer;
+use crate::gpu::shaders::Key;
 use crate::gpu::uniforms::{FrameInputs, View};
-use crate::scene::Scene;
+use crate::scene::{Mode, Scene, Triangulation};
 use crate::sketch::Atlas;
 use crate::stage::StageTimes;
 use std::any::Any;
@@ -50,6 +52,61 @@ pub struct Shared<'a> {
     pub samples: u32,
     /// A mesh mode, shading single-sampled frames deferred (`GpuContext::deferred`).
     pub deferred: bool,
+}
+
+/// The shader variant every pass of `mode`'s scheme is composed with, for the scene and the
+/// renderer's choices in `s`: the one place a flag is derived.
+pub fn shader_key(s: &Shared, mode: Mode) -> Key {
+    let (scene, mut key) = (s.scene, Key::NONE);
+    let noise = s.detail.octaves > 0;
+    let bump = noise && scene.detail.bump;
+    let shadows = |key: &mut Key| {
+        let on = scene.render.shadows;
+        key.set(Key::SHADOWS, on);
+        key.set(
+            Key::DETAIL_SHADOWS,
+            on && scene.render.detail_shadows && noise,
+        );
+    };
+    key.set(Key::NOISE, noise);
+    key.set(Key::STREAMED, s.atlas_binding.marks.is_some());
+    match mode {
+        Mode::Warped | Mode::Geomipmap | Mode::Bruteforce => {
+            let pixel_normals = scene.render.pixel_normals;
+            // Warp & zoom's octaves: the warped mesh's, and the baselines' bake.
+            key.set(Key::DETAIL, noise);
+            key.set(Key::PIXEL_NORMALS, pixel_normals);
+            // Pixel normals hold every octave already: no bump on top of them.
+            let bump = bump && !pixel_normals;
+            key.set(Key::BUMP, bump);
+            key.set(Key::BUMP_FADE, bump && scene.detail.bump_fade);
+            shadows(&mut key);
+            // Multisampled, the depth copy is a pass of its own (`gpu::terrain`).
+            key.set(Key::POSITIONS, s.positions && s.samples == 1);
+            key.set(Key::DEFERRED, s.deferred);
+            if mode == Mode::Warped {
+                let adaptive = scene.warp.triangulation == Triangulation::Adaptive;
+                key.set(Key::CENTRES, adaptive);
+                key.set(Key::IMPORTANCE_VIEW, s.view == View::Importance);
+            } else {
+                key.set(Key::GEOMIPMAP, true);
+                // No baked grid: the vertex shader evaluates the grid through the tile cache.
+                key.set(Key::GRID_STREAMED, s.atlas.pyramid.is_some());
+            }
+        }
+        Mode::Reference => {
+            // Its frame is left in buffers, which the output pass reads for a host.
+            key.set(Key::FROM_BUFFERS, true);
+            shadows(&mut key);
+            key.set(Key::SUPERSAMPLE, s.samples > 1 && scene.planet().is_none());
+        }
+        Mode::Clipmaps => {
+            key.set(Key::BUMP, bump);
+            key.set(Key::BUMP_FADE, bump && scene.detail.bump_fade);
+            key.set(Key::POSITIONS, s.positions);
+        }
+    }
+    key
 }
 
 /// The CPU's part of a frame.

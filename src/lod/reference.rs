@@ -7,7 +7,7 @@ use crate::camera::Camera;
 use crate::error::Result;
 use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::Timer;
-use crate::gpu::reference::{Features, ReferencePass};
+use crate::gpu::reference::ReferencePass;
 use crate::gpu::uniforms::{FrameInputs, View};
 use crate::sketch::Atlas;
 use std::any::Any;
@@ -33,7 +33,6 @@ struct PlanetMarch {
 impl Reference {
     pub fn new(s: &Shared) -> Result<Reference> {
         let (w, h) = (s.scene.camera.width, s.scene.camera.height);
-        let noise = s.detail.octaves > 0;
         let planet = s.scene.planet().map(|p| PlanetMarch {
             radius: p.radius_m,
             detail: s.detail.clone(),
@@ -47,13 +46,8 @@ impl Reference {
             s.atlas_binding,
             w,
             h,
-            Features {
-                noise,
-                shadows: s.scene.render.shadows,
-                detail_shadows: s.scene.render.detail_shadows,
-                supersample: s.samples > 1 && planet.is_none(),
-                planet: planet.as_ref().map(|p| wgpu::Buffer::clone(&p.buffer)),
-            },
+            super::shader_key(s, crate::scene::Mode::Reference),
+            planet.as_ref().map(|p| &*p.buffer),
         )?;
         Ok(Reference {
             pass,

@@ -11,10 +11,10 @@ use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::{ColourReadback, Timer, read_pod, read_vec4};
 use crate::gpu::mesh_split::MeshSplitPass;
 use crate::gpu::normals::NormalsPass;
-use crate::gpu::terrain::{Shading, TerrainPass, Variant};
+use crate::gpu::terrain::{TerrainPass, Variant};
 use crate::gpu::uniforms::{FrameInputs, View};
 use crate::gpu::warp_zoom::WarpZoomPass;
-use crate::scene::Triangulation;
+use crate::scene::{Mode, Triangulation};
 use crate::sketch::Atlas;
 use crate::stage::CpuStage;
 use std::any::Any;
@@ -53,10 +53,8 @@ impl Warped {
         let (n, mesh) = (s.scene.warp.size, s.scene.warp.mesh);
         let (width, height) = (s.scene.camera.width, s.scene.camera.height);
         let stage = CpuStage::new(s.scene, s.detail)?;
-        let noise = s.detail.octaves > 0;
-        let adaptive = s.scene.warp.triangulation == Triangulation::Adaptive;
-        let warp_zoom =
-            WarpZoomPass::new(device, s.frame, s.atlas_binding, n, mesh, noise, adaptive)?;
+        let key = super::shader_key(s, Mode::Warped);
+        let warp_zoom = WarpZoomPass::new(device, s.frame, s.atlas_binding, n, mesh, key)?;
         let normals = if s.scene.render.pixel_normals {
             None
         } else {
@@ -77,21 +75,15 @@ impl Warped {
             })
         });
         let variant = Variant {
-            noise,
-            bump: noise && s.scene.detail.bump,
-            bump_fade: noise && s.scene.detail.bump && s.scene.detail.bump_fade,
-            shading: match &normals {
-                Some(pass) => Shading::MeshNormals(wgpu::Buffer::clone(&pass.normals)),
-                None => Shading::PixelNormals,
-            },
+            key,
+            normals: normals
+                .as_ref()
+                .map(|pass| wgpu::Buffer::clone(&pass.normals)),
             importance: importance.as_ref().map(|b| wgpu::Buffer::clone(b)),
             geomipmap: None,
             positions: s.positions,
             atlas: s.atlas_binding.clone(),
-            shadows: s.scene.render.shadows,
-            detail_shadows: s.scene.render.detail_shadows,
             samples: s.samples,
-            deferred: s.deferred,
         };
         let terrain = TerrainPass::new(
             device,
