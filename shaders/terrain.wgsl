@@ -24,10 +24,21 @@ fn vertex_normal(i: u32) -> vec3<f32> {
     return vec3<f32>(0.0, 0.0, 1.0);
 }
 #else
+#ifdef GRID_STREAMED
+#ifdef GEOMIPMAP
+// A streamed grid's normals are differences of its vertices (level_normal): none are bound.
+#else
 @group(0) @binding(4) var<storage, read> normals: array<vec4<f32>>;
 fn vertex_normal(i: u32) -> vec3<f32> {
     return normals[i].xyz;
 }
+#endif
+#else
+@group(0) @binding(4) var<storage, read> normals: array<vec4<f32>>;
+fn vertex_normal(i: u32) -> vec3<f32> {
+    return normals[i].xyz;
+}
+#endif
 #endif
 #ifdef IMPORTANCE_VIEW
 @group(0) @binding(5) var<storage, read> importance: array<f32>;

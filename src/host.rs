@@ -175,7 +175,7 @@ impl Terrain {
             "the renderer keeps no frame for a host's targets",
         ))?;
         self.output
-            .record(&self.ctx.device, encoder, source, colour, depth);
+            .record(&self.ctx.device, encoder, source, colour, depth)?;
         self.recorded = true;
         Ok(())
     }

@@ -4,9 +4,10 @@
 //! to and the f64 terrain function ([`crate::planet::Planet::ground`]) holds in turn.
 
 use super::alloc::{Alloc, Buffer};
+use super::bindings::{Binding, bind_group, buffer, layout};
+use super::compute_pipeline;
 use super::shaders::Key;
 use super::stream::AtlasBinding;
-use super::{bind, compute_pipeline, entry, storage, uniform};
 use crate::camera::Geo;
 use crate::detail::Detail;
 use crate::error::Result;
@@ -160,6 +161,16 @@ impl PlanetUniforms {
     }
 }
 
+/// `shaders/clipmaps.wgsl`'s bindings.
+pub const BINDINGS: &[Binding] = &[
+    Binding::frame(S::COMPUTE),
+    Binding::atlas(S::COMPUTE),
+    Binding::wanted(S::COMPUTE),
+    Binding::uniform(2, "planet", S::COMPUTE),
+    Binding::storage(3, "hemisphere", S::COMPUTE),
+    Binding::storage_rw(4, "vertices", S::COMPUTE),
+];
+
 pub struct ClipmapsPass {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
@@ -182,18 +193,9 @@ impl ClipmapsPass {
         rings: &Rings,
         key: Key,
     ) -> Result<ClipmapsPass> {
-        let mut entries = vec![entry(0, S::COMPUTE, uniform())];
-        entries.extend(atlas.entries(S::COMPUTE));
-        entries.extend([
-            entry(2, S::COMPUTE, uniform()),
-            entry(3, S::COMPUTE, storage(true)),
-            entry(4, S::COMPUTE, storage(false)),
-        ]);
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("clipmaps"),
-            entries: &entries,
-        });
-        let pipeline = compute_pipeline(device, "clipmaps", key, &layout)?;
+        let name = Self::NAME;
+        let layout = layout(device, name, BINDINGS, 0, key);
+        let pipeline = compute_pipeline(device, name, key, &layout)?;
         let points: Vec<[f32; 4]> = rings.vertices.iter().map(|v| v.to_array()).collect();
         let hemisphere = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("hemisphere"),
@@ -206,16 +208,14 @@ impl ClipmapsPass {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("clipmaps"),
-            layout: &layout,
-            entries: &[
-                vec![bind(0, frame)],
-                atlas.binds(),
-                vec![bind(2, planet), bind(3, &hemisphere), bind(4, &vertices)],
-            ]
-            .concat(),
-        });
+        let mut resources = atlas.resources();
+        resources.extend([
+            ("frame", buffer(frame)),
+            ("planet", buffer(planet)),
+            ("hemisphere", buffer(&hemisphere)),
+            ("vertices", buffer(&vertices)),
+        ]);
+        let bind_group = bind_group(device, name, &layout, BINDINGS, 0, key, &resources)?;
         Ok(ClipmapsPass {
             pipeline,
             bind_group,

@@ -23,10 +23,19 @@
 //! are stored from one array, not one by one.
 
 use super::alloc::Alloc;
+use super::bindings::{Binding, bind_group, buffer, layout};
 use super::shaders::Key;
-use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
+use super::{compute_pipeline, dispatch_grid};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
+
+/// `shaders/mesh_split.wgsl`'s bindings.
+pub const BINDINGS: &[Binding] = &[
+    Binding::frame(S::COMPUTE),
+    Binding::storage(3, "detailed", S::COMPUTE),
+    Binding::storage(4, "centres", S::COMPUTE),
+    Binding::storage_rw(5, "indices", S::COMPUTE),
+];
 
 pub struct MeshSplitPass {
     pipeline: wgpu::ComputePipeline,
@@ -48,26 +57,16 @@ impl MeshSplitPass {
         indices: &wgpu::Buffer,
         mesh: u32,
     ) -> Result<MeshSplitPass> {
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("mesh_split"),
-            entries: &[
-                entry(0, S::COMPUTE, uniform()),
-                entry(3, S::COMPUTE, storage(true)),
-                entry(4, S::COMPUTE, storage(true)),
-                entry(5, S::COMPUTE, storage(false)),
-            ],
-        });
-        let pipeline = compute_pipeline(device, "mesh_split", Key::NONE, &layout)?;
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("mesh_split"),
-            layout: &layout,
-            entries: &[
-                bind(0, frame),
-                bind(3, detailed),
-                bind(4, centres),
-                bind(5, indices),
-            ],
-        });
+        let (name, key) = (Self::NAME, Key::NONE);
+        let layout = layout(device, name, BINDINGS, 0, key);
+        let pipeline = compute_pipeline(device, name, key, &layout)?;
+        let resources = [
+            ("frame", buffer(frame)),
+            ("detailed", buffer(detailed)),
+            ("centres", buffer(centres)),
+            ("indices", buffer(indices)),
+        ];
+        let bind_group = bind_group(device, name, &layout, BINDINGS, 0, key, &resources)?;
         Ok(MeshSplitPass {
             pipeline,
             bind_group,

@@ -1,8 +1,10 @@
 //! The GPU half of a frame: warp & zoom → mesh split → normals → terrain (with the sky), one
 //! struct per pass, each owning its pipeline, bind-group layout and resources, each with a WGSL
-//! file of the same name in `shaders/`. [`crate::render::Renderer`] runs them as a flat list.
+//! file of the same name in `shaders/`, and its bindings listed once ([`bindings`]).
+//! [`crate::render::Renderer`] runs them as a flat list.
 
 pub mod alloc;
+pub mod bindings;
 pub mod clipmaps;
 pub mod context;
 pub mod frame_io;
@@ -55,44 +57,6 @@ pub(crate) fn shader_module(
         label: Some(name),
         source: wgpu::ShaderSource::Wgsl(source.into()),
     }))
-}
-
-/// A bind-group-layout entry.
-pub(crate) fn entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    ty: wgpu::BindingType,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty,
-        count: None,
-    }
-}
-
-pub(crate) fn uniform() -> wgpu::BindingType {
-    wgpu::BindingType::Buffer {
-        ty: wgpu::BufferBindingType::Uniform,
-        has_dynamic_offset: false,
-        min_binding_size: None,
-    }
-}
-
-pub(crate) fn storage(read_only: bool) -> wgpu::BindingType {
-    wgpu::BindingType::Buffer {
-        ty: wgpu::BufferBindingType::Storage { read_only },
-        has_dynamic_offset: false,
-        min_binding_size: None,
-    }
-}
-
-/// A bind-group entry for a whole buffer.
-pub(crate) fn bind(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry {
-        binding,
-        resource: buffer.as_entire_binding(),
-    }
 }
 
 /// Records a compute pass running `pipeline` once per cell of a `size[0]` × `size[1]` grid

@@ -1,10 +1,18 @@
 //! Normals of the detailed geometry image (`shaders/normals.wgsl`).
 
 use super::alloc::{Alloc, Buffer};
+use super::bindings::{Binding, bind_group, buffer, layout};
 use super::shaders::Key;
-use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
+use super::{compute_pipeline, dispatch_grid};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
+
+/// `shaders/normals.wgsl`'s bindings.
+pub const BINDINGS: &[Binding] = &[
+    Binding::frame(S::COMPUTE),
+    Binding::storage(3, "detailed", S::COMPUTE),
+    Binding::storage_rw(4, "normals", S::COMPUTE),
+];
 
 pub struct NormalsPass {
     pipeline: wgpu::ComputePipeline,
@@ -24,26 +32,21 @@ impl NormalsPass {
         detailed: &wgpu::Buffer,
         mesh: u32,
     ) -> Result<NormalsPass> {
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("normals"),
-            entries: &[
-                entry(0, S::COMPUTE, uniform()),
-                entry(3, S::COMPUTE, storage(true)),
-                entry(4, S::COMPUTE, storage(false)),
-            ],
-        });
-        let pipeline = compute_pipeline(device, "normals", Key::NONE, &layout)?;
+        let (name, key) = (Self::NAME, Key::NONE);
+        let layout = layout(device, name, BINDINGS, 0, key);
+        let pipeline = compute_pipeline(device, name, key, &layout)?;
         let normals = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("normals"),
             size: (mesh * mesh) as u64 * 16,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("normals"),
-            layout: &layout,
-            entries: &[bind(0, frame), bind(3, detailed), bind(4, &normals)],
-        });
+        let resources = [
+            ("frame", buffer(frame)),
+            ("detailed", buffer(detailed)),
+            ("normals", buffer(&normals)),
+        ];
+        let bind_group = bind_group(device, name, &layout, BINDINGS, 0, key, &resources)?;
         Ok(NormalsPass {
             pipeline,
             bind_group,

@@ -10,8 +10,9 @@
 //! triangle.
 
 use super::alloc::{Alloc, Buffer};
+use super::bindings::{self, Binding, Kind, buffer};
+use super::shader_module;
 use super::shaders::Key;
-use super::{bind, entry, shader_module, storage, uniform};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
 
@@ -50,11 +51,23 @@ pub struct OutputUniforms {
     pub encode_srgb: u32,
 }
 
+/// `shaders/output.wgsl`'s bindings: the frame from the reference's buffers (`FROM_BUFFERS`) or
+/// from a mesh mode's targets.
+pub const BINDINGS: &[Binding] = &[
+    Binding::uniform(0, "output", S::FRAGMENT),
+    Binding::storage(1, "colour_in", S::FRAGMENT).when(|k| k.contains(Key::FROM_BUFFERS)),
+    Binding::storage(2, "position_in", S::FRAGMENT).when(|k| k.contains(Key::FROM_BUFFERS)),
+    Binding::new(1, "colour_in", Kind::FloatTexture, S::FRAGMENT)
+        .when(|k| !k.contains(Key::FROM_BUFFERS)),
+    Binding::new(2, "depth_in", Kind::FloatTexture, S::FRAGMENT)
+        .when(|k| !k.contains(Key::FROM_BUFFERS)),
+];
+
 pub struct OutputPass {
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     uniforms: Buffer,
-    from_buffers: bool,
+    key: Key,
     encode_srgb: bool,
 }
 
@@ -65,22 +78,7 @@ impl OutputPass {
     /// For frames left in buffers (the reference, `FROM_BUFFERS` in the scheme's `key`) or in
     /// targets, written into `targets`.
     pub fn new(device: &Alloc, targets: Targets, key: Key) -> Result<OutputPass> {
-        let from_buffers = key.contains(Key::FROM_BUFFERS);
-        let fs = S::FRAGMENT;
-        let texture = wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: false },
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        };
-        let input = if from_buffers { storage(true) } else { texture };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some(Self::NAME),
-            entries: &[
-                entry(0, fs, uniform()),
-                entry(1, fs, input),
-                entry(2, fs, input),
-            ],
-        });
+        let layout = bindings::layout(device, Self::NAME, BINDINGS, 0, key);
         let module = shader_module(device, Self::NAME, key)?;
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(Self::NAME),
@@ -127,7 +125,7 @@ impl OutputPass {
             pipeline,
             layout,
             uniforms,
-            from_buffers,
+            key,
             encode_srgb: !targets.colour.is_srgb(),
         })
     }
@@ -154,33 +152,26 @@ impl OutputPass {
         source: Source,
         colour: &wgpu::TextureView,
         depth: &wgpu::TextureView,
-    ) {
-        let inputs = match source {
-            Source::Targets { colour, depth } => [
-                wgpu::BindingResource::TextureView(colour),
-                wgpu::BindingResource::TextureView(depth),
-            ],
-            Source::Buffers { colour, position } => {
-                debug_assert!(self.from_buffers);
-                [colour.as_entire_binding(), position.as_entire_binding()]
-            }
-        };
-        let [a, b] = inputs;
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(Self::NAME),
-            layout: &self.layout,
-            entries: &[
-                bind(0, &self.uniforms),
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: a,
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: b,
-                },
-            ],
-        });
+    ) -> Result<()> {
+        if matches!(source, Source::Buffers { .. }) != self.key.contains(Key::FROM_BUFFERS) {
+            return Err(crate::error::Error::Internal(
+                "an output pass built for one kind of frame given the other",
+            ));
+        }
+        let mut resources = vec![("output", buffer(&self.uniforms))];
+        match source {
+            Source::Targets { colour, depth } => resources.extend([
+                ("colour_in", wgpu::BindingResource::TextureView(colour)),
+                ("depth_in", wgpu::BindingResource::TextureView(depth)),
+            ]),
+            Source::Buffers { colour, position } => resources.extend([
+                ("colour_in", buffer(colour)),
+                ("position_in", buffer(position)),
+            ]),
+        }
+        let (name, key) = (Self::NAME, self.key);
+        let bind_group =
+            bindings::bind_group(device, name, &self.layout, BINDINGS, 0, key, &resources)?;
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(Self::NAME),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -207,5 +198,6 @@ impl OutputPass {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
         pass.draw(0..3, 0..1);
+        Ok(())
     }
 }

@@ -6,13 +6,24 @@
 //! z-fighting. Owns the colour and depth targets.
 
 use super::alloc::{Alloc, Buffer, Texture};
+use super::bindings::{Binding, bind_group, buffer, layout};
+use super::shader_module;
 use super::shaders::Key;
 use super::stream::AtlasBinding;
 use super::terrain::{COLOUR, DEPTH, DEPTH_COPY, RasterPipeline};
-use super::{bind, entry, shader_module, storage, uniform};
 use crate::error::Result;
 use crate::planet::rings::{Rings, Span};
 use wgpu::ShaderStages as S;
+
+/// `shaders/planet.wgsl`'s bindings.
+pub const BINDINGS: &[Binding] = &[
+    Binding::frame(S::VERTEX_FRAGMENT),
+    Binding::atlas(S::VERTEX_FRAGMENT),
+    Binding::wanted(S::VERTEX_FRAGMENT),
+    Binding::uniform(2, "planet", S::VERTEX_FRAGMENT),
+    Binding::storage(3, "hemisphere", S::VERTEX),
+    Binding::storage(4, "vertices", S::VERTEX),
+];
 
 pub struct PlanetPass {
     sky: wgpu::RenderPipeline,
@@ -57,19 +68,7 @@ impl PlanetPass {
         if positions {
             targets.push(Some(DEPTH_COPY.into()));
         }
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("planet"),
-            entries: &[
-                vec![entry(0, S::VERTEX_FRAGMENT, uniform())],
-                atlas.entries(S::VERTEX_FRAGMENT),
-                vec![
-                    entry(2, S::VERTEX_FRAGMENT, uniform()),
-                    entry(3, S::VERTEX, storage(true)),
-                    entry(4, S::VERTEX, storage(true)),
-                ],
-            ]
-            .concat(),
-        });
+        let layout = layout(device, Self::NAME, BINDINGS, 0, key);
         let module = shader_module(device, Self::NAME, key)?;
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("planet"),
@@ -92,16 +91,14 @@ impl PlanetPass {
             ("planet_vs", "planet_fs"),
             (true, wgpu::CompareFunction::Greater),
         );
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("planet"),
-            layout: &layout,
-            entries: &[
-                vec![bind(0, frame)],
-                atlas.binds(),
-                vec![bind(2, planet), bind(3, hemisphere), bind(4, vertices)],
-            ]
-            .concat(),
-        });
+        let mut resources = atlas.resources();
+        resources.extend([
+            ("frame", buffer(frame)),
+            ("planet", buffer(planet)),
+            ("hemisphere", buffer(hemisphere)),
+            ("vertices", buffer(vertices)),
+        ]);
+        let bind_group = bind_group(device, Self::NAME, &layout, BINDINGS, 0, key, &resources)?;
         let index = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("clipmap indices"),
             contents: bytemuck::cast_slice(&rings.indices),

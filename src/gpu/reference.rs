@@ -2,13 +2,33 @@
 //! every octave down to the pixel's footprint; linear colour and hit positions per pixel.
 
 use super::alloc::{Alloc, Buffer};
+use super::bindings::{Binding, bind_group, buffer, layout};
 use super::context::GpuContext;
 use super::frame_io::read_vec4;
 use super::shaders::Key;
 use super::stream::AtlasBinding;
-use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
+use super::{compute_pipeline, dispatch_grid};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
+
+/// `shaders/reference.wgsl`'s bindings.
+pub const BINDINGS: &[Binding] = &[
+    Binding::frame(S::COMPUTE),
+    Binding::atlas(S::COMPUTE),
+    Binding::wanted(S::COMPUTE),
+    Binding::storage_rw(2, "colour_out", S::COMPUTE),
+    Binding::storage_rw(3, "position_out", S::COMPUTE),
+];
+
+/// `shaders/planet_reference.wgsl`'s bindings: the reference's, and the planet's block.
+pub const PLANET_BINDINGS: &[Binding] = &[
+    Binding::frame(S::COMPUTE),
+    Binding::atlas(S::COMPUTE),
+    Binding::wanted(S::COMPUTE),
+    Binding::storage_rw(2, "colour_out", S::COMPUTE),
+    Binding::storage_rw(3, "position_out", S::COMPUTE),
+    Binding::uniform(4, "planet", S::COMPUTE),
+];
 
 pub struct ReferencePass {
     pipeline: wgpu::ComputePipeline,
@@ -36,25 +56,13 @@ impl ReferencePass {
         key: Key,
         planet: Option<&wgpu::Buffer>,
     ) -> Result<ReferencePass> {
-        let mut entries = vec![entry(0, S::COMPUTE, uniform())];
-        entries.extend(atlas.entries(S::COMPUTE));
-        entries.extend([
-            entry(2, S::COMPUTE, storage(false)),
-            entry(3, S::COMPUTE, storage(false)),
-        ]);
-        if planet.is_some() {
-            entries.push(entry(4, S::COMPUTE, uniform()));
-        }
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("reference"),
-            entries: &entries,
-        });
-        let shader = match planet {
-            Some(_) => "planet_reference",
-            None => "reference",
+        let (shader, bindings) = match planet {
+            Some(_) => ("planet_reference", PLANET_BINDINGS),
+            None => ("reference", BINDINGS),
         };
+        let layout = layout(device, shader, bindings, 0, key);
         let pipeline = compute_pipeline(device, shader, key, &layout)?;
-        let buffer = |label| {
+        let output = |label| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size: (width * height) as u64 * 16,
@@ -62,18 +70,15 @@ impl ReferencePass {
                 mapped_at_creation: false,
             })
         };
-        let (colour, position) = (buffer("reference colour"), buffer("reference position"));
-        let mut binds = vec![bind(0, frame)];
-        binds.extend(atlas.binds());
-        binds.extend([bind(2, &colour), bind(3, &position)]);
-        if let Some(planet) = planet {
-            binds.push(bind(4, planet));
-        }
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("reference"),
-            layout: &layout,
-            entries: &binds,
-        });
+        let (colour, position) = (output("reference colour"), output("reference position"));
+        let mut resources = atlas.resources();
+        resources.extend([
+            ("frame", buffer(frame)),
+            ("colour_out", buffer(&colour)),
+            ("position_out", buffer(&position)),
+        ]);
+        resources.extend(planet.map(|p| ("planet", buffer(p))));
+        let bind_group = bind_group(device, shader, &layout, bindings, 0, key, &resources)?;
         Ok(ReferencePass {
             pipeline,
             bind_group,

@@ -87,6 +87,11 @@ impl Key {
             .fold(0, |bits, (k, _)| bits | 1 << k))
     }
 
+    /// Both keys' flags.
+    pub const fn union(self, other: Key) -> Key {
+        Key(self.0 | other.0)
+    }
+
     /// Whether every flag of `flags` is set.
     pub const fn contains(self, flags: Key) -> bool {
         self.0 & flags.0 == flags.0

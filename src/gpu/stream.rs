@@ -1,6 +1,6 @@
 //! A streamed sketch on the GPU: the tile cache's pool of pages and its page table in one
 //! read-only storage buffer (the atlas binding every planar pass already has), and the marks the
-//! shaders leave per page-table entry (binding 7, cleared before each frame and read back after
+//! shaders leave per page-table entry (`wanted`, cleared before each frame and read back after
 //! it). The policy — what to load, keep and evict — is [`crate::tiles::cache`]'s; this moves the
 //! bytes.
 //!
@@ -10,15 +10,15 @@
 //! which entries a fade or an eviction changed).
 
 use super::alloc::{Alloc, Buffer};
+use super::bindings::buffer;
 use super::context::GpuContext;
 use super::uniforms::{AtlasUniforms, MAX_LEVELS};
-use super::{bind, entry, storage};
 use crate::error::{Error, Result};
 use crate::tiles::Pyramid;
 use crate::tiles::cache::{Budget, StreamStats, TileCache};
 
-/// The sketch's atlas as a pass binds it: the heights at binding 1 and, for a streamed pyramid,
-/// the marks at binding 7 (`shaders/shared/atlas.wgsl`).
+/// The sketch's atlas as a pass binds it: the heights and, for a streamed pyramid, the marks
+/// (`atlas` and `wanted` in `shaders/shared/atlas.wgsl`, [`super::bindings::Binding::atlas`]).
 #[derive(Clone)]
 pub struct AtlasBinding {
     pub atlas: wgpu::Buffer,
@@ -26,21 +26,13 @@ pub struct AtlasBinding {
 }
 
 impl AtlasBinding {
-    /// The layout entries, visible to `stages`.
-    pub fn entries(&self, stages: wgpu::ShaderStages) -> Vec<wgpu::BindGroupLayoutEntry> {
-        let mut e = vec![entry(1, stages, storage(true))];
-        if self.marks.is_some() {
-            e.push(entry(7, stages, storage(false)));
+    /// The resources, by the names the shaders bind them under.
+    pub fn resources(&self) -> Vec<(&'static str, wgpu::BindingResource<'_>)> {
+        let mut r = vec![("atlas", buffer(&self.atlas))];
+        if let Some(marks) = &self.marks {
+            r.push(("wanted", buffer(marks)));
         }
-        e
-    }
-
-    pub fn binds(&self) -> Vec<wgpu::BindGroupEntry<'_>> {
-        let mut b = vec![bind(1, &self.atlas)];
-        if let Some(m) = &self.marks {
-            b.push(bind(7, m));
-        }
-        b
+        r
     }
 
     /// Refuses a streamed sketch where a pass reads it in its vertex shader (`what`) and the

@@ -9,9 +9,10 @@
 //!   single-sampled pass of the terrain's depth alone.
 
 use super::alloc::{Alloc, Buffer, Texture};
+use super::bindings::{self, Binding, Kind, buffer};
+use super::shader_module;
 use super::shaders::Key;
 use super::stream::AtlasBinding;
-use super::{bind, entry, shader_module, storage, uniform};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
 
@@ -29,6 +30,41 @@ pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// the sky (the world beyond the sketch, lit and hazed) and then for the ground
 /// (docs/decisions.md, “Sky after the ground”).
 pub const SKY_TEST: wgpu::CompareFunction = wgpu::CompareFunction::GreaterEqual;
+
+/// `shaders/terrain.wgsl`'s bindings: group 0 for every draw; group 1, the G-buffer the deferred
+/// shading reads, its targets in [`GBUFFER`]'s order.
+pub const BINDINGS: &[Binding] = &[
+    Binding::frame(S::VERTEX_FRAGMENT),
+    // The fragment shader reads the sketch; the vertex shader too where it evaluates a streamed
+    // grid's vertices.
+    Binding::atlas(S::FRAGMENT).when(|k| !k.contains(Key::GRID_STREAMED)),
+    Binding::atlas(S::VERTEX_FRAGMENT).when(|k| k.contains(Key::GRID_STREAMED)),
+    Binding::wanted(S::FRAGMENT)
+        .when(|k| k.contains(Key::STREAMED) && !k.contains(Key::GRID_STREAMED)),
+    Binding::wanted(S::VERTEX_FRAGMENT)
+        .when(|k| k.contains(Key::STREAMED.union(Key::GRID_STREAMED))),
+    Binding::storage(3, "detailed", S::VERTEX).when(|k| !streamed_grid(k)),
+    Binding::storage(4, "normals", S::VERTEX)
+        .when(|k| !k.contains(Key::PIXEL_NORMALS) && !streamed_grid(k)),
+    Binding::storage(5, "importance", S::FRAGMENT).when(|k| k.contains(Key::IMPORTANCE_VIEW)),
+    Binding::storage(6, "blocks", S::VERTEX).when(|k| k.contains(Key::GEOMIPMAP)),
+    gbuffer(0, "gbuffer_local_w"),
+    gbuffer(1, "gbuffer_normal_split"),
+    gbuffer(2, "gbuffer_inscatter_spacing"),
+    gbuffer(3, "gbuffer_through_wire"),
+];
+
+/// GeoMipMap over a streamed sketch: no baked grid, no vertex normals.
+fn streamed_grid(k: Key) -> bool {
+    k.contains(Key::GRID_STREAMED.union(Key::GEOMIPMAP))
+}
+
+/// A G-buffer target as the deferred shading reads it.
+const fn gbuffer(index: u32, name: &'static str) -> Binding {
+    Binding::new(index, name, Kind::UintTexture, S::FRAGMENT)
+        .in_group(1)
+        .when(|k| k.contains(Key::DEFERRED))
+}
 
 pub struct TerrainPass {
     /// The mesh: shaded as it is drawn (forward), or written to the G-buffer (deferred).
@@ -125,23 +161,6 @@ impl TerrainPass {
         variant: &Variant,
     ) -> Result<TerrainPass> {
         let key = variant.key;
-        let mut entries = vec![entry(0, S::VERTEX_FRAGMENT, uniform())];
-        match detailed {
-            Some(_) => {
-                entries.extend(variant.atlas.entries(S::FRAGMENT));
-                entries.push(entry(3, S::VERTEX, storage(true)));
-            }
-            None => entries.extend(variant.atlas.entries(S::VERTEX_FRAGMENT)),
-        }
-        if variant.normals.is_some() {
-            entries.push(entry(4, S::VERTEX, storage(true)));
-        }
-        if variant.importance.is_some() {
-            entries.push(entry(5, S::FRAGMENT, storage(true)));
-        }
-        if variant.geomipmap.is_some() {
-            entries.push(entry(6, S::VERTEX, storage(true)));
-        }
         let multisampled = variant.samples > 1;
         let deferred = key.contains(Key::DEFERRED);
         if deferred && multisampled {
@@ -154,10 +173,7 @@ impl TerrainPass {
             targets.push(Some(DEPTH_COPY.into()));
         }
 
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("terrain"),
-            entries: &entries,
-        });
+        let layout = bindings::layout(device, Self::NAME, BINDINGS, 0, key);
         let module = shader_module(device, "terrain", key)?;
         // Multisampled with positions: the same shaders with the depth copy's entry point.
         let depth_module = if variant.positions && multisampled {
@@ -189,13 +205,7 @@ impl TerrainPass {
         let ground_test = Some((true, wgpu::CompareFunction::Greater));
         let n = variant.samples;
         let (ground, screen, gbuffer) = if deferred {
-            let gbuffer_layout =
-                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                    label: Some("terrain g-buffer"),
-                    entries: &(0..GBUFFER.len() as u32)
-                        .map(|b| entry(b, S::FRAGMENT, gbuffer_texture()))
-                        .collect::<Vec<_>>(),
-                });
+            let gbuffer_layout = bindings::layout(device, "terrain g-buffer", BINDINGS, 1, key);
             let shading_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("terrain shading"),
                 bind_group_layouts: &[Some(&layout), Some(&gbuffer_layout)],
@@ -225,25 +235,24 @@ impl TerrainPass {
             pipeline_of(&pipeline_layout, &m, entry, &targets, 1, ground_test)
         });
 
-        let mut bind_entries = vec![bind(0, frame)];
-        bind_entries.extend(variant.atlas.binds());
-        if let Some(detailed) = detailed {
-            bind_entries.push(bind(3, detailed));
-        }
-        if let Some(normals) = &variant.normals {
-            bind_entries.push(bind(4, normals));
-        }
-        if let Some(buffer) = &variant.importance {
-            bind_entries.push(bind(5, buffer));
-        }
-        if let Some((blocks, _)) = &variant.geomipmap {
-            bind_entries.push(bind(6, blocks));
-        }
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("terrain"),
-            layout: &layout,
-            entries: &bind_entries,
-        });
+        let mut resources = variant.atlas.resources();
+        resources.push(("frame", buffer(frame)));
+        resources.extend(detailed.map(|d| ("detailed", buffer(d))));
+        resources.extend(variant.normals.as_ref().map(|n| ("normals", buffer(n))));
+        resources.extend(
+            variant
+                .importance
+                .as_ref()
+                .map(|i| ("importance", buffer(i))),
+        );
+        resources.extend(
+            variant
+                .geomipmap
+                .as_ref()
+                .map(|(b, _)| ("blocks", buffer(b))),
+        );
+        let bind_group =
+            bindings::bind_group(device, Self::NAME, &layout, BINDINGS, 0, key, &resources)?;
         let (index, index_count) = match &variant.geomipmap {
             Some((_, capacity)) => {
                 let index = device.create_buffer(&wgpu::BufferDescriptor {
@@ -316,7 +325,7 @@ impl TerrainPass {
             }
             ms
         });
-        let deferred = gbuffer.map(|gbuffer_layout| {
+        let deferred = gbuffer.map(|gbuffer_layout| -> Result<Deferred> {
             let usage = drawn | wgpu::TextureUsages::TEXTURE_BINDING;
             let targets: Vec<_> = GBUFFER
                 .iter()
@@ -326,25 +335,22 @@ impl TerrainPass {
                 .iter()
                 .map(|t| t.create_view(&Default::default()))
                 .collect();
-            let entries: Vec<_> = views
-                .iter()
-                .enumerate()
-                .map(|(b, view)| wgpu::BindGroupEntry {
-                    binding: b as u32,
-                    resource: wgpu::BindingResource::TextureView(view),
-                })
+            // The targets in the order of their bindings.
+            let names = BINDINGS.iter().filter(|b| b.group == 1).map(|b| b.name);
+            let resources: Vec<_> = names
+                .zip(&views)
+                .map(|(name, view)| (name, wgpu::BindingResource::TextureView(view)))
                 .collect();
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("terrain g-buffer"),
-                layout: &gbuffer_layout,
-                entries: &entries,
-            });
-            Deferred {
+            let label = "terrain g-buffer";
+            let bind_group =
+                bindings::bind_group(device, label, &gbuffer_layout, BINDINGS, 1, key, &resources)?;
+            Ok(Deferred {
                 bind_group,
                 views,
                 _targets: targets,
-            }
+            })
         });
+        let deferred = deferred.transpose()?;
         Ok(TerrainPass {
             ground,
             screen,
@@ -578,15 +584,6 @@ fn render_pass<'e>(
         occlusion_query_set: None,
         multiview_mask: None,
     })
-}
-
-/// A G-buffer target as the shading pass reads it.
-fn gbuffer_texture() -> wgpu::BindingType {
-    wgpu::BindingType::Texture {
-        sample_type: wgpu::TextureSampleType::Uint,
-        view_dimension: wgpu::TextureViewDimension::D2,
-        multisampled: false,
-    }
 }
 
 /// A render pipeline of the raster passes (terrain, planet): vertices pulled from storage (no

@@ -4,16 +4,27 @@
 //! the tests to hold the GPU to the CPU stage's definitions.
 
 use super::alloc::{Alloc, Buffer};
+use super::bindings::{Binding, bind_group, buffer, layout};
 use super::shaders::Key;
 use super::stream::AtlasBinding;
 use super::uniforms::FrameUniforms;
-use super::{bind, compute_pipeline, dispatch_grid, entry, storage, uniform};
+use super::{compute_pipeline, dispatch_grid};
 use crate::detail::{OctaveFrame, gradient_noise};
 use crate::error::Result;
 use crate::sketch::Atlas;
 use crate::sketch::cubic::catmull_rom;
 use glam::{IVec2, Vec2, Vec3};
 use wgpu::ShaderStages as S;
+
+/// `shaders/warp_zoom.wgsl`'s bindings.
+pub const BINDINGS: &[Binding] = &[
+    Binding::frame(S::COMPUTE),
+    Binding::atlas(S::COMPUTE),
+    Binding::wanted(S::COMPUTE),
+    Binding::storage(2, "phi", S::COMPUTE),
+    Binding::storage_rw(3, "detailed", S::COMPUTE),
+    Binding::storage_rw(4, "centres", S::COMPUTE).when(|k| k.contains(Key::CENTRES)),
+];
 
 pub struct WarpZoomPass {
     pipeline: wgpu::ComputePipeline,
@@ -41,24 +52,9 @@ impl WarpZoomPass {
         key: Key,
     ) -> Result<WarpZoomPass> {
         let centres = key.contains(Key::CENTRES);
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("warp_zoom"),
-            entries: &[
-                vec![entry(0, S::COMPUTE, uniform())],
-                atlas.entries(S::COMPUTE),
-                vec![
-                    entry(2, S::COMPUTE, storage(true)),
-                    entry(3, S::COMPUTE, storage(false)),
-                ],
-                if centres {
-                    vec![entry(4, S::COMPUTE, storage(false))]
-                } else {
-                    vec![]
-                },
-            ]
-            .concat(),
-        });
-        let pipeline = compute_pipeline(device, "warp_zoom", key, &layout)?;
+        let name = Self::NAME;
+        let layout = layout(device, name, BINDINGS, 0, key);
+        let pipeline = compute_pipeline(device, name, key, &layout)?;
         let phi = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("phi"),
             size: (n * n) as u64 * 8,
@@ -79,17 +75,14 @@ impl WarpZoomPass {
                 mapped_at_creation: false,
             })
         });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("warp_zoom"),
-            layout: &layout,
-            entries: &[
-                vec![bind(0, frame)],
-                atlas.binds(),
-                vec![bind(2, &phi), bind(3, &detailed)],
-                centres.iter().map(|c| bind(4, c)).collect(),
-            ]
-            .concat(),
-        });
+        let mut resources = atlas.resources();
+        resources.extend([
+            ("frame", buffer(frame)),
+            ("phi", buffer(&phi)),
+            ("detailed", buffer(&detailed)),
+        ]);
+        resources.extend(centres.iter().map(|c| ("centres", buffer(c))));
+        let bind_group = bind_group(device, name, &layout, BINDINGS, 0, key, &resources)?;
         Ok(WarpZoomPass {
             pipeline,
             bind_group,

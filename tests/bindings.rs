@@ -1,0 +1,97 @@
+//! Every pass's bindings, declared once in Rust (`terrain::gpu::bindings`), are the ones its WGSL
+//! declares in every variant: the same group, index, name and kind, as naga reflects them from the
+//! composed source (no GPU needed).
+
+use std::collections::HashMap;
+use terrain::gpu::bindings::{Kind, SHADERS};
+use terrain::gpu::shaders::{FLAGS, Key, PASSES, compose};
+
+type Declared = Vec<(u32, u32, String, Kind)>;
+
+/// The `@group @binding` variables of a composed source.
+fn reflect(name: &str, source: &str) -> Declared {
+    let module = naga::front::wgsl::parse_str(source)
+        .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));
+    let mut declared: Declared = module
+        .global_variables
+        .iter()
+        .filter_map(|(_, var)| {
+            let binding = var.binding.as_ref()?;
+            let var_name = var.name.clone().unwrap_or_default();
+            let kind = match var.space {
+                naga::AddressSpace::Uniform => Kind::Uniform,
+                naga::AddressSpace::Storage { access } => {
+                    if access.contains(naga::StorageAccess::STORE) {
+                        Kind::StorageRw
+                    } else {
+                        Kind::Storage
+                    }
+                }
+                naga::AddressSpace::Handle => match module.types[var.ty].inner {
+                    naga::TypeInner::Image {
+                        dim: naga::ImageDimension::D2,
+                        arrayed: false,
+                        class:
+                            naga::ImageClass::Sampled {
+                                kind: naga::ScalarKind::Uint,
+                                multi: false,
+                            },
+                    } => Kind::UintTexture,
+                    naga::TypeInner::Image {
+                        dim: naga::ImageDimension::D2,
+                        arrayed: false,
+                        class:
+                            naga::ImageClass::Sampled {
+                                kind: naga::ScalarKind::Float,
+                                multi: false,
+                            },
+                    } => Kind::FloatTexture,
+                    ref other => panic!("{name}: {var_name} is a {other:?}, no Kind of the passes"),
+                },
+                other => panic!("{name}: {var_name} in {other:?}"),
+            };
+            Some((binding.group, binding.binding, var_name, kind))
+        })
+        .collect();
+    declared.sort_by_key(|d| (d.0, d.1));
+    declared
+}
+
+#[test]
+fn every_pass_declares_its_listed_bindings_in_every_variant() {
+    for (name, _) in PASSES {
+        assert!(
+            SHADERS.iter().any(|(n, _)| *n == name),
+            "{name} lists no bindings in gpu::bindings::SHADERS"
+        );
+    }
+    let mut reflected: HashMap<String, Declared> = HashMap::new();
+    let mut checked = 0;
+    for (name, bindings) in SHADERS {
+        for mask in 0..(1u32 << FLAGS.len()) {
+            let flags: Vec<&str> = FLAGS
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| mask & (1 << k) != 0)
+                .map(|(_, f)| *f)
+                .collect();
+            let key = Key::of(&flags);
+            let source = compose(name, &flags).unwrap_or_else(|e| panic!("{name} {flags:?}: {e}"));
+            let wgsl = reflected
+                .entry(source)
+                .or_insert_with_key(|source| reflect(name, source));
+            let mut listed: Declared = bindings
+                .iter()
+                .filter(|b| b.declared(key))
+                .map(|b| (b.group, b.index, b.name.to_string(), b.kind))
+                .collect();
+            listed.sort_by_key(|d| (d.0, d.1));
+            assert_eq!(
+                &listed, wgsl,
+                "{name} {flags:?}: (group, binding, name, kind) listed in Rust and declared in WGSL"
+            );
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, SHADERS.len() << FLAGS.len());
+}
