@@ -247,25 +247,55 @@ impl Gpu {
         let camera = self.camera(k)?;
         self.terrain.prepare(&camera)?;
         let frame = self.next_texture()?;
-        let view = frame.texture.create_view(&Default::default());
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        clear(&mut encoder, &view, &self.depth);
-        self.terrain.record(&mut encoder, &view, &self.depth)?;
-        self.mast.draw(
-            &self.queue,
-            &mut encoder,
-            &view,
-            &self.depth,
-            &camera,
-            self.foot,
-        );
-        let readback = shot
-            .then(|| Readback::record(&self.device, &mut encoder, &frame.texture))
-            .flatten();
+        self.draw_into(&mut encoder, &frame.texture, &camera)?;
+        // The screenshot: the surface's texture where it allows copies, else the same frame drawn
+        // again into a texture that does.
+        let readback = if shot {
+            match Readback::record(&self.device, &mut encoder, &frame.texture) {
+                Some(r) => Some(r),
+                None => {
+                    let copy = self.offscreen(&frame.texture);
+                    self.draw_into(&mut encoder, &copy, &camera)?;
+                    Readback::record(&self.device, &mut encoder, &copy)
+                }
+            }
+        } else {
+            None
+        };
         self.queue.submit([encoder.finish()]);
         let image = readback.map(|r| r.read(&self.device)).transpose()?;
         self.queue.present(frame);
         Ok(image)
+    }
+
+    /// The terrain, then the mast over it, into `target` and the host's depth.
+    fn draw_into(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::Texture,
+        camera: &Camera,
+    ) -> anyhow::Result<()> {
+        let view = target.create_view(&Default::default());
+        clear(encoder, &view, &self.depth);
+        self.terrain.record(encoder, &view, &self.depth)?;
+        self.mast
+            .draw(&self.queue, encoder, &view, &self.depth, camera, self.foot);
+        Ok(())
+    }
+
+    /// A texture like `like` that can be copied from.
+    fn offscreen(&self, like: &wgpu::Texture) -> wgpu::Texture {
+        self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("screenshot"),
+            size: like.size(),
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: like.format(),
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        })
     }
 }
 
@@ -458,6 +488,7 @@ impl Readback {
         texture: &wgpu::Texture,
     ) -> Option<Readback> {
         if !texture.usage().contains(wgpu::TextureUsages::COPY_SRC) {
+            // The caller draws the frame into a copyable texture instead.
             return None;
         }
         let (width, height) = (texture.width(), texture.height());
