@@ -13,12 +13,12 @@
 
 use glam::DVec3;
 use std::path::PathBuf;
-use terrain::app::path::Flight;
 use terrain::camera::Camera;
 use terrain::scene::{self, Scene, WarpMethod};
 use terrain::stage::CpuStage;
 use terrain::stage::quality;
 use terrain::stage::warp::pair_unfolded;
+use terrain_cli::app::path::Flight;
 
 /// Thresholds tried, in folded pairs of 127; the last is the rounds alone.
 const THRESHOLDS: [usize; 7] = [8, 12, 16, 24, 32, 64, usize::MAX];

@@ -134,7 +134,7 @@ impl App {
         self.frame += 1;
         if last {
             if let (Some(path), Some((w, h, rgba))) = (&self.o.screenshot, shot) {
-                terrain::app::output::write_image(path, w, h, &rgba)?;
+                terrain_cli::app::output::write_image(path, w, h, &rgba)?;
             }
             event_loop.exit();
         } else {

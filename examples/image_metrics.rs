@@ -4,7 +4,7 @@
 //! cargo run --release --example image_metrics -- REFERENCE.png TEST.png
 
 use anyhow::{Context, Result, bail};
-use terrain::eval::metrics;
+use terrain_cli::eval::metrics;
 
 /// An 8-bit RGB or RGBA PNG as RGBA.
 fn rgba(path: &str) -> Result<(u32, u32, Vec<u8>)> {

@@ -19,13 +19,13 @@
 use anyhow::Context;
 use glam::DVec2;
 use std::path::PathBuf;
-use terrain::eval::metrics::{ScreenError, screen_space_error};
 use terrain::gpu::context::{GpuContext, Needs};
 use terrain::gpu::uniforms::View;
 use terrain::planet::Planet;
 use terrain::render::Renderer;
 use terrain::scene::{Mode, Scene};
 use terrain::sketch::{Atlas, LoadOptions, RawGrid};
+use terrain_cli::eval::metrics::{ScreenError, screen_space_error};
 
 /// Nodes a side of the tangent-plane sketch map.
 const NODES: usize = 1025;

@@ -166,7 +166,7 @@ pub fn targets() -> Vec<Target> {
             text: true,
             run: |b| match std::str::from_utf8(b) {
                 Ok(t) => {
-                    match terrain::app::batch::Jobs::parse(
+                    match terrain_cli::app::batch::Jobs::parse(
                         &root_dir().join("sketches/fuzz.toml"),
                         t,
                     ) {

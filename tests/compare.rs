@@ -4,9 +4,9 @@
 
 mod common;
 use common::*;
-use terrain::eval::compare::report::{CSV_COLUMNS, Row};
-use terrain::eval::compare::sweep::{Setting, at_geomipmap_budgets, default_sweep};
 use terrain::scene::Mode;
+use terrain_cli::eval::compare::report::{CSV_COLUMNS, Row};
+use terrain_cli::eval::compare::sweep::{Setting, at_geomipmap_budgets, default_sweep};
 
 fn sketch(name: &str) -> String {
     manifest_dir()

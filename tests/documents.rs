@@ -236,7 +236,7 @@ fn own_text_files() -> Vec<PathBuf> {
         root.join(".ci/run"),
     ];
     let mut dirs: Vec<PathBuf> = [
-        "docs", "src", "shaders", "tests", "benches", "examples", "scripts", "sketches", "fuzz",
+        "docs", "src", "crates", "tests", "benches", "examples", "scripts", "sketches", "fuzz",
     ]
     .iter()
     .map(|d| root.join(d))

@@ -226,8 +226,13 @@ fn snapshots_match_their_references() {
         let reference = dir.join(format!("{name}.png"));
         if update {
             std::fs::create_dir_all(&dir).unwrap();
-            terrain::app::output::write_image(&reference, frame.width, frame.height, &frame.rgba)
-                .unwrap();
+            terrain_cli::app::output::write_image(
+                &reference,
+                frame.width,
+                frame.height,
+                &frame.rgba,
+            )
+            .unwrap();
             continue;
         }
         let (w, h, expected) = read_png(&reference).unwrap_or_else(|| {
@@ -241,8 +246,8 @@ fn snapshots_match_their_references() {
         eprintln!("{name}: {db:.1} dB");
         if db < 40.0 {
             let actual = out.join(format!("{name}.png"));
-            terrain::app::output::write_image(&actual, w, h, &frame.rgba).unwrap();
-            terrain::app::output::write_image(
+            terrain_cli::app::output::write_image(&actual, w, h, &frame.rgba).unwrap();
+            terrain_cli::app::output::write_image(
                 &out.join(format!("{name}-diff.png")),
                 w,
                 h,
@@ -491,7 +496,7 @@ fn a_low_sun_behind_a_cliff_shadows_the_plain_at_its_foot() {
         let ground = positions
             .chunks_exact(4)
             .map(|q| q[3] > 0.5 && (x0..x1).contains(&q[0]));
-        terrain::eval::metrics::terrain_luminance(rgba, ground)
+        terrain_cli::eval::metrics::terrain_luminance(rgba, ground)
             .expect("ground in the band")
             .0
     };
@@ -627,7 +632,7 @@ fn a_low_sun_leaves_the_lee_of_a_mountain_under_half_the_lit_side() {
                 let side = if west { q[0] < 3540.0 } else { q[0] > 4140.0 };
                 q[3] > 0.5 && q[2] > 200.0 && side
             });
-            terrain::eval::metrics::terrain_luminance(&rgba, ground)
+            terrain_cli::eval::metrics::terrain_luminance(&rgba, ground)
                 .expect("the flank in view")
                 .0
         };
@@ -676,7 +681,7 @@ fn the_detail_shadows_itself_alike_in_mesh_and_reference() {
         let mean = |detail_shadows: bool| {
             let (_, rgba, world) = render_with_positions(&scene(detail_shadows), mode);
             let ground = world.chunks_exact(4).map(|q| q[3] > 0.5);
-            terrain::eval::metrics::terrain_luminance(&rgba, ground)
+            terrain_cli::eval::metrics::terrain_luminance(&rgba, ground)
                 .expect("ground in view")
                 .0
         };
@@ -925,7 +930,7 @@ fn water_floods_the_ground_below_its_level_alike_in_mesh_and_reference() {
         .fold(f64::INFINITY, f64::min);
     assert!(deepest > 599.9, "the reference's ray reached {deepest} m");
     let mean = |rgba: &[u8], on: &[bool]| {
-        terrain::eval::metrics::terrain_luminance(rgba, on.iter().copied())
+        terrain_cli::eval::metrics::terrain_luminance(rgba, on.iter().copied())
             .expect("water in view")
             .0
     };

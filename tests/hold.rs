@@ -5,13 +5,13 @@
 mod common;
 use common::*;
 use glam::DVec3;
-use terrain::app::path::Flight;
 use terrain::camera::Camera;
-use terrain::eval::compare::temporal;
 use terrain::gpu::uniforms::View;
 use terrain::render::Renderer;
 use terrain::scene::{self, Mode, Scene};
 use terrain::stage::CpuStage;
+use terrain_cli::app::path::Flight;
+use terrain_cli::eval::compare::temporal;
 
 fn jacksboro() -> Scene {
     let mut s = Scene::load(&manifest_dir().join("sketches/jacksboro.toml")).unwrap();

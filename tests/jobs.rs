@@ -629,7 +629,7 @@ fn a_jobs_sketch_is_relative_to_the_jobs_file() {
 #[test]
 fn the_bundled_jobs_file_and_flight_load() {
     let jobs =
-        terrain::app::batch::Jobs::load(&manifest_dir().join("sketches/random-snapshots.toml"))
+        terrain_cli::app::batch::Jobs::load(&manifest_dir().join("sketches/random-snapshots.toml"))
             .unwrap();
     let items = jobs.items();
     assert_eq!(items.len(), 202);
@@ -639,7 +639,7 @@ fn the_bundled_jobs_file_and_flight_load() {
     );
     let scene = terrain::scene::Scene::load(&manifest_dir().join("sketches/jacksboro-flight.toml"))
         .unwrap();
-    let path = terrain::app::path::CameraPath::of_scene(
+    let path = terrain_cli::app::path::CameraPath::of_scene(
         &scene,
         &terrain::scene::load_atlas(&scene).unwrap(),
     )
@@ -671,7 +671,7 @@ fn a_long_path_without_frames_is_spread_over_the_default_count_and_says_so() {
         "--no-mp4",
     ]);
     assert_eq!(code, 0, "{err}");
-    let n = terrain::app::fly::DEFAULT_MAX_FRAMES;
+    let n = terrain_cli::app::fly::DEFAULT_MAX_FRAMES;
     assert!(stdout.contains(&format!("{n} frames")), "{stdout}");
     // Said before the first frame: how many frames, spread over the path, and what is written.
     assert!(

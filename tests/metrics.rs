@@ -8,7 +8,7 @@
 
 mod common;
 use common::*;
-use terrain::eval::metrics;
+use terrain_cli::eval::metrics;
 
 #[derive(serde::Deserialize)]
 struct Values {

@@ -88,7 +88,7 @@ fn reference_positions_project_to_their_pixels_and_sky_has_none() {
 
 #[test]
 fn meshes_stay_within_pixels_of_the_reference() {
-    use terrain::eval::metrics::screen_space_error;
+    use terrain_cli::eval::metrics::screen_space_error;
     for name in ["gaussian", "hills"] {
         let scene = bundled(name, &["geomipmap.tau=0.5"]);
         let mut reference = Renderer::new(&scene, Mode::Reference, View::Shaded).unwrap();
@@ -106,8 +106,8 @@ fn meshes_stay_within_pixels_of_the_reference() {
         let width32 = camera.width;
         for (mode, image) in [("warped", &warped_image), ("GeoMipMap τ=0.5", &gmm_image)] {
             let (ssim, flip) = (
-                terrain::eval::metrics::ssim(&truth_image, image, width32).unwrap(),
-                terrain::eval::metrics::flip_mean(&truth_image, image, width32).unwrap(),
+                terrain_cli::eval::metrics::ssim(&truth_image, image, width32).unwrap(),
+                terrain_cli::eval::metrics::flip_mean(&truth_image, image, width32).unwrap(),
             );
             eprintln!(
                 "{name}: {mode}: PSNR {:.1} dB, SSIM {ssim:.3}, FLIP {flip:.3}",

@@ -6,8 +6,8 @@ mod common;
 use common::manifest_dir;
 use serde_aux::serde_introspection::serde_introspect;
 use std::collections::{BTreeMap, BTreeSet};
-use terrain::app::batch::{JobsFile, RandomSection};
 use terrain::scene::*;
+use terrain_cli::app::batch::{JobsFile, RandomSection};
 
 /// The documented keys of each table, by its dotted name, with their default cells.
 fn documented() -> BTreeMap<String, BTreeMap<String, String>> {

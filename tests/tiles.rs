@@ -827,14 +827,14 @@ fn compare_over_a_pyramid_sweeps_warped_and_geomipmap_and_refuses_brute_force_be
     let (dir, _, pyr) = jacksboro_pyramid("tiles-compare");
     let scene = jacksboro_scene(&pyr, "");
     assert_eq!(
-        terrain::eval::compare::default_modes(&scene),
+        terrain_cli::eval::compare::default_modes(&scene),
         [Mode::Warped, Mode::Geomipmap]
     );
     let whole = jacksboro_scene(
         &common::manifest_dir().join("sketches/jacksboro_fault_dem.asc"),
         "",
     );
-    assert_eq!(terrain::eval::compare::default_modes(&whole).len(), 3);
+    assert_eq!(terrain_cli::eval::compare::default_modes(&whole).len(), 3);
     let file = dir.join("scene.toml");
     std::fs::write(&file, jacksboro_text(&pyr, "")).unwrap();
     let out = dir.join("cmp");

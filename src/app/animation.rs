@@ -10,11 +10,11 @@
 //! Rejected alternative: an animated GIF. Its 256-colour palette bands the sky's gradient and
 //! dithers the terrain's texture, which is the detail a flythrough is made to show.
 
-use crate::error::{Error, Result, Role};
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use terrain::error::{Error, Result, Role};
 
 pub struct Apng {
     writer: Option<png::Writer<BufWriter<File>>>,

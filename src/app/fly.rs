@@ -23,19 +23,19 @@ use crate::app::animation;
 use crate::app::output::{Fixed, write_atomic, write_image};
 use crate::app::path::Flight;
 use crate::app::progress::Progress;
-use crate::error::{Error, Result, Role};
 use crate::eval::percentile;
-use crate::gpu::frame_io::PassTimes;
-use crate::gpu::uniforms::View;
-use crate::gpu::{
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use terrain::error::{Error, Result, Role};
+use terrain::gpu::frame_io::PassTimes;
+use terrain::gpu::uniforms::View;
+use terrain::gpu::{
     mesh_split::MeshSplitPass, normals::NormalsPass, reference::ReferencePass,
     terrain::TerrainPass, warp_zoom::WarpZoomPass,
 };
-use crate::render::Renderer;
-use crate::scene::{Mode, Scene};
-use crate::tiles::cache::StreamStats;
-use serde::Serialize;
-use std::path::{Path, PathBuf};
+use terrain::render::Renderer;
+use terrain::scene::{Mode, Scene};
+use terrain::tiles::cache::StreamStats;
 
 pub struct Options {
     pub mode: Mode,
@@ -117,8 +117,8 @@ impl CsvRow<'_> {
             normals_ms: ms(NormalsPass::NAME),
             terrain_ms: ms(TerrainPass::NAME),
             reference_ms: ms(ReferencePass::NAME),
-            clipmaps_ms: ms(crate::gpu::clipmaps::ClipmapsPass::NAME),
-            planet_ms: ms(crate::gpu::planet::PlanetPass::NAME),
+            clipmaps_ms: ms(terrain::gpu::clipmaps::ClipmapsPass::NAME),
+            planet_ms: ms(terrain::gpu::planet::PlanetPass::NAME),
             lat_deg: r.nadir_deg.map(|g| Fixed(g[0])),
             lon_deg: r.nadir_deg.map(|g| Fixed(g[1])),
             stream_us: r.stream.map(|_| Fixed(r.stream_us)),
@@ -147,7 +147,7 @@ pub struct Outcome {
     /// Why the frame count differs from `fps` frames a second of travel, when it does.
     pub frames_note: Option<String>,
     pub elapsed_s: f64,
-    /// GPU memory the renderer held at the end, bytes (as allocated: [`crate::gpu::alloc`]).
+    /// GPU memory the renderer held at the end, bytes (as allocated: [`terrain::gpu::alloc`]).
     pub gpu_memory_bytes: u64,
     /// A streamed sketch: tiles loaded per frame (mean and most), and frames that showed a
     /// stand-in level somewhere.

@@ -4,9 +4,9 @@
 
 use crate::app::flycam::FlyCamera;
 use crate::eval::plot::{Rgb, draw_on_rgba, font};
-use crate::gpu::uniforms::View;
-use crate::render::Frame;
-use crate::scene::Mode;
+use terrain::gpu::uniforms::View;
+use terrain::render::Frame;
+use terrain::scene::Mode;
 
 /// What the window knows beside the frame.
 pub struct Status {

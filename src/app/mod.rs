@@ -2,7 +2,7 @@
 //! [`animation`]), snapshots in [`batch`], the interactive window ([`view`], flown by
 //! [`flycam`], its figures drawn by [`hud`]), the CPU stage's figures of `terrain warp`
 //! ([`stage_figures`]); and what they share: [`output`] (atomic files, written together) and
-//! [`progress`] (which also shows the library's, [`crate::progress`]).
+//! [`progress`] (which also shows the library's, [`terrain::progress`]).
 
 pub mod animation;
 pub mod batch;

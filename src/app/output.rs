@@ -1,5 +1,5 @@
 //! The program's outputs: images by extension, CSV rows, `.npy`, each written atomically and
-//! several together through [`crate::io`] (re-exported here).
+//! several together through [`terrain::io`] (re-exported here).
 //!
 //! Rules:
 //! - Every writer creates the output's folder first: `-o out/x.png` on a fresh clone, where `out/`
@@ -15,10 +15,10 @@
 //! scripts that read the header text expect (the tests among them).
 
 use crate::app::progress::Progress;
-use crate::error::{Error, Result, Role};
-pub use crate::io::{Staged, create_folder, create_parent, write_atomic};
 use std::io::Write;
 use std::path::Path;
+use terrain::error::{Error, Result, Role};
+pub use terrain::io::{Staged, create_folder, create_parent, write_atomic};
 
 /// Images above this many pixels show their encoding's progress.
 const PROGRESS_PIXELS: u64 = 8 << 20;

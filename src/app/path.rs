@@ -13,12 +13,12 @@
 //! speed changes with the spacing of the keys (a camera that lurches), and its uniform
 //! parameterisation loops past closely spaced keys.
 
-use crate::camera::Camera;
-use crate::error::{Error, Result};
-use crate::scene::{PathKey, PathSection, Scene};
-use crate::scene::{ground_under, place};
-use crate::sketch::Atlas;
 use glam::{DVec2, DVec3};
+use terrain::camera::Camera;
+use terrain::error::{Error, Result};
+use terrain::scene::{PathKey, PathSection, Scene};
+use terrain::scene::{ground_under, place};
+use terrain::sketch::Atlas;
 
 /// Arc-length samples per segment.
 const SAMPLES: usize = 512;
@@ -209,7 +209,7 @@ impl CameraPath {
         }
         let mut base = scene.clone();
         base.camera.aim(eye, eye + self.direction(s) * 100.0);
-        crate::scene::camera_of(&base, atlas)
+        terrain::scene::camera_of(&base, atlas)
     }
 }
 
@@ -273,8 +273,8 @@ impl Flight {
 pub fn world_eye(camera: &Camera, radius: Option<f64>) -> DVec3 {
     match (camera.geo, radius) {
         (Some(g), Some(r)) => {
-            crate::planet::unit(g.lat, g.lon) * r
-                + crate::planet::Tangent::at(g.lat, g.lon).world(camera.eye)
+            terrain::planet::unit(g.lat, g.lon) * r
+                + terrain::planet::Tangent::at(g.lat, g.lon).world(camera.eye)
         }
         _ => camera.eye,
     }
@@ -319,7 +319,8 @@ impl PlanetFlight {
         );
         let altitude = c.altitude_m.unwrap_or(1.0);
         let angle = altitude.clamp(10.0, 0.1 * radius) / radius;
-        let (lat2, lon2, track) = crate::planet::travel(lat, lon, c.heading().to_radians(), angle);
+        let (lat2, lon2, track) =
+            terrain::planet::travel(lat, lon, c.heading().to_radians(), angle);
         let key = |lat: f64, lon: f64, heading: f64| PathKey {
             position: None,
             look_at: None,
@@ -365,14 +366,14 @@ impl PlanetFlight {
         let (la, oa, ha, da, pa) = get(a);
         let (lb, ob, hb, db, pb) = get(b);
         // The great circle between the two nadirs.
-        let (ua, ub) = (crate::planet::unit(la, oa), crate::planet::unit(lb, ob));
+        let (ua, ub) = (terrain::planet::unit(la, oa), terrain::planet::unit(lb, ob));
         let angle = ua.angle_between(ub);
         let dir = if angle < 1e-12 {
             ua
         } else {
             (ua * ((1.0 - w) * angle).sin() + ub * (w * angle).sin()) / angle.sin()
         };
-        let (lat, lon) = crate::planet::lat_lon(dir);
+        let (lat, lon) = terrain::planet::lat_lon(dir);
         let altitude = (ha.ln() + (hb.ln() - ha.ln()) * w).exp();
         let turn = (db - da + 540.0).rem_euclid(360.0) - 180.0;
         [
@@ -394,7 +395,7 @@ impl PlanetFlight {
         c.altitude_m = Some(altitude);
         c.heading_deg = Some(heading);
         c.pitch_deg = Some(pitch);
-        crate::scene::camera_of(&s, atlas)
+        terrain::scene::camera_of(&s, atlas)
     }
 }
 

@@ -7,11 +7,11 @@
 //! > 4 red; cells out of view grey.
 
 use crate::app::output::{Staged, add_image};
-use crate::error::Result;
-use crate::sketch::Atlas;
-use crate::stage::CpuStage;
 use glam::DVec2;
 use std::path::Path;
+use terrain::error::Result;
+use terrain::sketch::Atlas;
+use terrain::stage::CpuStage;
 use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Stroke, Transform};
 
 const SIZE: u32 = 768;

@@ -124,7 +124,7 @@ pub fn assert_sound(r: &Run, what: &str) {
 }
 
 #[allow(unused_imports)] // not every test file compares images
-pub use terrain::eval::metrics::psnr;
+pub use terrain_cli::eval::metrics::psnr;
 
 /// An image of |a − b| × 4, for looking at where two renders differ.
 pub fn difference(a: &[u8], b: &[u8]) -> Vec<u8> {

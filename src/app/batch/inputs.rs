@@ -14,11 +14,11 @@
 
 use super::jobs::{Jobs, Overrides};
 use crate::app::output::write_atomic;
-use crate::error::{Error, Result, Role};
-use crate::scene::{Mode, Scene};
-use crate::sketch::mosaic;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+use terrain::error::{Error, Result, Role};
+use terrain::scene::{Mode, Scene};
+use terrain::sketch::mosaic;
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Inputs {
@@ -144,7 +144,7 @@ fn stamps(path: &Path) -> Vec<Stamp> {
             Err(_) => vec![stamp(path)],
         };
     }
-    let pyramid = path.join(crate::tiles::META);
+    let pyramid = path.join(terrain::tiles::META);
     if path.is_dir() && pyramid.is_file() {
         return vec![stamp(&pyramid)];
     }

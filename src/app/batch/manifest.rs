@@ -2,8 +2,8 @@
 //! per item, done or failed, appended and flushed as items finish; `--resume` and `--merge` read
 //! it back as these types.
 
-use crate::scene::Mode;
 use serde::{Deserialize, Serialize};
+use terrain::scene::Mode;
 
 /// A line of the manifest: one item, done or failed.
 #[derive(Debug, Serialize, Deserialize)]

@@ -28,13 +28,13 @@
 
 use crate::app::output::{write_atomic, write_image};
 use crate::app::progress::Progress;
-use crate::camera::Camera;
-use crate::error::{Error, Result, Role};
-use crate::gpu::context::{GpuContext, Needs};
-use crate::gpu::uniforms::View;
-use crate::render::Renderer;
-use crate::scene::{self, Scene};
-use crate::sketch::Atlas;
+use terrain::camera::Camera;
+use terrain::error::{Error, Result, Role};
+use terrain::gpu::context::{GpuContext, Needs};
+use terrain::gpu::uniforms::View;
+use terrain::render::Renderer;
+use terrain::scene::{self, Scene};
+use terrain::sketch::Atlas;
 
 mod inputs;
 mod jobs;
@@ -238,7 +238,7 @@ fn planet_keys(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<Option<P
     let (Some(p), Some(geo)) = (scene.planet(), camera.geo) else {
         return Ok(None);
     };
-    let planet = crate::planet::Planet {
+    let planet = terrain::planet::Planet {
         radius: p.radius_m,
         sketch: atlas,
     };

@@ -1,10 +1,10 @@
 //! Random cameras: a pure function of (seed, index), so shards and reruns draw the same ones.
 
-use crate::camera::Camera;
-use crate::error::Result;
-use crate::scene::{self, Scene, ground_under};
-use crate::sketch::Atlas;
 use glam::{DVec2, DVec3};
+use terrain::camera::Camera;
+use terrain::error::Result;
+use terrain::scene::{self, Scene, ground_under};
+use terrain::sketch::Atlas;
 
 /// Random cameras stand this far above the sketch's ground, plus the detail's reach (metres).
 pub const RANDOM_HEIGHT_M: (f64, f64) = (30.0, 3000.0);

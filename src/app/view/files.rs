@@ -4,8 +4,8 @@
 use super::App;
 use crate::app::flycam::{PathRecorder, scene_with_path};
 use crate::app::output::{write_atomic, write_image};
-use crate::error::{Error, Result, Role};
 use std::path::{Path, PathBuf};
+use terrain::error::{Error, Result, Role};
 
 /// `dir/<name(0)>`, or the first of `dir/<name(n)>`, n = 1, 2, … that does not exist yet.
 fn unused(dir: &Path, name: impl Fn(usize) -> String) -> PathBuf {
@@ -51,7 +51,7 @@ impl App {
         // lands in another folder.
         let absolute = std::path::absolute(&self.o.scene_path)
             .map_err(|e| Error::io(Role::Scene, &self.o.scene_path, e))?;
-        let (text, _) = crate::scene::scene_text(&absolute)?;
+        let (text, _) = terrain::scene::scene_text(&absolute)?;
         let out = scene_with_path(&text, &self.o.scene_path, &path)?;
         let stem = self.stem();
         let file = unused(&self.o.out_dir, |n| match n {

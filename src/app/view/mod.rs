@@ -27,20 +27,20 @@
 use crate::app::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder, PlanetFlyCamera};
 use crate::app::hud;
 use crate::app::path::CameraPath;
-use crate::error::{Error, Result};
+use terrain::error::{Error, Result};
 
 mod files;
-use crate::gpu::context::GpuContext;
-use crate::gpu::uniforms::View;
-use crate::render::{Frame, Renderer};
-use crate::scene::{self, ground_under};
-use crate::scene::{Mode, Scene};
-use crate::sketch::Atlas;
 use std::collections::HashSet;
 use std::num::NonZeroU32;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
+use terrain::gpu::context::GpuContext;
+use terrain::gpu::uniforms::View;
+use terrain::render::{Frame, Renderer};
+use terrain::scene::{self, ground_under};
+use terrain::scene::{Mode, Scene};
+use terrain::sketch::Atlas;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
 use winit::event::{ElementState, MouseButton, WindowEvent};
@@ -107,7 +107,7 @@ impl Flyer {
     }
 
     /// The camera's `[path]` key, and where its eye is in world metres.
-    fn key(&self) -> (crate::scene::PathKey, glam::DVec3) {
+    fn key(&self) -> (terrain::scene::PathKey, glam::DVec3) {
         match self {
             Flyer::Plane(c) => (PathRecorder::key_of(c), c.eye),
             Flyer::Planet(c) => (c.key(), c.world()),
@@ -127,7 +127,7 @@ impl App {
         ground.map(|g| g + self.reach_m + CLEARANCE_M)
     }
 
-    fn camera(&self) -> Result<crate::camera::Camera> {
+    fn camera(&self) -> Result<terrain::camera::Camera> {
         let (w, h) = self.size;
         match &self.cam {
             Flyer::Plane(c) => c.camera(self.scene.camera.fov_y_deg, w, h, self.far),
@@ -462,7 +462,7 @@ pub fn run(scene: Scene, o: Options) -> Result<()> {
         true => Some((CameraPath::of_scene(&scene, &atlas)?, 0.0)),
         false => None,
     };
-    let ctx = GpuContext::new(&crate::render::needs(&scene, largest, &atlas))?;
+    let ctx = GpuContext::new(&terrain::render::needs(&scene, largest, &atlas))?;
     let event_loop = EventLoop::new().map_err(|e| Error::NoDisplay {
         cause: no_display(&e.to_string()),
     })?;

@@ -67,3 +67,18 @@ fn one_of(modes: &[Mode], s: &str) -> Result<Mode, String> {
             format!("expected one of {}", names.join(", "))
         })
 }
+
+/// A value of a named enum (a mode, a view, a warp method) by its name: the names are the
+/// possible values `--help` lists and a bad value's error names.
+pub fn named<T: terrain::names::Named>() -> impl clap::builder::TypedValueParser<Value = T> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(T::all().iter().map(|v| v.name())).try_map(
+        |s: String| {
+            T::all()
+                .iter()
+                .copied()
+                .find(|v| v.name() == s)
+                .ok_or_else(|| format!("unknown value {s:?}"))
+        },
+    )
+}

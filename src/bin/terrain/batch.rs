@@ -28,7 +28,7 @@ pub struct Args {
     #[arg(long, value_name = "N|WxH", value_parser = args::size, conflicts_with = "merge")]
     size: Option<(u32, u32)>,
     /// Overrides every item's render.mode.
-    #[arg(long, conflicts_with = "merge")]
+    #[arg(long, value_parser = crate::args::named::<Mode>(), conflicts_with = "merge")]
     mode: Option<Mode>,
     /// Merges the shard manifests in --out-dir into manifest.jsonl instead of rendering.
     #[arg(long, conflicts_with_all = ["shard", "resume"])]
@@ -64,19 +64,19 @@ pub fn run(a: Args) -> Result<()> {
     }
     // The jobs' base scene names the sketch; a jobs file that does not load is reported by the
     // batch itself, in its one line.
-    if let Ok(base) = terrain::app::batch::Jobs::load(&a.jobs).and_then(|j| j.base_scene()) {
+    if let Ok(base) = terrain_cli::app::batch::Jobs::load(&a.jobs).and_then(|j| j.base_scene()) {
         crate::warn_sketch(&base);
     }
-    let o = terrain::app::batch::Options {
+    let o = terrain_cli::app::batch::Options {
         shard: a.shard.unwrap_or((0, 1)),
         resume: a.resume,
-        overrides: terrain::app::batch::Overrides {
+        overrides: terrain_cli::app::batch::Overrides {
             set: a.set.clone(),
             size: a.size,
             mode: a.mode,
         },
     };
-    let s = terrain::app::batch::run(&a.jobs, &a.out_dir, &o)?;
+    let s = terrain_cli::app::batch::run(&a.jobs, &a.out_dir, &o)?;
     let r = Report {
         items: s.total,
         rendered: s.rendered,
@@ -111,7 +111,7 @@ pub fn run(a: Args) -> Result<()> {
 }
 
 fn merge(a: &Args) -> Result<()> {
-    let (lines, missing, failed) = terrain::app::batch::merge_manifests(&a.jobs, &a.out_dir)?;
+    let (lines, missing, failed) = terrain_cli::app::batch::merge_manifests(&a.jobs, &a.out_dir)?;
     let m = Merged {
         lines,
         missing,

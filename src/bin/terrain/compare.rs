@@ -25,7 +25,7 @@ pub struct Args {
     repeat: u32,
     /// GPU memory (MiB) for the renderers kept to time the settings side by side, a frame of
     /// each in turn, `--repeat` rounds; a setting past it is timed alone. 0: every setting alone.
-    #[arg(long, value_name = "MIB", default_value_t = terrain::eval::compare::rounds::KEEP_BYTES >> 20)]
+    #[arg(long, value_name = "MIB", default_value_t = terrain_cli::eval::compare::rounds::KEEP_BYTES >> 20)]
     keep_mib: u64,
     /// Frames along the camera path (the scene's `[path]`, else straight ahead); 0: none.
     #[arg(long, default_value_t = 24, value_parser = clap::value_parser!(u32).range(0..=100000))]
@@ -46,7 +46,7 @@ pub struct Args {
 
 pub fn run(a: Args) -> Result<()> {
     if a.replot {
-        let n = terrain::eval::compare::replot(&a.out_dir)?;
+        let n = terrain_cli::eval::compare::replot(&a.out_dir)?;
         outln!("{n} rows redrawn in {}", a.out_dir.display());
         return Ok(());
     }
@@ -54,9 +54,9 @@ pub fn run(a: Args) -> Result<()> {
     let mut modes = a.modes;
     modes.dedup();
     if modes.is_empty() {
-        modes = terrain::eval::compare::default_modes(&scene);
+        modes = terrain_cli::eval::compare::default_modes(&scene);
     }
-    let opts = terrain::eval::compare::Options {
+    let opts = terrain_cli::eval::compare::Options {
         size: a.size,
         modes,
         repeat: a.repeat,
@@ -70,13 +70,13 @@ pub fn run(a: Args) -> Result<()> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
-    let outcome = terrain::eval::compare::run(&scene, &name, &opts, &a.out_dir)?;
+    let outcome = terrain_cli::eval::compare::run(&scene, &name, &opts, &a.out_dir)?;
     if a.json {
         return crate::print_json(&outcome.report);
     }
     out!(
         "{}",
-        terrain::eval::compare::report::summary_markdown(&name, &outcome.summary)
+        terrain_cli::eval::compare::report::summary_markdown(&name, &outcome.summary)
     );
     let skipped = outcome.report.skipped.len();
     outln!(

@@ -16,10 +16,10 @@ pub struct Args {
     #[arg(long)]
     out_dir: PathBuf,
     /// Overrides the scene's render.mode.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::args::named::<Mode>())]
     mode: Option<Mode>,
     /// What the image shows: the shaded terrain, or a diagnostic view.
-    #[arg(long, default_value_t = View::Shaded)]
+    #[arg(long, value_parser = crate::args::named::<View>(), default_value_t = View::Shaded)]
     view: View,
     /// Frames spread evenly over the whole path (default: --fps frames per second of travel,
     /// at most 300; a longer path is spread over 300 frames).
@@ -60,7 +60,7 @@ struct Report {
     elapsed_s: f64,
     gpu_memory_bytes: u64,
     /// A streamed sketch (a tile pyramid): tiles loaded per frame, stand-in frames, pages.
-    stream: Option<terrain::app::fly::StreamSummary>,
+    stream: Option<terrain_cli::app::fly::StreamSummary>,
 }
 
 pub fn run(a: Args) -> Result<()> {
@@ -68,7 +68,7 @@ pub fn run(a: Args) -> Result<()> {
     if let Some(size) = a.size {
         (scene.camera.width, scene.camera.height) = size;
     }
-    let opts = terrain::app::fly::Options {
+    let opts = terrain_cli::app::fly::Options {
         mode: a.mode.unwrap_or(scene.render.mode),
         view: a.view,
         frames: a.frames.map(|n| n as usize),
@@ -76,7 +76,7 @@ pub fn run(a: Args) -> Result<()> {
         mp4: !a.no_mp4,
         settle: a.settle,
     };
-    let o = terrain::app::fly::run(&scene, &opts, &a.out_dir, |p| say_plan(p, &a.out_dir))?;
+    let o = terrain_cli::app::fly::run(&scene, &opts, &a.out_dir, |p| say_plan(p, &a.out_dir))?;
     if let Some(note) = &o.mp4_note {
         eprintln!("{note}");
     }
@@ -122,7 +122,7 @@ pub fn run(a: Args) -> Result<()> {
 
 /// What the flight will write, before its first frame: the frames, and how many files and
 /// bytes when they are many.
-fn say_plan(plan: &terrain::app::fly::Plan, out_dir: &std::path::Path) {
+fn say_plan(plan: &terrain_cli::app::fly::Plan, out_dir: &std::path::Path) {
     if let Some(note) = &plan.frames_note {
         eprintln!("fly: {note}");
     }
@@ -137,7 +137,7 @@ fn say_plan(plan: &terrain::app::fly::Plan, out_dir: &std::path::Path) {
         plan.height,
         out_dir.display()
     );
-    if plan.files() > terrain::app::fly::MANY_FILES {
+    if plan.files() > terrain_cli::app::fly::MANY_FILES {
         eprintln!(
             "fly: that is {} files, about {:.1} MB in all (--frames or --size chooses fewer or smaller)",
             plan.files(),

@@ -110,7 +110,7 @@ fn main() {
     };
     // The library prints nothing: its notes and progress are shown here.
     notes::install();
-    terrain::progress::set_reporter(Box::new(terrain::app::progress::Bars));
+    terrain::progress::set_reporter(Box::new(terrain_cli::app::progress::Bars));
     // GeoMipMap's block figures over a pyramid are kept in its folder for the next command.
     terrain::tiles::blocks::set_keep_figures(true);
     let result = match cli.command {

@@ -4,8 +4,6 @@ use crate::args;
 use anyhow::{Context, Result};
 use serde::Serialize;
 use std::path::PathBuf;
-use terrain::app::output::{self, ImageFormat, Staged};
-use terrain::app::progress::Spinner;
 use terrain::error::{Error, Role};
 use terrain::gpu::frame_io::PassTimes;
 use terrain::gpu::uniforms::View;
@@ -13,6 +11,8 @@ use terrain::render::{Frame, Renderer};
 use terrain::scene;
 use terrain::scene::place::CameraReport;
 use terrain::scene::{Mode, Scene};
+use terrain_cli::app::output::{self, ImageFormat, Staged};
+use terrain_cli::app::progress::Spinner;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -25,10 +25,10 @@ pub struct Args {
     #[arg(long, value_name = "N|WxH", value_parser = args::size)]
     size: Option<(u32, u32)>,
     /// Overrides the scene's render.mode.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::args::named::<Mode>())]
     mode: Option<Mode>,
     /// What the image shows: the shaded terrain, or a diagnostic view.
-    #[arg(long, default_value_t = View::Shaded)]
+    #[arg(long, value_parser = crate::args::named::<View>(), default_value_t = View::Shaded)]
     view: View,
     /// GeoMipMap's τ: the largest projected vertex error, pixels (overrides geomipmap.tau).
     #[arg(long, allow_negative_numbers = true, value_parser = args::positive_px)]
@@ -138,7 +138,7 @@ pub fn run(a: Args) -> Result<()> {
     if let Some(p) = &a.positions {
         let world = terrain::render::world_positions(&r.read_positions(&camera)?, &camera);
         let ground = world.chunks_exact(4).map(|q| q[3] > 0.5);
-        luminance = terrain::eval::metrics::terrain_luminance(&last.rgba, ground);
+        luminance = terrain_cli::eval::metrics::terrain_luminance(&last.rgba, ground);
         let shape = [last.height as usize, last.width as usize, 4];
         staged.add(p, &output::npy_f64(&shape, &world))?;
     }

@@ -2,9 +2,9 @@
 
 use anyhow::Result;
 use std::path::{Path, PathBuf};
-use terrain::app::output::write_atomic;
 use terrain::error::{Error, Role};
 use terrain::scene;
+use terrain_cli::app::output::write_atomic;
 
 #[derive(clap::Args)]
 pub struct Args {

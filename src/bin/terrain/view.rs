@@ -44,7 +44,7 @@ pub fn run(a: Args) -> Result<()> {
         None if scene.render.mode == Mode::Reference => Mode::Warped,
         None => scene.render.mode,
     };
-    let opts = terrain::app::view::Options {
+    let opts = terrain_cli::app::view::Options {
         scene_path: a.scene,
         mode,
         size: a.size,
@@ -52,7 +52,7 @@ pub fn run(a: Args) -> Result<()> {
         out_dir: a.out_dir,
         screenshot: a.screenshot,
     };
-    Ok(terrain::app::view::run(scene, opts)?)
+    Ok(terrain_cli::app::view::run(scene, opts)?)
 }
 
 #[cfg(not(feature = "view"))]

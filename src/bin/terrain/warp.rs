@@ -17,7 +17,7 @@ pub struct Args {
     #[arg(long)]
     out_dir: PathBuf,
     /// Overrides the scene's warp.method.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::args::named::<WarpMethod>())]
     method: Option<WarpMethod>,
     /// Timed runs of the stage (after one warm-up); the median is reported.
     #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..=10000))]
@@ -103,7 +103,7 @@ pub fn run(a: Args) -> Result<()> {
         &mut ratios,
     );
     if !a.no_figures {
-        terrain::app::stage_figures::write_all(&a.out_dir, &atlas, &stage, &ratios)?;
+        terrain_cli::app::stage_figures::write_all(&a.out_dir, &atlas, &stage, &ratios)?;
     }
     let map = &stage.sketch_map;
     let r = Report {

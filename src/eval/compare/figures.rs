@@ -3,13 +3,13 @@
 
 use super::report::{PSNR_CAP_DB, Row, TARGET_PSNR_DB, TARGET_SSE_PX};
 use crate::app::output::write_image;
-use crate::error::Result;
 use crate::eval::plot::chart::{Axis, Figure, Panel, Scale, Series, Style};
 use crate::eval::plot::{Rgb, draw_on_rgba, font};
-use crate::scene::Mode;
-use crate::stage::quality::Bin;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::Path;
+use terrain::error::Result;
+use terrain::scene::Mode;
+use terrain::stage::quality::Bin;
 
 /// A mode's colour in every figure (rows name their mode as `Mode::name` writes it).
 pub fn colour(mode: &str) -> Rgb {

@@ -3,16 +3,16 @@
 use super::report::Row;
 use super::sweep::Setting;
 use super::{MAX_REFERENCE_HALVINGS, Options, REFERENCE_CONVERGED_DB};
-use crate::camera::Camera;
-use crate::error::Result;
 use crate::eval::{metrics, percentile};
-use crate::gpu::context::GpuContext;
-use crate::gpu::frame_io::PassTimes;
-use crate::gpu::uniforms::View;
-use crate::lod::reference::Reference;
-use crate::render::{Frame, Renderer};
-use crate::scene::{Mode, Scene};
-use crate::sketch::Atlas;
+use terrain::camera::Camera;
+use terrain::error::Result;
+use terrain::gpu::context::GpuContext;
+use terrain::gpu::frame_io::PassTimes;
+use terrain::gpu::uniforms::View;
+use terrain::lod::reference::Reference;
+use terrain::render::{Frame, Renderer};
+use terrain::scene::{Mode, Scene};
+use terrain::sketch::Atlas;
 
 /// The reference renderer's march step (a fraction of the height above the ground).
 fn march_step(reference: &mut Renderer) -> &mut f32 {

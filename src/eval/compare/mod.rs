@@ -39,19 +39,19 @@ pub mod temporal;
 use crate::app::output::{write_atomic, write_image};
 use crate::app::path::Flight;
 use crate::app::progress::Progress;
-use crate::camera::Camera;
-use crate::error::{Error, Result, Role};
-use crate::gpu::context::{GpuContext, Needs};
-use crate::scene;
-use crate::scene::{Mode, Scene};
-use crate::sketch::Atlas;
-use crate::stage::CpuStage;
 use measure::{measure_lod, renderer};
 use path::{Out, path_series};
 use report::{DetailUsed, RatioReport, ReferenceFigures, Replot, Report, Row, Skipped};
 use rounds::{Rounds, RowTimes};
 use std::path::Path;
 use sweep::Setting;
+use terrain::camera::Camera;
+use terrain::error::{Error, Result, Role};
+use terrain::gpu::context::{GpuContext, Needs};
+use terrain::scene;
+use terrain::scene::{Mode, Scene};
+use terrain::sketch::Atlas;
+use terrain::stage::CpuStage;
 
 /// PSNR between the reference at its step and at half of it that counts as converged: finer
 /// than any difference between modes worth reporting (mode images differ from it by 20–45 dB).
@@ -112,7 +112,7 @@ pub fn default_modes(scene: &Scene) -> Vec<Mode> {
 /// Whether `scene`'s sketch is a tile pyramid, streamed through the tile cache.
 fn streamed(scene: &Scene) -> bool {
     let path = scene.sketch.path.as_ref();
-    path.is_some_and(|p| crate::tiles::is_pyramid(&scene.resolve(p)))
+    path.is_some_and(|p| terrain::tiles::is_pyramid(&scene.resolve(p)))
 }
 
 /// Refuses modes that cannot draw `scene`, in one line, before any work.
@@ -233,7 +233,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     };
     let storage_bytes = settings
         .iter()
-        .map(|s| crate::render::needs(&s.apply(&scene), s.mode(), &atlas).storage_bytes)
+        .map(|s| terrain::render::needs(&s.apply(&scene), s.mode(), &atlas).storage_bytes)
         .max()
         .unwrap_or(0)
         .max(atlas.bytes());
@@ -337,7 +337,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     crate::app::output::write_npy_f64(
         &out_dir.join("reference_positions.npy"),
         &[h as usize, w as usize, 4],
-        &crate::render::world_positions(&truth0.positions, &camera),
+        &terrain::render::world_positions(&truth0.positions, &camera),
     )?;
     let strip_modes: Vec<(String, String, Vec<u8>)> = o
         .modes
@@ -456,7 +456,7 @@ fn ratio_histogram(
     let mut stage = CpuStage::new(scene, &detail)?;
     stage.run(atlas, camera);
     let mut ratios = Vec::new();
-    let q = crate::stage::quality::measure(
+    let q = terrain::stage::quality::measure(
         &stage.warp.phi,
         stage.sketch_map.n,
         stage.sketch_map.spacing,

@@ -9,14 +9,14 @@ use super::{Options, figures};
 use crate::app::output::{Fixed, write_atomic};
 use crate::app::path::{Flight, world_eye};
 use crate::app::progress::Progress;
-use crate::camera::Camera;
-use crate::error::Result;
 use crate::eval::metrics::{self, ScreenError};
-use crate::gpu::context::GpuContext;
-use crate::render::Renderer;
-use crate::scene::Scene;
-use crate::sketch::Atlas;
 use std::path::Path;
+use terrain::camera::Camera;
+use terrain::error::Result;
+use terrain::gpu::context::GpuContext;
+use terrain::render::Renderer;
+use terrain::scene::Scene;
+use terrain::sketch::Atlas;
 
 /// A line of `path.csv`: one mode at one frame of the camera path.
 #[derive(serde::Serialize)]

@@ -8,9 +8,9 @@
 //! common budget, the slowest of the modes' fastest rows (so every mode has a row within it).
 
 use crate::app::output::Fixed;
-use crate::gpu::frame_io::PassTimes;
-use crate::stage::quality::Bin;
 use serde::{Deserialize, Serialize};
+use terrain::gpu::frame_io::PassTimes;
+use terrain::stage::quality::Bin;
 
 /// PSNR written for identical images.
 pub const PSNR_CAP_DB: f64 = 100.0;

@@ -4,9 +4,9 @@
 //! the warped mode against GeoMipMap row by row ([`Dominance`]).
 
 use super::report::{PSNR_CAP_DB, Row, TARGET_PSNR_DB, TARGET_SSE_PX};
-use crate::gpu::terrain::TerrainPass;
 use serde::Serialize;
 use std::fmt::Write;
+use terrain::gpu::terrain::TerrainPass;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct ModeSummary {
@@ -437,7 +437,7 @@ fn time_miss_line(m: &TimeMiss) -> String {
 mod tests {
     use super::*;
     use crate::eval::compare::report::tests::row;
-    use crate::gpu::frame_io::PassTimes;
+    use terrain::gpu::frame_io::PassTimes;
 
     #[test]
     fn summary_finds_times_to_targets_and_errors_at_the_common_budget() {

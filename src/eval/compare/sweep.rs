@@ -32,13 +32,13 @@
 //!   it changes Φ only where the surface bound `I_s` or the floor clip the importance.
 
 use super::report::Row;
-use crate::camera::Camera;
-use crate::error::Result;
-use crate::lod::baseline::default_k;
-use crate::scene::{Mode, Scene};
-use crate::sketch::Atlas;
-use crate::stage::CpuStage;
-use crate::stage::budget::Budget;
+use terrain::camera::Camera;
+use terrain::error::Result;
+use terrain::lod::baseline::default_k;
+use terrain::scene::{Mode, Scene};
+use terrain::sketch::Atlas;
+use terrain::stage::CpuStage;
+use terrain::stage::budget::Budget;
 
 /// The largest mesh the sweep draws: 2M triangles.
 const MAX_MESH: u32 = 1024;
@@ -277,7 +277,7 @@ fn mesh_within(triangles: u64) -> u32 {
 fn view_mesh(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<u32> {
     let mut s = scene.clone();
     s.warp.mesh = MAX_MESH.max(s.warp.mesh);
-    let detail = crate::scene::detail_for(&s, atlas, Mode::Warped);
+    let detail = terrain::scene::detail_for(&s, atlas, Mode::Warped);
     let mut stage = CpuStage::new(&s, &detail)?;
     stage.run(atlas, camera);
     Ok(stage.mesh)

@@ -12,13 +12,13 @@
 use super::axis::{Frame, range};
 use super::{Rgb, draw_on_rgba, drawing_error, font, fonts};
 use crate::app::output::{write_atomic, write_image};
-use crate::error::{Error, Result};
 use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::iter::once;
 use std::path::Path;
+use terrain::error::{Error, Result};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Scale {

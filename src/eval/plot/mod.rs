@@ -22,13 +22,13 @@ pub mod axis;
 pub mod bitmap;
 pub mod chart;
 
-use crate::error::{Error, Result};
 use plotters::coord::Shift;
 use plotters::prelude::{
     BitMapBackend, DrawResult, DrawingArea, DrawingAreaErrorKind, IntoDrawingArea,
 };
 use plotters::style::{FontStyle, IntoFont, RGBColor, TextStyle, register_font};
 use std::sync::OnceLock;
+use terrain::error::{Error, Result};
 
 static DEJAVU_SANS: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
 

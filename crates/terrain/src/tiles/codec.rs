@@ -186,7 +186,7 @@ mod tests {
     #[test]
     fn the_byte_plane_predictor_beats_plain_zstd_on_a_real_dem() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("sketches/jacksboro_fault_dem.asc");
+            .join("../../sketches/jacksboro_fault_dem.asc");
         let atlas = crate::sketch::Atlas::load(&path, &Default::default()).unwrap();
         let level = &atlas.levels[0];
         let side = 128;

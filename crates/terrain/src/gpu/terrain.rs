@@ -125,7 +125,7 @@ struct Multisampled {
 /// shader (the normals pass's central differences).
 pub struct Variant {
     /// The shaders' flags ([`crate::lod::shader_key`]); `DEFERRED` shades from a G-buffer
-    /// ([`Deferred`]), single-sampled frames only.
+    /// (`Deferred`), single-sampled frames only.
     pub key: Key,
     /// The mesh's vertex normals, unless the key lights the terrain otherwise.
     pub normals: Option<wgpu::Buffer>,

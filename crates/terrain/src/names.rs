@@ -1,9 +1,9 @@
 //! Names said once: an enum whose values users type (a mode, a view, a warp method) is declared
 //! with [`named_enum!`](crate::named_enum), which writes each variant's name in one place and
-//! derives from it the scene file's spelling (serde), the command line's (clap's `ValueEnum`),
+//! derives from it the scene file's spelling (serde), the command line's (through [`Named`]),
 //! reports and messages (`name()`, `Display`), and the error that lists the choices.
 //!
-//! Rejected alternative: `#[serde(rename_all = "kebab-case")]` plus `#[derive(clap::ValueEnum)]`.
+//! Rejected alternative: `#[serde(rename_all = "kebab-case")]` plus a command-line derive.
 //! Each derives the same spelling by its own rule from the variant's identifier, so the two agree
 //! only while the rules do, and `name()` for reports would be a third copy; the WGSL constants
 //! (checked against [`ALL`](crate::gpu::uniforms::View::ALL) in `tests/shaders.rs`) need the
@@ -11,7 +11,7 @@
 
 /// Declares a `Copy` enum whose variants each carry the name users type, in declaration order
 /// (a variant's `as u32` is its place). Provides `ALL`, `name()`, `parse()`, `Display`, serde as
-/// the name, and `clap::ValueEnum`.
+/// the name, and [`Named`].
 #[macro_export]
 macro_rules! named_enum {
     (
@@ -69,15 +69,24 @@ macro_rules! named_enum {
             }
         }
 
-        impl clap::ValueEnum for $enum {
-            fn value_variants<'a>() -> &'a [Self] {
+        impl $crate::names::Named for $enum {
+            fn all() -> &'static [Self] {
                 Self::ALL
             }
-            fn to_possible_value(&self) -> ::std::option::Option<clap::builder::PossibleValue> {
-                Some(clap::builder::PossibleValue::new(self.name()))
+            fn name(self) -> &'static str {
+                $enum::name(self)
             }
         }
     };
+}
+
+/// An enum declared with [`named_enum!`](crate::named_enum): its values and the name of each, for
+/// a command line or a form to offer them by (the `terrain` binary's value parser).
+pub trait Named: Copy + Send + Sync + 'static {
+    /// Every value, in declaration order.
+    fn all() -> &'static [Self];
+    /// The name users type.
+    fn name(self) -> &'static str;
 }
 
 #[cfg(test)]
@@ -95,8 +104,8 @@ mod tests {
     }
 
     #[test]
-    fn one_name_for_serde_clap_and_reports() {
-        use clap::ValueEnum;
+    fn one_name_for_serde_the_command_line_and_reports() {
+        use super::Named;
         let h: Holder = toml::from_str("c = \"deep-blue\"").unwrap();
         assert_eq!(h.c, Colour::DeepBlue);
         assert_eq!(toml::to_string(&h).unwrap().trim(), "c = \"deep-blue\"");
@@ -106,7 +115,9 @@ mod tests {
                 .contains("unknown colour `green`: one of red, deep-blue"),
             "{e}"
         );
-        assert_eq!(Colour::from_str("deep-blue", false), Ok(Colour::DeepBlue));
+        assert_eq!(Colour::all(), [Colour::Red, Colour::DeepBlue]);
+        assert_eq!(Named::name(Colour::DeepBlue), "deep-blue");
+        assert_eq!(Colour::parse("deep-blue"), Some(Colour::DeepBlue));
         assert_eq!(Colour::DeepBlue.to_string(), "deep-blue");
         assert_eq!(Colour::DeepBlue as u32, 1);
     }

@@ -17,7 +17,7 @@ use serde::Serialize;
 use std::fmt::Write;
 use std::path::Path;
 
-const MANUAL: &str = include_str!("../../docs/scene.md");
+const MANUAL: &str = include_str!("../../../../docs/scene.md");
 /// The widest a key's comment grows before it is cut at a word.
 const COMMENT_CHARS: usize = 96;
 
