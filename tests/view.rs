@@ -1,7 +1,8 @@
 //! `terrain view` under Xvfb on whatever adapter there is: it opens a window, draws frames, writes
 //! a screenshot of what it presented and exits; the screenshot shows the terrain `render` draws
-//! for the same camera, with the on-screen figures over it. Driven by xdotool's keys, it switches
-//! mode, records the path flown and quits.
+//! for the same camera, with the on-screen figures over it, through the wgpu surface and through
+//! the CPU copy it falls back to. Driven by xdotool's keys, it switches mode, records the path
+//! flown and quits.
 //!
 //! This file has its own harness (libtest-mimic) so that a machine without Xvfb or xdotool
 //! reports these tests as ignored, with the reason, instead of passing them having checked
@@ -18,7 +19,7 @@ type ViewTest = (&'static str, fn(), &'static [&'static str]);
 
 fn main() {
     let args = Arguments::from_args();
-    let tests: [ViewTest; 6] = [
+    let tests: [ViewTest; 8] = [
         (
             "the_host_example_draws_the_terrain_and_its_own_mast_in_a_window",
             the_host_example_draws_the_terrain_and_its_own_mast_in_a_window,
@@ -37,6 +38,16 @@ fn main() {
         (
             "view_opens_draws_and_screenshots_itself_under_xvfb",
             view_opens_draws_and_screenshots_itself_under_xvfb,
+            &["xvfb-run"],
+        ),
+        (
+            "view_presents_through_a_surface_and_prints_its_figures_as_json",
+            view_presents_through_a_surface_and_prints_its_figures_as_json,
+            &["xvfb-run"],
+        ),
+        (
+            "view_presents_through_the_cpu_where_asked_and_shows_the_same_terrain",
+            view_presents_through_the_cpu_where_asked_and_shows_the_same_terrain,
             &["xvfb-run"],
         ),
         (
@@ -234,6 +245,71 @@ fn view_opens_draws_and_screenshots_itself_under_xvfb() {
     assert!(
         top < 30.0,
         "no figures on screen ({top:.1} dB against the bare render)"
+    );
+}
+
+/// `view` of the gaussian scene at 160×120 for `frames` frames with `--json`, its screenshot
+/// written to `shot`, with `env` set: the JSON object it printed.
+fn view_json(
+    shot: &std::path::Path,
+    frames: u32,
+    env: &[(&str, &str)],
+) -> serde_json::Map<String, serde_json::Value> {
+    let scene = manifest_dir().join("sketches/gaussian.toml");
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24"])
+        .arg(env!("CARGO_BIN_EXE_terrain"))
+        .args([
+            "view",
+            scene.to_str().unwrap(),
+            "--size",
+            "160x120",
+            "--json",
+        ])
+        .args(["--frames", &frames.to_string(), "--screenshot"])
+        .arg(shot)
+        .envs(env.iter().copied())
+        .output()
+        .expect("run xvfb-run");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "view failed: {err}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines.len(), 1, "one JSON line on stdout: {stdout}");
+    match serde_json::from_str(lines[0]) {
+        Ok(serde_json::Value::Object(o)) => o,
+        _ => panic!("not a JSON object: {stdout}"),
+    }
+}
+
+/// Under Xvfb a surface can be made: the window presents through it, and `--json` says so with
+/// the frame count and positive medians.
+fn view_presents_through_a_surface_and_prints_its_figures_as_json() {
+    let dir = scratch("view-json");
+    let json = view_json(&dir.join("shot.png"), 5, &[]);
+    assert_eq!(json["present"], "surface", "{json:?}");
+    assert_eq!(json["frames"], 5, "{json:?}");
+    for key in ["interval_ms_median", "cpu_ms_median", "gpu_ms_median"] {
+        let v = json[key].as_f64();
+        assert!(v.is_some_and(|v| v > 0.0), "{key}: {json:?}");
+    }
+}
+
+/// `TERRAIN_VIEW_PRESENT=cpu` takes the fallback, the frame read back and drawn through
+/// softbuffer: the same terrain `render` draws, between the figures.
+fn view_presents_through_the_cpu_where_asked_and_shows_the_same_terrain() {
+    let dir = scratch("view-cpu");
+    let shot = dir.join("shot.png");
+    let json = view_json(&shot, 3, &[("TERRAIN_VIEW_PRESENT", "cpu")]);
+    assert_eq!(json["present"], "cpu", "{json:?}");
+    assert_eq!(json["frames"], 3, "{json:?}");
+    let (w, h, view) = read_png(&shot).expect("screenshot written");
+    assert_eq!((w, h), (160, 120));
+    let band = |img: &[u8]| img[56 * 160 * 4..104 * 160 * 4].to_vec();
+    let db = psnr(&band(&view), &band(&rendered(&dir, "warped")));
+    assert!(
+        db >= 40.0,
+        "the CPU path's terrain differs from render's: {db:.1} dB"
     );
 }
 

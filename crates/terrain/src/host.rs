@@ -7,8 +7,12 @@
 //!   [`Description::optional_features`] say what to create the device with; [`Terrain::new`]
 //!   refuses a device without them in one error.
 //! - A frame: [`Terrain::prepare`] with the camera in f64 world metres (the CPU stage, the
-//!   uniforms), then [`Terrain::record`] into the host's encoder; the host submits. The next
-//!   `prepare` comes after that submission (a streamed sketch then reads what the frame marked).
+//!   uniforms), or [`Terrain::prepare_held`] (the camera drawn with the last frame's level of
+//!   detail, no CPU stage), then [`Terrain::record`] into the host's encoder; the host submits.
+//!   The next `prepare` comes after that submission (a streamed sketch then reads what the frame
+//!   marked).
+//! - The terrain is drawn shaded unless [`Description::with_view`] asks for a debug view
+//!   (wireframe, split octave, importance, normals, coverage); its depth is the same.
 //! - Depth is reversed-Z with an infinite far plane, written for every pixel (0 where there is
 //!   sky). Host geometry drawn with [`Terrain::view_proj`], positions relative to
 //!   [`Terrain::frame_origin`], depth compare `GreaterEqual` on a depth cleared to 0, is hidden
@@ -26,11 +30,12 @@ use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::ColourReadback;
 use crate::gpu::output::OutputPass;
 pub use crate::gpu::output::Targets;
-use crate::gpu::uniforms::View;
+pub use crate::gpu::uniforms::View;
 use crate::query::Ground;
 use crate::render::{Renderer, needs};
 use crate::scene::{self, Mode, Scene};
 use crate::sketch::Atlas;
+use crate::stage::StageTimes;
 use glam::{DVec2, DVec3, Mat4};
 
 /// What a terrain is made from: a scene (sketch, detail, light, mode and its settings) with its
@@ -39,19 +44,37 @@ pub struct Description {
     scene: Scene,
     atlas: Atlas,
     mode: Mode,
+    view: View,
 }
 
 impl Description {
     /// `scene` with its sketch read, drawn in the scene's own mode.
     pub fn new(scene: Scene) -> Result<Description> {
         let atlas = scene::load_atlas(&scene)?;
+        Ok(Description::with_atlas(scene, atlas))
+    }
+
+    /// `scene` over its sketch already read (a host that builds several terrains of one sketch,
+    /// as `terrain view` does for each mode, reads it once).
+    pub fn with_atlas(scene: Scene, atlas: Atlas) -> Description {
         let mode = scene.render.mode;
-        Ok(Description { scene, atlas, mode })
+        Description {
+            scene,
+            atlas,
+            mode,
+            view: View::Shaded,
+        }
     }
 
     /// The same terrain drawn in `mode`.
     pub fn with_mode(mut self, mode: Mode) -> Description {
         self.mode = mode;
+        self
+    }
+
+    /// The same terrain drawn in `view` (the importance view is the warped mode's only).
+    pub fn with_view(mut self, view: View) -> Description {
+        self.view = view;
         self
     }
 
@@ -92,6 +115,8 @@ impl Description {
 pub struct FrameInfo {
     /// The CPU stage, or the baselines' block selection, µs.
     pub cpu_us: f64,
+    /// The warped mode's CPU stage by part (zero for the other modes).
+    pub stage: StageTimes,
     /// Triangles the last recorded frame drew.
     pub triangles: u64,
 }
@@ -102,6 +127,7 @@ pub struct Terrain {
     targets: Targets,
     scene: Scene,
     mode: Mode,
+    view: View,
     renderer: Renderer,
     output: OutputPass,
     /// What the output pass and read-backs allocate (the renderer counts its own).
@@ -118,20 +144,26 @@ impl Terrain {
         targets: Targets,
         description: Description,
     ) -> Result<Terrain> {
-        let Description { scene, atlas, mode } = description;
+        let Description {
+            scene,
+            atlas,
+            mode,
+            view,
+        } = description;
         let ctx = GpuContext::from_device(device, queue, &needs(&scene, mode, &atlas))?;
         let ledger = Ledger::default();
         let alloc = Alloc {
             device: &ctx.device,
             ledger: &ledger,
         };
-        let renderer = build(&ctx, &scene, atlas, mode)?;
+        let renderer = build(&ctx, &scene, atlas, mode, view)?;
         let output = OutputPass::new(&alloc, targets, renderer.shader_key)?;
         Ok(Terrain {
             ctx,
             targets,
             scene,
             mode,
+            view,
             renderer,
             output,
             _ledger: ledger,
@@ -147,19 +179,41 @@ impl Terrain {
     /// The CPU's part of a frame of `camera`: the level of detail, the uniforms. A camera of
     /// another size than the last builds the renderer again for it.
     pub fn prepare(&mut self, camera: &Camera) -> Result<FrameInfo> {
-        if (camera.width, camera.height) != (self.scene.camera.width, self.scene.camera.height) {
-            self.scene.camera.width = camera.width;
-            self.scene.camera.height = camera.height;
-            let atlas = self.renderer.atlas().clone();
-            self.renderer = build(&self.ctx, &self.scene, atlas, self.mode)?;
-            self.recorded = false;
-        }
+        self.fit(camera)?;
+        let triangles = self.renderer.host_triangles();
         let cpu = self.renderer.host_prepare(camera, self.recorded)?;
         self.output.prepare(&self.ctx.queue, camera);
         Ok(FrameInfo {
             cpu_us: cpu.us,
-            triangles: 0,
+            stage: cpu.stage,
+            triangles,
         })
+    }
+
+    /// As [`Terrain::prepare`], but `camera` is drawn with the level of detail of the last frame
+    /// (the warped mode's CPU stage, GeoMipMap's selection, clipmaps' rings kept): the mesh seen
+    /// from elsewhere. No CPU stage runs.
+    pub fn prepare_held(&mut self, camera: &Camera) -> Result<FrameInfo> {
+        self.fit(camera)?;
+        let triangles = self.renderer.host_triangles();
+        let held = self.renderer.host_prepare_held(camera, self.recorded)?;
+        self.output.prepare(&self.ctx.queue, &held);
+        Ok(FrameInfo {
+            triangles,
+            ..FrameInfo::default()
+        })
+    }
+
+    /// Builds the renderer again where `camera`'s image is of another size than the last.
+    fn fit(&mut self, camera: &Camera) -> Result<()> {
+        if (camera.width, camera.height) != (self.scene.camera.width, self.scene.camera.height) {
+            self.scene.camera.width = camera.width;
+            self.scene.camera.height = camera.height;
+            let atlas = self.renderer.atlas().clone();
+            self.renderer = build(&self.ctx, &self.scene, atlas, self.mode, self.view)?;
+            self.recorded = false;
+        }
+        Ok(())
     }
 
     /// Records the prepared frame into `encoder`, writing it into `colour` and `depth` (views of
@@ -250,10 +304,16 @@ impl Terrain {
     }
 }
 
-/// The renderer of `scene` in `mode` over `atlas` on `ctx`, keeping each frame for the output
-/// pass.
-fn build(ctx: &GpuContext, scene: &Scene, atlas: Atlas, mode: Mode) -> Result<Renderer> {
-    Renderer::with_context(ctx.clone(), scene, atlas, mode, View::Shaded, true)
+/// The renderer of `scene` in `mode` and `view` over `atlas` on `ctx`, keeping each frame for
+/// the output pass.
+fn build(
+    ctx: &GpuContext,
+    scene: &Scene,
+    atlas: Atlas,
+    mode: Mode,
+    view: View,
+) -> Result<Renderer> {
+    Renderer::with_context(ctx.clone(), scene, atlas, mode, view, true)
 }
 
 /// Clears a host's targets as a frame starts: black, and depth 0 (reversed-Z's far).

@@ -376,17 +376,45 @@ impl Renderer {
     /// streamed sketch, `after_frame` says a frame was recorded before, whose tile marks are now
     /// read (its encoder must have been submitted) and whose missing tiles are queued.
     pub(crate) fn host_prepare(&mut self, camera: &Camera, after_frame: bool) -> Result<CpuTimes> {
+        self.host_end_frame(after_frame)?;
+        let cpu = self.lod.prepare(&self.atlas, camera);
+        self.host_uniforms(camera);
+        Ok(cpu)
+    }
+
+    /// As [`Renderer::host_prepare`] with the level of detail of the last frame kept, as
+    /// [`Renderer::render_held`] draws: no CPU work. Returns the camera the frame is drawn with.
+    pub(crate) fn host_prepare_held(
+        &mut self,
+        camera: &Camera,
+        after_frame: bool,
+    ) -> Result<Camera> {
+        self.host_end_frame(after_frame)?;
+        let camera = self.lod.held_camera(camera);
+        self.host_uniforms(&camera);
+        Ok(camera)
+    }
+
+    /// Over a streamed sketch, reads the marks of the frame recorded before (if any).
+    fn host_end_frame(&mut self, after_frame: bool) -> Result<()> {
         if let SketchGpu::Streamed(s) = &mut self.sketch
             && after_frame
         {
             s.end_frame(&self.ctx)?;
         }
-        let cpu = self.lod.prepare(&self.atlas, camera);
+        Ok(())
+    }
+
+    fn host_uniforms(&self, camera: &Camera) {
         let uniforms = self.uniforms(camera);
         self.ctx
             .queue
             .write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniforms));
-        Ok(cpu)
+    }
+
+    /// Triangles the last recorded frame drew.
+    pub(crate) fn host_triangles(&self) -> u64 {
+        self.lod.triangles()
     }
 
     /// A host's frame, second half: the passes, recorded into the host's `encoder`, leaving the

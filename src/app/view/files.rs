@@ -16,7 +16,8 @@ fn unused(dir: &Path, name: impl Fn(usize) -> String) -> PathBuf {
 }
 
 impl App {
-    pub(super) fn screenshot(&mut self) -> Result<PathBuf> {
+    /// Writes `rgba` (`width` × `height`, the pixels presented) as the next screenshot.
+    pub(super) fn screenshot(&mut self, rgba: &[u8], width: u32, height: u32) -> Result<PathBuf> {
         let path = match &self.o.screenshot {
             Some(p) if self.shots == 0 => p.clone(),
             _ => {
@@ -25,7 +26,7 @@ impl App {
             }
         };
         self.shots += 1;
-        write_image(&path, self.size.0, self.size.1, &self.presented)?;
+        write_image(&path, width, height, rgba)?;
         Ok(path)
     }
 

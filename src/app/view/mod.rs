@@ -13,16 +13,20 @@
 //! time flown. A sketch given with no camera place and no `[path]` tours its default orbit
 //! (`scene::place::default_path`) until a key or the mouse takes over.
 //!
-//! Rules: the frame is rendered headless by the same renderers as every other command (one
-//! device, renderers rebuilt only when the mode, the view or the window's size changes), then
-//! presented through softbuffer with the figures drawn on it; a screenshot is exactly the pixels
-//! presented. `--frames N` quits after N frames, writing `--screenshot` first (how the test
-//! drives it under Xvfb).
+//! Rules: the frame is drawn by the same renderers as every other command, on the device of a
+//! wgpu surface made for the window, through the host API ([`terrain::host::Terrain`], one per mode
+//! and view, rebuilt only when the mode, the view or the window's size changes): recorded into
+//! the surface's texture, the figures composited over it from a transparent overlay drawn on the
+//! CPU (`present.rs`); the frame's pixels never leave the GPU. Where no surface can be made (none
+//! for the window, no adapter that presents to it, a configuration it refuses), or
+//! `TERRAIN_VIEW_PRESENT=cpu` asks, the frame is read back and presented through softbuffer with
+//! the figures drawn on its pixels: softbuffer needs no GPU on the display's side, so the window
+//! opens on any X11 or Wayland display. A screenshot is exactly the pixels presented.
+//! `--frames N` quits after N frames, writing `--screenshot` first (how the test drives it under
+//! Xvfb); [`run`] returns the session's figures ([`Summary`], `--json`).
 //!
-//! Rejected alternative: a wgpu surface and a blit pass. The renderers read their frame back for
-//! every other command already; a second presentation path needs a surface format per platform
-//! and a GL context on the X display, which llvmpipe under Xvfb provides unreliably. The cost of
-//! the CPU path is one readback per frame (a few ms at 1080p on a discrete GPU).
+//! Rejected alternative: the CPU copy for every frame, a read-back per frame and a second
+//! upload to the display (docs/decisions.md, "View presented through a surface").
 
 use crate::app::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder, PlanetFlyCamera};
 use crate::app::hud;
@@ -30,14 +34,13 @@ use crate::app::path::CameraPath;
 use terrain::error::{Error, Result};
 
 mod files;
+mod present;
+use present::{CpuPath, Present, SurfacePath, Want};
 use std::collections::HashSet;
-use std::num::NonZeroU32;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
-use terrain::gpu::context::GpuContext;
 use terrain::gpu::uniforms::View;
-use terrain::render::{Frame, Renderer};
 use terrain::scene::{self, ground_under};
 use terrain::scene::{Mode, Scene};
 use terrain::sketch::Atlas;
@@ -60,7 +63,25 @@ pub struct Options {
     pub screenshot: Option<PathBuf>,
 }
 
-type Surface = softbuffer::Surface<Arc<Window>, Arc<Window>>;
+/// What a session showed, for `--json`.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Summary {
+    /// How frames reached the screen: "surface" or "cpu".
+    pub present: &'static str,
+    pub frames: u64,
+    /// The median time between presented frames, ms.
+    pub interval_ms_median: Option<f64>,
+    /// The median CPU stage (or the baselines' block selection), ms.
+    pub cpu_ms_median: Option<f64>,
+    /// The median GPU time, ms: on the surface path from submit to the queue's completion
+    /// callback (run at the device's next poll: after presenting, or as the next frame starts);
+    /// on the CPU path the frame's own (its passes' timestamps, else submit to read-back).
+    pub gpu_ms_median: Option<f64>,
+}
+
+/// The environment variable that, set to `cpu`, presents through the CPU even where a surface
+/// can be made.
+pub const PRESENT_ENV: &str = "TERRAIN_VIEW_PRESENT";
 
 struct App {
     o: Options,
@@ -69,8 +90,9 @@ struct App {
     reach_m: f64,
     /// The scene camera's far distance (default: the sketch's farthest corner), kept in flight.
     far: f64,
-    ctx: GpuContext,
-    renderer: Option<Renderer>,
+    /// The mode whose needs the device is made for: the largest the window can switch to.
+    largest: Mode,
+    present: Option<Present>,
     mode: Mode,
     view: View,
     size: (u32, u32),
@@ -84,11 +106,14 @@ struct App {
     /// or the mouse takes over: the path, and the seconds flown along it.
     tour: Option<(CameraPath, f64)>,
     shots: u32,
-    presented: Vec<u8>,
+    /// Screenshots asked for (P) and not yet written: the next frame's.
+    pending_shots: u32,
     recorder: Option<PathRecorder>,
     window: Option<Arc<Window>>,
-    surface: Option<Surface>,
     error: Option<Error>,
+    /// When each frame was presented, and its CPU stage in ms.
+    presented_at: Vec<Instant>,
+    cpu_ms: Vec<f64>,
     message: String,
 }
 
@@ -159,30 +184,16 @@ impl App {
         }
     }
 
-    fn renderer(&mut self) -> Result<&mut Renderer> {
-        if self.renderer.is_none() {
-            let mut scene = self.scene.clone();
-            (scene.camera.width, scene.camera.height) = self.size;
-            // The importance view is drawn only by the warped mode.
-            let view = if self.mode != Mode::Warped && self.view == View::Importance {
-                View::Shaded
-            } else {
-                self.view
-            };
-            self.renderer = Some(Renderer::with_context(
-                self.ctx.clone(),
-                &scene,
-                self.atlas.clone(),
-                self.mode,
-                view,
-                false,
-            )?);
-            self.frozen = false;
+    /// The terrain is built again for the next frame (mode, view or size changed).
+    fn rebuild(&mut self) {
+        if let Some(p) = &mut self.present {
+            p.forget();
         }
-        Ok(self.renderer.as_mut().expect("just built"))
+        self.frozen = false;
     }
 
-    fn frame(&mut self) -> Result<Vec<u8>> {
+    /// Moves the camera by the time since the last frame; returns that time, seconds.
+    fn step(&mut self) -> f64 {
         let now = Instant::now();
         let dt = (now - self.last).as_secs_f64();
         self.last = now;
@@ -204,19 +215,11 @@ impl App {
             let (key, at) = self.cam.key();
             r.record(key, at, dt);
         }
-        let camera = self.camera()?;
-        let frozen = self.frozen;
-        let r = self.renderer()?;
-        let frame = if frozen {
-            r.render_held(&camera)?
-        } else {
-            r.render(&camera)?
-        };
-        Ok(self.hud(&frame, dt))
+        dt
     }
 
-    /// The frame with the figures written on it.
-    fn hud(&self, frame: &Frame, dt: f64) -> Vec<u8> {
+    /// What the window knows beside the frame, for the figures.
+    fn status(&self, dt: f64) -> hud::Status {
         let mut flags = Vec::new();
         if self.frozen {
             flags.push("LOD frozen".to_string());
@@ -227,36 +230,13 @@ impl App {
         if !self.message.is_empty() {
             flags.push(self.message.clone());
         }
-        hud::draw(
-            frame,
-            &hud::Status {
-                mode: self.mode,
-                view: self.view,
-                dt,
-                above_m: self.above_m(),
-                flags,
-            },
-        )
-    }
-
-    fn present(&mut self, rgba: &[u8]) -> Result<()> {
-        let (Some(surface), Some(w), Some(h)) = (
-            self.surface.as_mut(),
-            NonZeroU32::new(self.size.0),
-            NonZeroU32::new(self.size.1),
-        ) else {
-            return Ok(());
-        };
-        let gpu = |e: softbuffer::SoftBufferError| Error::window("cannot draw into it", e);
-        surface.resize(w, h).map_err(gpu)?;
-        let mut buffer = surface.buffer_mut().map_err(gpu)?;
-        if buffer.len() * 4 != rgba.len() {
-            return Ok(()); // resized meanwhile: the next frame matches
+        hud::Status {
+            mode: self.mode,
+            view: self.view,
+            dt,
+            above_m: self.above_m(),
+            flags,
         }
-        for (dst, p) in buffer.iter_mut().zip(rgba.chunks_exact(4)) {
-            *dst = (p[0] as u32) << 16 | (p[1] as u32) << 8 | p[2] as u32;
-        }
-        buffer.present().map_err(gpu)
     }
 
     fn key(&mut self, code: KeyCode, el: &ActiveEventLoop) -> Result<()> {
@@ -272,7 +252,7 @@ impl App {
         match new_mode.map(|m| switch_mode(self.mode, m, planet, streamed)) {
             Some(Ok(Some(m))) => {
                 self.mode = m;
-                self.renderer = None;
+                self.rebuild();
             }
             Some(Err(why)) => self.message = why,
             _ => {}
@@ -281,14 +261,11 @@ impl App {
             KeyCode::KeyV => {
                 let k = View::ALL.iter().position(|v| *v == self.view).unwrap_or(0);
                 self.view = View::ALL[(k + 1) % View::ALL.len()];
-                self.renderer = None;
+                self.rebuild();
             }
             KeyCode::KeyF => self.frozen = !self.frozen,
             KeyCode::KeyR => self.toggle_recording()?,
-            KeyCode::KeyP => {
-                let p = self.screenshot()?;
-                self.message = format!("screenshot {}", p.display());
-            }
+            KeyCode::KeyP => self.pending_shots += 1,
             KeyCode::Escape => el.exit(),
             _ => {}
         }
@@ -313,13 +290,9 @@ impl ApplicationHandler for App {
             Ok(w) => Arc::new(w),
             Err(e) => return self.fail(el, Error::window("cannot open one", e)),
         };
-        let surface = softbuffer::Context::new(window.clone())
-            .and_then(|c| softbuffer::Surface::new(&c, window.clone()));
-        match surface {
-            Ok(s) => self.surface = Some(s),
-            Err(e) => {
-                return self.fail(el, Error::window("cannot draw into it", e));
-            }
+        match self.open(el, window.clone()) {
+            Ok(p) => self.present = Some(p),
+            Err(e) => return self.fail(el, e),
         }
         let size = window.inner_size();
         if size.width > 0 && size.height > 0 {
@@ -338,7 +311,7 @@ impl ApplicationHandler for App {
             WindowEvent::Resized(s) if s.width > 0 && s.height > 0 => {
                 if (s.width, s.height) != self.size {
                     self.size = (s.width, s.height);
-                    self.renderer = None;
+                    self.rebuild();
                 }
                 Ok(())
             }
@@ -394,18 +367,87 @@ impl ApplicationHandler for App {
 }
 
 impl App {
-    fn redraw(&mut self, el: &ActiveEventLoop) -> Result<()> {
-        let rgba = self.frame()?;
-        self.present(&rgba)?;
-        self.presented = rgba;
-        self.frames += 1;
-        if self.o.frames.is_some_and(|n| self.frames >= n) {
-            if self.o.screenshot.is_some() {
-                self.screenshot()?;
+    /// The surface path on `window`, or the CPU path where no surface can be made there (or
+    /// the environment asks for it).
+    fn open(&self, el: &ActiveEventLoop, window: Arc<Window>) -> Result<Present> {
+        let forced = std::env::var(PRESENT_ENV).is_ok_and(|v| v == "cpu");
+        let surface = match forced {
+            true => Err(format!("{PRESENT_ENV}=cpu")),
+            false => SurfacePath::open(el, window.clone(), &self.scene, &self.atlas, self.largest)?,
+        };
+        Ok(match surface {
+            Ok(s) => Present::Surface(Box::new(s)),
+            Err(why) => {
+                log::info!("presenting through the CPU: {why}");
+                let cpu = CpuPath::open(window, &self.scene, &self.atlas, self.largest)?;
+                Present::Cpu(Box::new(cpu))
             }
+        })
+    }
+
+    fn redraw(&mut self, el: &ActiveEventLoop) -> Result<()> {
+        let dt = self.step();
+        let camera = self.camera()?;
+        let last = self.o.frames.is_some_and(|n| self.frames + 1 >= n);
+        let shots = self.pending_shots + u32::from(last && self.o.screenshot.is_some());
+        let status = self.status(dt);
+        let want = Want {
+            scene: &self.scene,
+            atlas: &self.atlas,
+            mode: self.mode,
+            view: self.view,
+            frozen: self.frozen,
+        };
+        let Some(present) = &mut self.present else {
+            return Ok(());
+        };
+        let drawn = present.draw(&camera, &want, &status, shots > 0)?;
+        self.presented_at.push(Instant::now());
+        self.cpu_ms.push(drawn.cpu_ms);
+        self.frames += 1;
+        if let Some(rgba) = &drawn.shot {
+            for _ in 0..shots {
+                let p = self.screenshot(rgba, drawn.width, drawn.height)?;
+                self.message = format!("screenshot {}", p.display());
+            }
+            self.pending_shots = 0;
+        }
+        if last {
             el.exit();
         }
         Ok(())
+    }
+
+    /// The session's figures, for `--json`.
+    fn summary(&mut self) -> Summary {
+        let intervals: Vec<f64> = self
+            .presented_at
+            .windows(2)
+            .map(|w| (w[1] - w[0]).as_secs_f64() * 1e3)
+            .collect();
+        let gpu = self
+            .present
+            .as_mut()
+            .map(|p| p.gpu_ms())
+            .unwrap_or_default();
+        Summary {
+            present: self.present.as_ref().map_or("none", |p| p.name()),
+            frames: self.frames,
+            interval_ms_median: median(intervals),
+            cpu_ms_median: median(self.cpu_ms.clone()),
+            gpu_ms_median: median(gpu),
+        }
+    }
+}
+
+/// The middle value (the mean of the two middle ones for an even count); `None` for none.
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => None,
+        _ if n % 2 == 1 => Some(v[n / 2]),
+        _ => Some((v[n / 2 - 1] + v[n / 2]) / 2.0),
     }
 }
 
@@ -445,8 +487,9 @@ fn no_display(winit: &str) -> String {
     format!("{cause}; `terrain view` needs X11 or Wayland (headless: xvfb-run terrain view …)")
 }
 
-/// Opens the window and flies until it is closed (or `frames` are drawn).
-pub fn run(scene: Scene, o: Options) -> Result<()> {
+/// Opens the window and flies until it is closed (or `frames` are drawn); returns what it
+/// showed.
+pub fn run(scene: Scene, o: Options) -> Result<Summary> {
     let atlas = scene::load_atlas(&scene)?;
     let camera = scene::camera_of(&scene, &atlas)?;
     let reach_m = scene::detail_of(&scene, &atlas).reach_m();
@@ -462,7 +505,6 @@ pub fn run(scene: Scene, o: Options) -> Result<()> {
         true => Some((CameraPath::of_scene(&scene, &atlas)?, 0.0)),
         false => None,
     };
-    let ctx = GpuContext::new(&terrain::render::needs(&scene, largest, &atlas))?;
     let event_loop = EventLoop::new().map_err(|e| Error::NoDisplay {
         cause: no_display(&e.to_string()),
     })?;
@@ -476,8 +518,8 @@ pub fn run(scene: Scene, o: Options) -> Result<()> {
         atlas,
         reach_m,
         far: camera.far,
-        ctx,
-        renderer: None,
+        largest,
+        present: None,
         view: View::Shaded,
         frozen: false,
         held: HashSet::new(),
@@ -486,11 +528,12 @@ pub fn run(scene: Scene, o: Options) -> Result<()> {
         frames: 0,
         tour,
         shots: 0,
-        presented: Vec::new(),
+        pending_shots: 0,
         recorder: None,
         window: None,
-        surface: None,
         error: None,
+        presented_at: Vec::new(),
+        cpu_ms: Vec::new(),
         message: String::new(),
     };
     event_loop
@@ -504,7 +547,7 @@ pub fn run(scene: Scene, o: Options) -> Result<()> {
         app.toggle_recording()?;
         eprintln!("{}", app.message);
     }
-    Ok(())
+    Ok(app.summary())
 }
 
 #[cfg(test)]
@@ -520,5 +563,12 @@ mod tests {
         let why = switch_mode(w, Mode::Bruteforce, false, true).unwrap_err();
         assert!(why.contains("bruteforce"), "{why}");
         assert_eq!(switch_mode(g, w, false, true), Ok(Some(w)));
+    }
+
+    #[test]
+    fn the_median_is_the_middle_value_or_the_mean_of_the_two() {
+        assert_eq!(median(vec![]), None);
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), Some(2.0));
+        assert_eq!(median(vec![4.0, 1.0, 2.0, 3.0]), Some(2.5));
     }
 }

@@ -26,6 +26,11 @@ pub struct Args {
     /// --out-dir.
     #[arg(long)]
     screenshot: Option<PathBuf>,
+    /// On quitting, prints one JSON object on stdout: how frames were presented (`present`:
+    /// "surface" or "cpu"), `frames`, and the medians `interval_ms_median` (between presented
+    /// frames), `cpu_ms_median` (the CPU stage) and `gpu_ms_median`.
+    #[arg(long)]
+    json: bool,
     /// Overrides a scene key (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
@@ -52,7 +57,11 @@ pub fn run(a: Args) -> Result<()> {
         out_dir: a.out_dir,
         screenshot: a.screenshot,
     };
-    Ok(terrain_cli::app::view::run(scene, opts)?)
+    let summary = terrain_cli::app::view::run(scene, opts)?;
+    if a.json {
+        crate::print_json(&summary)?;
+    }
+    Ok(())
 }
 
 #[cfg(not(feature = "view"))]
