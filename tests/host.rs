@@ -91,20 +91,8 @@ fn jacksboro() -> Scene {
 
 #[test]
 fn a_host_texture_holds_the_bytes_terrain_render_writes() {
-    let dir = scratch("host-bytes");
-    let png = dir.join("render.png");
     let scene = manifest_dir().join("sketches/jacksboro.toml");
-    let size = SIZE.to_string();
-    let (code, _, err) = terrain(&[
-        "render",
-        scene.to_str().unwrap(),
-        "-o",
-        png.to_str().unwrap(),
-        "--size",
-        &size,
-    ]);
-    assert_eq!(code, 0, "{err}");
-    let (_, _, rendered) = read_png(&png).unwrap();
+    let rendered = rendered_rgba(&scene, &scratch("host-bytes"), SIZE);
 
     let description = Description::new(jacksboro()).unwrap();
     let (device, queue) = host_device(&description);
@@ -326,20 +314,8 @@ fn the_terrains_depth_hides_a_host_object_where_the_terrain_is_nearer() {
 /// A planet through the same API: the clipmaps' frame in the host's texture is `terrain render`'s.
 #[test]
 fn a_planet_draws_through_the_host_api_as_terrain_render_draws_it() {
-    let dir = scratch("host-planet");
-    let png = dir.join("render.png");
     let path = manifest_dir().join("sketches/planet-10km.toml");
-    let size = SIZE.to_string();
-    let (code, _, err) = terrain(&[
-        "render",
-        path.to_str().unwrap(),
-        "-o",
-        png.to_str().unwrap(),
-        "--size",
-        &size,
-    ]);
-    assert_eq!(code, 0, "{err}");
-    let (_, _, rendered) = read_png(&png).unwrap();
+    let rendered = rendered_rgba(&path, &scratch("host-planet"), SIZE);
     let description = Description::new(Scene::load(&path).unwrap()).unwrap();
     let (device, queue) = host_device(&description);
     let camera = description.camera(SIZE, SIZE).unwrap();
@@ -357,34 +333,9 @@ fn a_planet_draws_through_the_host_api_as_terrain_render_draws_it() {
 #[test]
 fn a_streamed_pyramid_settles_through_the_host_api_on_terrain_renders_image() {
     let dir = scratch("host-pyramid");
-    let pyramid = dir.join("pyramid");
-    let dem = manifest_dir().join("sketches/jacksboro_fault_dem.asc");
-    let (code, _, err) = terrain(&[
-        "tiles",
-        dem.to_str().unwrap(),
-        "--out-dir",
-        pyramid.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
-    let text = std::fs::read_to_string(manifest_dir().join("sketches/jacksboro.toml"))
-        .unwrap()
-        .replace("jacksboro_fault_dem.asc", pyramid.to_str().unwrap())
-        // A pool too small to pin the whole pyramid: level 0 streams.
-        + "\n[stream]\ngpu_mb = 8\n";
-    let scene_path = dir.join("streamed.toml");
-    std::fs::write(&scene_path, text).unwrap();
-    let png = dir.join("render.png");
-    let size = SIZE.to_string();
-    let (code, _, err) = terrain(&[
-        "render",
-        scene_path.to_str().unwrap(),
-        "-o",
-        png.to_str().unwrap(),
-        "--size",
-        &size,
-    ]);
-    assert_eq!(code, 0, "{err}");
-    let (_, _, settled) = read_png(&png).unwrap();
+    // A pool too small to pin the whole pyramid: level 0 streams.
+    let scene_path = streamed_jacksboro(&dir, "\n[stream]\ngpu_mb = 8\n");
+    let settled = rendered_rgba(&scene_path, &dir, SIZE);
 
     let description = Description::new(Scene::load(&scene_path).unwrap()).unwrap();
     let (device, queue) = host_device(&description);

@@ -101,21 +101,7 @@ fn heights_equal_the_references_ground_on_the_bundled_dem_with_its_octaves() {
 
 #[test]
 fn heights_equal_the_references_ground_on_a_streamed_pyramid() {
-    let dir = scratch("query-pyramid-src");
-    let pyramid = dir.join("pyramid");
-    let dem = manifest_dir().join("sketches/jacksboro_fault_dem.asc");
-    let (code, _, err) = terrain(&[
-        "tiles",
-        dem.to_str().unwrap(),
-        "--out-dir",
-        pyramid.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
-    let text = std::fs::read_to_string(manifest_dir().join("sketches/jacksboro.toml"))
-        .unwrap()
-        .replace("jacksboro_fault_dem.asc", pyramid.to_str().unwrap());
-    let scene = dir.join("streamed.toml");
-    std::fs::write(&scene, text).unwrap();
+    let scene = streamed_jacksboro(&scratch("query-pyramid-src"), "");
     let worst = planar_difference(&scene, &[], "pyramid");
     assert!(worst <= 0.01, "{worst} m");
 }

@@ -236,3 +236,39 @@ pub fn read_npy(path: &std::path::Path) -> (String, Vec<f64>) {
         .collect();
     (header, values)
 }
+
+/// The bundled DEM converted by `terrain tiles` into `dir/pyramid`, and `dir/streamed.toml`: the
+/// jacksboro scene over that pyramid, with `extra` TOML appended.
+pub fn streamed_jacksboro(dir: &std::path::Path, extra: &str) -> PathBuf {
+    let pyramid = dir.join("pyramid");
+    let dem = manifest_dir().join("sketches/jacksboro_fault_dem.asc");
+    let (code, _, err) = terrain(&[
+        "tiles",
+        dem.to_str().unwrap(),
+        "--out-dir",
+        pyramid.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(manifest_dir().join("sketches/jacksboro.toml"))
+        .unwrap()
+        .replace("jacksboro_fault_dem.asc", pyramid.to_str().unwrap());
+    let scene = dir.join("streamed.toml");
+    std::fs::write(&scene, text + extra).unwrap();
+    scene
+}
+
+/// `terrain render SCENE -o DIR/render.png --size SIZE`'s pixels (RGBA).
+pub fn rendered_rgba(scene: &std::path::Path, dir: &std::path::Path, size: u32) -> Vec<u8> {
+    let png = dir.join("render.png");
+    let size = size.to_string();
+    let (code, _, err) = terrain(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+        "--size",
+        &size,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    read_png(&png).expect("render wrote its image").2
+}
