@@ -1,0 +1,199 @@
+//! The keys of the drawing itself: `[stream]`, `[reference]`, `[light]`, `[render]` (the mode
+//! and anti-aliasing) and `[planet]`.
+//!
+//! Rule: each section's defaults live in its `Default` impl, one place each.
+
+use serde::{Deserialize, Serialize};
+
+/// A sketch read from a tile pyramid (`terrain tiles`) streams through the tile cache (see
+/// [`crate::tiles::cache`]); these are its budgets.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StreamSection {
+    /// GPU memory for the tile pages and the page table, MiB (less where the adapter's largest
+    /// storage binding is smaller).
+    pub gpu_mb: f64,
+    /// Main memory for the coarse levels the CPU stage reads, MiB.
+    pub cpu_mb: f64,
+    /// Tiles placed on the GPU per frame at most.
+    pub loads_per_frame: u32,
+    /// Frames a newly loaded tile takes to blend in over the coarser level that stood in.
+    pub fade_frames: u32,
+    /// Threads reading and decoding tiles.
+    pub threads: u32,
+}
+impl Default for StreamSection {
+    fn default() -> Self {
+        StreamSection {
+            gpu_mb: 128.0,
+            cpu_mb: 256.0,
+            loads_per_frame: 32,
+            fade_frames: 8,
+            threads: 2,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ReferenceSection {
+    /// March step as a fraction of the height above the ground (and at least of the pixel's
+    /// footprint); halving it must not change the image (the convergence test).
+    pub step: f64,
+}
+impl Default for ReferenceSection {
+    fn default() -> Self {
+        ReferenceSection { step: 0.25 }
+    }
+}
+
+/// The sun and the air (see [`crate::light`]).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LightSection {
+    /// Degrees clockwise from north: 0 north, 90 east (150 unless the time is given).
+    pub sun_azimuth_deg: Option<f64>,
+    /// Degrees above the horizon; below 0 the sun has set (35 unless the time is given).
+    pub sun_elevation_deg: Option<f64>,
+    /// The sun from the time instead: the place's latitude, the day of the year (1–366) and
+    /// the local solar time in hours (12 at solar noon).
+    pub latitude_deg: Option<f64>,
+    pub day_of_year: Option<u32>,
+    pub solar_time_h: Option<f64>,
+    /// Meteorological visibility at sea level, km: the haze's density.
+    pub haze_visibility_km: f64,
+    /// Scale height of the haze, metres: how fast it thins with height.
+    pub haze_height_m: f64,
+    /// Exposure compensation in stops: light is scaled by 2^exposure_ev before the tone map.
+    pub exposure_ev: f64,
+}
+impl Default for LightSection {
+    fn default() -> Self {
+        LightSection {
+            sun_azimuth_deg: None,
+            sun_elevation_deg: None,
+            latitude_deg: None,
+            day_of_year: None,
+            solar_time_h: None,
+            haze_visibility_km: 100.0,
+            haze_height_m: 1200.0,
+            exposure_ev: 0.0,
+        }
+    }
+}
+
+impl LightSection {
+    /// The sun's azimuth and elevation, degrees: from the time where it is given (checked whole
+    /// by `Scene::check`), else the keys, else 150° and 35°.
+    pub fn sun_deg(&self) -> (f64, f64) {
+        match (self.latitude_deg, self.day_of_year, self.solar_time_h) {
+            (Some(lat), Some(day), Some(time)) => crate::light::sun_position(lat, day, time),
+            _ => (
+                self.sun_azimuth_deg.unwrap_or(150.0),
+                self.sun_elevation_deg.unwrap_or(35.0),
+            ),
+        }
+    }
+}
+
+crate::named_enum! {
+    /// The level-of-detail scheme that draws the terrain (`render.mode`, `--mode`).
+    pub enum Mode ("mode") {
+        Warped = "warped",
+        Geomipmap = "geomipmap",
+        Bruteforce = "bruteforce",
+        Reference = "reference",
+        /// Spherical clipmaps (Clasen & Hege 2006): planet scenes only.
+        Clipmaps = "clipmaps",
+    }
+}
+
+impl Mode {
+    /// The modes that draw a mesh (every one but the ray-marched reference).
+    pub const MESHES: [Mode; 4] = [
+        Mode::Warped,
+        Mode::Geomipmap,
+        Mode::Bruteforce,
+        Mode::Clipmaps,
+    ];
+
+    /// Brute force: it draws every vertex of a grid baked whole, so a streamed sketch (a tile
+    /// pyramid) cannot feed it. (GeoMipMap over a pyramid reads its blocks' vertices through the
+    /// tile cache instead.)
+    pub fn bakes_whole_sketch(self) -> bool {
+        self == Mode::Bruteforce
+    }
+
+    /// The modes that draw the sketch as a mesh in the terrain pass (warped, GeoMipMap, brute
+    /// force).
+    pub fn is_mesh(self) -> bool {
+        matches!(self, Mode::Warped | Mode::Geomipmap | Mode::Bruteforce)
+    }
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RenderSection {
+    pub mode: Mode,
+    /// The mesh modes shade with the terrain function's normal at each pixel, as the reference
+    /// does; `false`: the mesh's normals plus bump detail (`detail.bump`).
+    pub pixel_normals: bool,
+    /// The sketch shadows itself from the sun; `false` compiles the shadow ray out.
+    pub shadows: bool,
+    /// With `shadows`, the procedural detail shadows itself too.
+    pub detail_shadows: bool,
+    /// Anti-aliasing: the mesh modes multisampled and the reference supersampled alike.
+    pub msaa: Msaa,
+    /// Single-sampled frames of the mesh modes shade each pixel once, from a G-buffer the mesh
+    /// writes (`gpu::terrain`'s `Deferred`); `false`: forward, once per triangle touching it.
+    pub deferred: bool,
+}
+impl Default for RenderSection {
+    fn default() -> Self {
+        RenderSection {
+            mode: Mode::Warped,
+            pixel_normals: false,
+            shadows: true,
+            detail_shadows: false,
+            msaa: Msaa::Auto,
+            deferred: true,
+        }
+    }
+}
+
+crate::named_enum! {
+    /// Anti-aliasing (`render.msaa`): 4 samples per pixel, multisampled in the mesh modes (where
+    /// the adapter's targets allow it) and four rays per pixel in the reference.
+    pub enum Msaa ("msaa") {
+        /// 4× on a hardware GPU; off on a software rasterizer, where it costs several times
+        /// the terrain pass (docs/decisions.md, “Multisampling”).
+        Auto = "auto",
+        Off = "off",
+        X4 = "4x",
+    }
+}
+
+/// A planet and its spherical clipmaps (Clasen & Hege, *Terrain Rendering using Spherical
+/// Clipmaps*, 2006).
+///
+/// The defaults split the paper's triangles (512 × 20) the other way, 256 bearings × 40 rings a
+/// level: a ring's vertices a level apart matter more than its bearings (docs/decisions.md,
+/// “Clipmap rings”).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlanetSection {
+    pub radius_m: f64,
+    /// Bearing steps of every clipmap ring (the paper's n).
+    pub phi_steps: u32,
+    /// Rings per clipmap level (the paper's m).
+    pub rings_per_level: u32,
+}
+impl Default for PlanetSection {
+    fn default() -> Self {
+        PlanetSection {
+            radius_m: crate::planet::EARTH_RADIUS_M,
+            phi_steps: 256,
+            rings_per_level: 40,
+        }
+    }
+}
