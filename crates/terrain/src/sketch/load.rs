@@ -1,0 +1,371 @@
+//! Reading a sketch: what the scene says of a file ([`LoadOptions`]), the grid a reader makes
+//! ([`RawGrid`]), the dispatch by format, and the atlas made of it (scale, nodata fill, pyramid).
+//!
+//! Rule: the file's name alone picks its reader ([`Format::of`], the one place that knows the
+//! extensions); guesses the library takes on trust come back as [`warnings`], never printed.
+
+use super::georef::Georef;
+use super::{
+    Atlas, Level, MAX_HEIGHT_M, asc, build_pyramid, fill, geotiff, hgt, max_cells, mosaic, png,
+    synthetic, xyz,
+};
+use crate::error::{Error, Result};
+use glam::DVec2;
+use std::path::Path;
+
+/// What a file does not say about itself, from the scene.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    pub spacing_m: Option<f64>,
+    pub origin_m: Option<DVec2>,
+    pub height_scale: Option<f64>,
+    /// For 8/16-bit images: the heights that pixel values 0 and the maximum stand for.
+    pub height_range_m: Option<[f64; 2]>,
+    /// A streamed tile pyramid: bytes of its coarse levels to hold in memory (`stream.cpu_mb`).
+    pub stream_cpu_bytes: Option<u64>,
+}
+
+/// A grid as a format reader produces it, before filling and the pyramid.
+#[derive(Clone, Debug)]
+pub struct RawGrid {
+    pub width: usize,
+    pub height: usize,
+    pub dx: f64,
+    pub dy: f64,
+    /// Row-major, row 0 south. Non-finite values are nodata.
+    pub data: Vec<f32>,
+    /// Where the nodes lie in the file's coordinate system, when the file says (mosaics need it).
+    pub georef: Option<Georef>,
+}
+
+impl RawGrid {
+    /// A grid placed by its georeference when it has one; without, its cells are 1 m until the
+    /// scene's `sketch.spacing_m` says otherwise.
+    pub fn new(width: usize, height: usize, data: Vec<f32>, georef: Option<Georef>) -> RawGrid {
+        match georef {
+            Some(g) => RawGrid::georeferenced(width, height, data, g),
+            None => RawGrid {
+                width,
+                height,
+                dx: 1.0,
+                dy: 1.0,
+                data,
+                georef: None,
+            },
+        }
+    }
+
+    /// A grid whose spacing follows from its georeference.
+    pub fn georeferenced(width: usize, height: usize, data: Vec<f32>, georef: Georef) -> RawGrid {
+        let georef = georef.resolved(width, height);
+        let (dx, dy) = georef.spacing_m(width, height);
+        RawGrid {
+            width,
+            height,
+            dx,
+            dy,
+            data,
+            georef: Some(georef),
+        }
+    }
+
+    /// Checks the size against the limits before a reader allocates.
+    pub fn check_size(path: &Path, width: i64, height: i64) -> Result<(usize, usize)> {
+        if width < 2 || height < 2 {
+            RawGrid::check_size_unlimited(path, width, height)?;
+        }
+        let cells = (width as u128) * (height as u128);
+        let limit = max_cells();
+        if cells > limit as u128 {
+            return Err(Error::sketch(
+                path,
+                format!("grid is {width}×{height}, more than the {limit} cells supported"),
+            ));
+        }
+        Ok((width as usize, height as usize))
+    }
+
+    /// Checks that a grid has at least 2×2 nodes and at most 2^31 along a side, whatever the cell
+    /// limit: for grids that are streamed rather than allocated (`terrain tiles`).
+    pub fn check_size_unlimited(path: &Path, width: i64, height: i64) -> Result<(usize, usize)> {
+        if width < 2 || height < 2 {
+            return Err(Error::sketch(
+                path,
+                format!("grid is {width}×{height}; a sketch needs at least 2×2 cells"),
+            ));
+        }
+        if width.max(height) > i32::MAX as i64 {
+            return Err(Error::sketch(
+                path,
+                format!("grid is {width}×{height}; a side longer than 2^31 nodes is no sketch's"),
+            ));
+        }
+        Ok((width as usize, height as usize))
+    }
+}
+
+/// Reads a sketch file, or a glob of tiles, as the grid its format holds: the scene's overrides,
+/// the nodata fill and the pyramid come after ([`Atlas::from_raw`]).
+pub fn read_grid(path: &Path, opts: &LoadOptions) -> Result<RawGrid> {
+    read_at_depth(path, opts, 0)
+}
+
+/// A sketch file's format, told by its name: the one place that knows the extensions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Asc,
+    Hgt,
+    HgtZip,
+    Png,
+    Tiff,
+    Vrt,
+    Xyz,
+}
+
+impl Format {
+    fn of(path: &Path) -> Result<Format> {
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .map(|n| n.to_ascii_lowercase())
+            .unwrap_or_default();
+        if name.ends_with(".hgt.zip") {
+            return Ok(Format::HgtZip);
+        }
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .unwrap_or_default();
+        let why = match ext.as_str() {
+            "asc" | "grd" => return Ok(Format::Asc),
+            "hgt" => return Ok(Format::Hgt),
+            "png" => return Ok(Format::Png),
+            "tif" | "tiff" => return Ok(Format::Tiff),
+            "vrt" => return Ok(Format::Vrt),
+            "xyz" | "csv" | "txt" => return Ok(Format::Xyz),
+            "toml" => "a scene file, not a height map: give it to `terrain render`".to_string(),
+            "" if path.is_dir() => {
+                "is a folder without pyramid.toml, not a tile pyramid (`terrain tiles` writes one)"
+                    .to_string()
+            }
+            "" => "no extension to tell its format".to_string(),
+            other => format!("unknown sketch format `.{other}`"),
+        };
+        Err(Error::sketch(path, format!("{why}; a sketch is {FORMATS}")))
+    }
+}
+
+/// `depth`: how many mosaics enclose this file (a VRT may name VRTs).
+fn read_at_depth(path: &Path, opts: &LoadOptions, depth: usize) -> Result<RawGrid> {
+    if crate::tiles::is_pyramid(path) {
+        return crate::tiles::read::raw_grid(path, opts);
+    }
+    if mosaic::is_glob(path) {
+        return mosaic::read_glob(path, |tile| read_at_depth(tile, opts, depth + 1));
+    }
+    let spacing_given = opts.spacing_m.is_some();
+    match Format::of(path)? {
+        Format::Asc => asc::read(path),
+        Format::Hgt => hgt::read_file(path, spacing_given),
+        Format::HgtZip => hgt::read_zip_file(path, spacing_given),
+        Format::Png => png::read_file(path, opts),
+        Format::Tiff => geotiff::read_file(path),
+        Format::Vrt => mosaic::read_vrt(path, depth, |src, d| read_at_depth(src, opts, d)),
+        Format::Xyz => xyz::read(path),
+    }
+}
+
+/// What reading the sketch at `path` with `opts` would take on trust where neither the file nor
+/// the options say (a PNG's units), one line each for the program to show: the library prints
+/// nothing. Cheap (a PNG's header); empty where nothing is guessed or the file cannot be read.
+pub fn warnings(path: &Path, opts: &LoadOptions) -> Vec<String> {
+    match Format::of(path) {
+        Ok(Format::Png) if !mosaic::is_glob(path) => {
+            png::units_warning(path, opts).into_iter().collect()
+        }
+        _ => Vec::new(),
+    }
+}
+
+/// Parses a sketch held in memory, the format told by `name`'s extension, as [`read_grid`] would
+/// read the file (a VRT's sources and a PNG's world file are still read from disk, beside
+/// `name`). For the fuzz harness and for callers that hold the bytes already.
+pub fn parse_grid(name: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<RawGrid> {
+    let spacing_given = opts.spacing_m.is_some();
+    match Format::of(name)? {
+        Format::Asc => asc::parse_bytes(name, bytes),
+        Format::Hgt => hgt::parse(name, bytes, spacing_given),
+        Format::HgtZip => hgt::parse_zip(name, std::io::Cursor::new(bytes), spacing_given),
+        Format::Png => png::parse(name, bytes, opts, None),
+        Format::Tiff => geotiff::read(name, std::io::Cursor::new(bytes)),
+        Format::Vrt => mosaic::parse_vrt(name, bytes, 0, |src, d| read_at_depth(src, opts, d)),
+        Format::Xyz => xyz::parse_bytes(name, bytes),
+    }
+}
+
+/// Sketch files above this size report their reading as progress (about 2 s for an ASCII grid).
+const LARGE_FILE_BYTES: u64 = 64 << 20;
+
+/// The sketch formats by extension, for messages.
+const FORMATS: &str = ".asc/.grd (ESRI ASCII), .hgt/.hgt.zip (SRTM), .png (with a .pgw world file), \
+     .tif/.tiff (GeoTIFF), .vrt (GDAL mosaic), .xyz/.csv/.txt, a glob of tiles (tiles/*.hgt), \
+     or a tile pyramid's folder (`terrain tiles`)";
+
+impl Atlas {
+    /// Reads a sketch file, choosing the reader by its extension.
+    pub fn load(path: &Path, opts: &LoadOptions) -> Result<Atlas> {
+        // A large sketch takes seconds to parse and fill: say so while it does.
+        let step = std::fs::metadata(path)
+            .is_ok_and(|m| m.len() > LARGE_FILE_BYTES)
+            .then(|| crate::progress::start(&format!("reading sketch {}", path.display()), None));
+        let atlas = Atlas::load_quietly(path, opts);
+        if let Some(s) = step {
+            s.finish();
+        }
+        atlas
+    }
+
+    fn load_quietly(path: &Path, opts: &LoadOptions) -> Result<Atlas> {
+        if crate::tiles::is_pyramid(path) {
+            return crate::tiles::read::streamed_atlas(path, opts);
+        }
+        let raw = read_grid(path, opts)?;
+        Atlas::from_raw(raw, opts).map_err(|e| match e {
+            Error::Value { reason, .. } => Error::sketch(path, reason),
+            e => e,
+        })
+    }
+
+    /// The atlas of a grid a reader (or a program) made: fills nodata, applies the scene's
+    /// overrides and builds the pyramid.
+    pub fn from_raw(mut raw: RawGrid, opts: &LoadOptions) -> Result<Atlas> {
+        if let Some(s) = opts.spacing_m {
+            raw.dx = s;
+            raw.dy = s;
+        }
+        if !(raw.dx.is_finite() && raw.dy.is_finite() && raw.dx > 0.0 && raw.dy > 0.0) {
+            return Err(Error::value(
+                "sketch.spacing_m",
+                format!(
+                    "grid spacing {} × {} m is not positive and finite",
+                    raw.dx, raw.dy
+                ),
+            ));
+        }
+        scale_heights(&mut raw.data, opts)?;
+        let nodata = fill::fill_nodata(&mut raw.data, raw.width, raw.height);
+        let mut min_m = f32::INFINITY;
+        let mut max_m = f32::NEG_INFINITY;
+        for &h in &raw.data {
+            min_m = min_m.min(h);
+            max_m = max_m.max(h);
+        }
+        let base = Level {
+            width: raw.width,
+            height: raw.height,
+            data: raw.data,
+        };
+        let edge_mean_m = base.edge_mean();
+        Ok(Atlas {
+            dx: raw.dx,
+            dy: raw.dy,
+            origin: opts.origin_m.unwrap_or(DVec2::ZERO),
+            nodata,
+            min_m,
+            max_m,
+            edge_mean_m,
+            water_m: 0.0,
+            levels: build_pyramid(base),
+            georef: raw.georef,
+            resident_from: 0,
+            pyramid: None,
+            relief_m: None,
+        })
+    }
+}
+
+/// Applies `sketch.height_scale` and takes heights beyond ±[`MAX_HEIGHT_M`] as nodata (NaN); more
+/// than 1 % of them beyond is a unit error and refused.
+pub fn scale_heights(data: &mut [f32], opts: &LoadOptions) -> Result<()> {
+    let scale = opts.height_scale.unwrap_or(1.0);
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(Error::value(
+            "sketch.height_scale",
+            format!("height scale {scale} is not positive and finite"),
+        ));
+    }
+    let (mut beyond, mut largest) = (0usize, 0.0f64);
+    for h in data.iter_mut() {
+        let v = *h as f64 * scale;
+        *h = if v.abs() <= MAX_HEIGHT_M {
+            v as f32
+        } else {
+            if v.is_finite() {
+                beyond += 1;
+                largest = largest.max(v.abs());
+            }
+            f32::NAN
+        };
+    }
+    // A few such cells are damage or an undeclared nodata; many are heights in another unit.
+    if beyond * 100 > data.len() {
+        return Err(Error::value(
+            "sketch.height_scale",
+            format!(
+                "{beyond} of {} heights lie beyond ±1000 km (up to {largest:.3e} m after height_scale {scale}): \
+                     set sketch.height_scale to their unit in metres (0.001 for millimetres)",
+                data.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+impl Atlas {
+    /// A synthetic sketch (see [`synthetic::NAMES`]), `size`² nodes.
+    pub fn synthetic(name: &str, size: usize, opts: &LoadOptions) -> Result<Atlas> {
+        if !(2..=4097).contains(&size) {
+            return Err(Error::value(
+                "sketch.size",
+                format!("synthetic size {size} is outside 2..=4097"),
+            ));
+        }
+        let spacing = opts.spacing_m.unwrap_or(synthetic::DEFAULT_SPACING_M);
+        Atlas::from_raw(synthetic::generate(name, size, spacing)?, opts)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn heights_beyond_a_thousand_kilometres_are_filled_as_nodata() {
+        let mut data = vec![10.0; 400];
+        data[7] = -3.4e38;
+        data[99] = 1.0e30;
+        data[0] = 20.0;
+        let raw = RawGrid::new(20, 20, data, None);
+        let a = Atlas::from_raw(raw, &LoadOptions::default()).unwrap();
+        assert_eq!(a.nodata, 2);
+        assert!(
+            a.min_m >= 10.0 && a.max_m <= 20.0,
+            "{} {}",
+            a.min_m,
+            a.max_m
+        );
+        // Many such heights are another unit: refused, naming the key that fixes it.
+        let mm = RawGrid::new(2, 2, vec![1.2e6, 1.3e6, 1.1e6, 2.0e6], None);
+        let err = Atlas::from_raw(mm.clone(), &LoadOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with("sketch.height_scale: 4 of 4"), "{err}");
+        let opts = LoadOptions {
+            height_scale: Some(0.001),
+            ..LoadOptions::default()
+        };
+        let a = Atlas::from_raw(mm, &opts).unwrap();
+        assert_eq!((a.nodata, a.min_m, a.max_m), (0, 1100.0, 2000.0));
+    }
+}
