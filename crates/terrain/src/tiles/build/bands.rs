@@ -1,0 +1,136 @@
+//! Cutting bands into tiles: a band is one tile row of a level and its borders, level 0's from
+//! scratch, a coarser level's averaged from the tiles below; its tiles are encoded in parallel.
+//!
+//! Rule: a coarser band averages in the atlas's order of additions, so a pyramid's levels and the
+//! atlas's agree bit for bit; nodata is filled within the band alone (`tiles::build`'s rules).
+
+use super::resume::write_quietly;
+use crate::error::{Error, Result, Role};
+use crate::sketch::fill;
+use crate::tiles::codec::encode_tile;
+use crate::tiles::{BORDER, Meta, SIDE, TILE, tile_path};
+use std::path::Path;
+
+/// Level l's rows of band `ty`, each the box average of two rows of level l−1 read from its tiles.
+pub(super) fn coarser_band(
+    out: &Path,
+    meta: &Meta,
+    l: usize,
+    ty: usize,
+) -> Result<(usize, Vec<f32>)> {
+    let [w, h] = meta.levels[l];
+    let [fw, _] = meta.levels[l - 1];
+    let (r0, r1) = band_rows(ty, h);
+    let fine = read_rows(out, meta, l - 1, 2 * r0, 2 * r1)?;
+    let mut band = Vec::with_capacity(w * (r1 - r0));
+    for j in 0..r1 - r0 {
+        for i in 0..w {
+            let at = |x: usize, y: usize| fine[y * fw + x];
+            let (x, y) = (2 * i, 2 * j);
+            // The atlas's order of additions, so both pyramids agree bit for bit.
+            band.push(0.25 * (at(x, y) + at(x + 1, y) + at(x, y + 1) + at(x + 1, y + 1)));
+        }
+    }
+    Ok((r0, band))
+}
+
+/// Rows `r0..r1` of level `l`, whole width, from the interiors of its tiles.
+pub(in crate::tiles) fn read_rows(
+    out: &Path,
+    meta: &Meta,
+    l: usize,
+    r0: usize,
+    r1: usize,
+) -> Result<Vec<f32>> {
+    let [w, _] = meta.levels[l];
+    let (tiles_x, _) = meta.tiles(l);
+    let (t, b, side) = (meta.tile, meta.border, meta.tile + 2 * meta.border);
+    let mut rows = vec![0f32; w * (r1 - r0)];
+    for ty in r0 / t..=(r1 - 1) / t {
+        for tx in 0..tiles_x {
+            let heights = crate::tiles::read::read_tile_file(&tile_path(out, l, tx, ty), side)?;
+            let (lo, hi) = (r0.max(ty * t), r1.min(ty * t + t));
+            let cols = t.min(w - tx * t);
+            for r in lo..hi {
+                let src = &heights[(r - ty * t + b) * side + b..][..cols];
+                rows[(r - r0) * w + tx * t..][..cols].copy_from_slice(src);
+            }
+        }
+    }
+    Ok(rows)
+}
+
+/// The rows a band of tile row `ty` holds, clamped to a level of `h` rows.
+pub(super) fn band_rows(ty: usize, h: usize) -> (usize, usize) {
+    let r0 = (ty * TILE).saturating_sub(BORDER);
+    let r1 = ((ty + 1) * TILE + BORDER).min(h);
+    (r0, r1)
+}
+
+/// Fills the band's nodata (level 0) and writes its `missing` tiles, encoded on `threads` threads.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn write_band(
+    out: &Path,
+    meta: &Meta,
+    l: usize,
+    ty: usize,
+    r0: usize,
+    band: &[f32],
+    w: usize,
+    missing: &[usize],
+    threads: usize,
+) -> Result<()> {
+    let rows = band.len() / w;
+    let mut filled;
+    let mut nodata_mask = Vec::new();
+    let band = if band.iter().any(|h| !h.is_finite()) {
+        nodata_mask = band.iter().map(|h| !h.is_finite()).collect();
+        filled = band.to_vec();
+        fill::fill_nodata(&mut filled, w, rows);
+        &filled[..]
+    } else {
+        band
+    };
+    let [_, h] = meta.levels[l];
+    let dir = tile_path(out, l, 0, ty);
+    let dir = dir.parent().expect("a tile has a folder");
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(Role::OutputFolder, dir, e))?;
+    let chunk = missing.len().div_ceil(threads.max(1));
+    std::thread::scope(|scope| {
+        let jobs: Vec<_> = missing
+            .chunks(chunk.max(1))
+            .map(|txs| {
+                let mask = &nodata_mask;
+                scope.spawn(move || -> Result<()> {
+                    let mut tile = vec![0f32; SIDE * SIDE];
+                    for &tx in txs {
+                        let (mut lo, mut hi, mut nodata) = (f32::INFINITY, f32::NEG_INFINITY, 0u32);
+                        for j in 0..SIDE {
+                            let gy = (ty * TILE + j).saturating_sub(BORDER).min(h - 1);
+                            for i in 0..SIDE {
+                                let gx = (tx * TILE + i).saturating_sub(BORDER).min(w - 1);
+                                let k = (gy - r0) * w + gx;
+                                let v = band[k];
+                                tile[j * SIDE + i] = v;
+                                let inside = (BORDER..BORDER + TILE).contains(&i)
+                                    && (BORDER..BORDER + TILE).contains(&j)
+                                    && tx * TILE + i - BORDER < w
+                                    && ty * TILE + j - BORDER < h;
+                                if inside {
+                                    lo = lo.min(v);
+                                    hi = hi.max(v);
+                                    nodata += mask.get(k).copied().unwrap_or(false) as u32;
+                                }
+                            }
+                        }
+                        let bytes = encode_tile(&tile, SIDE, lo, hi, nodata);
+                        write_quietly(&tile_path(out, l, tx, ty), &bytes)?;
+                    }
+                    Ok(())
+                })
+            })
+            .collect();
+        jobs.into_iter()
+            .try_for_each(|j| j.join().expect("a tile encoder does not panic"))
+    })
+}
