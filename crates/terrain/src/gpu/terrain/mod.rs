@@ -16,6 +16,12 @@ use super::stream::AtlasBinding;
 use crate::error::Result;
 use wgpu::ShaderStages as S;
 
+mod raster;
+mod targets;
+
+pub(crate) use raster::RasterPipeline;
+use raster::render_pass;
+
 pub const COLOUR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 /// Each pixel's depth as four bytes, kept for recovering ground positions (depth textures cannot
 /// be copied, nor float targets rendered, on every adapter).
@@ -278,79 +284,7 @@ impl TerrainPass {
                 (index, indices.len() as u32)
             }
         };
-        let target_of = |format, usage, label, sample_count| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
-        let target = |format, usage, label| target_of(format, usage, label, 1);
-        let colour = target(
-            COLOUR,
-            // Read by the output pass too, for a host's targets.
-            wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::COPY_SRC
-                | wgpu::TextureUsages::TEXTURE_BINDING,
-            "colour",
-        );
-        let drawn = wgpu::TextureUsages::RENDER_ATTACHMENT;
-        let depth = target_of(DEPTH, drawn, "depth", n);
-        let depth_copy = variant.positions.then(|| {
-            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::COPY_SRC
-                | wgpu::TextureUsages::TEXTURE_BINDING;
-            target(DEPTH_COPY, usage, "depth copy")
-        });
-        let multisampled = multisampled.then(|| {
-            let colour = target_of(COLOUR, drawn, "colour samples", n);
-            let mut ms = Multisampled {
-                colour: colour.create_view(&Default::default()),
-                depth_pass: None,
-                _targets: vec![colour],
-            };
-            if let Some(pipeline) = depth_pipeline {
-                let depth = target(DEPTH, drawn, "depth copy's depth");
-                ms.depth_pass = Some((pipeline, depth.create_view(&Default::default())));
-                ms._targets.push(depth);
-            }
-            ms
-        });
-        let deferred = gbuffer.map(|gbuffer_layout| -> Result<Deferred> {
-            let usage = drawn | wgpu::TextureUsages::TEXTURE_BINDING;
-            let targets: Vec<_> = GBUFFER
-                .iter()
-                .map(|&f| target(f, usage, "g-buffer"))
-                .collect();
-            let views: Vec<_> = targets
-                .iter()
-                .map(|t| t.create_view(&Default::default()))
-                .collect();
-            // The targets in the order of their bindings.
-            let names = BINDINGS.iter().filter(|b| b.group == 1).map(|b| b.name);
-            let resources: Vec<_> = names
-                .zip(&views)
-                .map(|(name, view)| (name, wgpu::BindingResource::TextureView(view)))
-                .collect();
-            let label = "terrain g-buffer";
-            let bind_group =
-                bindings::bind_group(device, label, &gbuffer_layout, BINDINGS, 1, key, &resources)?;
-            Ok(Deferred {
-                bind_group,
-                views,
-                _targets: targets,
-            })
-        });
-        let deferred = deferred.transpose()?;
+        let made = targets::make(device, (width, height), variant, depth_pipeline, gbuffer)?;
         Ok(TerrainPass {
             ground,
             screen,
@@ -358,15 +292,16 @@ impl TerrainPass {
             index_count,
             quad_mesh: if variant.geomipmap.is_some() { 0 } else { mesh },
             index,
-            colour_view: colour.create_view(&Default::default()),
-            depth_view: depth.create_view(&Default::default()),
-            depth_copy_view: depth_copy
+            colour_view: made.colour.create_view(&Default::default()),
+            depth_view: made.depth.create_view(&Default::default()),
+            depth_copy_view: made
+                .depth_copy
                 .as_ref()
                 .map(|t| t.create_view(&Default::default())),
-            depth_copy,
-            colour,
-            multisampled,
-            deferred,
+            depth_copy: made.depth_copy,
+            colour: made.colour,
+            multisampled: made.multisampled,
+            deferred: made.deferred,
         })
     }
 
@@ -566,74 +501,4 @@ pub fn quad_indices(mesh: u32) -> Vec<u32> {
         }
     }
     v
-}
-
-/// A render pass of the terrain's: no occlusion queries, one view.
-fn render_pass<'e>(
-    encoder: &'e mut wgpu::CommandEncoder,
-    label: &str,
-    colour: &[Option<wgpu::RenderPassColorAttachment>],
-    depth: Option<wgpu::RenderPassDepthStencilAttachment>,
-    timestamps: Option<wgpu::RenderPassTimestampWrites>,
-) -> wgpu::RenderPass<'e> {
-    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some(label),
-        color_attachments: colour,
-        depth_stencil_attachment: depth,
-        timestamp_writes: timestamps,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    })
-}
-
-/// A render pipeline of the raster passes (terrain, planet): vertices pulled from storage (no
-/// vertex buffers), triangle lists, and a reversed-Z depth test into [`DEPTH`] or none.
-pub(crate) struct RasterPipeline<'a> {
-    pub layout: &'a wgpu::PipelineLayout,
-    pub module: &'a wgpu::ShaderModule,
-    /// Vertex and fragment entry points.
-    pub entry: (&'a str, &'a str),
-    pub targets: &'a [Option<wgpu::ColorTargetState>],
-    pub samples: u32,
-    /// Whether it writes the depth, and its test; `None`: drawn without a depth attachment.
-    pub depth: Option<(bool, wgpu::CompareFunction)>,
-}
-
-impl RasterPipeline<'_> {
-    pub fn build(&self, device: &wgpu::Device) -> wgpu::RenderPipeline {
-        let (vs, fs) = self.entry;
-        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(fs),
-            layout: Some(self.layout),
-            vertex: wgpu::VertexState {
-                module: self.module,
-                entry_point: Some(vs),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                ..Default::default()
-            },
-            depth_stencil: self.depth.map(|(write, compare)| wgpu::DepthStencilState {
-                format: DEPTH,
-                depth_write_enabled: Some(write),
-                depth_compare: Some(compare),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: wgpu::MultisampleState {
-                count: self.samples,
-                ..Default::default()
-            },
-            fragment: Some(wgpu::FragmentState {
-                module: self.module,
-                entry_point: Some(fs),
-                compilation_options: Default::default(),
-                targets: self.targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
-    }
 }

@@ -1,0 +1,112 @@
+//! The terrain pass's targets at a frame's size: the colour it leaves for read-back and the output
+//! pass, the depth, the depth copy for positions, the multisampled colour and the G-buffer with its
+//! bind group. Nothing else in the pass depends on the size.
+
+use super::{BINDINGS, COLOUR, DEPTH, DEPTH_COPY, Deferred, GBUFFER, Multisampled, Variant};
+use crate::error::Result;
+use crate::gpu::alloc::{Alloc, Texture};
+use crate::gpu::bindings;
+
+/// The targets [`make`] builds.
+pub(super) struct Made {
+    pub colour: Texture,
+    pub depth: Texture,
+    pub depth_copy: Option<Texture>,
+    pub multisampled: Option<Multisampled>,
+    pub deferred: Option<Deferred>,
+}
+
+/// The targets of a `width` × `height` frame of `variant`; `depth_pipeline` draws the depth copy
+/// of a multisampled frame, `gbuffer` is the G-buffer's layout when shading is deferred.
+pub(super) fn make(
+    device: &Alloc,
+    (width, height): (u32, u32),
+    variant: &Variant,
+    depth_pipeline: Option<wgpu::RenderPipeline>,
+    gbuffer: Option<wgpu::BindGroupLayout>,
+) -> Result<Made> {
+    let key = variant.key;
+    let n = variant.samples;
+    let multisampled = n > 1;
+    let target_of = |format, usage, label, sample_count| {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    };
+    let target = |format, usage, label| target_of(format, usage, label, 1);
+    let colour = target(
+        COLOUR,
+        // Read by the output pass too, for a host's targets.
+        wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING,
+        "colour",
+    );
+    let drawn = wgpu::TextureUsages::RENDER_ATTACHMENT;
+    let depth = target_of(DEPTH, drawn, "depth", n);
+    let depth_copy = variant.positions.then(|| {
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING;
+        target(DEPTH_COPY, usage, "depth copy")
+    });
+    let multisampled = multisampled.then(|| {
+        let colour = target_of(COLOUR, drawn, "colour samples", n);
+        let mut ms = Multisampled {
+            colour: colour.create_view(&Default::default()),
+            depth_pass: None,
+            _targets: vec![colour],
+        };
+        if let Some(pipeline) = depth_pipeline {
+            let depth = target(DEPTH, drawn, "depth copy's depth");
+            ms.depth_pass = Some((pipeline, depth.create_view(&Default::default())));
+            ms._targets.push(depth);
+        }
+        ms
+    });
+    let deferred = gbuffer.map(|gbuffer_layout| -> Result<Deferred> {
+        let usage = drawn | wgpu::TextureUsages::TEXTURE_BINDING;
+        let targets: Vec<_> = GBUFFER
+            .iter()
+            .map(|&f| target(f, usage, "g-buffer"))
+            .collect();
+        let views: Vec<_> = targets
+            .iter()
+            .map(|t| t.create_view(&Default::default()))
+            .collect();
+        // The targets in the order of their bindings.
+        let names = BINDINGS.iter().filter(|b| b.group == 1).map(|b| b.name);
+        let resources: Vec<_> = names
+            .zip(&views)
+            .map(|(name, view)| (name, wgpu::BindingResource::TextureView(view)))
+            .collect();
+        let label = "terrain g-buffer";
+        let bind_group =
+            bindings::bind_group(device, label, &gbuffer_layout, BINDINGS, 1, key, &resources)?;
+        Ok(Deferred {
+            bind_group,
+            views,
+            _targets: targets,
+        })
+    });
+    let deferred = deferred.transpose()?;
+
+    Ok(Made {
+        colour,
+        depth,
+        depth_copy,
+        multisampled,
+        deferred,
+    })
+}
