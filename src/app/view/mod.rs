@@ -26,7 +26,7 @@
 //! Xvfb); [`run`] returns the session's figures ([`Summary`], `--json`).
 //!
 //! Rejected alternative: the CPU copy for every frame, a read-back per frame and a second
-//! upload to the display (docs/decisions.md, "View presented through a surface").
+//! upload to the display (docs/decisions.md, “View presented through a surface”).
 
 use crate::app::flycam::{FlyCamera, PathRecorder, PlanetFlyCamera};
 use crate::app::hud;
