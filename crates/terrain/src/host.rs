@@ -130,6 +130,8 @@ pub struct Terrain {
     view: View,
     renderer: Renderer,
     output: OutputPass,
+    /// The output pass's reading of the renderer's frame, made with the renderer.
+    output_group: wgpu::BindGroup,
     /// What the output pass and read-backs allocate (the renderer counts its own).
     _ledger: Ledger,
     /// Whether a frame was recorded since the renderer was built.
@@ -158,6 +160,7 @@ impl Terrain {
         };
         let renderer = build(&ctx, &scene, atlas, mode, view)?;
         let output = OutputPass::new(&alloc, targets, renderer.shader_key)?;
+        let output_group = bind_output(&ctx, &output, &renderer)?;
         Ok(Terrain {
             ctx,
             targets,
@@ -166,6 +169,7 @@ impl Terrain {
             view,
             renderer,
             output,
+            output_group,
             _ledger: ledger,
             recorded: false,
         })
@@ -211,6 +215,7 @@ impl Terrain {
             self.scene.camera.height = camera.height;
             let atlas = self.renderer.atlas().clone();
             self.renderer = build(&self.ctx, &self.scene, atlas, self.mode, self.view)?;
+            self.output_group = bind_output(&self.ctx, &self.output, &self.renderer)?;
             self.recorded = false;
         }
         Ok(())
@@ -225,11 +230,8 @@ impl Terrain {
         depth: &wgpu::TextureView,
     ) -> Result<()> {
         self.renderer.host_record(encoder)?;
-        let source = self.renderer.output().ok_or(Error::Internal(
-            "the renderer keeps no frame for a host's targets",
-        ))?;
         self.output
-            .record(&self.ctx.device, encoder, source, colour, depth)?;
+            .record(encoder, &self.output_group, colour, depth);
         self.recorded = true;
         Ok(())
     }
@@ -314,6 +316,18 @@ fn build(
     view: View,
 ) -> Result<Renderer> {
     Renderer::with_context(ctx.clone(), scene, atlas, mode, view, true)
+}
+
+/// The output pass's bind group over `renderer`'s frame.
+fn bind_output(
+    ctx: &GpuContext,
+    output: &OutputPass,
+    renderer: &Renderer,
+) -> Result<wgpu::BindGroup> {
+    let source = renderer.output().ok_or(Error::Internal(
+        "the renderer keeps no frame for a host's targets",
+    ))?;
+    output.bind(&ctx.device, source)
 }
 
 /// Clears a host's targets as a frame starts: black, and depth 0 (reversed-Z's far).

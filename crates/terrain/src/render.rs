@@ -334,6 +334,7 @@ impl Renderer {
         let mut stream_us = stream_start.elapsed().as_secs_f64() * 1e6;
         let timer = self.timer.as_ref();
         let ran = self.lod.record(ctx, &mut encoder, timer);
+        self.lod.record_read_back(&mut encoder);
         if let Some(t) = timer {
             t.resolve(&mut encoder, ran);
         }

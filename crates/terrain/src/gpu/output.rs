@@ -144,15 +144,9 @@ impl OutputPass {
         queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
     }
 
-    /// Writes the frame left in `source` into the host's `colour` and `depth` views.
-    pub fn record(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        source: Source,
-        colour: &wgpu::TextureView,
-        depth: &wgpu::TextureView,
-    ) -> Result<()> {
+    /// The bind group that reads the frame a renderer leaves in `source`: made once per renderer,
+    /// as its targets live as long as it does.
+    pub fn bind(&self, device: &wgpu::Device, source: Source) -> Result<wgpu::BindGroup> {
         if matches!(source, Source::Buffers { .. }) != self.key.contains(Key::FROM_BUFFERS) {
             return Err(crate::error::Error::Internal(
                 "an output pass built for one kind of frame given the other",
@@ -170,8 +164,18 @@ impl OutputPass {
             ]),
         }
         let (name, key) = (Self::NAME, self.key);
-        let bind_group =
-            bindings::bind_group(device, name, &self.layout, BINDINGS, 0, key, &resources)?;
+        bindings::bind_group(device, name, &self.layout, BINDINGS, 0, key, &resources)
+    }
+
+    /// Writes the frame `bind_group` ([`OutputPass::bind`]) reads into the host's `colour` and
+    /// `depth` views.
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind_group: &wgpu::BindGroup,
+        colour: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+    ) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(Self::NAME),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -196,8 +200,7 @@ impl OutputPass {
             multiview_mask: None,
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
+        pass.set_bind_group(0, bind_group, &[]);
         pass.draw(0..3, 0..1);
-        Ok(())
     }
 }

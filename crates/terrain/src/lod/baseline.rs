@@ -398,8 +398,11 @@ impl Lod for Baselines {
         let draw = !self.indices.is_empty();
         self.terrain
             .record(encoder, draw, t.map(|t| t.render(TerrainPass::NAME)));
-        self.readback.record(encoder, &self.terrain.colour);
         &[TerrainPass::NAME]
+    }
+
+    fn record_read_back(&self, encoder: &mut wgpu::CommandEncoder) {
+        self.readback.record(encoder, &self.terrain.colour);
     }
 
     fn output(&self) -> Option<crate::gpu::output::Source<'_>> {

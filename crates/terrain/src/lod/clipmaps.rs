@@ -228,8 +228,13 @@ impl Lod for Clipmaps {
         self.clipmaps.record(encoder, u.vertex_count, compute);
         let render = t.map(|t| t.render(PlanetPass::NAME));
         self.pass.record(encoder, &self.rings, self.span, render);
-        self.readback.record(encoder, &self.pass.colour);
         &PASSES
+    }
+
+    fn record_read_back(&self, encoder: &mut wgpu::CommandEncoder) {
+        if self.uniforms.is_some() {
+            self.readback.record(encoder, &self.pass.colour);
+        }
     }
 
     fn output(&self) -> Option<crate::gpu::output::Source<'_>> {

@@ -139,6 +139,10 @@ pub trait Lod: Any {
         encoder: &mut wgpu::CommandEncoder,
         timer: Option<&Timer>,
     ) -> &'static [&'static str];
+    /// Records the copy of the frame's image that [`read_image`](Lod::read_image) reads: a
+    /// snapshot's frame records it after [`record`](Lod::record); a host's frame, which never reads
+    /// its image back, does not.
+    fn record_read_back(&self, _encoder: &mut wgpu::CommandEncoder) {}
     /// The image of the submitted frame: RGBA8 sRGB, rows top first.
     fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>>;
     /// Where the recorded frame is left, for writing into a host's targets

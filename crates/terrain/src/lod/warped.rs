@@ -225,7 +225,6 @@ impl Lod for Warped {
         }
         let terrain = t.map(|t| t.render(TerrainPass::NAME));
         self.terrain.record(encoder, visible, terrain);
-        self.readback.record(encoder, &self.terrain.colour);
         // A sky-only frame runs the terrain pass alone (for the sky).
         let passes = self.passes();
         if visible {
@@ -233,6 +232,10 @@ impl Lod for Warped {
         } else {
             &passes[passes.len() - 1..]
         }
+    }
+
+    fn record_read_back(&self, encoder: &mut wgpu::CommandEncoder) {
+        self.readback.record(encoder, &self.terrain.colour);
     }
 
     fn output(&self) -> Option<crate::gpu::output::Source<'_>> {
