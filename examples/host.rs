@@ -277,7 +277,7 @@ impl Gpu {
         camera: &Camera,
     ) -> anyhow::Result<()> {
         let view = target.create_view(&Default::default());
-        clear(encoder, &view, &self.depth);
+        terrain::host::clear(encoder, &view, &self.depth);
         self.terrain.record(encoder, &view, &self.depth)?;
         self.mast
             .draw(&self.queue, encoder, &view, &self.depth, camera, self.foot);
@@ -318,30 +318,12 @@ fn depth_view(device: &wgpu::Device, width: u32, height: u32) -> wgpu::TextureVi
         .create_view(&Default::default())
 }
 
-/// Clears colour to black and depth to 0, reversed-Z's far.
-fn clear(
-    encoder: &mut wgpu::CommandEncoder,
-    colour: &wgpu::TextureView,
-    depth: &wgpu::TextureView,
-) {
-    begin(encoder, colour, depth, true);
-}
-
-/// A render pass into the host's targets, cleared or loaded.
+/// A render pass over what the host's targets hold.
 fn begin<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
     colour: &wgpu::TextureView,
     depth: &wgpu::TextureView,
-    clear: bool,
 ) -> wgpu::RenderPass<'e> {
-    let (c, d) = if clear {
-        (
-            wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-            wgpu::LoadOp::Clear(0.0),
-        )
-    } else {
-        (wgpu::LoadOp::Load, wgpu::LoadOp::Load)
-    };
     encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some("host"),
         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -349,14 +331,14 @@ fn begin<'e>(
             depth_slice: None,
             resolve_target: None,
             ops: wgpu::Operations {
-                load: c,
+                load: wgpu::LoadOp::Load,
                 store: wgpu::StoreOp::Store,
             },
         })],
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
             view: depth,
             depth_ops: Some(wgpu::Operations {
-                load: d,
+                load: wgpu::LoadOp::Load,
                 store: wgpu::StoreOp::Store,
             }),
             stencil_ops: None,
@@ -465,7 +447,7 @@ impl Mast {
         let mut data = Terrain::view_proj(camera).to_cols_array().to_vec();
         data.extend([local.x, local.y, local.z, 1.0]);
         queue.write_buffer(&self.uniforms, 0, bytemuck::cast_slice(&data));
-        let mut pass = begin(encoder, colour, depth, false);
+        let mut pass = begin(encoder, colour, depth);
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.draw(0..12, 0..1);

@@ -102,11 +102,10 @@ fn a_host_texture_holds_the_bytes_terrain_render_writes() {
     let depth = target(&device, TARGETS.depth);
     terrain.prepare(&camera).unwrap();
     let mut encoder = device.create_command_encoder(&Default::default());
-    clear(&mut encoder, &colour, &depth);
     let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-    terrain
-        .record(&mut encoder, &view(&colour), &view(&depth))
-        .unwrap();
+    let (cv, dv) = (view(&colour), view(&depth));
+    clear(&mut encoder, &cv, &dv);
+    terrain.record(&mut encoder, &cv, &dv).unwrap();
     queue.submit([encoder.finish()]);
     let drawn = read(&device, &queue, &colour);
     assert_eq!(drawn.len(), rendered.len());
@@ -216,11 +215,11 @@ fn the_terrains_depth_hides_a_host_object_where_the_terrain_is_nearer() {
 
     terrain.prepare(&camera).unwrap();
     let mut encoder = device.create_command_encoder(&Default::default());
-    clear(&mut encoder, &colour, &depth);
     let (cv, dv) = (
         colour.create_view(&Default::default()),
         depth.create_view(&Default::default()),
     );
+    clear(&mut encoder, &cv, &dv);
     terrain.record(&mut encoder, &cv, &dv).unwrap();
     {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {

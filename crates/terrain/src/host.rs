@@ -289,11 +289,11 @@ impl Terrain {
         let depth = texture(self.targets.depth, usage, "host depth");
         self.prepare(camera)?;
         let mut encoder = device.create_command_encoder(&Default::default());
-        clear(&mut encoder, &colour, &depth);
         let (cv, dv) = (
             colour.create_view(&Default::default()),
             depth.create_view(&Default::default()),
         );
+        clear(&mut encoder, &cv, &dv);
         self.record(&mut encoder, &cv, &dv)?;
         let alloc = Alloc {
             device: &device,
@@ -331,15 +331,15 @@ fn bind_output(
 }
 
 /// Clears a host's targets as a frame starts: black, and depth 0 (reversed-Z's far).
-pub fn clear(encoder: &mut wgpu::CommandEncoder, colour: &wgpu::Texture, depth: &wgpu::Texture) {
-    let (cv, dv) = (
-        colour.create_view(&Default::default()),
-        depth.create_view(&Default::default()),
-    );
+pub fn clear(
+    encoder: &mut wgpu::CommandEncoder,
+    colour: &wgpu::TextureView,
+    depth: &wgpu::TextureView,
+) {
     encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some("clear"),
         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: &cv,
+            view: colour,
             depth_slice: None,
             resolve_target: None,
             ops: wgpu::Operations {
@@ -348,7 +348,7 @@ pub fn clear(encoder: &mut wgpu::CommandEncoder, colour: &wgpu::Texture, depth: 
             },
         })],
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view: &dv,
+            view: depth,
             depth_ops: Some(wgpu::Operations {
                 load: wgpu::LoadOp::Clear(0.0),
                 store: wgpu::StoreOp::Store,

@@ -210,7 +210,7 @@ impl SurfacePath {
         let target: &wgpu::Texture = offscreen.as_deref().unwrap_or(&frame.texture);
         let view = target.create_view(&Default::default());
         let depth = self.depth.create_view(&Default::default());
-        terrain::host::clear(&mut encoder, target, &self.depth);
+        terrain::host::clear(&mut encoder, &view, &depth);
         terrain.record(&mut encoder, &view, &depth)?;
         self.composite.overlay(&mut encoder, &view);
         if offscreen.is_some() {
