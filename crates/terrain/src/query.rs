@@ -19,6 +19,7 @@ use crate::detail::Detail;
 use crate::error::{Error, Result};
 use crate::scene::{Outside, Scene};
 use crate::sketch::Atlas;
+use crate::sketch::cubic::Weights;
 use crate::sketch::cubic::{catmull_rom, catmull_rom_d};
 use glam::{DVec2, DVec3};
 
@@ -276,29 +277,17 @@ fn slab(eye: DVec3, dir: DVec3, lo: DVec3, hi: DVec3) -> Option<(f64, f64)> {
 
 /// The bicubic on level `l` at level-0 texel coordinates `uv`, nodes clamped to the level, with
 /// weights `wx` along x and `wy` along y (the Catmull–Rom weights or their derivatives).
-fn bicubic(
-    atlas: &Atlas,
-    uv: DVec2,
-    l: usize,
-    wx: fn(f64) -> [f64; 4],
-    wy: fn(f64) -> [f64; 4],
-) -> Result<f64> {
+fn bicubic(atlas: &Atlas, uv: DVec2, l: usize, wx: Weights, wy: Weights) -> Result<f64> {
     let level = &atlas.levels[l];
-    let s = (1u64 << l) as f64;
-    let x = (uv - DVec2::splat((s - 1.0) * 0.5)) / s;
-    let i = x.floor();
-    let f = x - i;
-    let (ax, ay) = (wx(f.x), wy(f.y));
     let (w, h) = (level.width as i64, level.height as i64);
-    let mut sum = 0.0;
-    for (r, ayr) in ay.iter().enumerate() {
-        let j = (i.y as i64 - 1 + r as i64).clamp(0, h - 1) as usize;
-        for (c, axc) in ax.iter().enumerate() {
-            let ii = (i.x as i64 - 1 + c as i64).clamp(0, w - 1) as usize;
-            sum += ayr * axc * node(atlas, l, ii, j)? as f64;
-        }
-    }
-    Ok(sum)
+    crate::sketch::cubic::bicubic(uv, l, (wx, wy), |i, j| {
+        node(
+            atlas,
+            l,
+            i.clamp(0, w - 1) as usize,
+            j.clamp(0, h - 1) as usize,
+        )
+    })
 }
 
 /// Node (i, j) of level `l`: from memory, or from a streamed sketch's tile.

@@ -201,23 +201,8 @@ impl Planet<'_> {
     }
 
     fn bicubic(&self, uv: DVec2, l: usize) -> Result<f64> {
-        let s = (1u64 << l) as f64;
-        let x = (uv - DVec2::splat((s - 1.0) * 0.5)) / s;
-        let i = x.floor();
-        let f = x - i;
-        let (wx, wy) = (
-            crate::sketch::cubic::catmull_rom(f.x),
-            crate::sketch::cubic::catmull_rom(f.y),
-        );
-        let mut h = 0.0;
-        for (r, wyr) in wy.iter().enumerate() {
-            for (c, wxc) in wx.iter().enumerate() {
-                let v =
-                    self.texel_value(i.x as i64 - 1 + c as i64, i.y as i64 - 1 + r as i64, l)?;
-                h += wyr * wxc * v as f64;
-            }
-        }
-        Ok(h)
+        let weights = crate::sketch::cubic::catmull_rom;
+        crate::sketch::cubic::bicubic(uv, l, (weights, weights), |i, j| self.texel_value(i, j, l))
     }
 
     /// The terrain function's height at `lat`, `lon` for a footprint of `footprint` metres: the

@@ -51,6 +51,34 @@ pub fn catmull_rom_d<T: Real>(t: T) -> [T; 4] {
     ]
 }
 
+/// Weights of the four nodes around a fraction: [`catmull_rom`] or [`catmull_rom_d`] in f64.
+pub type Weights = fn(f64) -> [f64; 4];
+
+/// The f64 bicubic on pyramid level `l` at level-0 texel coordinates `uv`, with weights `wx`
+/// along x and `wy` along y ([`catmull_rom`] or its derivative), each node from `node(i, j)` of
+/// that level: the caller addresses them, clamped to the level's edge (`query`) or wrapped across
+/// the date line and the poles (`planet`).
+pub fn bicubic<E>(
+    uv: glam::DVec2,
+    l: usize,
+    (wx, wy): (Weights, Weights),
+    mut node: impl FnMut(i64, i64) -> Result<f32, E>,
+) -> Result<f64, E> {
+    let s = (1u64 << l) as f64;
+    let x = (uv - glam::DVec2::splat((s - 1.0) * 0.5)) / s;
+    let i = x.floor();
+    let f = x - i;
+    let (ax, ay) = (wx(f.x), wy(f.y));
+    let mut sum = 0.0;
+    for (r, ayr) in ay.iter().enumerate() {
+        for (c, axc) in ax.iter().enumerate() {
+            let v = node(i.x as i64 - 1 + c as i64, i.y as i64 - 1 + r as i64)?;
+            sum += ayr * axc * v as f64;
+        }
+    }
+    Ok(sum)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
