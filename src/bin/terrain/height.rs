@@ -155,7 +155,14 @@ fn planar(
                 reason: why,
             })?
         }
-        _ => unreachable!("clap requires one place"),
+        (None, None, None) => {
+            let why = "give the point by --xy, --map-xy or --lat-lon".to_string();
+            return Err(Error::Value {
+                key: "--xy",
+                reason: why,
+            }
+            .into());
+        }
     };
     let ground = Ground::new(scene, atlas, detail);
     let Some(z) = ground.height_at(p, a.footprint_m)? else {
