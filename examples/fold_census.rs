@@ -13,11 +13,11 @@
 
 use glam::DVec3;
 use std::path::PathBuf;
-use terrain::camera::Camera;
+use terrain::Camera;
 use terrain::scene::{self, Scene, WarpMethod};
 use terrain::stage::CpuStage;
+use terrain::stage::pair_unfolded;
 use terrain::stage::quality;
-use terrain::stage::warp::pair_unfolded;
 use terrain_cli::app::path::Flight;
 
 /// Thresholds tried, in folded pairs of 127; the last is the rounds alone.

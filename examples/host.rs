@@ -4,7 +4,7 @@
 //! A host application that embeds the terrain: its own window, surface, device and geometry.
 //!
 //! It opens a winit window, creates a wgpu surface and a device with what
-//! `terrain::host::Description` asks for, and each frame records the terrain into its own encoder,
+//! `terrain::Description` asks for, and each frame records the terrain into its own encoder,
 //! into the surface's texture and its own depth buffer, then draws a marker of its own: a red
 //! mast standing on the ground (placed with the height query) in front of the camera, hidden
 //! wherever the terrain is nearer. The camera circles the mast.
@@ -15,8 +15,8 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use terrain::camera::Camera;
-use terrain::host::{Description, Targets, Terrain};
+use terrain::Camera;
+use terrain::{Description, Targets, Terrain};
 use winit::application::ApplicationHandler;
 use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, EventLoop};
@@ -277,7 +277,7 @@ impl Gpu {
         camera: &Camera,
     ) -> anyhow::Result<()> {
         let view = target.create_view(&Default::default());
-        terrain::host::clear(encoder, &view, &self.depth);
+        terrain::clear(encoder, &view, &self.depth);
         self.terrain.record(encoder, &view, &self.depth)?;
         self.mast
             .draw(&self.queue, encoder, &view, &self.depth, camera, self.foot);

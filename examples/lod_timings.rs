@@ -5,11 +5,11 @@
 
 use anyhow::Context;
 use std::path::PathBuf;
-use terrain::gpu::uniforms::View;
-use terrain::lod::baseline::Baselines;
-use terrain::render::{Frame, Renderer};
+use terrain::Baselines;
+use terrain::View;
 use terrain::scene::Mode;
 use terrain::scene::Scene;
+use terrain::{Frame, Renderer};
 
 const FRAMES: usize = 10;
 

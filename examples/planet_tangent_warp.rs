@@ -19,12 +19,12 @@
 use anyhow::Context;
 use glam::DVec2;
 use std::path::PathBuf;
-use terrain::gpu::context::{GpuContext, Needs};
-use terrain::gpu::uniforms::View;
+use terrain::Renderer;
+use terrain::View;
 use terrain::planet::Planet;
-use terrain::render::Renderer;
 use terrain::scene::{Mode, Scene};
 use terrain::sketch::{Atlas, LoadOptions, RawGrid};
+use terrain::{GpuContext, Needs};
 use terrain_cli::eval::metrics::{ScreenError, screen_space_error};
 
 /// Nodes a side of the tangent-plane sketch map.
@@ -48,7 +48,7 @@ fn main() -> anyhow::Result<()> {
     let ctx = GpuContext::new(&Needs {
         storage_bytes: 1 << 27,
     })?;
-    let positions = |mode: Mode, scene: &Scene, atlas: &Atlas, cam: &terrain::camera::Camera| {
+    let positions = |mode: Mode, scene: &Scene, atlas: &Atlas, cam: &terrain::Camera| {
         let mut r =
             Renderer::with_context(ctx.clone(), scene, atlas.clone(), mode, View::Shaded, true)?;
         let frame = r.render(cam)?;
@@ -131,8 +131,8 @@ fn main() -> anyhow::Result<()> {
 /// own.
 fn tangent_plane_map(
     planet: &Planet,
-    detail: &terrain::detail::Detail,
-    geo: terrain::camera::Geo,
+    detail: &terrain::Detail,
+    geo: terrain::Geo,
     half: f64,
     water_m: f64,
 ) -> anyhow::Result<Atlas> {

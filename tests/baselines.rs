@@ -3,9 +3,9 @@
 
 mod common;
 use common::*;
-use terrain::gpu::uniforms::View;
-use terrain::lod::baseline::Baselines;
-use terrain::render::Renderer;
+use terrain::Baselines;
+use terrain::Renderer;
+use terrain::View;
 use terrain::scene::Mode;
 use terrain::scene::Scene;
 

@@ -387,7 +387,7 @@ fn the_warped_sweep_spans_the_budgets_where_geomipmap_competes() {
         // Every rung of the ladder within 8 triangles a pixel, less at most one: the rung the
         // scene's own setting draws.
         let pixels = (size * size) as f64;
-        let ladder: Vec<u32> = terrain::stage::budget::Budget::new(16, 1024)
+        let ladder: Vec<u32> = terrain::stage::Budget::new(16, 1024)
             .rungs()
             .iter()
             .copied()

@@ -4,7 +4,7 @@ mod common;
 use common::*;
 use glam::DVec2;
 use terrain::scene::WarpMethod;
-use terrain::stage::warp::Warp;
+use terrain::stage::Warp;
 
 fn synthetic(name: &str, size: usize, position: [f64; 3], look_at: [f64; 3]) -> String {
     format!(
@@ -112,8 +112,8 @@ fn camera_outside_the_sketch() {
     // The region encloses the atlas's visible part, not the empty ground around the camera: it
     // reaches past the atlas only by the few texels of slack a region larger than the atlas has.
     let m = &r.stage.sketch_map;
-    // The camera looks north-east, so the region is turned (`stage::sketch_map::Turn`).
-    assert_ne!(m.turn, terrain::stage::sketch_map::Turn::None);
+    // The camera looks north-east, so the region is turned (`stage::Turn`).
+    assert_ne!(m.turn, terrain::stage::Turn::None);
     let centre = m.world(DVec2::splat(0.5 * m.extent()));
     let atlas_centre = 0.5 * (r.atlas.origin + r.atlas.max_corner());
     assert!(
@@ -263,7 +263,10 @@ fn importance_spanning_twelve_orders_of_magnitude() {
     let mut importance = vec![0.0f32; n * n];
     let mut x = 12345u32;
     for v in importance.iter_mut() {
-        x = terrain::detail::hash(x);
+        // xorshift32: any spread of values does; no generator is under test here.
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
         *v = 10f32.powf(-6.0 + 12.0 * (x as f32 / u32::MAX as f32));
     }
     // And a smooth 12-order ramp, which the random field does not exercise.
@@ -280,7 +283,7 @@ fn importance_spanning_twelve_orders_of_magnitude() {
         );
         for s in 0..n - 1 {
             assert!(
-                terrain::stage::warp::pair_unfolded(phi, n, s),
+                terrain::stage::pair_unfolded(phi, n, s),
                 "{what}: fold at column {s}"
             );
         }

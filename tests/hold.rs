@@ -5,9 +5,9 @@
 mod common;
 use common::*;
 use glam::DVec3;
-use terrain::camera::Camera;
-use terrain::gpu::uniforms::View;
-use terrain::render::Renderer;
+use terrain::Camera;
+use terrain::Renderer;
+use terrain::View;
 use terrain::scene::{self, Mode, Scene};
 use terrain::stage::CpuStage;
 use terrain_cli::app::path::Flight;

@@ -1,5 +1,5 @@
 //! The host API: a test opens its own device, creates its own colour and depth textures, and
-//! draws a bundled scene into them through `terrain::host::Terrain`; the bytes equal `terrain
+//! draws a bundled scene into them through `terrain::Terrain`; the bytes equal `terrain
 //! render`'s. Then a host object of its own, drawn after the terrain with the terrain's
 //! view-projection and depth, shows only where the terrain does not hide it.
 
@@ -9,9 +9,9 @@
 mod common;
 use common::*;
 use glam::DVec3;
-use terrain::host::{Description, Targets, Terrain, clear};
-use terrain::query::Ground;
+use terrain::Ground;
 use terrain::scene::{self, Scene};
+use terrain::{Description, Targets, Terrain, clear};
 
 const SIZE: u32 = 96;
 const TARGETS: Targets = Targets {

@@ -225,7 +225,7 @@ fn a_view_looking_east_warps_as_well_as_looking_north() {
 /// against 0.91. Looking north-west is looking north-east mirrored, and gives the same figures.
 #[test]
 fn a_view_looking_north_east_warps_nearly_as_well_as_looking_north() {
-    use terrain::stage::sketch_map::Turn;
+    use terrain::stage::Turn;
     let view = |position: &str, look_at: &str, diagonal: bool| {
         run(&scene(
             &format!(

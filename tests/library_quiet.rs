@@ -9,8 +9,8 @@ mod common;
 use common::scratch;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-use terrain::gpu::uniforms::View;
-use terrain::render::Renderer;
+use terrain::Renderer;
+use terrain::View;
 use terrain::scene::Mode;
 
 /// Every record of `terrain`'s targets: level, target and text.
@@ -130,9 +130,9 @@ fn geomipmap_keeps_its_block_figures_only_when_asked() {
     let scene = tight_scene(&pyr);
     Renderer::new(&scene, Mode::Geomipmap, View::Shaded).unwrap();
     assert_eq!(kept_figures(&pyr), Vec::<String>::new());
-    terrain::tiles::blocks::set_keep_figures(true);
+    terrain::tiles::set_keep_figures(true);
     Renderer::new(&scene, Mode::Geomipmap, View::Shaded).unwrap();
-    terrain::tiles::blocks::set_keep_figures(false);
+    terrain::tiles::set_keep_figures(false);
     let block = scene.geomipmap.block;
     assert_eq!(kept_figures(&pyr), vec![format!("geomipmap-{block}.bin")]);
 }

@@ -3,7 +3,7 @@
 //! tests in `src/detail.rs`).
 
 use glam::DVec2;
-use terrain::detail::Detail;
+use terrain::Detail;
 
 fn detail() -> Detail {
     Detail {

@@ -7,8 +7,8 @@ mod common;
 use common::*;
 use glam::{DVec2, DVec3};
 use std::path::Path;
-use terrain::query::{Ground, PlanetGround};
 use terrain::scene::{self, Scene};
+use terrain::{Ground, PlanetGround};
 
 /// The reference's ground pixels of `scene` at `size`²: (world point, footprint) each, sampled
 /// evenly down to at most 1,000, and the eye.

@@ -4,9 +4,9 @@
 mod common;
 use common::*;
 use glam::{DVec2, DVec4};
-use terrain::gpu::uniforms::{View, view_proj};
-use terrain::lod::reference::Reference;
-use terrain::render::Renderer;
+use terrain::Reference;
+use terrain::Renderer;
+use terrain::View;
 use terrain::scene::Mode;
 use terrain::scene::Scene;
 
@@ -65,7 +65,8 @@ fn reference_positions_project_to_their_pixels_and_sky_has_none() {
     let camera = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
     r.render(&camera).unwrap();
     let positions = r.read_positions(&camera).unwrap();
-    let vp = view_proj(&camera, camera.eye.truncate());
+    // Positions are relative to the frame origin, which is the eye over a flat sketch.
+    let vp = terrain::Terrain::view_proj(&camera).as_dmat4();
     let (w, h) = (camera.width as usize, camera.height as usize);
     let (mut hits, mut sky, mut worst) = (0, 0, 0.0f64);
     for (k, p) in positions.iter().enumerate() {

@@ -146,7 +146,7 @@ fn a_coarser_level_stands_in_for_a_pyramid_beyond_the_cell_limit() {
     let out = dir.join("pyramid");
     convert(&src, &out);
     let atlas = Atlas::load(&src, &LoadOptions::default()).unwrap();
-    let g = terrain::tiles::read::raw_grid_within(&out, 150 * 150).unwrap();
+    let g = terrain::tiles::raw_grid_within(&out, 150 * 150).unwrap();
     assert_eq!((g.width, g.height), (150, 150));
     assert_eq!((g.dx, g.dy), (60.0, 60.0));
     assert!(
@@ -375,8 +375,8 @@ fn jacksboro_scene(sketch: &Path, extra: &str) -> terrain::scene::Scene {
 
 #[test]
 fn a_streamed_pyramid_renders_as_the_sketch_in_memory_once_its_tiles_are_resident() {
-    use terrain::gpu::uniforms::View;
-    use terrain::render::Renderer;
+    use terrain::Renderer;
+    use terrain::View;
     use terrain::scene::Mode;
     let (_, asc, pyr) = jacksboro_pyramid("tiles-streamed");
     // 4 MiB: 15 pages for the pyramid's 11 tiles, of which the top three levels are pinned, so
@@ -463,8 +463,8 @@ fn jacksboro_crop(dir: &Path) -> PathBuf {
 /// its defaults leave finer (`scene::default_bias`).
 #[test]
 fn a_pyramid_draws_its_sketchs_picture_by_default_in_every_mode_that_streams() {
-    use terrain::gpu::uniforms::View;
-    use terrain::render::Renderer;
+    use terrain::Renderer;
+    use terrain::View;
     use terrain::scene::Mode;
     let dir = scratch("tiles-defaults");
     let asc = jacksboro_crop(&dir);
@@ -551,12 +551,12 @@ fn streamed_geomipmap_measures_the_baked_grids_blocks_and_renders_as_it_once_res
 /// GeoMipMap over `pyr`, converted from `sketch`, against GeoMipMap over `sketch` in memory, with
 /// the water at `water` metres.
 fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path, water: f64) {
-    use terrain::gpu::uniforms::View;
-    use terrain::lod::baseline::Baselines;
-    use terrain::render::Renderer;
+    use terrain::Baselines;
+    use terrain::Renderer;
+    use terrain::View;
     use terrain::scene::Mode;
     // Kept in the folder, as the binary asks (the library alone writes no file).
-    terrain::tiles::blocks::set_keep_figures(true);
+    terrain::tiles::set_keep_figures(true);
     // k = 0: over a pyramid the grid is the sketch at its own spacing; the sketch in memory bakes
     // the same grid. 4 MiB of pages: the first frame stands in.
     let mut streamed = jacksboro_scene(pyr, "[geomipmap]\nk = 0\n[stream]\ngpu_mb = 4");
@@ -603,7 +603,7 @@ fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path, water: f64)
     // Other water is another grid: the kept figures are not taken for it.
     let mut lower = streamed.clone();
     lower.sketch.water_level_m = water - 100.0;
-    let fresh = terrain::tiles::blocks::measure(
+    let fresh = terrain::tiles::measure_blocks(
         &Pyramid::open(pyr).unwrap(),
         a.cells,
         a.per_side,
@@ -747,8 +747,8 @@ fn a_streamed_sketch_measures_the_curvature_of_levels_not_in_memory() {
 
 #[test]
 fn a_streamed_snapshot_settles_on_the_whole_sketchs_image_and_a_damaged_tile_fails_it() {
-    use terrain::gpu::uniforms::View;
-    use terrain::render::Renderer;
+    use terrain::Renderer;
+    use terrain::View;
     use terrain::scene::Mode;
     let (_, asc, pyr) = jacksboro_pyramid("tiles-settled");
     // Fades of 8 frames, as by default: a settled snapshot places its tiles without them.
@@ -861,8 +861,8 @@ fn compare_over_a_pyramid_sweeps_warped_and_geomipmap_and_refuses_brute_force_be
 /// first frame, with 4 MiB of pages, stands in.
 #[test]
 fn a_streamed_planet_draws_as_its_sketch_in_memory_once_resident() {
-    use terrain::gpu::uniforms::View;
-    use terrain::render::Renderer;
+    use terrain::Renderer;
+    use terrain::View;
     use terrain::scene::Mode;
     let dir = scratch("tiles-planet");
     let tif = common::manifest_dir().join("tests/data/planet/global-1024x512.tif");

@@ -26,16 +26,13 @@ use crate::app::progress::Progress;
 use crate::eval::percentile;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
-use terrain::error::{Error, Result, Role};
-use terrain::gpu::frame_io::PassTimes;
-use terrain::gpu::uniforms::View;
-use terrain::gpu::{
-    mesh_split::MeshSplitPass, normals::NormalsPass, reference::ReferencePass,
-    terrain::TerrainPass, warp_zoom::WarpZoomPass,
-};
-use terrain::render::Renderer;
+use terrain::PassTimes;
+use terrain::Renderer;
+use terrain::View;
+use terrain::pass;
 use terrain::scene::{Mode, Scene};
-use terrain::tiles::cache::StreamStats;
+use terrain::tiles::StreamStats;
+use terrain::{Error, Result, Role};
 
 pub struct Options {
     pub mode: Mode,
@@ -112,13 +109,13 @@ impl CsvRow<'_> {
             gpu_ms: Fixed(r.gpu_ms),
             frame_ms: Fixed(r.frame_ms),
             triangles: r.triangles,
-            warp_zoom_ms: ms(WarpZoomPass::NAME),
-            mesh_split_ms: ms(MeshSplitPass::NAME),
-            normals_ms: ms(NormalsPass::NAME),
-            terrain_ms: ms(TerrainPass::NAME),
-            reference_ms: ms(ReferencePass::NAME),
-            clipmaps_ms: ms(terrain::gpu::clipmaps::ClipmapsPass::NAME),
-            planet_ms: ms(terrain::gpu::planet::PlanetPass::NAME),
+            warp_zoom_ms: ms(pass::WARP_ZOOM),
+            mesh_split_ms: ms(pass::MESH_SPLIT),
+            normals_ms: ms(pass::NORMALS),
+            terrain_ms: ms(pass::TERRAIN),
+            reference_ms: ms(pass::REFERENCE),
+            clipmaps_ms: ms(pass::CLIPMAPS),
+            planet_ms: ms(pass::PLANET),
             lat_deg: r.nadir_deg.map(|g| Fixed(g[0])),
             lon_deg: r.nadir_deg.map(|g| Fixed(g[1])),
             stream_us: r.stream.map(|_| Fixed(r.stream_us)),

@@ -18,10 +18,10 @@
 
 use glam::DVec3;
 use std::path::Path;
-use terrain::camera::Camera;
-use terrain::error::{Error, Result, Role};
+use terrain::Camera;
 use terrain::scene::{PathKey, PathSection, Scene};
 use terrain::sketch::Atlas;
+use terrain::{Error, Result, Role};
 
 /// Metres kept between the eye and the highest the terrain can reach under it.
 pub const CLEARANCE_M: f64 = 2.0;

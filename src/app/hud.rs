@@ -9,8 +9,8 @@
 
 use crate::app::flycam::FlyCamera;
 use crate::eval::plot::{Rgb, draw_on_rgba, font};
-use terrain::gpu::uniforms::View;
-use terrain::render::Frame;
+use terrain::Frame;
+use terrain::View;
 use terrain::scene::Mode;
 use terrain::stage::StageTimes;
 

@@ -17,8 +17,8 @@
 use crate::app::progress::Progress;
 use std::io::Write;
 use std::path::Path;
-use terrain::error::{Error, Result, Role};
 pub use terrain::io::{Staged, create_folder, create_parent, write_atomic};
+use terrain::{Error, Result, Role};
 
 /// Images above this many pixels show their encoding's progress.
 const PROGRESS_PIXELS: u64 = 8 << 20;

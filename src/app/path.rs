@@ -14,11 +14,11 @@
 //! parameterisation loops past closely spaced keys.
 
 use glam::{DVec2, DVec3};
-use terrain::camera::Camera;
-use terrain::error::{Error, Result};
+use terrain::Camera;
+use terrain::scene::{self as place, ground_under};
 use terrain::scene::{PathKey, PathSection, Scene};
-use terrain::scene::{ground_under, place};
 use terrain::sketch::Atlas;
+use terrain::{Error, Result};
 
 /// Arc-length samples per segment.
 const SAMPLES: usize = 512;

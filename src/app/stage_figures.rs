@@ -9,7 +9,7 @@
 use crate::app::output::{Staged, add_image};
 use glam::DVec2;
 use std::path::Path;
-use terrain::error::Result;
+use terrain::Result;
 use terrain::sketch::Atlas;
 use terrain::stage::CpuStage;
 use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Stroke, Transform};

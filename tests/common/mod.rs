@@ -2,13 +2,13 @@
 #![allow(dead_code)]
 
 use std::path::PathBuf;
-use terrain::camera::Camera;
+use terrain::Camera;
 use terrain::scene;
 use terrain::scene::Scene;
 use terrain::sketch::Atlas;
 use terrain::stage::CpuStage;
+use terrain::stage::pair_unfolded;
 use terrain::stage::quality::{self, Quality};
-use terrain::stage::warp::pair_unfolded;
 
 pub fn manifest_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

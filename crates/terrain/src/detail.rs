@@ -163,6 +163,7 @@ impl OctaveFrame {
     }
 }
 
+#[cfg(test)]
 /// n_k and its gradient at `local` metres from the frame origin (the GPU's path).
 pub fn octave_local(o: &OctaveFrame, local: Vec2) -> (f32, Vec2) {
     let q = local * o.scale + o.phase;
@@ -180,6 +181,7 @@ pub fn octave_share(k: u32, o: f32, o_px: f32) -> f32 {
     g + (1.0 - g) * b
 }
 
+#[cfg(test)]
 /// The bump remainder alone, `(1 − g_k)·b_k`: what the per-pixel normal takes of octave k.
 pub fn bump_share(k: u32, o: f32, o_px: f32) -> f32 {
     let g = (o - k as f32 + 1.0).clamp(0.0, 1.0);

@@ -22,23 +22,70 @@
 //! `terrain` binary). Rejected: one crate for both, where every embedder compiled the commands'
 //! dependencies.
 
-pub mod camera;
-pub mod detail;
-pub mod error;
-pub mod geomipmap;
-pub mod gpu;
-pub mod host;
+// The crate's own tests name it as its users do.
+#[cfg(test)]
+extern crate self as terrain;
+
+mod camera;
+#[cfg(test)]
+mod checks;
+mod detail;
+mod error;
+mod geomipmap;
+mod gpu;
+mod host;
 pub mod io;
-pub mod light;
-pub mod lod;
-pub mod names;
+mod light;
+mod lod;
+mod names;
 pub mod planet;
 pub mod progress;
-pub mod query;
-pub mod render;
+mod query;
+mod render;
 pub mod scene;
 pub mod sketch;
 pub mod stage;
 pub mod tiles;
 
-pub use error::{Error, Result};
+pub use camera::{Camera, Geo};
+pub use detail::Detail;
+pub use error::{Error, Result, Role};
+pub use gpu::alloc;
+pub use gpu::context::{GpuContext, Needs};
+pub use gpu::frame_io::PassTimes;
+pub use gpu::output::Targets;
+pub use gpu::uniforms::View;
+pub use host::{Description, FrameInfo, Terrain, clear};
+pub use light::Light;
+pub use lod::baseline::Baselines;
+pub use lod::clipmaps::Clipmaps;
+pub use lod::reference::Reference;
+pub use lod::warped::Warped;
+pub use names::Named;
+pub use query::{Ground, PlanetGround};
+pub use render::{Frame, Renderer, needs, world_positions};
+pub use scene::{Mode, Scene};
+pub use sketch::Atlas;
+
+/// The names a frame's passes are timed and reported by: the keys of [`PassTimes`] and of
+/// `passes_ms` in the tools' JSON.
+pub mod pass {
+    use crate::gpu;
+
+    /// The warp & zoom pass: the warped geometry image upsampled to the mesh.
+    pub const WARP_ZOOM: &str = gpu::warp_zoom::WarpZoomPass::NAME;
+    /// The mesh split pass: each vertex's split octave and its procedural displacement.
+    pub const MESH_SPLIT: &str = gpu::mesh_split::MeshSplitPass::NAME;
+    /// The normals pass of the warped mesh.
+    pub const NORMALS: &str = gpu::normals::NormalsPass::NAME;
+    /// The terrain pass: the mesh drawn and shaded, with the sky.
+    pub const TERRAIN: &str = gpu::terrain::TerrainPass::NAME;
+    /// The ray-marched reference.
+    pub const REFERENCE: &str = gpu::reference::ReferencePass::NAME;
+    /// The spherical clipmaps' mesh.
+    pub const CLIPMAPS: &str = gpu::clipmaps::ClipmapsPass::NAME;
+    /// A planet's drawing pass.
+    pub const PLANET: &str = gpu::planet::PlanetPass::NAME;
+    /// The output pass that resolves a frame into the host's colour target.
+    pub const OUTPUT: &str = gpu::output::OutputPass::NAME;
+}

@@ -171,6 +171,12 @@ impl Light {
         (inscatter.map(|v| v * self.daylight), through)
     }
 
+    /// `light` exposed and tone-mapped as a pixel shows it: display-referred linear RGB, before
+    /// sRGB encoding.
+    pub fn display(&self, light: [f64; 3]) -> [f64; 3] {
+        display(light, self.exposure)
+    }
+
     /// The sky seen from height `eye_z` along `dir` (without the sun's disc).
     pub fn sky(&self, eye_z: f64, dir: DVec3) -> [f64; 3] {
         self.scatter(eye_z, dir, sky_length(eye_z, dir)).0
@@ -199,7 +205,7 @@ impl Light {
 
 /// Exposure and the tone map (Khronos PBR Neutral), the twin of `display` in
 /// `shaders/shared/shading.wgsl`: light in, display-referred linear RGB (before sRGB encoding) out.
-pub fn display(light: [f64; 3], exposure: f64) -> [f64; 3] {
+fn display(light: [f64; 3], exposure: f64) -> [f64; 3] {
     let (start, desaturation) = (0.8 - 0.04, 0.15);
     let mut c = light.map(|v| v * exposure);
     let x = c[0].min(c[1]).min(c[2]);

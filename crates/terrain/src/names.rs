@@ -1,18 +1,17 @@
 //! Names said once: an enum whose values users type (a mode, a view, a warp method) is declared
-//! with [`named_enum!`](crate::named_enum), which writes each variant's name in one place and
+//! with [`named_enum!`](crate::names::named_enum), which writes each variant's name in one place and
 //! derives from it the scene file's spelling (serde), the command line's (through [`Named`]),
 //! reports and messages (`name()`, `Display`), and the error that lists the choices.
 //!
 //! Rejected alternative: `#[serde(rename_all = "kebab-case")]` plus a command-line derive.
 //! Each derives the same spelling by its own rule from the variant's identifier, so the two agree
 //! only while the rules do, and `name()` for reports would be a third copy; the WGSL constants
-//! (checked against [`ALL`](crate::gpu::uniforms::View::ALL) in `tests/shaders.rs`) need the
+//! (checked against [`ALL`](crate::gpu::uniforms::View::ALL) in `checks/shaders.rs`) need the
 //! number and the name side by side anyway.
 
 /// Declares a `Copy` enum whose variants each carry the name users type, in declaration order
 /// (a variant's `as u32` is its place). Provides `ALL`, `name()`, `parse()`, `Display`, serde as
 /// the name, and [`Named`].
-#[macro_export]
 macro_rules! named_enum {
     (
         $(#[$meta:meta])*
@@ -79,8 +78,9 @@ macro_rules! named_enum {
         }
     };
 }
+pub(crate) use named_enum;
 
-/// An enum declared with [`named_enum!`](crate::named_enum): its values and the name of each, for
+/// An enum declared with [`named_enum!`](crate::names::named_enum): its values and the name of each, for
 /// a command line or a form to offer them by (the `terrain` binary's value parser).
 pub trait Named: Copy + Send + Sync + 'static {
     /// Every value, in declaration order.
@@ -91,7 +91,7 @@ pub trait Named: Copy + Send + Sync + 'static {
 
 #[cfg(test)]
 mod tests {
-    crate::named_enum! {
+    crate::names::named_enum! {
         enum Colour ("colour") {
             Red = "red",
             DeepBlue = "deep-blue",

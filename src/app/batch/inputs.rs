@@ -16,9 +16,8 @@ use super::jobs::{Jobs, Overrides};
 use crate::app::output::write_atomic;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-use terrain::error::{Error, Result, Role};
 use terrain::scene::{Mode, Scene};
-use terrain::sketch::mosaic;
+use terrain::{Error, Result, Role};
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Inputs {
@@ -138,8 +137,8 @@ impl Inputs {
 }
 
 fn stamps(path: &Path) -> Vec<Stamp> {
-    if mosaic::is_glob(path) {
-        return match mosaic::list_glob(path) {
+    if terrain::sketch::is_glob(path) {
+        return match terrain::sketch::list_glob(path) {
             Ok(files) => files.iter().map(|f| stamp(f)).collect(),
             Err(_) => vec![stamp(path)],
         };

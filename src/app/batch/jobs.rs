@@ -3,8 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-use terrain::error::{Error, Result, Role};
 use terrain::scene::{Fault, Mode, Scene};
+use terrain::{Error, Result, Role};
 
 /// The most random cameras one jobs file asks for.
 pub const MAX_RANDOM: usize = 10_000_000;

@@ -28,13 +28,13 @@
 
 use crate::app::output::{write_atomic, write_image};
 use crate::app::progress::Progress;
-use terrain::camera::Camera;
-use terrain::error::{Error, Result, Role};
-use terrain::gpu::context::{GpuContext, Needs};
-use terrain::gpu::uniforms::View;
-use terrain::render::Renderer;
+use terrain::Camera;
+use terrain::Renderer;
+use terrain::View;
 use terrain::scene::{self, Scene};
 use terrain::sketch::Atlas;
+use terrain::{Error, Result, Role};
+use terrain::{GpuContext, Needs};
 
 mod inputs;
 mod jobs;

@@ -1,8 +1,8 @@
 //! Random cameras: a pure function of (seed, index), so shards and reruns draw the same ones.
 
 use glam::{DVec2, DVec3};
-use terrain::camera::Camera;
-use terrain::error::Result;
+use terrain::Camera;
+use terrain::Result;
 use terrain::scene::{self, Scene, ground_under};
 use terrain::sketch::Atlas;
 

@@ -5,7 +5,7 @@ use super::App;
 use crate::app::flycam::{PathRecorder, scene_with_path};
 use crate::app::output::{write_atomic, write_image};
 use std::path::{Path, PathBuf};
-use terrain::error::{Error, Result, Role};
+use terrain::{Error, Result, Role};
 
 /// `dir/<name(0)>`, or the first of `dir/<name(n)>`, n = 1, 2, … that does not exist yet.
 fn unused(dir: &Path, name: impl Fn(usize) -> String) -> PathBuf {

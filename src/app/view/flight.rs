@@ -7,7 +7,7 @@
 use super::App;
 use crate::app::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder, PlanetFlyCamera};
 use std::time::Instant;
-use terrain::error::Result;
+use terrain::Result;
 use terrain::scene::ground_under;
 use winit::keyboard::KeyCode;
 
@@ -46,7 +46,7 @@ impl App {
         ground.map(|g| g + self.reach_m + CLEARANCE_M)
     }
 
-    pub(super) fn camera(&self) -> Result<terrain::camera::Camera> {
+    pub(super) fn camera(&self) -> Result<terrain::Camera> {
         let (w, h) = self.size;
         match &self.cam {
             Flyer::Plane(c) => c.camera(self.scene.camera.fov_y_deg, w, h, self.far),

@@ -11,10 +11,10 @@
 //! ground. Over a planet the same keys fly great circles (`flycam::PlanetFlyCamera`) in clipmaps
 //! mode (1/2/3 do nothing), and a recorded path is a planet's `[path]`: the camera's keys and the
 //! time flown. A sketch given with no camera place and no `[path]` tours its default orbit
-//! (`scene::place::default_path`) until a key or the mouse takes over.
+//! (`scene::default_path`) until a key or the mouse takes over.
 //!
 //! Rules: the frame is drawn by the same renderers as every other command, on the device of a
-//! wgpu surface made for the window, through the host API ([`terrain::host::Terrain`], one per mode
+//! wgpu surface made for the window, through the host API ([`terrain::Terrain`], one per mode
 //! and view, rebuilt only when the mode, the view or the window's size changes): recorded into
 //! the surface's texture, the figures composited over it from a transparent overlay drawn on the
 //! CPU (`present.rs`); the frame's pixels never leave the GPU. Where no surface can be made (none
@@ -31,7 +31,7 @@
 use crate::app::flycam::{FlyCamera, PathRecorder, PlanetFlyCamera};
 use crate::app::hud;
 use crate::app::path::CameraPath;
-use terrain::error::{Error, Result};
+use terrain::{Error, Result};
 
 mod files;
 mod flight;
@@ -42,7 +42,7 @@ use std::collections::HashSet;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
-use terrain::gpu::uniforms::View;
+use terrain::View;
 use terrain::scene;
 use terrain::scene::{Mode, Scene};
 use terrain::sketch::Atlas;

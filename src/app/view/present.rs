@@ -1,5 +1,5 @@
 //! How `terrain view` puts a frame on screen: through a wgpu surface (the terrain drawn by
-//! [`terrain::host::Terrain`] into the surface's texture, the figures composited over it), or,
+//! [`terrain::Terrain`] into the surface's texture, the figures composited over it), or,
 //! where no surface can be made, through the CPU (the frame read back, the figures drawn on its
 //! pixels, the pixels handed to softbuffer).
 //!
@@ -18,9 +18,9 @@ pub(super) use cpu::CpuPath;
 pub(super) use surface::SurfacePath;
 
 use crate::app::hud::Status;
-use terrain::camera::Camera;
-use terrain::error::Result;
-use terrain::gpu::uniforms::View;
+use terrain::Camera;
+use terrain::Result;
+use terrain::View;
 use terrain::scene::{Mode, Scene};
 use terrain::sketch::Atlas;
 

@@ -5,7 +5,7 @@ use crate::args;
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
-use terrain::gpu::uniforms::View;
+use terrain::View;
 use terrain::scene::Mode;
 
 #[derive(clap::Args)]

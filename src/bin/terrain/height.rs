@@ -4,10 +4,10 @@
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
-use terrain::error::Error;
-use terrain::query::{Ground, PlanetGround};
+use terrain::Error;
 use terrain::scene::{self, Scene};
 use terrain::sketch::Atlas;
+use terrain::{Ground, PlanetGround};
 
 #[derive(clap::Args)]
 #[command(group(clap::ArgGroup::new("place").required(true).args(["xy", "map_xy", "lat_lon"])))]
@@ -126,20 +126,13 @@ pub fn run(a: Args) -> Result<()> {
     Ok(())
 }
 
-fn planar(
-    a: &Args,
-    scene: &Scene,
-    atlas: &Atlas,
-    detail: &terrain::detail::Detail,
-) -> Result<Report> {
+fn planar(a: &Args, scene: &Scene, atlas: &Atlas, detail: &terrain::Detail) -> Result<Report> {
     let p = match (a.xy, a.map_xy, a.lat_lon) {
         (Some(xy), _, _) => glam::DVec2::from(xy),
-        (_, Some(map), _) => {
-            scene::place::world_of_map(atlas, map).map_err(|why| Error::Value {
-                key: "--map-xy",
-                reason: why,
-            })?
-        }
+        (_, Some(map), _) => scene::world_of_map(atlas, map).map_err(|why| Error::Value {
+            key: "--map-xy",
+            reason: why,
+        })?,
         (_, _, Some([lat, lon])) => {
             let map = atlas
                 .georef
@@ -150,7 +143,7 @@ fn planar(
                     key: "--lat-lon",
                     reason: why,
                 })?;
-            scene::place::world_of_map(atlas, map).map_err(|why| Error::Value {
+            scene::world_of_map(atlas, map).map_err(|why| Error::Value {
                 key: "--lat-lon",
                 reason: why,
             })?

@@ -3,8 +3,8 @@
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
-use terrain::sketch::georef::{Georef, Units};
 use terrain::sketch::{Atlas, LoadOptions};
+use terrain::sketch::{Georef, Units};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -136,10 +136,7 @@ fn pyramid(a: Args) -> Result<()> {
         min_m: m.min_m,
         max_m: m.max_m,
         nodata: m.nodata as usize,
-        georef: m
-            .georef
-            .as_ref()
-            .map(|g| GeorefReport::new(terrain::tiles::read::georef(g))),
+        georef: m.georef.as_ref().map(|g| GeorefReport::new(g.georef())),
         levels: Some(m.levels.clone()),
         tiles: Some(m.tile_count()),
     };

@@ -33,7 +33,7 @@ mod view;
 mod warp;
 
 use clap::{Parser, Subcommand};
-use terrain::error::Error;
+use terrain::Error;
 
 #[derive(Parser)]
 #[command(
@@ -112,7 +112,7 @@ fn main() {
     notes::install();
     terrain::progress::set_reporter(Box::new(terrain_cli::app::progress::Bars));
     // GeoMipMap's block figures over a pyramid are kept in its folder for the next command.
-    terrain::tiles::blocks::set_keep_figures(true);
+    terrain::tiles::set_keep_figures(true);
     let result = match cli.command {
         Command::Info(a) => info::run(a),
         Command::Tiles(a) => tiles::run(a),

@@ -4,13 +4,13 @@ use crate::args;
 use anyhow::{Context, Result};
 use serde::Serialize;
 use std::path::PathBuf;
-use terrain::error::{Error, Role};
-use terrain::gpu::frame_io::PassTimes;
-use terrain::gpu::uniforms::View;
-use terrain::render::{Frame, Renderer};
+use terrain::PassTimes;
+use terrain::View;
 use terrain::scene;
-use terrain::scene::place::CameraReport;
+use terrain::scene::CameraReport;
 use terrain::scene::{Mode, Scene};
+use terrain::{Error, Role};
+use terrain::{Frame, Renderer};
 use terrain_cli::app::output::{self, ImageFormat, Staged};
 use terrain_cli::app::progress::Spinner;
 
@@ -128,7 +128,7 @@ pub fn run(a: Args) -> Result<()> {
     }
     let mut r = Renderer::with_positions(&scene, mode, a.view, a.positions.is_some())?;
     let camera = scene::camera_of(&scene, r.atlas())?;
-    let camera_report = scene::place::camera_report(&scene, r.atlas(), &camera)?;
+    let camera_report = scene::camera_report(&scene, r.atlas(), &camera)?;
     let frames = frames(&mut r, &camera, &scene, a.repeat)?;
     let last = frames.last().context("no frame rendered")?;
     // The image and the positions land together or not at all.
@@ -136,7 +136,7 @@ pub fn run(a: Args) -> Result<()> {
     output::add_image(&mut staged, &a.output, last.width, last.height, &last.rgba)?;
     let mut luminance = None;
     if let Some(p) = &a.positions {
-        let world = terrain::render::world_positions(&r.read_positions(&camera)?, &camera);
+        let world = terrain::world_positions(&r.read_positions(&camera)?, &camera);
         let ground = world.chunks_exact(4).map(|q| q[3] > 0.5);
         luminance = terrain_cli::eval::metrics::terrain_luminance(&last.rgba, ground);
         let shape = [last.height as usize, last.width as usize, 4];
@@ -216,7 +216,7 @@ pub fn run(a: Args) -> Result<()> {
 /// spinner while they render when the image is large.
 fn frames(
     r: &mut Renderer,
-    camera: &terrain::camera::Camera,
+    camera: &terrain::Camera,
     scene: &Scene,
     repeat: u32,
 ) -> Result<Vec<Frame>> {

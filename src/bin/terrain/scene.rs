@@ -2,8 +2,8 @@
 
 use anyhow::Result;
 use std::path::{Path, PathBuf};
-use terrain::error::{Error, Role};
 use terrain::scene;
+use terrain::{Error, Role};
 use terrain_cli::app::output::write_atomic;
 
 #[derive(clap::Args)]

@@ -61,14 +61,14 @@ struct Region {
     size: usize,
     /// The region's axes: `none` (x and y), or turned 45° for a diagonal heading
     /// (`north_east`: its t axis along (1, 1); `north_west`: along (−1, 1)).
-    turn: terrain::stage::sketch_map::Turn,
+    turn: terrain::stage::Turn,
 }
 
 pub fn run(a: Args) -> Result<()> {
     let mut scene = crate::load_scene(&a.scene, &a.set)?;
     if scene.planet().is_some() {
         // The stage warps a plane; a planet draws with clipmaps, which have no CPU stage.
-        return Err(terrain::error::Error::scene(
+        return Err(terrain::Error::scene(
             &a.scene,
             "a planet scene: `terrain warp` runs the warped mode's CPU stage over a planar sketch, \
              and a planet draws with clipmaps",

@@ -7,7 +7,7 @@ use crate::eval::plot::chart::{Axis, Figure, Panel, Scale, Series, Style};
 use crate::eval::plot::{Rgb, draw_on_rgba, font};
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::Path;
-use terrain::error::Result;
+use terrain::Result;
 use terrain::scene::Mode;
 use terrain::stage::quality::Bin;
 

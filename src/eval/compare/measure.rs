@@ -4,15 +4,15 @@ use super::report::Row;
 use super::sweep::Setting;
 use super::{MAX_REFERENCE_HALVINGS, Options, REFERENCE_CONVERGED_DB};
 use crate::eval::{metrics, percentile};
-use terrain::camera::Camera;
-use terrain::error::Result;
-use terrain::gpu::context::GpuContext;
-use terrain::gpu::frame_io::PassTimes;
-use terrain::gpu::uniforms::View;
-use terrain::lod::reference::Reference;
-use terrain::render::{Frame, Renderer};
+use terrain::Camera;
+use terrain::GpuContext;
+use terrain::PassTimes;
+use terrain::Reference;
+use terrain::Result;
+use terrain::View;
 use terrain::scene::{Mode, Scene};
 use terrain::sketch::Atlas;
+use terrain::{Frame, Renderer};
 
 /// The reference renderer's march step (a fraction of the height above the ground).
 fn march_step(reference: &mut Renderer) -> &mut f32 {

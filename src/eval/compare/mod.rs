@@ -45,13 +45,13 @@ use report::{DetailUsed, RatioReport, ReferenceFigures, Replot, Report, Row, Ski
 use rounds::{Rounds, RowTimes};
 use std::path::Path;
 use sweep::Setting;
-use terrain::camera::Camera;
-use terrain::error::{Error, Result, Role};
-use terrain::gpu::context::{GpuContext, Needs};
+use terrain::Camera;
 use terrain::scene;
 use terrain::scene::{Mode, Scene};
 use terrain::sketch::Atlas;
 use terrain::stage::CpuStage;
+use terrain::{Error, Result, Role};
+use terrain::{GpuContext, Needs};
 
 /// PSNR between the reference at its step and at half of it that counts as converged: finer
 /// than any difference between modes worth reporting (mode images differ from it by 20–45 dB).
@@ -233,7 +233,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     };
     let storage_bytes = settings
         .iter()
-        .map(|s| terrain::render::needs(&s.apply(&scene), s.mode(), &atlas).storage_bytes)
+        .map(|s| terrain::needs(&s.apply(&scene), s.mode(), &atlas).storage_bytes)
         .max()
         .unwrap_or(0)
         .max(atlas.bytes());
@@ -337,7 +337,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     crate::app::output::write_npy_f64(
         &out_dir.join("reference_positions.npy"),
         &[h as usize, w as usize, 4],
-        &terrain::render::world_positions(&truth0.positions, &camera),
+        &terrain::world_positions(&truth0.positions, &camera),
     )?;
     let strip_modes: Vec<(String, String, Vec<u8>)> = o
         .modes

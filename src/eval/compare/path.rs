@@ -11,10 +11,10 @@ use crate::app::path::{Flight, world_eye};
 use crate::app::progress::Progress;
 use crate::eval::metrics::{self, ScreenError};
 use std::path::Path;
-use terrain::camera::Camera;
-use terrain::error::Result;
-use terrain::gpu::context::GpuContext;
-use terrain::render::Renderer;
+use terrain::Camera;
+use terrain::GpuContext;
+use terrain::Renderer;
+use terrain::Result;
 use terrain::scene::Scene;
 use terrain::sketch::Atlas;
 

@@ -9,7 +9,7 @@
 
 use crate::app::output::Fixed;
 use serde::{Deserialize, Serialize};
-use terrain::gpu::frame_io::PassTimes;
+use terrain::PassTimes;
 use terrain::stage::quality::Bin;
 
 /// PSNR written for identical images.

@@ -6,7 +6,7 @@
 use super::report::{PSNR_CAP_DB, Row, TARGET_PSNR_DB, TARGET_SSE_PX};
 use serde::Serialize;
 use std::fmt::Write;
-use terrain::gpu::terrain::TerrainPass;
+use terrain::pass;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct ModeSummary {
@@ -126,7 +126,7 @@ pub struct FrameSplit {
 impl FrameSplit {
     /// `None` where the row's passes were not timed (an adapter without timestamp queries).
     fn of(r: &Row) -> Option<FrameSplit> {
-        let terrain_ms = r.passes_ms.get(TerrainPass::NAME)?;
+        let terrain_ms = r.passes_ms.get(pass::TERRAIN)?;
         Some(FrameSplit {
             cpu_ms: r.cpu_stage_us / 1000.0,
             other_passes_ms: r.passes_ms.total() - terrain_ms,
@@ -437,7 +437,7 @@ fn time_miss_line(m: &TimeMiss) -> String {
 mod tests {
     use super::*;
     use crate::eval::compare::report::tests::row;
-    use terrain::gpu::frame_io::PassTimes;
+    use terrain::PassTimes;
 
     #[test]
     fn summary_finds_times_to_targets_and_errors_at_the_common_budget() {

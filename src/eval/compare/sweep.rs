@@ -14,7 +14,7 @@
 //!   and still land beside GeoMipMap's counts, not on them.
 //! - GeoMipMap over τ 0.5, 1, 2, 4, 8 px at blocks of 17, 33 and 65 vertices;
 //! - brute force over grid spacings d_atlas/2^K for K = 0 up to the finest the device and the
-//!   vertex budget allow ([`default_k`]);
+//!   vertex budget allow ([`Baselines::default_k`]);
 //! - on a planet, clipmaps over φ steps 128, 256, 512, 1024 at 20 rings per level, rings per
 //!   level 10 and 40 at 512 φ steps (the paper's n and m, 8× and 4× triangles end to end), and the
 //!   paper's triangles split the other ways: 256 × 40 and 128 × 80.
@@ -32,13 +32,13 @@
 //!   it changes Φ only where the surface bound `I_s` or the floor clip the importance.
 
 use super::report::Row;
-use terrain::camera::Camera;
-use terrain::error::Result;
-use terrain::lod::baseline::default_k;
+use terrain::Baselines;
+use terrain::Camera;
+use terrain::Result;
 use terrain::scene::{Mode, Scene};
 use terrain::sketch::Atlas;
+use terrain::stage::Budget;
 use terrain::stage::CpuStage;
-use terrain::stage::budget::Budget;
 
 /// The largest mesh the sweep draws: 2M triangles.
 const MAX_MESH: u32 = 1024;
@@ -149,7 +149,10 @@ impl Setting {
                 block: scene.geomipmap.block,
             },
             Mode::Bruteforce => Setting::BruteForce {
-                k: scene.geomipmap.k.unwrap_or_else(|| default_k(atlas)),
+                k: scene
+                    .geomipmap
+                    .k
+                    .unwrap_or_else(|| Baselines::default_k(atlas)),
             },
             Mode::Clipmaps => {
                 let p = scene.planet()?;
@@ -183,7 +186,7 @@ pub fn default_sweep(
                 }
             }
             Mode::Bruteforce => {
-                for k in 0..=default_k(atlas) {
+                for k in 0..=Baselines::default_k(atlas) {
                     out.push(Setting::BruteForce { k });
                 }
             }

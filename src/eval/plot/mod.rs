@@ -28,7 +28,7 @@ use plotters::prelude::{
 };
 use plotters::style::{FontStyle, IntoFont, RGBColor, TextStyle, register_font};
 use std::sync::OnceLock;
-use terrain::error::{Error, Result};
+use terrain::{Error, Result};
 
 static DEJAVU_SANS: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
 

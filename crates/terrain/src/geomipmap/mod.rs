@@ -30,14 +30,18 @@ mod morph;
 mod select;
 mod templates;
 
+#[cfg(test)]
 pub use morph::morphed_height;
-pub use select::{BlockGpu, LodParams, Selection, choose_level, d_of};
+#[cfg(test)]
+pub use select::choose_level;
+pub use select::{BlockGpu, LodParams, Selection};
 pub use templates::Templates;
 
 use glam::{DVec2, DVec3};
 
 /// Where in [D_l, D_{l+1}] the morph toward level l+1 begins.
 pub const MORPH_START: f64 = 0.7;
+#[cfg(test)]
 /// Cells per block side by default (blocks of 33 vertices); 16, 32, 64 and 128 are allowed.
 pub const DEFAULT_CELLS: usize = 32;
 /// Levels of the largest block (128 cells: levels 0..=7).

@@ -1,5 +1,7 @@
 //! The CPU twin of the GEOMIPMAP vertex shader's geomorphing (tests hold the two together).
 
+#![cfg(test)]
+
 use super::{BlockGpu, Grid};
 use glam::DVec3;
 

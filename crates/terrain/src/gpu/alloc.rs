@@ -114,7 +114,7 @@ impl Alloc<'_> {
 }
 
 /// A texture's footprint: each mip level's extent in the format's blocks, times the samples.
-pub fn texture_bytes(desc: &wgpu::TextureDescriptor) -> u64 {
+pub(crate) fn texture_bytes(desc: &wgpu::TextureDescriptor) -> u64 {
     (0..desc.mip_level_count)
         .filter_map(|level| desc.mip_level_size(level))
         .map(|size| desc.format.theoretical_memory_footprint(size))

@@ -3,7 +3,7 @@
 //! its bind-group layout and its bind group, the bind group given its resources by name.
 //!
 //! Rules: a binding's index is written once in Rust and once in its WGSL declaration, and
-//! `tests/bindings.rs` holds every list of [`SHADERS`] to the `@group @binding` declarations naga
+//! `checks/bindings.rs` (a unit test) holds every list of [`SHADERS`] to the `@group @binding` declarations naga
 //! reflects from every variant of the pass's WGSL (index, name and kind), so a binding renumbered
 //! on one side fails there; a declared binding given no resource is an error, not a panic in wgpu.
 //! Rejected alternative: reflecting the layout from the WGSL with naga when a pass is built, which
@@ -124,6 +124,7 @@ impl Binding {
     }
 }
 
+#[cfg(test)]
 /// Every shader's bindings, by the name of its WGSL file.
 pub const SHADERS: [(&str, &[Binding]); 9] = [
     ("warp_zoom", super::warp_zoom::BINDINGS),

@@ -11,13 +11,20 @@ use super::stream::AtlasBinding;
 use crate::camera::Geo;
 use crate::detail::Detail;
 use crate::error::Result;
-use crate::planet::noise::{SphereOctave, gradient_noise3, lattice_scale};
+#[cfg(test)]
+use crate::planet::noise::gradient_noise3;
+use crate::planet::noise::{SphereOctave, lattice_scale};
 use crate::planet::rings::{Rings, Span};
 use crate::planet::{Planet, Tangent};
+#[cfg(test)]
 use crate::sketch::cubic::catmull_rom;
 use bytemuck::{Pod, Zeroable};
-use glam::{DVec3, IVec2, Vec2, Vec3, Vec4};
-use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use glam::{DVec3, IVec2};
+#[cfg(test)]
+use glam::{Vec2, Vec3, Vec4};
+#[cfg(test)]
+use std::f64::consts::FRAC_PI_2;
+use std::f64::consts::{PI, TAU};
 use wgpu::ShaderStages as S;
 
 /// One octave of the sphere's noise for one frame (WGSL `SphereOctave`).
@@ -241,6 +248,7 @@ impl ClipmapsPass {
     }
 }
 
+#[cfg(test)]
 /// `map_offset` and `planet_texel_of` in the shader: the hemisphere point's level-0 texel
 /// relative to the nadir's whole texel.
 fn texel_of(u: &PlanetUniforms, v: Vec4) -> Vec2 {
@@ -248,6 +256,7 @@ fn texel_of(u: &PlanetUniforms, v: Vec4) -> Vec2 {
     Vec2::from(u.texel_frac) + Vec2::new(d.y, d.x) * Vec2::from(u.texels_per_rad)
 }
 
+#[cfg(test)]
 /// `planet_level` in the shader.
 fn planet_level(planet: &Planet, u: &PlanetUniforms, t: Vec2, l: usize) -> Result<f32> {
     let s = (1u32 << l) as f32;
@@ -271,6 +280,7 @@ fn planet_level(planet: &Planet, u: &PlanetUniforms, t: Vec2, l: usize) -> Resul
     Ok(h)
 }
 
+#[cfg(test)]
 /// `ring_spacing` in the shader.
 fn ring_spacing(u: &PlanetUniforms, a: f32) -> f32 {
     let across = a * ((1.0 / u.rings_per_level as f32).exp2() - 1.0);
@@ -278,6 +288,7 @@ fn ring_spacing(u: &PlanetUniforms, a: f32) -> f32 {
     (u.radius * across.max(along)).max(u.min_spacing)
 }
 
+#[cfg(test)]
 /// The clipmaps pass's vertex for hemisphere point `v` (CPU twin of `clipmaps.wgsl`'s `main`).
 pub fn vertex_cpu(planet: &Planet, atlas_d: f32, u: &PlanetUniforms, v: Vec4) -> Result<Vec4> {
     let spacing = ring_spacing(u, v.w);
@@ -310,6 +321,7 @@ pub fn vertex_cpu(planet: &Planet, atlas_d: f32, u: &PlanetUniforms, v: Vec4) ->
     Ok(Vec4::new(rh * v.x, rh * v.y, ground - rh * v.z, h))
 }
 
+#[cfg(test)]
 /// The geographic position of hemisphere point (angle `a`, bearing `b`) seen from `geo`
 /// (radians), in f64: where [`vertex_cpu`]'s point should lie.
 pub fn lat_lon_of(geo: &Geo, a: f64, b: f64) -> (f64, f64) {

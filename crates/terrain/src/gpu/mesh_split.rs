@@ -88,11 +88,13 @@ impl MeshSplitPass {
     }
 }
 
+#[cfg(test)]
 fn ccw(a: [f32; 4], b: [f32; 4], c: [f32; 4]) -> bool {
     let (u, v) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
     u[0] * v[1] - u[1] * v[0] > 0.0
 }
 
+#[cfg(test)]
 /// The CPU twin of one invocation of `mesh_split.wgsl`: the six indices of cell (s, t) of a
 /// `mesh`² `detailed` geometry image whose cell centres' heights are `centres`.
 pub fn split_cpu(detailed: &[[f32; 4]], centres: &[f32], mesh: u32, s: u32, t: u32) -> [u32; 6] {

@@ -68,6 +68,7 @@ impl NormalsPass {
     }
 }
 
+#[cfg(test)]
 /// The CPU twin of one invocation of `normals.wgsl`: the normal of vertex `ij` of `detailed`
 /// (mesh², row-major).
 pub fn normal_cpu(detailed: &[[f32; 4]], mesh: u32, ij: glam::IVec2) -> [f32; 3] {

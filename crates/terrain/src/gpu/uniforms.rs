@@ -187,9 +187,9 @@ pub struct FrameUniforms {
     pub march: MarchUniforms,
 }
 
-crate::named_enum! {
+crate::names::named_enum! {
     /// The debug views of `render --view`; the WGSL twins are `VIEW_*` in
-    /// `shaders/shared/frame.wgsl` (checked in `tests/shaders.rs`).
+    /// `shaders/shared/frame.wgsl` (checked in `checks/shaders.rs`).
     pub enum View ("view") {
         Shaded = "shaded",
         Wireframe = "wireframe",

@@ -7,12 +7,17 @@ use super::alloc::{Alloc, Buffer};
 use super::bindings::{Binding, bind_group, buffer, layout};
 use super::shaders::Key;
 use super::stream::AtlasBinding;
+#[cfg(test)]
 use super::uniforms::FrameUniforms;
 use super::{compute_pipeline, dispatch_grid};
+#[cfg(test)]
 use crate::detail::{OctaveFrame, gradient_noise};
 use crate::error::Result;
+#[cfg(test)]
 use crate::sketch::Atlas;
+#[cfg(test)]
 use crate::sketch::cubic::catmull_rom;
+#[cfg(test)]
 use glam::{IVec2, Vec2, Vec3};
 use wgpu::ShaderStages as S;
 
@@ -107,6 +112,7 @@ impl WarpZoomPass {
     }
 }
 
+#[cfg(test)]
 /// Φ at warp coordinates (bilinear), metres from the frame origin (`phi_at` in the shader).
 fn phi_at(f: &FrameUniforms, phi: &[[f32; 2]], st: Vec2) -> Vec2 {
     let n = f.mesh.n;
@@ -121,6 +127,7 @@ fn phi_at(f: &FrameUniforms, phi: &[[f32; 2]], st: Vec2) -> Vec2 {
     s * q.x + t * q.y + Vec2::from(f.mesh.phi_offset)
 }
 
+#[cfg(test)]
 fn mesh_xy(f: &FrameUniforms, phi: &[[f32; 2]], ij: IVec2) -> Vec2 {
     let m = f.mesh.mesh as i32;
     let c = ij.clamp(IVec2::ZERO, IVec2::splat(m - 1));
@@ -131,6 +138,7 @@ fn mesh_xy(f: &FrameUniforms, phi: &[[f32; 2]], ij: IVec2) -> Vec2 {
     )
 }
 
+#[cfg(test)]
 /// `drawn_xy` in the shader: a vertex past the sketch's edge is drawn on it (`on_sketch_edge` in
 /// `shaders/shared/frame.wgsl`), unless the region is turned.
 fn drawn_xy(f: &FrameUniforms, p: Vec2) -> Vec2 {
@@ -141,6 +149,7 @@ fn drawn_xy(f: &FrameUniforms, p: Vec2) -> Vec2 {
     p.clamp(lo, hi)
 }
 
+#[cfg(test)]
 /// The sketch's rectangle, metres from the frame origin (`sketch_lo` and `sketch_hi` in
 /// `shaders/shared/frame.wgsl`).
 pub fn sketch_rect(f: &FrameUniforms) -> (Vec2, Vec2) {
@@ -149,6 +158,7 @@ pub fn sketch_rect(f: &FrameUniforms) -> (Vec2, Vec2) {
     (lo, lo + nodes.as_vec2() / Vec2::from(f.atlas.inv_spacing))
 }
 
+#[cfg(test)]
 /// `atlas_level` in the shader: bicubic height on level l at level-0 texel coordinates.
 fn atlas_level(atlas: &Atlas, uv: Vec2, l: usize) -> f32 {
     let level = &atlas.levels[l];
@@ -170,6 +180,7 @@ fn atlas_level(atlas: &Atlas, uv: Vec2, l: usize) -> f32 {
     h
 }
 
+#[cfg(test)]
 fn atlas_height(f: &FrameUniforms, atlas: &Atlas, local: Vec2, spacing: f32) -> f32 {
     let uv = (local + Vec2::from(f.atlas.offset)) * Vec2::from(f.atlas.inv_spacing);
     let lod = (spacing.max(1e-6) / f.atlas.d_atlas)
@@ -184,6 +195,7 @@ fn atlas_height(f: &FrameUniforms, atlas: &Atlas, local: Vec2, spacing: f32) -> 
     a + (atlas_level(atlas, uv, l0 as usize + 1) - a) * t
 }
 
+#[cfg(test)]
 fn octave_local(o: &super::uniforms::OctaveGpu, local: Vec2) -> f32 {
     let frame = OctaveFrame {
         lattice: IVec2::from(o.lattice),
@@ -197,12 +209,14 @@ fn octave_local(o: &super::uniforms::OctaveGpu, local: Vec2) -> f32 {
     gradient_noise(frame.lattice + c.as_ivec2(), q - c, frame.seed).0
 }
 
+#[cfg(test)]
 /// The spacing whose pyramid level the sketch is sampled at, for a vertex whose sketch octave is
 /// `o` ([`sketch_octave_in_view`]): level −o, clamped to the pyramid.
 pub fn sketch_spacing(d_atlas: f32, o: f32) -> f32 {
     d_atlas * (-o).exp2()
 }
 
+#[cfg(test)]
 /// The octave whose pyramid level a vertex at `p` reads the sketch at, for a split octave `o`
 /// before its stop at the pixel octave: with a camera, the pixel octave `log2(d_atlas /
 /// footprint)` (`pixel_octave`), so that each vertex lies on the surface the picture is
@@ -221,6 +235,7 @@ pub fn sketch_octave_in_view(f: &FrameUniforms, p: Vec2, o: f32) -> f32 {
     pixel_octave(f, p).unwrap_or(o)
 }
 
+#[cfg(test)]
 /// The pixel octave at `p`, `log2(d_atlas / footprint)`, the footprint taken at the nearest
 /// height the sketch can have under `p` (the eye's, below the sketch's highest); none without a
 /// camera (`pixel_scale` 0, a bake).
@@ -234,6 +249,7 @@ fn pixel_octave(f: &FrameUniforms, p: Vec2) -> Option<f32> {
     Some((f.atlas.d_atlas / footprint.max(1e-6)).log2())
 }
 
+#[cfg(test)]
 /// The split octave of a vertex at `p` (frame metres) whose mesh gives `o`: no finer than the
 /// pixel octave there (`pixel_octave`), as the reference's surface holds no octave finer than
 /// its pixel. A mesh finer than the pixels (far ground, a dense mesh from high up) otherwise
@@ -246,6 +262,7 @@ pub fn split_octave_in_view(f: &FrameUniforms, p: Vec2, o: f32) -> f32 {
     pixel_octave(f, p).map_or(o, |px| o.min(px))
 }
 
+#[cfg(test)]
 /// `detailed_at` in the shader: the detailed surface's height at `p` for a mesh spacing of
 /// `d_max` metres there, and its split octave.
 fn detailed_at(f: &FrameUniforms, atlas: &Atlas, detail: bool, p: Vec2, d_max: f32) -> (f32, f32) {
@@ -264,6 +281,7 @@ fn detailed_at(f: &FrameUniforms, atlas: &Atlas, detail: bool, p: Vec2, d_max: f
     (z.max(f.atlas.water_m), o)
 }
 
+#[cfg(test)]
 /// The CPU twin of one invocation of `warp_zoom.wgsl`: vertex `ij` of the detailed geometry image.
 pub fn vertex_cpu(
     f: &FrameUniforms,
@@ -282,6 +300,7 @@ pub fn vertex_cpu(
     [drawn.x, drawn.y, z, o]
 }
 
+#[cfg(test)]
 /// The CPU twin of `warp_zoom.wgsl`'s centres: the height at the mean of cell `ij`'s corners
 /// (from vertex `ij` to `ij + (1, 1)`), at the spacing of its longest side.
 pub fn centre_cpu(

@@ -39,7 +39,7 @@ use std::time::Instant;
 const MAX_DEFAULT_VERTICES: f64 = 4_194_304.0;
 
 /// K, the octaves baked into the grid: the finest grid (up to K = 3) within the vertex budget.
-pub fn default_k(atlas: &Atlas) -> u32 {
+fn default_k(atlas: &Atlas) -> u32 {
     let side = (atlas.max_corner() - atlas.origin).max_element() / atlas.d_atlas();
     (0..=3u32)
         .rev()
@@ -206,6 +206,12 @@ fn streamed_grid(
 }
 
 impl Baselines {
+    /// `geomipmap.k`'s default for `atlas`: the octaves baked into the grid, the finest grid (up
+    /// to K = 3) within a vertex budget of 2^22.
+    pub fn default_k(atlas: &Atlas) -> u32 {
+        default_k(atlas)
+    }
+
     /// `kind`: `Mode::Geomipmap` or `Mode::Bruteforce`.
     pub fn new(s: &Shared, kind: Mode) -> Result<Baselines> {
         let start = Instant::now();

@@ -15,7 +15,7 @@
 //!   they are small near the camera whatever the planet.
 //! - Map coordinates of a point at angular distance a and bearing b (0 north, 90° east) from the
 //!   nadir come from the spherical direct problem in a form that keeps their relative precision for
-//!   small a ([`map_offset`]): the latitude's change by the half-angle tangent of the sines'
+//!   small a (`map_offset`): the latitude's change by the half-angle tangent of the sines'
 //!   difference, the longitude's by atan2 of the point's coordinates in the nadir's meridian plane.
 //!   Clasen & Hege's equations (3)–(4) compute the absolute latitude `acos(p_z) − θ_v`, which in
 //!   f32 loses everything below 1e-7 rad (0.6 m on the Earth), and its §5 replaces them near the
@@ -28,14 +28,16 @@
 //! Rejected alternative: a cube-face parametrisation of the sketch. Files come equirectangular;
 //! resampling them onto six faces loses resolution at the faces' centres or doubles the texels.
 
-pub mod noise;
-pub mod rings;
-pub mod synthetic;
+pub(crate) mod noise;
+pub(crate) mod rings;
+pub(crate) mod synthetic;
 
 use crate::detail::Detail;
 use crate::error::Result;
 use crate::sketch::Atlas;
-use glam::{DVec2, DVec3, Vec2, Vec4};
+#[cfg(test)]
+use glam::Vec2;
+use glam::{DVec2, DVec3, Vec4};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 /// The Earth's mean radius, metres: `planet.radius_m`'s default.
@@ -105,7 +107,7 @@ impl Tangent {
 /// A point of the view hemisphere at angular distance `a` from the nadir and bearing `b` (0
 /// north, π/2 east), as the GPU receives it: (sin a·sin b, sin a·cos b, 1 − cos a, a). The third
 /// is computed as 2·sin²(a/2), which keeps its relative precision where 1 − cos a would not.
-pub fn hemisphere_point(a: f64, b: f64) -> Vec4 {
+pub(crate) fn hemisphere_point(a: f64, b: f64) -> Vec4 {
     let (sa, s_half) = (a.sin(), (0.5 * a).sin());
     Vec4::new(
         (sa * b.sin()) as f32,
@@ -117,7 +119,8 @@ pub fn hemisphere_point(a: f64, b: f64) -> Vec4 {
 
 /// The change of latitude and longitude (radians) from the nadir at latitude with sine `s1` and
 /// cosine `c1` to the hemisphere point `v` ([`hemisphere_point`]); f32, as the GPU computes it.
-pub fn map_offset(s1: f32, c1: f32, v: Vec4) -> Vec2 {
+#[cfg(test)]
+pub(crate) fn map_offset(s1: f32, c1: f32, v: Vec4) -> Vec2 {
     let (e, n, vers) = (v.x, v.y, v.z);
     // The point in the nadir meridian's frame: x toward the nadir's longitude on the equator's
     // plane, y east, z north.
@@ -131,7 +134,8 @@ pub fn map_offset(s1: f32, c1: f32, v: Vec4) -> Vec2 {
 
 /// The same in f64, from the angle and bearing: the CPU's reference, by rotating the vector
 /// (asin of the sine of the latitude would lose it near a pole).
-pub fn map_offset_exact(lat1: f64, a: f64, b: f64) -> DVec2 {
+#[cfg(test)]
+pub(crate) fn map_offset_exact(lat1: f64, a: f64, b: f64) -> DVec2 {
     let t = Tangent::at(lat1, 0.0);
     let (sa, ca) = a.sin_cos();
     let u = t.up * ca + (t.north * b.cos() + t.east * b.sin()) * sa;

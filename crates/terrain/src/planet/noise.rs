@@ -88,6 +88,7 @@ impl SphereOctave {
     }
 }
 
+#[cfg(test)]
 /// n_k and its gradient per metre at `rel` metres from the anchor (the GPU's path).
 pub fn octave_rel(o: &SphereOctave, rel: Vec3) -> (f32, Vec3) {
     let q = rel * o.scale + o.phase;

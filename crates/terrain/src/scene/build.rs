@@ -21,7 +21,7 @@ pub fn scene_load_options(scene: &Scene) -> LoadOptions {
 }
 
 /// The tile cache's budgets from `[stream]`.
-pub fn stream_config(scene: &Scene) -> crate::gpu::stream::StreamConfig {
+pub(crate) fn stream_config(scene: &Scene) -> crate::gpu::stream::StreamConfig {
     let s = &scene.stream;
     crate::gpu::stream::StreamConfig {
         gpu_bytes: (s.gpu_mb * 1048576.0) as u64,

@@ -9,10 +9,10 @@ use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
 /// The most octaves a scene may ask for.
-pub const MAX_OCTAVES: u32 = 24;
+pub(crate) const MAX_OCTAVES: u32 = 24;
 /// The finest noise wavelength the default octave count reaches, metres: below a decimetre
 /// no camera this renderer places (at least a metre above the ground) resolves a change.
-pub const FINEST_WAVELENGTH_M: f64 = 0.1;
+pub(crate) const FINEST_WAVELENGTH_M: f64 = 0.1;
 
 /// `detail.bias` when the scene does not set it: −1 in the warped mode and the reference (which
 /// draws every octave whatever the bias) on either storage, so a sketch and the tile pyramid
@@ -74,7 +74,7 @@ impl Default for DetailSection {
     }
 }
 
-crate::named_enum! {
+crate::names::named_enum! {
     /// How the warp keeps cells from folding; see `warp.rs`.
     pub enum WarpMethod ("warp method") {
         /// The paper's single row pass then column pass, nothing more.
@@ -85,7 +85,7 @@ crate::named_enum! {
     }
 }
 
-crate::named_enum! {
+crate::names::named_enum! {
     /// Which diagonal each cell of the warped mesh is split along; see `gpu::mesh_split`.
     pub enum Triangulation ("triangulation") {
         /// Every cell along (s, t)–(s+1, t+1).

@@ -15,23 +15,27 @@ mod camera;
 mod check;
 mod detail;
 mod parse;
-pub mod place;
+pub(crate) mod place;
 mod render;
 mod starter;
 
+pub(crate) use build::stream_config;
 pub use build::{
     camera_of, detail_for, detail_of, ground_under, light_of, load_atlas, scene_load_options,
-    stream_config,
 };
 pub use parse::{Fault, is_sketch_path, scene_text};
+pub use place::{
+    CameraReport, DEFAULT_PATH_S, camera_report, default_path, pose, resolve_key, world_of_map,
+};
 pub use starter::starter;
 
 pub(crate) use camera::Placement;
 pub use camera::{CameraSection, PathKey, PathSection};
 pub use detail::{
-    DetailSection, FINEST_WAVELENGTH_M, GeoMipMapSection, ImportanceSection, MAX_OCTAVES,
-    Triangulation, WarpMethod, WarpSection, default_bias,
+    DetailSection, GeoMipMapSection, ImportanceSection, Triangulation, WarpMethod, WarpSection,
+    default_bias,
 };
+pub(crate) use detail::{FINEST_WAVELENGTH_M, MAX_OCTAVES};
 pub use render::{
     LightSection, Mode, Msaa, PlanetSection, ReferenceSection, RenderSection, StreamSection,
 };
@@ -98,7 +102,7 @@ fn default_outside() -> Outside {
     Outside::Plain
 }
 
-crate::named_enum! {
+crate::names::named_enum! {
     /// What lies beyond the sketch (`sketch.outside`): drawn by the sky pass and the reference
     /// alike, and never counted as terrain by the image metrics.
     pub enum Outside ("outside") {

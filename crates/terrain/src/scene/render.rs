@@ -96,7 +96,7 @@ impl LightSection {
     }
 }
 
-crate::named_enum! {
+crate::names::named_enum! {
     /// The level-of-detail scheme that draws the terrain (`render.mode`, `--mode`).
     pub enum Mode ("mode") {
         Warped = "warped",
@@ -161,7 +161,7 @@ impl Default for RenderSection {
     }
 }
 
-crate::named_enum! {
+crate::names::named_enum! {
     /// Anti-aliasing (`render.msaa`): 4 samples per pixel, multisampled in the mesh modes (where
     /// the adapter's targets allow it) and four rays per pixel in the reference.
     pub enum Msaa ("msaa") {

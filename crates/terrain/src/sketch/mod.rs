@@ -14,38 +14,41 @@
 //! milliseconds, the pyramid costs one build at load time (a third more memory).
 
 mod asc;
-pub mod cubic;
-pub mod fill;
-pub mod georef;
+pub(crate) mod cubic;
+pub(crate) mod fill;
+pub(crate) mod georef;
 mod geotiff;
 mod hgt;
 mod load;
-pub mod mosaic;
+pub(crate) mod mosaic;
 mod png;
 mod pyramid;
-pub mod synthetic;
+pub(crate) mod synthetic;
 mod xyz;
 
-pub use load::{LoadOptions, RawGrid, parse_grid, read_grid, scale_heights, warnings};
+pub use georef::{Georef, US_SURVEY_FOOT_M, Units};
+pub(crate) use load::scale_heights;
+pub use load::{LoadOptions, RawGrid, parse_grid, read_grid, warnings};
+pub use mosaic::{is_glob, list_glob};
 pub use png::parse_world_file;
+pub use pyramid::Level;
 pub(crate) use pyramid::build_pyramid;
-pub use pyramid::{Level, bilinear_blend, bilinear_cell};
+pub(crate) use pyramid::{bilinear_blend, bilinear_cell};
 
 use crate::error::Result;
-use georef::Georef;
 use glam::DVec2;
 
 /// Mean Earth radius (IUGG), for converting geographic cells to metres at their mid latitude.
 pub const EARTH_RADIUS_M: f64 = 6_371_008.8;
 /// Larger grids are refused rather than allocated: 2^28 cells is 1 GiB of f32 before the pyramid.
-pub const MAX_CELLS: usize = 1 << 28;
+pub(crate) const MAX_CELLS: usize = 1 << 28;
 
 /// Heights beyond ±1000 km (after `sketch.height_scale`) are no terrain's (the Earth's relief
 /// spans 20 km), and squared or summed in f32 downstream they would overflow. Up to 1 % of a
 /// sketch's cells beyond it are taken as nodata and filled (a Float64 file damaged into 1e180 m, a
 /// float DEM whose −3.4e38 nodata its header does not declare; GDAL reads them as values); more
 /// are heights in another unit, and the sketch is refused with a hint to set the scale.
-pub const MAX_HEIGHT_M: f64 = 1.0e6;
+pub(crate) const MAX_HEIGHT_M: f64 = 1.0e6;
 
 /// The cell limit in force: [`MAX_CELLS`] unless [`limit_cells`] lowered it.
 static CELL_LIMIT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(MAX_CELLS);
@@ -57,14 +60,14 @@ pub fn limit_cells(cells: usize) {
 }
 
 /// The largest grid a reader allocates now.
-pub fn max_cells() -> usize {
+pub(crate) fn max_cells() -> usize {
     CELL_LIMIT.load(std::sync::atomic::Ordering::Relaxed)
 }
 
 /// The side of the window a level not in memory is measured on for
 /// [`Atlas::level_curvature`]: 512², whose stride (2) visits as many texels as on a level held
 /// whole.
-pub const CURVATURE_WINDOW: usize = 512;
+pub(crate) const CURVATURE_WINDOW: usize = 512;
 
 #[derive(Clone, Debug)]
 pub struct Atlas {
@@ -96,7 +99,6 @@ pub struct Atlas {
     pub relief_m: Option<[f64; 2]>,
 }
 
-pub use georef::degrees_to_metres;
 
 impl Atlas {
     pub fn width(&self) -> usize {

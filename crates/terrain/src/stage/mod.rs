@@ -4,28 +4,30 @@
 //! frame allocates nothing; its three parts are timed separately (the [`budget`], a sum over the
 //! importance map, counts with the warp).
 
-pub mod budget;
-pub mod hold;
-pub mod importance;
-pub mod lines;
+pub(crate) mod budget;
+pub(crate) mod hold;
+pub(crate) mod importance;
+pub(crate) mod lines;
 pub mod quality;
-pub mod simd;
-pub mod sketch_map;
-pub mod transpose;
-pub mod warp;
+pub(crate) mod simd;
+pub(crate) mod sketch_map;
+pub(crate) mod transpose;
+pub(crate) mod warp;
+
+pub use budget::Budget;
+pub use sketch_map::Turn;
+pub use warp::{Warp, pair_unfolded};
 
 use crate::camera::Camera;
 use crate::detail::Detail;
 use crate::error::Result;
 use crate::scene::Scene;
 use crate::sketch::Atlas;
-use budget::Budget;
 use glam::DVec2;
 use hold::{Hold, ROW_STEP};
 use importance::{ErrorTerm, ImportanceMap, ImportanceParams};
-use sketch_map::{Resampler, SketchMap, Turn};
+use sketch_map::{Resampler, SketchMap};
 use std::time::Instant;
-use warp::Warp;
 
 /// Microseconds spent in each part of the stage.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]

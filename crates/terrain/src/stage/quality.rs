@@ -16,7 +16,7 @@ use crate::stage::warp::cell_area;
 use serde::Serialize;
 
 /// Histogram bin edges in log2(ratio): 1/8 … 8 in half-octave steps, plus the two open ends.
-pub const BIN_EDGES_LOG2: [f64; 13] = [
+pub(crate) const BIN_EDGES_LOG2: [f64; 13] = [
     -3.0, -2.5, -2.0, -1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0,
 ];
 

@@ -24,15 +24,16 @@
 //! - Plain zstd on the f32 bytes: on the bundled Jacksboro DEM's 128² windows it compresses 2.64×,
 //!   the predicted byte planes 4.12× (`cargo test --release --lib tiles -- --nocapture`).
 
-pub mod blocks;
-pub mod build;
-pub mod cache;
+pub(crate) mod blocks;
+pub(crate) mod build;
+pub(crate) mod cache;
 mod codec;
-pub mod read;
+pub(crate) mod read;
 
+pub use blocks::{measure as measure_blocks, set_keep_figures};
 pub use build::{BuildOptions, BuildSummary, build};
-pub use codec::{TileHeader, decode_tile, encode_tile};
-pub use read::Pyramid;
+pub use cache::StreamStats;
+pub use read::{Pyramid, raw_grid_within};
 
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -46,7 +47,7 @@ pub const SIDE: usize = TILE + 2 * BORDER;
 /// The name that makes a folder a pyramid, written last.
 pub const META: &str = "pyramid.toml";
 /// `format` in `pyramid.toml`: bumped when the layout changes.
-pub const FORMAT: &str = "terrain-tiles 1";
+pub(crate) const FORMAT: &str = "terrain-tiles 1";
 
 /// `pyramid.toml`: what the pyramid holds, in the sketch's terms.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -76,7 +77,7 @@ pub struct Meta {
     pub georef: Option<MetaGeoref>,
 }
 
-/// A [`crate::sketch::georef::Georef`] as `pyramid.toml` spells it.
+/// A [`crate::sketch::Georef`] as `pyramid.toml` spells it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MetaGeoref {
@@ -89,6 +90,13 @@ pub struct MetaGeoref {
     /// The coordinate system's EPSG code, where the source named one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub epsg: Option<u16>,
+}
+
+impl MetaGeoref {
+    /// The georeference this spells.
+    pub fn georef(&self) -> crate::sketch::Georef {
+        build::georef_of(self)
+    }
 }
 
 impl Meta {
@@ -109,7 +117,7 @@ impl Meta {
 }
 
 /// Node counts of every level of a `width` × `height` grid (the atlas's rule).
-pub fn level_sizes(width: usize, height: usize) -> Vec<[usize; 2]> {
+pub(crate) fn level_sizes(width: usize, height: usize) -> Vec<[usize; 2]> {
     let mut levels = vec![[width, height]];
     loop {
         let [w, h] = *levels.last().expect("a base level");
@@ -122,7 +130,7 @@ pub fn level_sizes(width: usize, height: usize) -> Vec<[usize; 2]> {
 }
 
 /// The file of tile (tx, ty) of level `l` under the pyramid folder `dir`.
-pub fn tile_path(dir: &Path, l: usize, tx: usize, ty: usize) -> PathBuf {
+pub(crate) fn tile_path(dir: &Path, l: usize, tx: usize, ty: usize) -> PathBuf {
     dir.join(format!("L{l}"))
         .join(ty.to_string())
         .join(format!("{tx}.tile"))

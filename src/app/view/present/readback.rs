@@ -3,13 +3,13 @@
 //!
 //! Rule: a screenshot is the pixels presented, never a second rendering of the frame.
 
-use terrain::error::{Error, Result};
-use terrain::gpu::alloc::Alloc;
+use terrain::alloc::Alloc;
+use terrain::{Error, Result};
 
 /// A copy of the presented texture for a screenshot, four bytes a pixel, rows padded to the
 /// copy alignment.
 pub(super) struct Readback {
-    buffer: terrain::gpu::alloc::Buffer,
+    buffer: terrain::alloc::Buffer,
     width: u32,
     height: u32,
     row: u32,

@@ -1,4 +1,4 @@
-//! The surface path: the terrain drawn by [`terrain::host::Terrain`] into the surface's texture,
+//! The surface path: the terrain drawn by [`terrain::Terrain`] into the surface's texture,
 //! the figures composited over it.
 //!
 //! Rule: nothing of the frame leaves the GPU but a screenshot, a copy of the texture presented
@@ -10,12 +10,12 @@ use super::{Drawn, Want};
 use crate::app::hud::{self, Figures, Status};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
-use terrain::camera::Camera;
-use terrain::error::{Error, Result};
-use terrain::gpu::alloc::{Alloc, Ledger, Texture};
-use terrain::host::{Description, Targets, Terrain};
+use terrain::Camera;
+use terrain::alloc::{Alloc, Ledger, Texture};
 use terrain::scene::{Mode, Scene};
 use terrain::sketch::Atlas;
+use terrain::{Description, Targets, Terrain};
+use terrain::{Error, Result};
 use winit::event_loop::ActiveEventLoop;
 use winit::window::Window;
 
@@ -210,7 +210,7 @@ impl SurfacePath {
         let target: &wgpu::Texture = offscreen.as_deref().unwrap_or(&frame.texture);
         let view = target.create_view(&Default::default());
         let depth = self.depth.create_view(&Default::default());
-        terrain::host::clear(&mut encoder, &view, &depth);
+        terrain::clear(&mut encoder, &view, &depth);
         terrain.record(&mut encoder, &view, &depth)?;
         self.composite.overlay(&mut encoder, &view);
         if offscreen.is_some() {

@@ -30,7 +30,7 @@
 
 mod resample;
 
-pub use resample::{Resampler, Taps, resample};
+pub use resample::{Resampler, resample};
 
 use crate::camera::Camera;
 use crate::sketch::Atlas;

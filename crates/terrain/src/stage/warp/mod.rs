@@ -83,7 +83,7 @@
 mod fold;
 mod passes;
 
-pub use fold::{cell_area, cell_turn, pair_unfolded, pairs_unfolded};
+pub use fold::{cell_area, pair_unfolded, pairs_unfolded};
 
 use crate::scene::WarpMethod;
 use crate::stage::lines::{LANES, LaneScratch, LineScratch};

@@ -3,7 +3,7 @@
 
 use glam::{DVec2, DVec3, DVec4};
 use proptest::prelude::*;
-use terrain::camera::Camera;
+use terrain::Camera;
 use terrain::geomipmap::{
     Blocks, Grid, LodParams, Selection, Templates, choose_level, morphed_height,
 };
@@ -18,7 +18,7 @@ const BLOCK: usize = terrain::geomipmap::DEFAULT_CELLS;
 /// neighbours' line, and no level would differ).
 fn grid(name: &str, blocks: usize, spacing: f64) -> Grid {
     let atlas = Atlas::synthetic(name, 257, &LoadOptions::default()).unwrap();
-    let detail = terrain::detail::Detail {
+    let detail = terrain::Detail {
         octaves: 6,
         amplitude_m: 12.0,
         gain: 0.5,

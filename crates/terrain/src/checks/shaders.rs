@@ -267,7 +267,7 @@ fn the_planet_block_matches_the_wgsl_field_by_field() {
 
 #[test]
 fn view_constants_in_wgsl_are_the_rust_enum() {
-    use terrain::gpu::uniforms::View;
+    use terrain::View;
     let module = validate("terrain", &[]);
     let mut found = 0;
     for (_, c) in module.constants.iter() {

@@ -1,0 +1,312 @@
+//! The GPU's warp & zoom, mesh split and normals against their CPU twins, on the machine's
+//! adapter (llvmpipe without a GPU).
+
+use glam::IVec2;
+use std::path::Path;
+use terrain::gpu::clipmaps::{lat_lon_of, vertex_cpu as clipmaps_vertex_cpu};
+use terrain::gpu::mesh_split::split_cpu;
+use terrain::gpu::warp_zoom::{centre_cpu, sketch_rect, vertex_cpu};
+use terrain::planet::noise::{lattice_scale, octave_at};
+use terrain::planet::{Planet, unit};
+use terrain::scene::{Mode, Scene};
+use terrain::{Clipmaps, Frame, Renderer, View, Warped};
+
+fn bundled(name: &str, size: u32, mesh: u32) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../sketches")
+        .join(format!("{name}.toml"));
+    let mut s = Scene::load(&path).unwrap();
+    s.camera.width = size;
+    s.camera.height = size;
+    s.warp.mesh = mesh;
+    s
+}
+
+/// The warped scheme inside a renderer built in warped mode.
+fn warped(r: &Renderer) -> &Warped {
+    r.lod::<Warped>().expect("warped mode")
+}
+
+fn render(scene: &Scene, view: View) -> (Renderer, Frame) {
+    render_in(scene, Mode::Warped, view)
+}
+
+fn render_in(scene: &Scene, mode: Mode, view: View) -> (Renderer, Frame) {
+    let mut r = Renderer::new(scene, mode, view).expect("renderer");
+    let camera = terrain::scene::camera_of(scene, &r.atlas).unwrap();
+    let frame = r.render(&camera).expect("frame");
+    (r, frame)
+}
+
+#[test]
+fn gpu_warp_and_zoom_matches_its_cpu_twin() {
+    for (name, budget) in [
+        ("jacksboro", false),
+        ("gaussian-high", false),
+        ("hills", true),
+        // Its region reaches past the sketch: vertices on the edge (`drawn_xy`).
+        ("hills-high", false),
+    ] {
+        // The full 512² mesh, and one frame at the mesh its budget chose.
+        let mut scene = bundled(name, 64, 512);
+        scene.warp.budget = budget;
+        // The normals pass runs only for shading with the mesh's normals.
+        scene.render.pixel_normals = false;
+        let (r, _) = render(&scene, View::Shaded);
+        let camera = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
+        let uniforms = r.uniforms(&camera);
+        let gpu = warped(&r).read_detailed(&r.ctx).unwrap();
+        let range = (r.atlas.max_m - r.atlas.min_m) as f64;
+        let m = uniforms.mesh.mesh as i32;
+        assert_eq!(m < 512, budget, "{name}: mesh {m}");
+        let (mut worst_z, mut worst_xy, mut checked) = (0.0f64, 0.0f64, 0);
+        let (lo, hi) = sketch_rect(&uniforms);
+        let mut on_edge = 0;
+        for j in (0..m).step_by(7).chain([m - 1]) {
+            for i in (0..m).step_by(7).chain([m - 1]) {
+                let cpu = vertex_cpu(
+                    &uniforms,
+                    &warped(&r).stage.warp.phi,
+                    &r.atlas,
+                    true,
+                    IVec2::new(i, j),
+                );
+                let g = gpu[(j * m + i) as usize];
+                worst_z = worst_z.max((g[2] - cpu[2]).abs() as f64);
+                // Φ interpolates coordinates as large as the region: f32 rounding (fused or not)
+                // scales with the region's extent.
+                let extent = warped(&r).stage.sketch_map.extent();
+                worst_xy =
+                    worst_xy.max((g[0] - cpu[0]).abs().max((g[1] - cpu[1]).abs()) as f64 / extent);
+                // The split octave is log2 of d_atlas / d_max: the rounding of Φ above, a few
+                // ulps of the region's extent, moves it by that over d_max (where the warp
+                // crowds vertices a metre apart, a region 25 km wide: a few thousandths). Where
+                // the split octave stops at the pixel octave, d_max below is the spacing it stands
+                // for, larger than the mesh's: the allowance is then smaller, not larger.
+                let d_max = r.atlas.d_atlas() * (-(cpu[3] as f64 + r.detail.bias)).exp2();
+                let allowed = 1e-3 + 8.0 * f32::EPSILON as f64 * extent / (d_max * 2f64.ln());
+                assert!(
+                    ((g[3] - cpu[3]).abs() as f64) < allowed,
+                    "{name} ({i}, {j}): split octave {} vs {} (allowed {allowed})",
+                    g[3],
+                    cpu[3]
+                );
+                checked += 1;
+                let p = glam::Vec2::new(cpu[0], cpu[1]);
+                on_edge += usize::from(p.cmpeq(lo).any() || p.cmpeq(hi).any());
+            }
+        }
+        if name == "hills-high" {
+            assert!(
+                on_edge > 0,
+                "{name}: no vertex checked lies on the sketch's edge"
+            );
+        }
+        // The centres against their twin, and the mesh split against its twin fed the GPU's
+        // own vertices and centres.
+        let centres = warped(&r)
+            .read_centres(&r.ctx)
+            .unwrap()
+            .expect("an adaptive triangulation");
+        let mut worst_c = 0.0f64;
+        for j in (0..m - 1).step_by(7) {
+            for i in (0..m - 1).step_by(7) {
+                let cpu = centre_cpu(
+                    &uniforms,
+                    &warped(&r).stage.warp.phi,
+                    &r.atlas,
+                    true,
+                    IVec2::new(i, j),
+                );
+                worst_c = worst_c.max((centres[(j * m + i) as usize] - cpu).abs() as f64);
+            }
+        }
+        assert!(
+            worst_c <= 1e-4 * range,
+            "{name}: centres differ by {worst_c} m"
+        );
+        let indices = warped(&r).read_indices(&r.ctx).unwrap();
+        let (mut across, mut ties) = (0, 0);
+        for t in 0..m as u32 - 1 {
+            for s in 0..m as u32 - 1 {
+                let at = 6 * (t * (m as u32 - 1) + s) as usize;
+                let cpu = split_cpu(&gpu, &centres, m as u32, s, t);
+                let got = &indices[at..at + 6];
+                across += (cpu[2] != cpu[0] + m as u32 + 1) as usize;
+                if got != cpu {
+                    // The heights' midpoints are exact (a sum, then a half), so both sides
+                    // compare the same numbers; the GPU may fuse the other diagonal's cross
+                    // products, so only a cell whose b–d triangles are within rounding of
+                    // degenerate may go the other way.
+                    let v = |k: u32| glam::Vec2::new(gpu[k as usize][0], gpu[k as usize][1]);
+                    let (a, c) = (t * m as u32 + s, (t + 1) * m as u32 + s + 1);
+                    let (b, d) = (a + 1, c - 1);
+                    let slack = |p: glam::Vec2, q: glam::Vec2, r: glam::Vec2| {
+                        let (u, w) = (q - p, r - p);
+                        (u.perp_dot(w)).abs() <= 1e-5 * u.length() * w.length()
+                    };
+                    assert!(
+                        slack(v(a), v(b), v(d)) || slack(v(b), v(c), v(d)),
+                        "{name} cell ({s}, {t}): {got:?} against {cpu:?}"
+                    );
+                    ties += 1;
+                }
+            }
+        }
+        let cells = (m as usize - 1).pow(2);
+        // Measured: about half the cells take the other diagonal (49–53 % on these three).
+        assert!(
+            across > cells / 10 && across < cells * 9 / 10,
+            "{name}: {across} of {cells} cells split across"
+        );
+        assert!(
+            ties * 1000 <= cells,
+            "{name}: {ties} degenerate cells split apart"
+        );
+        // The normals pass against its twin, fed the GPU's own vertices.
+        let normals = warped(&r)
+            .read_normals(&r.ctx)
+            .unwrap()
+            .expect("lit by the mesh's normals");
+        let mut worst_n = 0.0f32;
+        for j in (0..m).step_by(7) {
+            for i in (0..m).step_by(7) {
+                let cpu = terrain::gpu::normals::normal_cpu(&gpu, m as u32, IVec2::new(i, j));
+                let g = normals[(j * m + i) as usize];
+                worst_n = worst_n.max((0..3).map(|c| (g[c] - cpu[c]).abs()).fold(0.0, f32::max));
+            }
+        }
+        assert!(worst_n < 1e-4, "{name}: normals differ by {worst_n}");
+        eprintln!(
+            "{name}: {checked} vertices, worst height difference {worst_z:.2e} m = {:.2e} of the range; centres {worst_c:.2e} m; normals {worst_n:.1e}; {across} of {cells} cells split across, {ties} degenerate ones apart",
+            worst_z / range
+        );
+        assert!(
+            worst_z <= 1e-4 * range,
+            "{name}: heights differ by {worst_z} m"
+        );
+        assert!(
+            worst_xy <= 1e-6,
+            "{name}: positions differ by {worst_xy} of the region"
+        );
+    }
+}
+
+fn planet_scene(lat: f64, lon: f64, altitude: f64, pitch: f64, size: u32) -> Scene {
+    let text = format!(
+        "[sketch]\nsynthetic = \"planet\"\nsize = 256\n[planet]\nphi_steps = 128\nrings_per_level = 8\n\
+         [camera]\nlat_deg = {lat}\nlon_deg = {lon}\naltitude_m = {altitude}\npitch_deg = {pitch}\n\
+         heading_deg = 30.0\nwidth = {size}\nheight = {size}\n"
+    );
+    Scene::parse(&text, env!("CARGO_MANIFEST_DIR").into()).unwrap()
+}
+
+/// The GPU's vertices equal the CPU twin's, and the twin's heights equal the f64 terrain
+/// function at the vertices' latitude and longitude (the sketch at the vertex's spacing plus its
+/// geometric octaves), at the Earth's radius: from orbit, at mid latitudes, a few metres from a
+/// pole, on the date line. Whole heights agree to 1e-3 of the detail's amplitude, the sketch's
+/// part differing by the last bit of the GPU's and the CPU's atan2 at vertices a radian away,
+/// which an ocean floor's texel turns into decimetres. The detail alone (each vertex's height
+/// less its height in the same frame drawn without octaves, the same camera and so the same
+/// nadir, so the sketch's part cancels) agrees to 1e-4 of the amplitude.
+#[test]
+fn the_clipmaps_pass_agrees_with_its_twin_and_the_terrain_function() {
+    for (lat, lon, altitude) in [
+        (31.0, 12.0, 2e7),
+        (31.0, 12.0, 10_000.0),
+        (89.9999, -40.0, 2.0),
+        (-12.0, 180.0, 500.0),
+    ] {
+        let s = planet_scene(lat, lon, altitude, -30.0, 64);
+        let (r, _) = render_in(&s, Mode::Clipmaps, View::Shaded);
+        let lod = r.lod::<Clipmaps>().expect("clipmaps");
+        let u = lod.uniforms.expect("a planet frame");
+        let gpu = lod.read_vertices(r.ctx()).expect("vertices");
+        // The same camera drawn without the octaves: the sketch's part of each vertex alone.
+        let camera = terrain::scene::camera_of(&s, &r.atlas).expect("camera");
+        let mut bare_scene = s.clone();
+        bare_scene.detail.octaves = Some(0);
+        let mut bare = Renderer::new(&bare_scene, Mode::Clipmaps, View::Shaded).expect("renderer");
+        bare.render(&camera).expect("frame");
+        let bare_lod = bare.lod::<Clipmaps>().expect("clipmaps");
+        let bare_u = bare_lod.uniforms.expect("a planet frame");
+        let bare_gpu = bare_lod.read_vertices(bare.ctx()).expect("vertices");
+        let bare_range = bare_lod.rings.vertex_range(bare_lod.span);
+        let (mut worst_detail, mut compared) = (0.0f32, 0);
+        let planet = Planet {
+            radius: u.radius as f64,
+            sketch: &r.atlas,
+        };
+        let geo = terrain::Geo {
+            lat: lat.to_radians(),
+            lon: lon.to_radians(),
+        };
+        let amplitude = r.detail.amplitude_m as f32;
+        let (mut worst_twin, mut worst_exact) = (0.0f32, 0.0f64);
+        let range = lod.rings.vertex_range(lod.span);
+        let step = ((range.end - range.start) / 997).max(1) as usize;
+        for i in (range.start..range.end)
+            .step_by(step)
+            .chain([lod.rings.nadir()])
+        {
+            let v = lod.rings.vertices[i as usize];
+            let g = glam::Vec4::from(gpu[i as usize]);
+            let c = clipmaps_vertex_cpu(&planet, r.atlas.d_atlas() as f32, &u, v).unwrap();
+            // Heights before the sea covers them (w); x, y and z are the same products of the
+            // radius and the height after it in both.
+            worst_twin = worst_twin.max((g.w - c.w).abs() / amplitude);
+            // Inside the innermost drawn ring the spacing is clamped to that ring's, which
+            // differs between the frames: compare the vertices both draw unclamped.
+            let unclamped = i / u.phi_steps < u.inner_ring.min(bare_u.inner_ring);
+            if bare_range.contains(&i) && unclamped && i != lod.rings.nadir() {
+                let bare_c =
+                    clipmaps_vertex_cpu(&planet, r.atlas.d_atlas() as f32, &bare_u, v).unwrap();
+                let (gpu_detail, cpu_detail) = (g.w - bare_gpu[i as usize][3], c.w - bare_c.w);
+                worst_detail = worst_detail.max((gpu_detail - cpu_detail).abs() / amplitude);
+                compared += 1;
+            }
+            // The f64 terrain function at the vertex's place, with the same octave shares.
+            let phi = if v.w > 0.0 {
+                v.x.atan2(v.y) as f64
+            } else {
+                0.0
+            };
+            let (vlat, vlon) = lat_lon_of(&geo, v.w as f64, phi);
+            let spacing = {
+                let a = v.w;
+                let across = a * ((1.0 / u.rings_per_level as f32).exp2() - 1.0);
+                let along = a.sin() * std::f32::consts::TAU / u.phi_steps as f32;
+                (u.radius * across.max(along)).max(u.min_spacing) as f64
+            };
+            let mut h = planet.sketch_height(vlat, vlon, spacing).unwrap();
+            let o = (r.atlas.d_atlas() / spacing).log2() - r.detail.bias;
+            let p = unit(vlat, vlon) * planet.radius;
+            for k in 1..=r.detail.last_octave(o as f32) {
+                let share = (o - k as f64 + 1.0).clamp(0.0, 1.0);
+                let (n, _) = octave_at(
+                    lattice_scale(r.detail.d_atlas, k),
+                    r.detail.octave_seed(k),
+                    p,
+                );
+                h += r.detail.weight(k) * share * n as f64;
+            }
+            // f32 keeps the offset to the vertex to its relative precision: up to 2e-7 of its
+            // distance sideways, which a slope of 1 turns into as much height.
+            let allowed = 0.02 + 2e-7 * planet.radius * v.w as f64;
+            worst_exact = worst_exact.max((c.w as f64 - h).abs() / allowed);
+        }
+        eprintln!(
+            "at {lat}°, {lon}°, {altitude} m: GPU vs twin {worst_twin:.2e} of the amplitude \
+             (the detail alone {worst_detail:.2e}), twin vs f64 {worst_exact:.3} of the allowance"
+        );
+        assert!(worst_twin < 1e-3, "{lat} {lon}: {worst_twin}");
+        assert!(
+            worst_detail < 1e-4 && compared >= 300,
+            "{lat} {lon}: the detail {worst_detail} over {compared} vertices"
+        );
+        assert!(
+            worst_exact < 1.0,
+            "{lat} {lon}: {worst_exact} of the allowance"
+        );
+    }
+}
