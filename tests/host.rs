@@ -350,3 +350,72 @@ fn a_streamed_pyramid_settles_through_the_host_api_on_terrain_renders_image() {
     assert_ne!(first, settled, "the first frame had every tile already");
     assert_eq!(last, settled, "not settled after {frames} frames");
 }
+
+/// A new image size remakes the frame's targets alone: in every mode, forward multisampled and
+/// deferred, the frame at the new size equals a fresh renderer's at that size, the baselines'
+/// baked grid is not baked again, and going back to the first size holds the GPU memory it held
+/// then (the old targets are freed). Through the host API the same: its image at the new size is
+/// a fresh terrain's.
+#[test]
+fn a_new_size_remakes_the_targets_alone() {
+    use terrain::scene::{Mode, Msaa};
+    use terrain::{Renderer, View};
+    let planet = Scene::load(&manifest_dir().join("sketches/planet-10km.toml")).unwrap();
+    let mut cases = vec![(planet, Mode::Clipmaps)];
+    for msaa in [Msaa::Off, Msaa::X4] {
+        for mode in [Mode::Warped, Mode::Geomipmap, Mode::Reference] {
+            let mut s = jacksboro();
+            s.render.msaa = msaa;
+            cases.push((s, mode));
+        }
+    }
+    let sized = |s: &Scene, (w, h): (u32, u32)| {
+        let mut s = s.clone();
+        (s.camera.width, s.camera.height) = (w, h);
+        s
+    };
+    for (scene, mode) in cases {
+        let (first, second) = (sized(&scene, (64, 64)), sized(&scene, (72, 40)));
+        let mut r = Renderer::new(&first, mode, View::Shaded).unwrap();
+        let camera_of = |s: &Scene| scene::camera_of(s, &r.atlas).unwrap();
+        let (camera_1, camera_2) = (camera_of(&first), camera_of(&second));
+        r.render(&camera_1).unwrap();
+        let (bytes, baked) = (r.gpu_bytes(), r.precompute());
+        // The warped mode's stage holds its warp for a still camera; a fresh one has none.
+        r.forget();
+        let resized = r.render(&camera_2).unwrap().rgba;
+        let mut fresh = Renderer::new(&second, mode, View::Shaded).unwrap();
+        let expected = fresh.render(&camera_2).unwrap().rgba;
+        assert_eq!(resized.len(), 72 * 40 * 4, "{mode}");
+        let differing = resized
+            .iter()
+            .zip(&expected)
+            .filter(|(a, b)| a != b)
+            .count();
+        assert_eq!(
+            differing, 0,
+            "{mode}, msaa {}: {differing} bytes differ",
+            r.samples
+        );
+        assert_eq!(r.precompute(), baked, "{mode}");
+        r.render(&camera_1).unwrap();
+        assert_eq!(
+            r.gpu_bytes(),
+            bytes,
+            "{mode}: memory back at the first size"
+        );
+    }
+
+    let description = Description::new(jacksboro())
+        .unwrap()
+        .with_mode(Mode::Geomipmap);
+    let (device, queue) = host_device(&description);
+    let camera = |w, h| description.camera(w, h).unwrap();
+    let (camera_1, camera_2) = (camera(64, 64), camera(72, 40));
+    let fresh_description = description.clone();
+    let mut terrain = Terrain::new(&device, &queue, TARGETS, description).unwrap();
+    terrain.render_to_image(&camera_1).unwrap();
+    let resized = terrain.render_to_image(&camera_2).unwrap();
+    let mut fresh = Terrain::new(&device, &queue, TARGETS, fresh_description).unwrap();
+    assert_eq!(resized, fresh.render_to_image(&camera_2).unwrap());
+}

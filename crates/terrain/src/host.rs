@@ -40,6 +40,7 @@ use glam::{DVec2, DVec3, Mat4};
 
 /// What a terrain is made from: a scene (sketch, detail, light, mode and its settings) with its
 /// sketch read.
+#[derive(Clone)]
 pub struct Description {
     scene: Scene,
     atlas: Atlas,
@@ -126,8 +127,6 @@ pub struct Terrain {
     ctx: GpuContext,
     targets: Targets,
     scene: Scene,
-    mode: Mode,
-    view: View,
     renderer: Renderer,
     output: OutputPass,
     /// The output pass's reading of the renderer's frame, made with the renderer.
@@ -136,6 +135,8 @@ pub struct Terrain {
     _ledger: Ledger,
     /// Whether a frame was recorded since the renderer was built.
     recorded: bool,
+    /// The image size the output pass's bind group reads the renderer's frame at.
+    size: (u32, u32),
 }
 
 impl Terrain {
@@ -162,11 +163,10 @@ impl Terrain {
         let output = OutputPass::new(&alloc, targets, renderer.shader_key)?;
         let output_group = bind_output(&ctx, &output, &renderer)?;
         Ok(Terrain {
+            size: (scene.camera.width, scene.camera.height),
             ctx,
             targets,
             scene,
-            mode,
-            view,
             renderer,
             output,
             output_group,
@@ -181,11 +181,11 @@ impl Terrain {
     }
 
     /// The CPU's part of a frame of `camera`: the level of detail, the uniforms. A camera of
-    /// another size than the last builds the renderer again for it.
+    /// another size than the last makes the frame's targets again, nothing else.
     pub fn prepare(&mut self, camera: &Camera) -> Result<FrameInfo> {
-        self.fit(camera)?;
         let triangles = self.renderer.host_triangles();
         let cpu = self.renderer.host_prepare(camera, self.recorded)?;
+        self.fit(camera)?;
         self.output.prepare(&self.ctx.queue, camera);
         Ok(FrameInfo {
             cpu_us: cpu.us,
@@ -198,9 +198,9 @@ impl Terrain {
     /// (the warped mode's CPU stage, GeoMipMap's selection, clipmaps' rings kept): the mesh seen
     /// from elsewhere. No CPU stage runs.
     pub fn prepare_held(&mut self, camera: &Camera) -> Result<FrameInfo> {
-        self.fit(camera)?;
         let triangles = self.renderer.host_triangles();
         let held = self.renderer.host_prepare_held(camera, self.recorded)?;
+        self.fit(camera)?;
         self.output.prepare(&self.ctx.queue, &held);
         Ok(FrameInfo {
             triangles,
@@ -208,15 +208,13 @@ impl Terrain {
         })
     }
 
-    /// Builds the renderer again where `camera`'s image is of another size than the last.
+    /// Binds the output pass to the renderer's frame again where `camera`'s image is of
+    /// another size than the last (the renderer has made its targets for it).
     fn fit(&mut self, camera: &Camera) -> Result<()> {
-        if (camera.width, camera.height) != (self.scene.camera.width, self.scene.camera.height) {
-            self.scene.camera.width = camera.width;
-            self.scene.camera.height = camera.height;
-            let atlas = self.renderer.atlas().clone();
-            self.renderer = build(&self.ctx, &self.scene, atlas, self.mode, self.view)?;
+        let size = (camera.width, camera.height);
+        if size != self.size {
             self.output_group = bind_output(&self.ctx, &self.output, &self.renderer)?;
-            self.recorded = false;
+            self.size = size;
         }
         Ok(())
     }

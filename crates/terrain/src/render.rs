@@ -71,6 +71,9 @@ pub struct Renderer {
     timer: Option<Timer>,
     lod: Box<dyn Lod>,
     ledger: Ledger,
+    /// The image size the scheme's targets are made for: a camera of another size remakes them
+    /// alone ([`Lod::resize`]).
+    size: (u32, u32),
 }
 
 /// What a scene in `mode` needs of the adapter: the atlas, and the mode's own largest binding
@@ -205,7 +208,23 @@ impl Renderer {
             sketch,
             lod,
             ledger,
+            size: (scene.camera.width, scene.camera.height),
         })
+    }
+
+    /// Fits the scheme's targets to `camera`'s image: nothing happens at the same size, and at
+    /// another only what depends on it is made again (targets, per-pixel buffers, read-back).
+    fn fit(&mut self, camera: &Camera) -> Result<()> {
+        let size = (camera.width, camera.height);
+        if size != self.size {
+            let alloc = Alloc {
+                device: &self.ctx.device,
+                ledger: &self.ledger,
+            };
+            self.lod.resize(&alloc, size.0, size.1)?;
+            self.size = size;
+        }
+        Ok(())
     }
 
     /// The next frame's level of detail is chosen as by a fresh renderer, whatever frames came
@@ -235,6 +254,7 @@ impl Renderer {
 
     /// The CPU work, then the GPU passes, for `camera`.
     pub fn render(&mut self, camera: &Camera) -> Result<Frame> {
+        self.fit(camera)?;
         let cpu = self.lod.prepare(&self.atlas, camera);
         self.draw(camera, cpu)
     }
@@ -286,6 +306,7 @@ impl Renderer {
     /// frozen, GeoMipMap's selection kept, clipmaps' rings left around the last nadir): what a
     /// frame would show without the LOD update.
     pub fn render_held(&mut self, camera: &Camera) -> Result<Frame> {
+        self.fit(camera)?;
         let camera = self.lod.held_camera(camera);
         self.draw(&camera, CpuTimes::default())
     }
@@ -378,6 +399,7 @@ impl Renderer {
     /// read (its encoder must have been submitted) and whose missing tiles are queued.
     pub(crate) fn host_prepare(&mut self, camera: &Camera, after_frame: bool) -> Result<CpuTimes> {
         self.host_end_frame(after_frame)?;
+        self.fit(camera)?;
         let cpu = self.lod.prepare(&self.atlas, camera);
         self.host_uniforms(camera);
         Ok(cpu)
@@ -391,6 +413,7 @@ impl Renderer {
         after_frame: bool,
     ) -> Result<Camera> {
         self.host_end_frame(after_frame)?;
+        self.fit(camera)?;
         let camera = self.lod.held_camera(camera);
         self.host_uniforms(&camera);
         Ok(camera)

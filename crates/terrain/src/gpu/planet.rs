@@ -10,7 +10,8 @@ use super::bindings::{Binding, bind_group, buffer, layout};
 use super::shader_module;
 use super::shaders::Key;
 use super::stream::AtlasBinding;
-use super::terrain::{COLOUR, DEPTH, DEPTH_COPY, RasterPipeline};
+use super::terrain::targets::{Sizing, Targets, make};
+use super::terrain::{COLOUR, DEPTH_COPY, RasterPipeline};
 use crate::error::Result;
 use crate::planet::rings::{Rings, Span};
 use wgpu::ShaderStages as S;
@@ -30,21 +31,19 @@ pub struct PlanetPass {
     planet: wgpu::RenderPipeline,
     bind_group: wgpu::BindGroup,
     index: Buffer,
-    pub colour: Texture,
-    colour_view: wgpu::TextureView,
-    depth_view: wgpu::TextureView,
-    _depth: Texture,
-    /// Each pixel's depth as a colour target, when positions are asked for.
-    depth_copy: Option<(Texture, wgpu::TextureView)>,
+    sizing: Sizing,
+    /// The colour, the depth, and each pixel's depth as a colour target when positions are
+    /// asked for.
+    targets: Targets,
 }
 
 impl PlanetPass {
     /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
     /// The frame's colour and view distances, where positions were asked for.
     pub fn output(&self) -> Option<super::output::Source<'_>> {
-        let (_, depth) = self.depth_copy.as_ref()?;
+        let depth = self.targets.depth_copy_view.as_ref()?;
         Some(super::output::Source::Targets {
-            colour: &self.colour_view,
+            colour: &self.targets.colour_view,
             depth,
         })
     }
@@ -104,50 +103,33 @@ impl PlanetPass {
             contents: bytemuck::cast_slice(&rings.indices),
             usage: wgpu::BufferUsages::INDEX,
         });
-        let target = |format, usage, label| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
+        let sizing = Sizing {
+            key,
+            samples: 1,
+            positions,
+            depth_pipeline: None,
+            gbuffer: None,
         };
-        let colour = target(
-            COLOUR,
-            // Read by the output pass too, for a host's targets.
-            wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::COPY_SRC
-                | wgpu::TextureUsages::TEXTURE_BINDING,
-            "colour",
-        );
-        let depth = target(DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT, "depth");
-        let depth_copy = positions.then(|| {
-            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::COPY_SRC
-                | wgpu::TextureUsages::TEXTURE_BINDING;
-            let t = target(DEPTH_COPY, usage, "depth copy");
-            let view = t.create_view(&Default::default());
-            (t, view)
-        });
+        let targets = make(device, (width, height), &sizing)?;
         Ok(PlanetPass {
             sky,
             planet: planet_pipeline,
             bind_group,
             index,
-            colour_view: colour.create_view(&Default::default()),
-            depth_view: depth.create_view(&Default::default()),
-            colour,
-            _depth: depth,
-            depth_copy,
+            sizing,
+            targets,
         })
+    }
+
+    /// Makes the targets for frames of `width` × `height` (nothing else depends on the size).
+    pub fn resize(&mut self, device: &Alloc, width: u32, height: u32) -> Result<()> {
+        self.targets = make(device, (width, height), &self.sizing)?;
+        Ok(())
+    }
+
+    /// The frame's colour.
+    pub fn colour(&self) -> &Texture {
+        &self.targets.colour
     }
 
     /// Ground positions of the last frame's pixels, drawn from `camera` (metres in its nadir's
@@ -157,7 +139,8 @@ impl PlanetPass {
         ctx: &super::context::GpuContext,
         camera: &crate::camera::Camera,
     ) -> Result<Vec<[f32; 4]>> {
-        let (depth, _) = self
+        let depth = self
+            .targets
             .depth_copy
             .as_ref()
             .ok_or(crate::error::Error::Internal(
@@ -186,8 +169,9 @@ impl PlanetPass {
                 },
             })
         };
-        let copy = self.depth_copy.as_ref().map(|(_, view)| attach(view));
-        let attachments: Vec<_> = [Some(attach(&self.colour_view)), copy]
+        let t = &self.targets;
+        let copy = t.depth_copy_view.as_ref().map(attach);
+        let attachments: Vec<_> = [Some(attach(&t.colour_view)), copy]
             .into_iter()
             .flatten()
             .collect();
@@ -195,7 +179,7 @@ impl PlanetPass {
             label: Some(Self::NAME),
             color_attachments: &attachments,
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &self.depth_view,
+                view: &t.depth_view,
                 depth_ops: Some(wgpu::Operations {
                     load: wgpu::LoadOp::Clear(0.0),
                     store: wgpu::StoreOp::Discard,

@@ -39,6 +39,19 @@ pub struct ReferencePass {
     pub position: Buffer,
     width: u32,
     height: u32,
+    /// What the bind group holds besides the per-pixel buffers, for a new size.
+    inputs: Inputs,
+}
+
+/// The pass's shader and the buffers it reads, kept to bind new per-pixel buffers.
+struct Inputs {
+    shader: &'static str,
+    bindings: &'static [Binding],
+    layout: wgpu::BindGroupLayout,
+    key: Key,
+    frame: wgpu::Buffer,
+    atlas: AtlasBinding,
+    planet: Option<wgpu::Buffer>,
 }
 
 impl ReferencePass {
@@ -62,23 +75,16 @@ impl ReferencePass {
         };
         let layout = layout(device, shader, bindings, 0, key);
         let pipeline = compute_pipeline(device, shader, key, &layout)?;
-        let output = |label| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: (width * height) as u64 * 16,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            })
+        let inputs = Inputs {
+            shader,
+            bindings,
+            layout,
+            key,
+            frame: frame.clone(),
+            atlas: atlas.clone(),
+            planet: planet.cloned(),
         };
-        let (colour, position) = (output("reference colour"), output("reference position"));
-        let mut resources = atlas.resources();
-        resources.extend([
-            ("frame", buffer(frame)),
-            ("colour_out", buffer(&colour)),
-            ("position_out", buffer(&position)),
-        ]);
-        resources.extend(planet.map(|p| ("planet", buffer(p))));
-        let bind_group = bind_group(device, shader, &layout, bindings, 0, key, &resources)?;
+        let (colour, position, bind_group) = inputs.per_pixel(device, width, height)?;
         Ok(ReferencePass {
             pipeline,
             bind_group,
@@ -86,7 +92,17 @@ impl ReferencePass {
             position,
             width,
             height,
+            inputs,
         })
+    }
+
+    /// Makes the per-pixel buffers for frames of `width` × `height` (nothing else depends on
+    /// the size).
+    pub fn resize(&mut self, device: &Alloc, width: u32, height: u32) -> Result<()> {
+        (self.colour, self.position, self.bind_group) =
+            self.inputs.per_pixel(device, width, height)?;
+        (self.width, self.height) = (width, height);
+        Ok(())
     }
 
     pub fn record(
@@ -135,4 +151,35 @@ fn srgb(v: f32) -> u8 {
         1.055 * v.powf(1.0 / 2.4) - 0.055
     };
     (e * 255.0 + 0.5) as u8
+}
+
+impl Inputs {
+    /// The colour and position buffers of a `width` × `height` frame, and the bind group over
+    /// them.
+    fn per_pixel(
+        &self,
+        device: &Alloc,
+        width: u32,
+        height: u32,
+    ) -> Result<(Buffer, Buffer, wgpu::BindGroup)> {
+        let output = |label| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: (width * height) as u64 * 16,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        let (colour, position) = (output("reference colour"), output("reference position"));
+        let mut resources = self.atlas.resources();
+        resources.extend([
+            ("frame", buffer(&self.frame)),
+            ("colour_out", buffer(&colour)),
+            ("position_out", buffer(&position)),
+        ]);
+        resources.extend(self.planet.as_ref().map(|p| ("planet", buffer(p))));
+        let (shader, bindings, key) = (self.shader, self.bindings, self.key);
+        let group = bind_group(device, shader, &self.layout, bindings, 0, key, &resources)?;
+        Ok((colour, position, group))
+    }
 }

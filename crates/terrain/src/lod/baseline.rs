@@ -360,6 +360,12 @@ impl Lod for Baselines {
         0
     }
 
+    fn resize(&mut self, alloc: &crate::gpu::alloc::Alloc, width: u32, height: u32) -> Result<()> {
+        self.terrain.resize(alloc, width, height)?;
+        self.readback = ColourReadback::new(alloc, width, height);
+        Ok(())
+    }
+
     /// Chooses the blocks for `camera` (GeoMipMap; brute force draws all, always).
     fn prepare(&mut self, _: &Atlas, camera: &Camera) -> CpuTimes {
         let start = Instant::now();
@@ -408,7 +414,7 @@ impl Lod for Baselines {
     }
 
     fn record_read_back(&self, encoder: &mut wgpu::CommandEncoder) {
-        self.readback.record(encoder, &self.terrain.colour);
+        self.readback.record(encoder, self.terrain.colour());
     }
 
     fn output(&self) -> Option<crate::gpu::output::Source<'_>> {

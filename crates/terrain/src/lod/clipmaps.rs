@@ -186,6 +186,12 @@ impl Lod for Clipmaps {
         })
     }
 
+    fn resize(&mut self, alloc: &crate::gpu::alloc::Alloc, width: u32, height: u32) -> Result<()> {
+        self.pass.resize(alloc, width, height)?;
+        self.readback = ColourReadback::new(alloc, width, height);
+        Ok(())
+    }
+
     fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes {
         let start = Instant::now();
         if let Some(geo) = &camera.geo {
@@ -233,7 +239,7 @@ impl Lod for Clipmaps {
 
     fn record_read_back(&self, encoder: &mut wgpu::CommandEncoder) {
         if self.uniforms.is_some() {
-            self.readback.record(encoder, &self.pass.colour);
+            self.readback.record(encoder, self.pass.colour());
         }
     }
 

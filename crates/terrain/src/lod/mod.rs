@@ -127,6 +127,9 @@ pub trait Lod: Any {
     fn needs(scene: &Scene) -> u64
     where
         Self: Sized;
+    /// Makes what depends on the frame's size for frames of `width` × `height`: its targets,
+    /// per-pixel buffers and read-back. Pipelines, meshes and the CPU stage stay.
+    fn resize(&mut self, alloc: &Alloc, width: u32, height: u32) -> Result<()>;
     /// The CPU work for `camera`: the warped mode's stage, GeoMipMap's block selection.
     fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes;
     /// Fills its part of the frame's uniform inputs (the rest is the renderer's).

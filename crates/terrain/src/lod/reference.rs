@@ -67,6 +67,10 @@ impl Lod for Reference {
         0
     }
 
+    fn resize(&mut self, alloc: &crate::gpu::alloc::Alloc, width: u32, height: u32) -> Result<()> {
+        self.pass.resize(alloc, width, height)
+    }
+
     fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes {
         if let (Some(p), Some(geo)) = (&mut self.planet, &camera.geo) {
             let u =

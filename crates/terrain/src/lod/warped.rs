@@ -163,6 +163,12 @@ impl Lod for Warped {
         (m * m * 16).max(indices)
     }
 
+    fn resize(&mut self, alloc: &crate::gpu::alloc::Alloc, width: u32, height: u32) -> Result<()> {
+        self.terrain.resize(alloc, width, height)?;
+        self.readback = ColourReadback::new(alloc, width, height);
+        Ok(())
+    }
+
     fn prepare(&mut self, atlas: &Atlas, camera: &Camera) -> CpuTimes {
         let stage = self.stage.run(atlas, camera);
         self.phi_on_gpu &= self.stage.held;
@@ -235,7 +241,7 @@ impl Lod for Warped {
     }
 
     fn record_read_back(&self, encoder: &mut wgpu::CommandEncoder) {
-        self.readback.record(encoder, &self.terrain.colour);
+        self.readback.record(encoder, self.terrain.colour());
     }
 
     fn output(&self) -> Option<crate::gpu::output::Source<'_>> {

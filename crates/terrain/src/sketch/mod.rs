@@ -99,7 +99,6 @@ pub struct Atlas {
     pub relief_m: Option<[f64; 2]>,
 }
 
-
 impl Atlas {
     pub fn width(&self) -> usize {
         self.levels[0].width

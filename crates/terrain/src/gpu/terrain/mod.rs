@@ -17,7 +17,7 @@ use crate::error::Result;
 use wgpu::ShaderStages as S;
 
 mod raster;
-mod targets;
+pub(super) mod targets;
 
 pub(crate) use raster::RasterPipeline;
 use raster::render_pass;
@@ -83,17 +83,12 @@ pub struct TerrainPass {
     index_count: u32,
     /// The side of the quad mesh the index buffer holds (warped mode; 0 for GeoMipMap).
     quad_mesh: u32,
-    pub colour: Texture,
-    colour_view: wgpu::TextureView,
-    /// Each pixel's depth as a colour target, when the variant asks for positions.
-    pub depth_copy: Option<Texture>,
-    depth_copy_view: Option<wgpu::TextureView>,
-    depth_view: wgpu::TextureView,
-    /// Multisampled: the colour's samples (resolved into `colour`), and with positions the
-    /// single-sampled depth pass.
-    multisampled: Option<Multisampled>,
-    /// Deferred: the G-buffer `ground` writes and `screen` shades the picture from.
-    deferred: Option<Deferred>,
+    /// What the targets are made of besides the size.
+    sizing: targets::Sizing,
+    /// The colour, the depth and its copy (when the variant asks for positions); multisampled,
+    /// the colour's samples (resolved into the colour) and with positions the single-sampled
+    /// depth pass; deferred, the G-buffer `ground` writes and `screen` shades the picture from.
+    targets: targets::Targets,
 }
 
 /// The G-buffer's targets: the f32s of the shader's `Surface` as bits, four to a target. Integer
@@ -284,7 +279,14 @@ impl TerrainPass {
                 (index, indices.len() as u32)
             }
         };
-        let made = targets::make(device, (width, height), variant, depth_pipeline, gbuffer)?;
+        let sizing = targets::Sizing {
+            key,
+            samples: variant.samples,
+            positions: variant.positions,
+            depth_pipeline,
+            gbuffer,
+        };
+        let targets = targets::make(device, (width, height), &sizing)?;
         Ok(TerrainPass {
             ground,
             screen,
@@ -292,17 +294,20 @@ impl TerrainPass {
             index_count,
             quad_mesh: if variant.geomipmap.is_some() { 0 } else { mesh },
             index,
-            colour_view: made.colour.create_view(&Default::default()),
-            depth_view: made.depth.create_view(&Default::default()),
-            depth_copy_view: made
-                .depth_copy
-                .as_ref()
-                .map(|t| t.create_view(&Default::default())),
-            depth_copy: made.depth_copy,
-            colour: made.colour,
-            multisampled: made.multisampled,
-            deferred: made.deferred,
+            sizing,
+            targets,
         })
+    }
+
+    /// Makes the targets for frames of `width` × `height` (nothing else depends on the size).
+    pub fn resize(&mut self, device: &Alloc, width: u32, height: u32) -> Result<()> {
+        self.targets = targets::make(device, (width, height), &self.sizing)?;
+        Ok(())
+    }
+
+    /// The frame's colour, resolved.
+    pub fn colour(&self) -> &Texture {
+        &self.targets.colour
     }
 
     pub fn triangles(&self) -> u64 {
@@ -317,7 +322,7 @@ impl TerrainPass {
         camera: &crate::camera::Camera,
     ) -> Result<Vec<[f32; 4]>> {
         let view_proj = super::uniforms::view_proj(camera, super::uniforms::frame_origin(camera));
-        let depth = self.depth_copy.as_ref().ok_or_else(|| {
+        let depth = self.targets.depth_copy.as_ref().ok_or_else(|| {
             crate::error::Error::Internal(
                 "positions were not asked for when the renderer was built",
             )
@@ -327,9 +332,9 @@ impl TerrainPass {
 
     /// The frame's colour and view distances, where positions were asked for.
     pub fn output(&self) -> Option<super::output::Source<'_>> {
-        let depth = self.depth_copy_view.as_ref()?;
+        let depth = self.targets.depth_copy_view.as_ref()?;
         Some(super::output::Source::Targets {
-            colour: &self.colour_view,
+            colour: &self.targets.colour_view,
             depth,
         })
     }
@@ -404,11 +409,12 @@ impl TerrainPass {
                 },
             })
         };
-        let attachments = match &self.multisampled {
-            Some(ms) => vec![attach(&ms.colour, Some(&self.colour_view))],
+        let t = &self.targets;
+        let attachments = match &t.multisampled {
+            Some(ms) => vec![attach(&ms.colour, Some(&t.colour_view))],
             None => {
-                let copy = self.depth_copy_view.as_ref().map(|v| attach(v, None));
-                [Some(attach(&self.colour_view, None)), copy]
+                let copy = t.depth_copy_view.as_ref().map(|v| attach(v, None));
+                [Some(attach(&t.colour_view, None)), copy]
                     .into_iter()
                     .flatten()
                     .collect()
@@ -425,7 +431,7 @@ impl TerrainPass {
                 stencil_ops: None,
             })
         };
-        if let Some(deferred) = &self.deferred {
+        if let Some(deferred) = &t.deferred {
             // The pass's timer spans both: from the G-buffer's start to the shading's end.
             let (begin, end) = match timestamps {
                 Some(t) => (
@@ -442,7 +448,7 @@ impl TerrainPass {
             };
             let gbuffer: Vec<_> = deferred.views.iter().map(|v| attach(v, None)).collect();
             let label = "terrain g-buffer";
-            let mut pass = render_pass(encoder, label, &gbuffer, depth(&self.depth_view), begin);
+            let mut pass = render_pass(encoder, label, &gbuffer, depth(&t.depth_view), begin);
             pass.set_bind_group(0, &self.bind_group, &[]);
             if draw_terrain {
                 self.draw_mesh(&mut pass, &self.ground);
@@ -455,7 +461,7 @@ impl TerrainPass {
             pass.draw(0..3, 0..1);
             return;
         }
-        let ground_depth = depth(&self.depth_view);
+        let ground_depth = depth(&t.depth_view);
         let mut pass = render_pass(encoder, "terrain", &attachments, ground_depth, timestamps);
         pass.set_bind_group(0, &self.bind_group, &[]);
         if draw_terrain {
@@ -467,13 +473,13 @@ impl TerrainPass {
         let Some(Multisampled {
             depth_pass: Some((pipeline, depth_view)),
             ..
-        }) = &self.multisampled
+        }) = &t.multisampled
         else {
             return;
         };
         let copy = [
             None,
-            self.depth_copy_view.as_ref().and_then(|v| attach(v, None)),
+            t.depth_copy_view.as_ref().and_then(|v| attach(v, None)),
         ];
         let mut pass = render_pass(
             encoder,

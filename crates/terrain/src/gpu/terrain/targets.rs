@@ -1,32 +1,46 @@
 //! The terrain pass's targets at a frame's size: the colour it leaves for read-back and the output
 //! pass, the depth, the depth copy for positions, the multisampled colour and the G-buffer with its
-//! bind group. Nothing else in the pass depends on the size.
+//! bind group. Nothing else in the pass depends on the size, so a new size makes these alone. A
+//! planet's pass draws into the same targets, single-sampled and forward.
 
-use super::{BINDINGS, COLOUR, DEPTH, DEPTH_COPY, Deferred, GBUFFER, Multisampled, Variant};
+use super::{BINDINGS, COLOUR, DEPTH, DEPTH_COPY, Deferred, GBUFFER, Multisampled};
 use crate::error::Result;
 use crate::gpu::alloc::{Alloc, Texture};
 use crate::gpu::bindings;
+use crate::gpu::shaders::Key;
 
-/// The targets [`make`] builds.
-pub(super) struct Made {
-    pub colour: Texture,
-    pub depth: Texture,
-    pub depth_copy: Option<Texture>,
-    pub multisampled: Option<Multisampled>,
-    pub deferred: Option<Deferred>,
+/// What the targets depend on besides the size: kept by the pass for a new size.
+pub(in crate::gpu) struct Sizing {
+    pub key: Key,
+    pub samples: u32,
+    /// Each pixel's depth copied for positions.
+    pub positions: bool,
+    /// Draws the depth copy of a multisampled frame.
+    pub depth_pipeline: Option<wgpu::RenderPipeline>,
+    /// The G-buffer's layout, when shading is deferred.
+    pub gbuffer: Option<wgpu::BindGroupLayout>,
 }
 
-/// The targets of a `width` × `height` frame of `variant`; `depth_pipeline` draws the depth copy
-/// of a multisampled frame, `gbuffer` is the G-buffer's layout when shading is deferred.
-pub(super) fn make(
+/// The targets [`make`] builds, with their views.
+pub(in crate::gpu) struct Targets {
+    pub colour: Texture,
+    pub colour_view: wgpu::TextureView,
+    pub depth_view: wgpu::TextureView,
+    _depth: Texture,
+    pub depth_copy: Option<Texture>,
+    pub depth_copy_view: Option<wgpu::TextureView>,
+    pub(super) multisampled: Option<Multisampled>,
+    pub(super) deferred: Option<Deferred>,
+}
+
+/// The targets of a `width` × `height` frame drawn as `sizing` says.
+pub(in crate::gpu) fn make(
     device: &Alloc,
     (width, height): (u32, u32),
-    variant: &Variant,
-    depth_pipeline: Option<wgpu::RenderPipeline>,
-    gbuffer: Option<wgpu::BindGroupLayout>,
-) -> Result<Made> {
-    let key = variant.key;
-    let n = variant.samples;
+    sizing: &Sizing,
+) -> Result<Targets> {
+    let key = sizing.key;
+    let n = sizing.samples;
     let multisampled = n > 1;
     let target_of = |format, usage, label, sample_count| {
         device.create_texture(&wgpu::TextureDescriptor {
@@ -55,7 +69,7 @@ pub(super) fn make(
     );
     let drawn = wgpu::TextureUsages::RENDER_ATTACHMENT;
     let depth = target_of(DEPTH, drawn, "depth", n);
-    let depth_copy = variant.positions.then(|| {
+    let depth_copy = sizing.positions.then(|| {
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::COPY_SRC
             | wgpu::TextureUsages::TEXTURE_BINDING;
@@ -68,43 +82,51 @@ pub(super) fn make(
             depth_pass: None,
             _targets: vec![colour],
         };
-        if let Some(pipeline) = depth_pipeline {
+        if let Some(pipeline) = sizing.depth_pipeline.clone() {
             let depth = target(DEPTH, drawn, "depth copy's depth");
             ms.depth_pass = Some((pipeline, depth.create_view(&Default::default())));
             ms._targets.push(depth);
         }
         ms
     });
-    let deferred = gbuffer.map(|gbuffer_layout| -> Result<Deferred> {
-        let usage = drawn | wgpu::TextureUsages::TEXTURE_BINDING;
-        let targets: Vec<_> = GBUFFER
-            .iter()
-            .map(|&f| target(f, usage, "g-buffer"))
-            .collect();
-        let views: Vec<_> = targets
-            .iter()
-            .map(|t| t.create_view(&Default::default()))
-            .collect();
-        // The targets in the order of their bindings.
-        let names = BINDINGS.iter().filter(|b| b.group == 1).map(|b| b.name);
-        let resources: Vec<_> = names
-            .zip(&views)
-            .map(|(name, view)| (name, wgpu::BindingResource::TextureView(view)))
-            .collect();
-        let label = "terrain g-buffer";
-        let bind_group =
-            bindings::bind_group(device, label, &gbuffer_layout, BINDINGS, 1, key, &resources)?;
-        Ok(Deferred {
-            bind_group,
-            views,
-            _targets: targets,
-        })
-    });
+    let deferred = sizing
+        .gbuffer
+        .as_ref()
+        .map(|gbuffer_layout| -> Result<Deferred> {
+            let usage = drawn | wgpu::TextureUsages::TEXTURE_BINDING;
+            let targets: Vec<_> = GBUFFER
+                .iter()
+                .map(|&f| target(f, usage, "g-buffer"))
+                .collect();
+            let views: Vec<_> = targets
+                .iter()
+                .map(|t| t.create_view(&Default::default()))
+                .collect();
+            // The targets in the order of their bindings.
+            let names = BINDINGS.iter().filter(|b| b.group == 1).map(|b| b.name);
+            let resources: Vec<_> = names
+                .zip(&views)
+                .map(|(name, view)| (name, wgpu::BindingResource::TextureView(view)))
+                .collect();
+            let label = "terrain g-buffer";
+            let bind_group =
+                bindings::bind_group(device, label, gbuffer_layout, BINDINGS, 1, key, &resources)?;
+            Ok(Deferred {
+                bind_group,
+                views,
+                _targets: targets,
+            })
+        });
     let deferred = deferred.transpose()?;
 
-    Ok(Made {
+    Ok(Targets {
+        colour_view: colour.create_view(&Default::default()),
+        depth_view: depth.create_view(&Default::default()),
+        depth_copy_view: depth_copy
+            .as_ref()
+            .map(|t| t.create_view(&Default::default())),
         colour,
-        depth,
+        _depth: depth,
         depth_copy,
         multisampled,
         deferred,
