@@ -17,7 +17,8 @@
 //!   sky). Host geometry drawn with [`Terrain::view_proj`], positions relative to
 //!   [`Terrain::frame_origin`], depth compare `GreaterEqual` on a depth cleared to 0, is hidden
 //!   where the terrain is nearer, whether drawn before the terrain or after it.
-//! - A frame of another size builds the renderer again for it (its targets follow the camera).
+//! - A frame of another size makes the targets that depend on the size again, nothing else
+//!   (pipelines, meshes, the baked grid and the CPU stage stay).
 //! - [`Terrain::render_to_image`] is a read-back on top, for snapshots; it is not the frame's path.
 //!
 //! Rejected: the renderer opening its own device and handing the host pixels, a copy through

@@ -15,9 +15,6 @@ use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::frame_io::{FrameStats, PassTimes, Timer, uniform_buffer, upload_atlas};
 use crate::gpu::stream::{AtlasBinding, Stream};
 use crate::gpu::uniforms::{FrameInputs, FrameUniforms, View};
-use crate::lod::baseline::Baselines;
-use crate::lod::reference::Reference;
-use crate::lod::warped::Warped;
 use crate::lod::{CpuTimes, Lod, Shared};
 use crate::scene;
 use crate::scene::{Mode, Scene};
@@ -77,14 +74,9 @@ pub struct Renderer {
 }
 
 /// What a scene in `mode` needs of the adapter: the atlas, and the mode's own largest binding
-/// ([`Lod::needs`]; one arm a mode, no wildcard, so a new mode has to answer).
+/// ([`crate::lod::needs`]).
 pub fn needs(scene: &Scene, mode: Mode, atlas: &Atlas) -> Needs {
-    let largest = match mode {
-        Mode::Warped => Warped::needs(scene),
-        Mode::Clipmaps => crate::lod::clipmaps::Clipmaps::needs(scene),
-        Mode::Geomipmap | Mode::Bruteforce => Baselines::needs(scene),
-        Mode::Reference => Reference::needs(scene),
-    };
+    let largest = crate::lod::needs(mode, scene);
     // A streamed pyramid's pool fits itself to the adapter's binding limit.
     let sketch = if atlas.pyramid.is_some() {
         0
@@ -184,12 +176,7 @@ impl Renderer {
                 },
             ));
         }
-        let lod: Box<dyn Lod> = match mode {
-            Mode::Clipmaps => Box::new(crate::lod::clipmaps::Clipmaps::new(&shared)?),
-            Mode::Warped => Box::new(Warped::new(&shared)?),
-            Mode::Geomipmap | Mode::Bruteforce => Box::new(Baselines::new(&shared, mode)?),
-            Mode::Reference => Box::new(Reference::new(&shared)?),
-        };
+        let lod = crate::lod::scheme(mode, &shared)?;
         let deferred = shared.deferred;
         let shader_key = crate::lod::shader_key(&shared, mode);
         Ok(Renderer {

@@ -139,7 +139,7 @@ fn plain_name(name: &str) -> bool {
 }
 
 /// The renderer kept across items: rebuilt when an item's scene differs from the last in
-/// anything but the camera.
+/// anything but the camera (its size included: a renderer makes its targets for each size).
 struct Cache {
     ctx: Option<GpuContext>,
     key: String,
@@ -152,6 +152,7 @@ fn scene_key(scene: &Scene) -> String {
     let c = &mut s.camera;
     (c.lat_deg, c.lon_deg, c.altitude_m) = (None, None, None);
     (c.heading_deg, c.pitch_deg) = (None, None);
+    (c.width, c.height) = (0, 0);
     format!("{s:?}")
 }
 

@@ -15,7 +15,8 @@
 //!
 //! Rules: the frame is drawn by the same renderers as every other command, on the device of a
 //! wgpu surface made for the window, through the host API ([`terrain::Terrain`], one per mode
-//! and view, rebuilt only when the mode, the view or the window's size changes): recorded into
+//! and view, rebuilt only when the mode or the view changes; a new window size makes its targets
+//! alone): recorded into
 //! the surface's texture, the figures composited over it from a transparent overlay drawn on the
 //! CPU (`present.rs`); the frame's pixels never leave the GPU. Where no surface can be made (none
 //! for the window, no adapter that presents to it, a configuration it refuses), or
@@ -120,7 +121,7 @@ struct App {
 }
 
 impl App {
-    /// The terrain is built again for the next frame (mode, view or size changed).
+    /// The terrain is built again for the next frame (mode or view changed).
     fn rebuild(&mut self) {
         if let Some(p) = &mut self.present {
             p.forget();
@@ -219,10 +220,8 @@ impl ApplicationHandler for App {
                 Ok(())
             }
             WindowEvent::Resized(s) if s.width > 0 && s.height > 0 => {
-                if (s.width, s.height) != self.size {
-                    self.size = (s.width, s.height);
-                    self.rebuild();
-                }
+                // The next frame's camera has the new size; the terrain makes its targets for it.
+                self.size = (s.width, s.height);
                 Ok(())
             }
             WindowEvent::KeyboardInput { event, .. } => match event.physical_key {

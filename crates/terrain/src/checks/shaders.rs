@@ -1,7 +1,8 @@
 //! Every WGSL pass, as combined by the import step in every variant, parses and validates with
 //! naga (no GPU needed), and the uniform block's Rust twin has the WGSL struct's size.
 
-use terrain::gpu::shaders::{FLAGS, PASSES, compose};
+use terrain::gpu::SHADERS;
+use terrain::gpu::shaders::{FLAGS, compose};
 
 fn validate(name: &str, flags: &[&str]) -> naga::Module {
     let source = compose(name, flags).unwrap_or_else(|e| panic!("{name} {flags:?}: {e}"));
@@ -26,7 +27,7 @@ fn validate_source(name: &str, flags: &[&str], source: &str) -> naga::Module {
 fn every_pass_validates_in_every_variant() {
     let mut count = 0;
     let mut seen = std::collections::HashSet::new();
-    for (name, _) in PASSES {
+    for name in SHADERS.iter().map(|s| s.name) {
         for mask in 0..(1u32 << FLAGS.len()) {
             let flags: Vec<&str> = FLAGS
                 .iter()
@@ -41,7 +42,7 @@ fn every_pass_validates_in_every_variant() {
             count += 1;
         }
     }
-    assert_eq!(count, PASSES.len() << FLAGS.len());
+    assert_eq!(count, SHADERS.len() << FLAGS.len());
 }
 
 /// (name, offset, size) of each field of a Rust struct shared with WGSL, in declaration order.

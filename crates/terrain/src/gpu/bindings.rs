@@ -3,7 +3,7 @@
 //! its bind-group layout and its bind group, the bind group given its resources by name.
 //!
 //! Rules: a binding's index is written once in Rust and once in its WGSL declaration, and
-//! `checks/bindings.rs` (a unit test) holds every list of [`SHADERS`] to the `@group @binding` declarations naga
+//! `checks/bindings.rs` (a unit test) holds every pass's list ([`super::SHADERS`]) to the `@group @binding` declarations naga
 //! reflects from every variant of the pass's WGSL (index, name and kind), so a binding renumbered
 //! on one side fails there; a declared binding given no resource is an error, not a panic in wgpu.
 //! Rejected alternative: reflecting the layout from the WGSL with naga when a pass is built, which
@@ -123,20 +123,6 @@ impl Binding {
         (self.when)(key)
     }
 }
-
-#[cfg(test)]
-/// Every shader's bindings, by the name of its WGSL file.
-pub const SHADERS: [(&str, &[Binding]); 9] = [
-    ("warp_zoom", super::warp_zoom::BINDINGS),
-    ("mesh_split", super::mesh_split::BINDINGS),
-    ("normals", super::normals::BINDINGS),
-    ("terrain", super::terrain::BINDINGS),
-    ("reference", super::reference::BINDINGS),
-    ("clipmaps", super::clipmaps::BINDINGS),
-    ("planet", super::planet::BINDINGS),
-    ("planet_reference", super::reference::PLANET_BINDINGS),
-    ("output", super::output::BINDINGS),
-];
 
 /// The bindings of `group` that variant `key` declares.
 fn declared(bindings: &[Binding], group: u32, key: Key) -> impl Iterator<Item = &Binding> {

@@ -3,6 +3,17 @@
 //! file of the same name in `shaders/`, and its bindings listed once ([`bindings`]).
 //! [`crate::render::Renderer`] runs them as a flat list.
 
+/// The [`Shader`] of WGSL file `shaders/<name>.wgsl`.
+macro_rules! shader {
+    ($name:literal, $bindings:expr) => {
+        Shader {
+            name: $name,
+            source: include_str!(concat!("../../shaders/", $name, ".wgsl")),
+            bindings: $bindings,
+        }
+    };
+}
+
 pub mod alloc;
 pub mod bindings;
 pub mod clipmaps;
@@ -20,7 +31,32 @@ pub mod uniforms;
 pub mod warp_zoom;
 
 use crate::error::Result;
+use bindings::Binding;
 use shaders::Key;
+
+/// A pass's shader: the name its timer, its `passes_ms` key and its WGSL file share, the
+/// WGSL's text, and the bindings it declares ([`bindings`]).
+pub struct Shader {
+    pub name: &'static str,
+    pub source: &'static str,
+    /// Read by the check that holds them to the WGSL's declarations (a pass binds its own).
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub bindings: &'static [Binding],
+}
+
+/// Every pass's shader, a row a pass: the one list `compose` finds a pass's WGSL in and the
+/// naga checks run over.
+pub const SHADERS: [Shader; 9] = [
+    shader!("warp_zoom", warp_zoom::BINDINGS),
+    shader!("mesh_split", mesh_split::BINDINGS),
+    shader!("normals", normals::BINDINGS),
+    shader!("terrain", terrain::BINDINGS),
+    shader!("reference", reference::BINDINGS),
+    shader!("clipmaps", clipmaps::BINDINGS),
+    shader!("planet", planet::BINDINGS),
+    shader!("planet_reference", reference::PLANET_BINDINGS),
+    shader!("output", output::BINDINGS),
+];
 
 /// A compute pipeline for pass `name` in variant `key`, entry point `main`.
 pub(crate) fn compute_pipeline(

@@ -21,22 +21,6 @@ const SHARED: [(&str, &str); 8] = [
     ("fade", include_str!("../../shaders/shared/fade.wgsl")),
 ];
 
-/// The passes' WGSL files, by name.
-pub const PASSES: [(&str, &str); 9] = [
-    ("warp_zoom", include_str!("../../shaders/warp_zoom.wgsl")),
-    ("mesh_split", include_str!("../../shaders/mesh_split.wgsl")),
-    ("normals", include_str!("../../shaders/normals.wgsl")),
-    ("terrain", include_str!("../../shaders/terrain.wgsl")),
-    ("reference", include_str!("../../shaders/reference.wgsl")),
-    ("clipmaps", include_str!("../../shaders/clipmaps.wgsl")),
-    ("planet", include_str!("../../shaders/planet.wgsl")),
-    (
-        "planet_reference",
-        include_str!("../../shaders/planet_reference.wgsl"),
-    ),
-    ("output", include_str!("../../shaders/output.wgsl")),
-];
-
 /// A shader variant: a set of [`FLAGS`], a bit each. One key is derived per scene and mode
 /// ([`crate::lod::shader_key`]) and every pass of the scheme is composed with it; a pass ignores
 /// the flags its WGSL does not test.
@@ -129,10 +113,10 @@ impl std::ops::BitOr for Key {
 
 /// The combined source of pass `name` with `flags` set.
 pub fn compose(name: &str, flags: &[&str]) -> Result<String> {
-    let source = PASSES
+    let source = super::SHADERS
         .iter()
-        .find(|(n, _)| *n == name)
-        .map(|(_, s)| *s)
+        .find(|s| s.name == name)
+        .map(|s| s.source)
         .ok_or_else(|| Error::Shader {
             file: name.to_string(),
             reason: "no such pass".into(),

@@ -5,10 +5,15 @@
 //! Rules: the renderer owns what every mode shares (device, frame uniforms, atlas buffer, timer,
 //! submission and timing); a scheme owns its passes and buffers and answers the renderer through
 //! [`Lod`]: prepare on the CPU for a camera, fill its part of the frame's uniforms, record its
-//! passes (named, so the timer and the reports key them by name), give back its image. Adding a
-//! mode is one module here, its WGSL and its CPU twin. The shader variant of every pass is
-//! [`shader_key`]'s, per scene and mode: a flag is derived there and nowhere else. Each scheme states what it needs of the
-//! adapter ([`Lod::needs`], no default), so no mode is silently taken to need nothing.
+//! passes (named, so the timer and the reports key them by name), make its targets for a new
+//! image size, give back its image. The shader variant of every pass is [`shader_key`]'s, per
+//! scene and mode: a flag is derived there and nowhere else. Each scheme states what it needs of
+//! the adapter ([`Lod::needs`], no default), so no mode is silently taken to need nothing.
+//!
+//! Adding a mode: its `Mode` row (`scene/render.rs`), its module here with its arms in
+//! [`scheme`], [`needs`] and [`shader_key`] (exhaustive matches: the compiler lists them), its
+//! pass in `gpu/` with its [`crate::gpu::SHADERS`] row, its WGSL and its CPU twin's check in
+//! `checks/`, the settings `terrain compare` sweeps for it, and its page in docs/modes.md.
 //!
 //! Rejected alternative: an enum of the modes with a `match` in every method (what this replaced:
 //! three renderer types each wrapped again, their submit–read–time code written three times). A
@@ -52,6 +57,27 @@ pub struct Shared<'a> {
     pub samples: u32,
     /// A mesh mode, shading single-sampled frames deferred (`GpuContext::deferred`).
     pub deferred: bool,
+}
+
+/// The scheme of `mode`, built for `s`: one arm a mode, as in [`needs`] and [`shader_key`] (no
+/// wildcard, so a new mode answers all three here).
+pub fn scheme(mode: Mode, s: &Shared) -> Result<Box<dyn Lod>> {
+    Ok(match mode {
+        Mode::Warped => Box::new(warped::Warped::new(s)?),
+        Mode::Geomipmap | Mode::Bruteforce => Box::new(baseline::Baselines::new(s, mode)?),
+        Mode::Reference => Box::new(reference::Reference::new(s)?),
+        Mode::Clipmaps => Box::new(clipmaps::Clipmaps::new(s)?),
+    })
+}
+
+/// Bytes of `mode`'s largest storage binding beyond the sketch's, for `scene` ([`Lod::needs`]).
+pub fn needs(mode: Mode, scene: &Scene) -> u64 {
+    match mode {
+        Mode::Warped => warped::Warped::needs(scene),
+        Mode::Geomipmap | Mode::Bruteforce => baseline::Baselines::needs(scene),
+        Mode::Reference => reference::Reference::needs(scene),
+        Mode::Clipmaps => clipmaps::Clipmaps::needs(scene),
+    }
 }
 
 /// The shader variant every pass of `mode`'s scheme is composed with, for the scene and the
@@ -123,7 +149,7 @@ pub trait Lod: Any {
     /// The passes it may record, in the order it records them (the timer's slots).
     fn passes(&self) -> &'static [&'static str];
     /// Bytes of its largest storage binding beyond the sketch's, for `scene`: what the adapter
-    /// must bind before the scheme is built ([`crate::render::needs`]).
+    /// must bind before the scheme is built ([`needs`]).
     fn needs(scene: &Scene) -> u64
     where
         Self: Sized;
