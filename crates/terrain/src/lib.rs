@@ -101,6 +101,8 @@
 //! `terrain` binary). Rejected: one crate for both, where every embedder compiled the commands'
 //! dependencies.
 
+#![deny(missing_docs)]
+
 // The crate's own tests name it as its users do.
 #[cfg(test)]
 extern crate self as terrain;

@@ -35,8 +35,11 @@ pub enum Source<'a> {
 /// The host's targets: formats and samples per pixel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Targets {
+    /// The colour view's format: any renderable one; an sRGB format gets the picture encoded.
     pub colour: wgpu::TextureFormat,
+    /// The depth view's format (reversed-Z, cleared to 0), e.g. `Depth32Float`.
     pub depth: wgpu::TextureFormat,
+    /// Samples per pixel of both views: 1, or 4 where the adapter multisamples them.
     pub samples: u32,
 }
 
