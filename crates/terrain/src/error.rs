@@ -97,7 +97,7 @@ pub enum Error {
         "GPU: {what} needs {needed}{unit} of `{limit}`, the adapter allows {allowed}{unit}{advice}"
     )]
     Limit {
-        /// The adapter and what needs the limit (the sketch's pyramid or the mesh).
+        /// What needs the limit ("a 1025² baked grid"; the adapter's name where a device is checked).
         what: String,
         /// wgpu's name for the limit, a field of `wgpu::Limits` (`max_buffer_size`).
         limit: &'static str,
