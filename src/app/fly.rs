@@ -144,7 +144,7 @@ pub struct Outcome {
     /// Why the frame count differs from `fps` frames a second of travel, when it does.
     pub frames_note: Option<String>,
     pub elapsed_s: f64,
-    /// GPU memory the renderer held at the end, bytes (as allocated: [`terrain::gpu::alloc`]).
+    /// GPU memory the renderer held at the end, bytes (as allocated: [`terrain::alloc`]).
     pub gpu_memory_bytes: u64,
     /// A streamed sketch: tiles loaded per frame (mean and most), and frames that showed a
     /// stand-in level somewhere.

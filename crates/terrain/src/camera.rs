@@ -8,15 +8,37 @@
 use crate::error::{Error, Result};
 use glam::{DVec2, DVec3};
 
+/// A pinhole camera: where the eye stands, where it looks, and the image it takes.
+///
+/// ```
+/// use glam::DVec3;
+/// use terrain::Camera;
+///
+/// // 100 m up, looking north and down at a point 1 km away.
+/// let (eye, look_at) = (DVec3::new(0.0, 0.0, 100.0), DVec3::new(0.0, 1000.0, 0.0));
+/// let cam = Camera::new(eye, look_at, 60.0, 640, 480, 5000.0)?;
+/// assert!((cam.forward.length() - 1.0).abs() < 1e-12);
+/// assert!(cam.right.x > 0.99, "north-facing: right is east");
+/// assert!((cam.f_px() - 240.0 / 30f64.to_radians().tan()).abs() < 1e-9);
+/// # Ok::<(), terrain::Error>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct Camera {
+    /// The eye, world metres (x east, y north, z up).
     pub eye: DVec3,
+    /// The unit view direction.
     pub forward: DVec3,
+    /// The unit vector toward the image's right edge, horizontal unless the view is vertical.
     pub right: DVec3,
+    /// The unit vector toward the image's top edge, `right × forward`.
     pub up: DVec3,
+    /// The vertical field of view, radians (the scene gives `camera.fov_y_deg`, default 60°).
     pub fov_y: f64,
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
+    /// The far clipping distance, metres (`camera.far_m`; by default the sketch's farthest corner).
     pub far: f64,
     /// The near plane, metres. With reversed-Z and an infinite far plane depth precision does
     /// not suffer from a small one on an adapter with a 0..1 clip range; where the driver maps
@@ -31,7 +53,9 @@ pub struct Camera {
 /// Where a planet's camera stands: the latitude and longitude of its nadir (radians, f64).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Geo {
+    /// Latitude of the nadir, radians, north positive, in [−π/2, π/2].
     pub lat: f64,
+    /// Longitude of the nadir, radians, east positive.
     pub lon: f64,
 }
 
@@ -52,6 +76,10 @@ impl Plane {
 }
 
 impl Camera {
+    /// A camera at `eye` looking at `look_at` (world metres), with a vertical field of view of
+    /// `fov_y_deg` degrees, an image of `width`×`height` pixels and its far plane at `far`
+    /// metres. Fails with [`Error::Camera`] where a value is not finite, `look_at` coincides with
+    /// `eye`, the field of view lies outside (0, 180), the image is empty or `far` not positive.
     pub fn new(
         eye: DVec3,
         look_at: DVec3,
@@ -103,12 +131,15 @@ impl Camera {
         })
     }
 
+    /// Width over height of the image.
     pub fn aspect(&self) -> f64 {
         self.width as f64 / self.height as f64
     }
+    /// `tan(fov_y / 2)`: the image's half height at unit distance.
     pub fn tan_half_y(&self) -> f64 {
         (0.5 * self.fov_y).tan()
     }
+    /// `tan(fov_x / 2)`: the image's half width at unit distance.
     pub fn tan_half_x(&self) -> f64 {
         self.tan_half_y() * self.aspect()
     }

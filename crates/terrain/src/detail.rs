@@ -53,11 +53,19 @@ pub fn default_amplitude_m(finest_relief_m: f64, gain: f64, d_atlas: f64) -> f64
 /// Scene parameters of the detail, plus the atlas spacing that fixes octave 1.
 #[derive(Clone, Debug)]
 pub struct Detail {
+    /// Noise octaves, 0 to 24 (`detail.octaves`); 0 draws the sketch alone.
     pub octaves: u32,
+    /// Amplitude `w_1` of octave 1, metres (`detail.amplitude_m`; by default from the sketch's
+    /// relief).
     pub amplitude_m: f64,
+    /// Amplitude ratio of each octave to the one before, in [0, 1] (`detail.gain`, default 0.5).
     pub gain: f64,
+    /// The noise's seed (`detail.seed`, default 7); each octave hashes it with its index.
     pub seed: u32,
+    /// Octaves subtracted from each vertex's split octave (`detail.bias`, −4 to 8): larger
+    /// carries fewer octaves as geometry and more as bump.
     pub bias: f64,
+    /// The sketch's cell size, metres: octave 1's wavelength, octave k's `d_atlas / 2^(k−1)`.
     pub d_atlas: f64,
     /// World position of lattice cell (0, 0) of every octave (normally the origin).
     pub lattice_origin_m: DVec2,
@@ -79,6 +87,7 @@ impl Detail {
     fn lattice_scale(&self, k: u32) -> f64 {
         self.frequency(k) * LATTICE_PER_CYCLE
     }
+    /// The seed of octave `k`'s lattice gradients, as the shaders derive it.
     pub fn octave_seed(&self, k: u32) -> u32 {
         hash(self.seed ^ hash(k))
     }

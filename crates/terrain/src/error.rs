@@ -10,10 +10,13 @@ use std::path::PathBuf;
 /// What a file is to the command that reads or writes it; the first words of its messages.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Role {
+    /// The scene file (TOML) that describes what to draw.
     Scene,
+    /// The height map, `sketch.path`: a DEM file, a glob of tiles or a tile pyramid's folder.
     Sketch,
     /// `importance.max_map`: a sketch-format map of I_s.
     ImportanceMap,
+    /// `batch`'s jobs file, listing the scenes it renders.
     JobsFile,
     /// A file the command writes (image, figure, report, animation).
     Output,
@@ -47,30 +50,45 @@ pub enum Error {
     /// The operating system refused a file: missing, unreadable, a full disk.
     #[error("{role} {}: {}", Line(&path.display()), Line(source))]
     Io {
+        /// What the file is to the command.
         role: Role,
+        /// The file, as the user or the scene named it.
         path: PathBuf,
+        /// The operating system's error.
         source: std::io::Error,
     },
     /// A file that is truncated, corrupt, inconsistent or, for a scene or jobs file, has a bad
     /// key; `reason` names the key.
     #[error("{role} {}: {}", Line(&path.display()), Line(reason))]
     File {
+        /// What the file is to the command.
         role: Role,
+        /// The file, as the user or the scene named it.
         path: PathBuf,
+        /// What is wrong with it, one line, naming the key or the place in the file.
         reason: String,
     },
     /// A file whose decoder refused it; `what` says what the file was taken for ("a readable
     /// TIFF"), `source` is the decoder's error (tiff, png, toml).
     #[error("{role} {}: {what}: {}", Line(&path.display()), Line(source))]
     Decode {
+        /// What the file is to the command.
         role: Role,
+        /// The file, as the user or the scene named it.
         path: PathBuf,
+        /// What the file was taken for, e.g. "a readable TIFF".
         what: &'static str,
+        /// The decoder's own error.
         source: Box<dyn std::error::Error + Send + Sync>,
     },
     /// A `--set key=value` override that is not a key, or whose value is out of range.
     #[error("--set {}: {}", Line(arg), Line(reason))]
-    Override { arg: String, reason: String },
+    Override {
+        /// The override as given, `key.path=value`.
+        arg: String,
+        /// Why it was refused: no such key, a value of the wrong type or out of range.
+        reason: String,
+    },
     /// A camera that cannot be built (NaN, eye at its own target, zero-size image).
     #[error("camera: {0}")]
     Camera(String),
@@ -79,9 +97,13 @@ pub enum Error {
         "GPU: {what} needs {needed}{unit} of `{limit}`, the adapter allows {allowed}{unit}{advice}"
     )]
     Limit {
+        /// What needs the limit ("a 1025² baked grid"; the adapter's name where a device is checked).
         what: String,
+        /// wgpu's name for the limit, a field of `wgpu::Limits` (`max_buffer_size`).
         limit: &'static str,
+        /// The value the scene needs, in `unit`.
         needed: u64,
+        /// The value the adapter allows, in `unit`.
         allowed: u64,
         /// The unit of `needed` and `allowed` as printed (" MiB", or "" for a count).
         unit: &'static str,
@@ -92,44 +114,69 @@ pub enum Error {
     /// `what` says what was being done, `source` is wgpu's error.
     #[error("GPU: {what}: {source}")]
     Device {
+        /// What was being done, e.g. "readback mapping".
         what: String,
+        /// wgpu's error.
         source: Box<dyn std::error::Error + Send + Sync>,
     },
     /// No window can be opened (no display, a window system error); `source` is winit's or
     /// softbuffer's error.
     #[error("window: {what}: {source}")]
     Window {
+        /// What was being done, e.g. "cannot open one".
         what: String,
+        /// The window system's error, kept as text.
         source: Box<dyn std::error::Error + Send + Sync>,
     },
     /// No display to open a window on; `cause` is winit's reason in the user's terms (its
     /// source-file location dropped) with what to do about it.
     #[error("window: {cause}")]
-    NoDisplay { cause: String },
+    NoDisplay {
+        /// Why no display can be opened, and what to do about it.
+        cause: String,
+    },
     /// A scene value that cannot be used although it parsed (a synthetic sketch's name, a camera
     /// path whose keys coincide); `key` names it as the scene file spells it.
     #[error("{key}: {}", Line(reason))]
-    Value { key: &'static str, reason: String },
+    Value {
+        /// The key, dotted as the scene file spells it (`camera.position`).
+        key: &'static str,
+        /// Why its value cannot be used.
+        reason: String,
+    },
     /// A height query at a point or along a ray that cannot be answered (not finite).
     #[error("height query: {}", Line(.0))]
     Query(String),
     /// One job of a batch that cannot run as the jobs file gives it.
     #[error("job {name:?}: {}", Line(reason))]
-    Job { name: String, reason: String },
+    Job {
+        /// The job's name, as in the jobs file or `random-k`.
+        name: String,
+        /// Why it cannot run.
+        reason: String,
+    },
     /// A report, manifest line or scene that serde could not encode.
     #[error("cannot encode the {what}: {source}")]
     Encode {
+        /// What was being encoded, e.g. "manifest line".
         what: &'static str,
+        /// serde's error.
         source: Box<dyn std::error::Error + Send + Sync>,
     },
     /// A shader source the preprocessor cannot expand (a defect of the program, not of input).
     #[error("shader {file}.wgsl: {reason}")]
-    Shader { file: String, reason: String },
+    Shader {
+        /// The shader's file name under `shaders/`, without `.wgsl`.
+        file: String,
+        /// What the preprocessor could not expand.
+        reason: String,
+    },
     /// A library call its own callers should never make (a defect of the program, not of input).
     #[error("internal: {0}")]
     Internal(&'static str),
 }
 
+/// The library's result: [`Error`] on failure.
 pub type Result<T> = std::result::Result<T, Error>;
 
 /// Shows a value on one line: control characters (a newline in a file name, in an XML parser's
@@ -155,6 +202,7 @@ impl<T: fmt::Display + ?Sized> fmt::Display for Line<'_, T> {
 }
 
 impl Error {
+    /// The operating system refused the `role` file at `path` with `source`.
     pub fn io(role: Role, path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {
             role,
@@ -162,6 +210,7 @@ impl Error {
             source,
         }
     }
+    /// The `role` file at `path` is wrong as `reason` says.
     pub fn file(role: Role, path: impl Into<PathBuf>, reason: impl Into<String>) -> Self {
         Error::File {
             role,
@@ -193,18 +242,22 @@ impl Error {
             source: Box::new(source),
         }
     }
+    /// The sketch at `path` is wrong as `reason` says.
     pub fn sketch(path: impl Into<PathBuf>, reason: impl Into<String>) -> Self {
         Error::file(Role::Sketch, path, reason)
     }
+    /// The scene file at `path` is wrong as `reason` says.
     pub fn scene(path: impl Into<PathBuf>, reason: impl Into<String>) -> Self {
         Error::file(Role::Scene, path, reason)
     }
+    /// The scene's value at `key` cannot be used, as `reason` says.
     pub fn value(key: &'static str, reason: impl Into<String>) -> Self {
         Error::Value {
             key,
             reason: reason.into(),
         }
     }
+    /// serde's `source` could not encode `what`.
     pub fn encode(
         what: &'static str,
         source: impl std::error::Error + Send + Sync + 'static,

@@ -2,25 +2,106 @@
 //! fine detail is procedural, rendered by geometry image warping (Dachsbacher & Stamminger,
 //! *Rendering Procedural Terrain by Geometry Image Warping*, 2004).
 //!
-//! A host application draws a terrain with its own device through [`host`]: a [`host::Description`]
-//! (a [`scene::Scene`] with its sketch read) states the limits and features a device needs, a
-//! [`host::Terrain`] prepares each frame on the CPU and records it into the host's encoder,
-//! into the host's colour and depth views. [`query`] answers heights, normals and rays on the
-//! same ground.
+//! A host application draws a terrain with its own device: a [`Description`] (a [`Scene`] with
+//! its sketch read) states the limits and features a device needs, a [`Terrain`] prepares each
+//! frame on the CPU and records it into the host's encoder, into the host's colour and depth
+//! views. [`Ground`] (and [`PlanetGround`]) answers heights, normals and rays on the same ground.
+//! [`Renderer`] draws frames on a device of its own and reads them back, for snapshots and
+//! measurements.
 //!
-//! The folders follow a frame, in the order data flows through it: [`scene`] (the terrain's
+//! The modules follow a frame, in the order data flows through it: [`scene`] (the terrain's
 //! description, and building a camera, the detail and the sketch from it) → [`sketch`] (the
-//! height map read into its atlas; [`tiles`] for pyramids larger than memory) → [`stage`] (the
-//! CPU stage: sketch map → importance → warp → Φ, measured by its quality) → [`gpu`] (the passes:
-//! warp & zoom, mesh split, normals, terrain, reference, output) driven by one
-//! [`render::Renderer`] through a level-of-detail scheme from [`lod`]. [`detail`] is the
-//! procedural model both sides share; [`planet`] carries it onto a sphere.
+//! height map read into its [`Atlas`]; [`tiles`] for pyramids larger than memory) → [`stage`]
+//! (the CPU stage: sketch map → importance → warp → Φ, measured by its quality) → the GPU passes
+//! (warp & zoom, mesh split, normals, terrain, reference, output; named in [`pass`]) driven by
+//! one [`Renderer`] through a level-of-detail scheme ([`Mode`]: [`Warped`], [`Baselines`],
+//! [`Reference`], [`Clipmaps`]). [`Detail`] is the procedural model both sides share; [`planet`]
+//! carries it onto a sphere.
+//!
+//! # A host drawing a terrain
+//!
+//! The host owns the device, the queue and the targets; the terrain records into them. Depth is
+//! reversed-Z: clear it to 0 (or call [`clear`]).
+//!
+//! ```no_run
+//! use std::path::Path;
+//! use terrain::{Description, Scene, Targets, Terrain};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let scene = Scene::load(Path::new("sketches/jacksboro.toml"))?;
+//! let description = Description::new(scene)?;
+//!
+//! // The host's device, created with what the terrain asks for.
+//! let instance =
+//!     wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+//! let adapter = pollster::block_on(instance.request_adapter(&Default::default()))?;
+//! let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+//!     label: Some("host"),
+//!     required_features: Description::optional_features(adapter.features()),
+//!     required_limits: description.required_limits(),
+//!     ..Default::default()
+//! }))?;
+//!
+//! // The host's targets, here textures of its own; a window's surface texture serves as well.
+//! let (width, height) = (640, 480);
+//! let targets = Targets {
+//!     colour: wgpu::TextureFormat::Rgba8UnormSrgb,
+//!     depth: wgpu::TextureFormat::Depth32Float,
+//!     samples: 1,
+//! };
+//! let texture = |format| {
+//!     device.create_texture(&wgpu::TextureDescriptor {
+//!         label: Some("host target"),
+//!         size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+//!         mip_level_count: 1,
+//!         sample_count: 1,
+//!         dimension: wgpu::TextureDimension::D2,
+//!         format,
+//!         usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+//!         view_formats: &[],
+//!     })
+//! };
+//! let colour = texture(targets.colour).create_view(&Default::default());
+//! let depth = texture(targets.depth).create_view(&Default::default());
+//!
+//! let mut camera = description.camera(width, height)?;
+//! let mut terrain = Terrain::new(&device, &queue, targets, description)?;
+//! for _frame in 0..100 {
+//!     terrain.prepare(&camera)?;
+//!     let mut encoder = device.create_command_encoder(&Default::default());
+//!     terrain::clear(&mut encoder, &colour, &depth);
+//!     terrain.record(&mut encoder, &colour, &depth)?;
+//!     // ... the host's own geometry, drawn with `Terrain::view_proj(&camera)` ...
+//!     queue.submit([encoder.finish()]);
+//!     camera.eye += camera.forward * 10.0;
+//! }
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! # Heights without a GPU
+//!
+//! ```
+//! use glam::DVec2;
+//! use terrain::{Ground, Scene, scene};
+//!
+//! let scene = Scene::parse("[sketch]\nsynthetic = \"hills\"\n", ".".into()).unwrap();
+//! let atlas = scene::load_atlas(&scene)?;
+//! let detail = scene::detail_of(&scene, &atlas);
+//! let ground = Ground::new(&scene, &atlas, &detail);
+//! let centre = atlas.origin + DVec2::new(atlas.dx, atlas.dy) * (atlas.width() as f64 / 2.0);
+//! let z = ground.height_at(centre, 0.0)?.expect("ground inside the sketch");
+//! assert!(z.is_finite());
+//! # Ok::<(), terrain::Error>(())
+//! ```
 //!
 //! Rules: the library prints nothing and writes no file it was not asked to: its notes go
 //! through the `log` crate, its long work reports to [`progress`]. It holds no command line,
 //! chart, progress bar or image metric: those are the tools' (the `terrain-cli` crate and its
 //! `terrain` binary). Rejected: one crate for both, where every embedder compiled the commands'
 //! dependencies.
+
+#![deny(missing_docs)]
 
 // The crate's own tests name it as its users do.
 #[cfg(test)]

@@ -75,12 +75,17 @@ pub struct Light {
     pub sky_light: [f64; 3],
     /// Haze extinction at sea level, per metre.
     pub haze_per_m: f64,
+    /// The haze's scale height, metres: its density falls by e every `haze_height_m` up
+    /// (`light.haze_height_m`, default 1200).
     pub haze_height_m: f64,
     /// The factor light is scaled by before the tone map: 2^exposure_ev.
     pub exposure: f64,
 }
 
 impl Light {
+    /// The sun at compass `azimuth_deg` (0 north, 90 east) and `elevation_deg` above the horizon,
+    /// haze of meteorological visibility `visibility_km` at sea level and scale height
+    /// `haze_height_m`, and the picture scaled by `2^exposure_ev` (the `[light]` keys).
     pub fn new(
         azimuth_deg: f64,
         elevation_deg: f64,

@@ -37,6 +37,7 @@ macro_rules! named_enum {
                 }
             }
 
+            /// The value named `name`, or `None` where no variant is called that.
             pub fn parse(name: &str) -> ::std::option::Option<$enum> {
                 Self::ALL.iter().copied().find(|v| v.name() == name)
             }
@@ -80,7 +81,7 @@ macro_rules! named_enum {
 }
 pub(crate) use named_enum;
 
-/// An enum declared with [`named_enum!`](crate::names::named_enum): its values and the name of each, for
+/// An enum declared with `named_enum!`: its values and the name of each, for
 /// a command line or a form to offer them by (the `terrain` binary's value parser).
 pub trait Named: Copy + Send + Sync + 'static {
     /// Every value, in declaration order.

@@ -43,6 +43,33 @@ impl<'a> Ground<'a> {
 
     /// The surface's height at world point `p` for a footprint of `footprint_m` metres (0: the
     /// finest), or `None` where nothing is drawn (beyond the sketch with `outside = "void"`).
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use terrain::{Ground, Scene, scene};
+    ///
+    /// let text = "[sketch]\nsynthetic = \"hills\"\nsize = 129\noutside = \"void\"\n";
+    /// let scene = Scene::parse(text, ".".into()).unwrap();
+    /// let atlas = scene::load_atlas(&scene)?;
+    /// let detail = scene::detail_of(&scene, &atlas);
+    /// let ground = Ground::new(&scene, &atlas, &detail);
+    ///
+    /// // The sketch's centre: the hills plus every octave, within the octaves' reach of them.
+    /// let centre = atlas.origin + DVec2::new(atlas.dx, atlas.dy) * 64.0;
+    /// let z = ground.height_at(centre, 0.0)?.expect("ground inside the sketch");
+    /// let reach = detail.reach_m();
+    /// assert!(z >= atlas.min_m as f64 - reach && z <= atlas.max_m as f64 + reach);
+    ///
+    /// // A coarser footprint reads a coarser pyramid level and fewer octaves: another height.
+    /// let far = ground.height_at(centre, 500.0)?.unwrap();
+    /// assert_ne!(z, far);
+    ///
+    /// // Beyond the sketch, `outside = "void"` draws nothing.
+    /// assert_eq!(ground.height_at(atlas.origin - DVec2::splat(1000.0), 0.0)?, None);
+    /// // A non-finite point is an error, not a height.
+    /// assert!(ground.height_at(DVec2::new(f64::NAN, 0.0), 0.0).is_err());
+    /// # Ok::<(), terrain::Error>(())
+    /// ```
     pub fn height_at(&self, p: DVec2, footprint_m: f64) -> Result<Option<f64>> {
         finite_point(p)?;
         if !self.inside(p) {

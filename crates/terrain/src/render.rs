@@ -25,13 +25,17 @@ use std::time::Instant;
 
 /// One rendered frame: RGBA8 sRGB pixels, rows top first.
 pub struct Frame {
+    /// The pixels, 4 bytes each (RGBA8, sRGB), `width` × `height`, rows top first.
     pub rgba: Vec<u8>,
+    /// Image width, pixels (the camera's).
     pub width: u32,
+    /// Image height, pixels (the camera's).
     pub height: u32,
     /// The warped mode's CPU stage; zero for the other modes.
     pub cpu: StageTimes,
     /// CPU time per frame: the CPU stage, or the baselines' block selection (µs).
     pub cpu_us: f64,
+    /// The GPU's side: its time (by pass, where the adapter times passes) and the triangles drawn.
     pub gpu: FrameStats,
     /// Blocks drawn (GeoMipMap and brute force).
     pub blocks: Option<usize>,
@@ -48,13 +52,33 @@ enum SketchGpu {
     Streamed(Box<Stream>),
 }
 
+/// Draws a scene's frames on a device of its own and reads each back: the snapshot path of
+/// `render`, `batch` and `compare` (a host drawing into its own targets uses [`crate::Terrain`]).
+///
+/// ```no_run
+/// use std::path::Path;
+/// use terrain::{Renderer, Scene, View, scene};
+///
+/// let scene = Scene::load(Path::new("sketches/jacksboro.toml"))?;
+/// let mut renderer = Renderer::new(&scene, scene.render.mode, View::Shaded)?;
+/// let camera = scene::camera_of(&scene, renderer.atlas())?;
+/// let frame = renderer.render(&camera)?;
+/// assert_eq!(frame.rgba.len(), (frame.width * frame.height * 4) as usize);
+/// println!("{} triangles, {:.1} ms on the GPU", frame.gpu.triangles, frame.gpu.gpu_ms);
+/// # Ok::<(), terrain::Error>(())
+/// ```
 pub struct Renderer {
+    /// The device it draws on, opened for this renderer (or shared, see `with_context`).
     pub ctx: GpuContext,
+    /// The sketch, as read on the CPU.
     pub atlas: Atlas,
+    /// The procedural detail, resolved for the scene and mode.
     pub detail: Detail,
+    /// The sun and the air, from `[light]` ([`Renderer::relight`] changes it).
     pub light: crate::light::Light,
     /// `sketch.outside`, resolved.
     pub outside: crate::scene::Outside,
+    /// The level-of-detail scheme it draws with.
     pub mode: Mode,
     /// Samples per pixel the picture was drawn with (`render.msaa` where the adapter allows).
     pub samples: u32,
@@ -74,7 +98,7 @@ pub struct Renderer {
 }
 
 /// What a scene in `mode` needs of the adapter: the atlas, and the mode's own largest binding
-/// ([`crate::lod::needs`]).
+/// (the scheme's `Lod::needs`).
 pub fn needs(scene: &Scene, mode: Mode, atlas: &Atlas) -> Needs {
     let largest = crate::lod::needs(mode, scene);
     // A streamed pyramid's pool fits itself to the adapter's binding limit.
@@ -89,6 +113,8 @@ pub fn needs(scene: &Scene, mode: Mode, atlas: &Atlas) -> Needs {
 }
 
 impl Renderer {
+    /// A renderer of `scene` in `mode` drawing `view`, on a device of its own: reads the sketch,
+    /// opens a device that meets [`needs`], builds the pipelines and buffers once.
     pub fn new(scene: &Scene, mode: Mode, view: View) -> Result<Renderer> {
         Renderer::with_positions(scene, mode, view, false)
     }
@@ -215,16 +241,18 @@ impl Renderer {
     }
 
     /// The next frame's level of detail is chosen as by a fresh renderer, whatever frames came
-    /// before (see [`Lod::forget`]). A streamed sketch keeps its tiles: those of the frames
+    /// before (see `Lod::forget`). A streamed sketch keeps its tiles: those of the frames
     /// before stay in the pool.
     pub fn forget(&mut self) {
         self.lod.forget();
     }
 
+    /// The sketch, as read on the CPU.
     pub fn atlas(&self) -> &Atlas {
         &self.atlas
     }
 
+    /// The device it draws on.
     pub fn ctx(&self) -> &GpuContext {
         &self.ctx
     }
@@ -235,6 +263,7 @@ impl Renderer {
         self.lod.as_any().downcast_ref()
     }
 
+    /// The scheme, as its own type, to change (a test's or a tool's setting between frames).
     pub fn lod_mut<T: Lod>(&mut self) -> Option<&mut T> {
         self.lod.as_any_mut().downcast_mut()
     }
@@ -250,8 +279,8 @@ impl Renderer {
     /// frame waiting for the tiles the last one missed, until no sample reads a stand-in level.
     /// The image is then the one the sketch held whole gives. Where the view needs more tiles
     /// than the pool holds (or the loader stops delivering), the first frame that placed none is
-    /// returned, its stand-ins counted in [`Frame::stream`], and a note on stderr says so (every
-    /// snapshot command: `render`, `batch`, `compare`).
+    /// returned, its stand-ins counted in [`Frame::stream`], and a note through `log` says so
+    /// (every snapshot command: `render`, `batch`, `compare`).
     pub fn render_settled(&mut self, camera: &Camera) -> Result<Frame> {
         let SketchGpu::Streamed(s) = &mut self.sketch else {
             return self.render(camera);

@@ -23,6 +23,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 pub struct Ledger(Arc<AtomicU64>);
 
 impl Ledger {
+    /// The bytes counted now: the sum over the live [`Tracked`] objects.
     pub fn bytes(&self) -> u64 {
         self.0.load(Ordering::Relaxed)
     }
@@ -47,6 +48,7 @@ pub struct Tracked<T> {
 }
 
 impl<T> Tracked<T> {
+    /// The bytes this object is counted as (its descriptor's size).
     pub fn bytes(&self) -> u64 {
         self.bytes
     }
@@ -65,14 +67,18 @@ impl<T> Drop for Tracked<T> {
     }
 }
 
+/// A buffer counted in its renderer's [`Ledger`].
 pub type Buffer = Tracked<wgpu::Buffer>;
+/// A texture counted in its renderer's [`Ledger`].
 pub type Texture = Tracked<wgpu::Texture>;
 
 /// The device, with what it allocates counted in `ledger`. Derefs to the device for everything
 /// that holds no memory of its own (pipelines, bind groups, encoders).
 #[derive(Clone, Copy)]
 pub struct Alloc<'a> {
+    /// The device that creates the objects.
     pub device: &'a wgpu::Device,
+    /// The ledger that counts them.
     pub ledger: &'a Ledger,
 }
 
@@ -84,12 +90,15 @@ impl Deref for Alloc<'_> {
 }
 
 impl Alloc<'_> {
+    /// `wgpu::Device::create_buffer`, counted at `desc.size` bytes.
     #[allow(clippy::disallowed_methods)]
     pub fn create_buffer(&self, desc: &wgpu::BufferDescriptor) -> Buffer {
         self.ledger
             .track(self.device.create_buffer(desc), desc.size)
     }
 
+    /// `wgpu::util::DeviceExt::create_buffer_init`, counted at the buffer's size (the contents
+    /// padded to the copy alignment).
     #[allow(clippy::disallowed_methods)]
     pub fn create_buffer_init(&self, desc: &wgpu::util::BufferInitDescriptor) -> Buffer {
         let buffer = wgpu::util::DeviceExt::create_buffer_init(self.device, desc);
@@ -97,6 +106,8 @@ impl Alloc<'_> {
         self.ledger.track(buffer, bytes)
     }
 
+    /// `wgpu::Device::create_texture`, counted at its format footprint, mip levels and samples
+    /// included.
     #[allow(clippy::disallowed_methods)]
     pub fn create_texture(&self, desc: &wgpu::TextureDescriptor) -> Texture {
         let bytes = texture_bytes(desc);

@@ -7,11 +7,15 @@ use crate::error::{Error, Result};
 /// share one device, as `compare` and `batch` do.
 #[derive(Clone)]
 pub struct GpuContext {
+    /// The device, opened with the adapter's own limits and, where offered, timestamp queries.
     pub device: wgpu::Device,
+    /// The device's queue.
     pub queue: wgpu::Queue,
+    /// The adapter's name, backend and kind, as reports print them.
     pub adapter: wgpu::AdapterInfo,
     /// Whether passes can be timed with timestamp queries.
     pub timestamps: bool,
+    /// The adapter's limits, which the device was opened with.
     pub limits: wgpu::Limits,
     /// The most samples per pixel the terrain pass's targets allow: 4, or 1 where they cannot
     /// be multisampled.
@@ -27,6 +31,9 @@ pub struct Needs {
 }
 
 impl GpuContext {
+    /// Opens a device on the best adapter `WGPU_BACKEND` allows and checks it against `needs`:
+    /// [`Error::Device`] where there is no adapter or device, [`Error::Limit`] where a limit is
+    /// too low.
     pub fn new(needs: &Needs) -> Result<GpuContext> {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
@@ -128,7 +135,7 @@ impl GpuContext {
         }
     }
 
-    /// Whether the mesh modes shade deferred (`render.deferred` asks; [`super::terrain`]'s
+    /// Whether the mesh modes shade deferred (`render.deferred` asks; `gpu::terrain`'s
     /// `Deferred`): single-sampled frames, on an adapter that draws the G-buffer's targets at once.
     pub fn deferred(&self, asked: bool, samples: u32) -> bool {
         let targets = super::terrain::GBUFFER.len() as u32;

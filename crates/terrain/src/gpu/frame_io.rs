@@ -22,6 +22,7 @@ impl PassTimes {
         self.0.iter().find(|(n, _)| n == name).map(|&(_, ms)| ms)
     }
 
+    /// The sum of the passes' times, milliseconds.
     pub fn total(&self) -> f64 {
         self.0.iter().map(|&(_, ms)| ms).sum()
     }

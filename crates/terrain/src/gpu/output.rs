@@ -35,8 +35,13 @@ pub enum Source<'a> {
 /// The host's targets: formats and samples per pixel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Targets {
+    /// The colour view's format: any renderable one; the picture arrives sRGB-encoded either way
+    /// (by an `*Srgb` format, or by the pass where the format is linear).
     pub colour: wgpu::TextureFormat,
+    /// The depth view's format (reversed-Z, cleared to 0), e.g. `Depth32Float`.
     pub depth: wgpu::TextureFormat,
+    /// Samples per pixel of both views, as the host created them (1, or a count the adapter
+    /// allows for both formats, e.g. 4).
     pub samples: u32,
 }
 

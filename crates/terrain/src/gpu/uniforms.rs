@@ -191,10 +191,16 @@ crate::names::named_enum! {
     /// The debug views of `render --view`; the WGSL twins are `VIEW_*` in
     /// `shaders/shared/frame.wgsl` (checked in `checks/shaders.rs`).
     pub enum View ("view") {
+        /// The picture: lit, shadowed and hazed, tone-mapped.
         Shaded = "shaded",
+        /// The mesh's grid lines over the shaded picture.
         Wireframe = "wireframe",
+        /// The split octave, blue (0) to yellow (every octave as geometry).
         SplitOctave = "split-octave",
+        /// The warped mode's importance at each point, on a log scale over 12 octaves below its
+        /// largest (that mode only).
         Importance = "importance",
+        /// The shading normal, `n · 0.5 + 0.5` as RGB.
         Normals = "normals",
         /// Terrain white, sky black: for finding holes.
         Coverage = "coverage",

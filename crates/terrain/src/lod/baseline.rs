@@ -142,14 +142,18 @@ pub fn bake(s: &Shared, key: Key, k: u32, cells: usize) -> Result<(Grid, Bake)> 
 
 /// GeoMipMap or brute force (`kind`) over one baked grid, or GeoMipMap over a streamed sketch.
 pub struct Baselines {
+    /// Which baseline: [`Mode::Geomipmap`] or [`Mode::Bruteforce`].
     pub kind: Mode,
     /// The grid the blocks divide (its heights empty when streamed).
     pub grid: Grid,
     /// The baked grid on the GPU; `None` over a tile pyramid, whose grid vertices the terrain
     /// pass evaluates where it draws them.
     pub bake: Option<Bake>,
+    /// The grid's blocks: each one's δ per level and the box of its vertices.
     pub blocks: Blocks,
+    /// Triangle templates per level: the interior, and each side's strip toward a neighbour.
     pub templates: Templates,
+    /// The last frame's level of each block, and which blocks it drew.
     pub selection: Selection,
     /// τ, the exact bound, geomorphing: how GeoMipMap chooses levels.
     pub params: LodParams,

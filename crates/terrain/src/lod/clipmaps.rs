@@ -27,7 +27,11 @@ use std::time::Instant;
 
 const PASSES: [&str; 2] = [ClipmapsPass::NAME, PlanetPass::NAME];
 
+/// Spherical clipmaps (Clasen & Hege, *Terrain Rendering using Spherical Clipmaps*, 2006): a
+/// planet drawn with rings of vertices around the camera's nadir.
 pub struct Clipmaps {
+    /// The rings of vertices around the nadir, built once (`planet.phi_steps`,
+    /// `planet.rings_per_level`).
     pub rings: Rings,
     radius: f64,
     detail: Detail,
@@ -39,12 +43,14 @@ pub struct Clipmaps {
     readback: ColourReadback,
     /// The last frame's levels and uniforms.
     pub span: Span,
+    /// The last frame's planet uniform block; `None` before the first frame.
     pub uniforms: Option<PlanetUniforms>,
     /// The nadir the last frame's rings stand around.
     geo: Option<Geo>,
 }
 
 impl Clipmaps {
+    /// The scheme of a planet scene; [`crate::Error::Value`] where the scene is no planet.
     pub fn new(s: &Shared) -> Result<Clipmaps> {
         let p = s.scene.planet().ok_or(Error::value(
             "render.mode",

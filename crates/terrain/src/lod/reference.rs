@@ -12,7 +12,10 @@ use crate::gpu::uniforms::{FrameInputs, View};
 use crate::sketch::Atlas;
 use std::any::Any;
 
+/// The ray-marched reference: the exact terrain function, marched per pixel, that every mode is
+/// compared with.
 pub struct Reference {
+    /// The marching pass.
     pub pass: ReferencePass,
     /// March step as a fraction of the height above the ground (`reference.step`); `compare`
     /// halves it to test convergence.
@@ -31,6 +34,7 @@ struct PlanetMarch {
 }
 
 impl Reference {
+    /// The reference of the scene, on a plane or a planet.
     pub fn new(s: &Shared) -> Result<Reference> {
         let (w, h) = (s.scene.camera.width, s.scene.camera.height);
         let planet = s.scene.planet().map(|p| PlanetMarch {

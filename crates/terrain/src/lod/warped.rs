@@ -33,7 +33,10 @@ const PASSES: [&[&str]; 4] = [
     ],
 ];
 
+/// Geometry image warping (Dachsbacher & Stamminger, *Rendering Procedural Terrain by Geometry
+/// Image Warping*, 2004): the CPU stage's Φ upsampled to the mesh, split, lit and drawn.
 pub struct Warped {
+    /// The CPU stage: sketch map, importance, warp.
     pub stage: CpuStage,
     warp_zoom: WarpZoomPass,
     /// Each cell's diagonal, with an adaptive triangulation (`warp.triangulation`).
@@ -48,6 +51,7 @@ pub struct Warped {
 }
 
 impl Warped {
+    /// The scheme of the scene: its stage and passes, sized for `warp.size` and `warp.mesh`.
     pub fn new(s: &Shared) -> Result<Warped> {
         let device = &s.alloc;
         let (n, mesh) = (s.scene.warp.size, s.scene.warp.mesh);

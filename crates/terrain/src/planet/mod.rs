@@ -4,7 +4,7 @@
 //! The terrain function of a planet of radius R at the unit vector u is `R + h(u)`, h being the
 //! global sketch (equirectangular: longitude −180…180 across, latitude −90…90 up, row 0 south,
 //! each texel the centre of its cell) sampled bicubically on the pyramid level of the footprint,
-//! plus the procedural octaves of [`noise`] on the sphere of radius R, each weighted as in the
+//! plus the procedural octaves of `noise` on the sphere of radius R, each weighted as in the
 //! plane (`docs/design.md`, Procedural detail: g_k as geometry, b_k per pixel).
 //!
 //! Rules:
@@ -45,6 +45,7 @@ pub const EARTH_RADIUS_M: f64 = 6_371_000.0;
 
 /// A planet: its radius and its global sketch.
 pub struct Planet<'a> {
+    /// The sphere's radius at height 0, metres (`planet.radius_m`).
     pub radius: f64,
     /// The global sketch: equirectangular, width twice its height, row 0 south.
     pub sketch: &'a Atlas,
@@ -77,12 +78,16 @@ pub fn travel(lat: f64, lon: f64, bearing: f64, angle: f64) -> (f64, f64, f64) {
 /// The tangent frame at latitude `lat`, longitude `lon`: east, north, up (world axes).
 #[derive(Clone, Copy, Debug)]
 pub struct Tangent {
+    /// The unit vector east, in the equator's plane; at a pole it follows `lon`.
     pub east: DVec3,
+    /// The unit vector north, along the meridian.
     pub north: DVec3,
+    /// The unit outward normal: the point's own direction from the centre.
     pub up: DVec3,
 }
 
 impl Tangent {
+    /// The frame at latitude `lat`, longitude `lon` (radians).
     pub fn at(lat: f64, lon: f64) -> Tangent {
         let (sl, cl) = lat.sin_cos();
         let (so, co) = lon.sin_cos();

@@ -20,20 +20,25 @@ pub struct CameraSection {
     /// The eye's x and y in the sketch file's own coordinate system (what `terrain info` prints
     /// as its georeference), with `altitude_m`.
     pub map_xy: Option<[f64; 2]>,
-    /// The eye's (a planet's: its nadir's) latitude and longitude, degrees; on a projected sketch
+    /// The eye's (a planet's: its nadir's) latitude, degrees, −90 to 90; on a projected sketch
     /// WGS 84, converted through the file's coordinate system.
     pub lat_deg: Option<f64>,
+    /// The eye's longitude, degrees, east positive (−360 to 360 on a sketch; on a planet any
+    /// value, wrapped).
     pub lon_deg: Option<f64>,
     /// Height above the ground or water under the eye, metres.
     pub altitude_m: Option<f64>,
     /// View direction: 0 north, 90 east (0 unless given; the default view: the side it looks from).
     pub heading_deg: Option<f64>,
-    /// View direction: 0 level, −90 straight down (0 unless given; the default view: −35).
+    /// View direction: 0 level, −90 straight down (0 unless given; the default view: −40).
     pub pitch_deg: Option<f64>,
+    /// Vertical field of view, degrees, in (0, 180) (default 60).
     #[serde(default = "default_fov")]
     pub fov_y_deg: f64,
+    /// Image width, pixels, 1 to 16384 (default 512; `--size` overrides).
     #[serde(default = "default_size")]
     pub width: u32,
+    /// Image height, pixels, 1 to 16384 (default 512; `--size` overrides).
     #[serde(default = "default_size")]
     pub height: u32,
     /// Far distance in metres; by default the farthest corner of the sketch.
@@ -132,38 +137,51 @@ fn default_size() -> u32 {
     512
 }
 
+/// `[path]`: the camera path `fly` and `compare` follow: a smooth (centripetal Catmull–Rom)
+/// curve through its keys on a sketch, a flight from key to key on a planet.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PathSection {
+    /// Constant speed along a planar curve, metres per second (> 0, default 150).
     #[serde(default = "default_speed")]
     pub speed_mps: f64,
     /// A planet's flight: how long it takes, seconds (each key to the next in equal time).
     pub duration_s: Option<f64>,
+    /// The points the path passes through, at least 2.
     pub keys: Vec<PathKey>,
 }
 fn default_speed() -> f64 {
     150.0
 }
 
+/// One key of a `[path]`: a place and, optionally, an aim, given by the same keys as
+/// `[camera]`'s.
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PathKey {
     /// A point of a planar path (required there), world metres.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub position: Option<[f64; 3]>,
+    /// Where the camera looks at this key, world metres (default: ahead along the path; not
+    /// with `heading_deg`, `pitch_deg`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub look_at: Option<[f64; 3]>,
+    /// A sketch's key in the file's own coordinates, with `altitude_m`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub map_xy: Option<[f64; 2]>,
-    /// Where the camera stands and looks, as the camera's keys of the same names.
+    /// The latitude under the camera, degrees, −90 to 90 (required on a planet).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lat_deg: Option<f64>,
+    /// The longitude under the camera, degrees, east positive (required on a planet).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lon_deg: Option<f64>,
+    /// The height above the ground or water, metres, 0.01 to 10⁹ (required on a planet).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub altitude_m: Option<f64>,
+    /// The view's compass direction, degrees: 0 north, 90 east (default 0).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub heading_deg: Option<f64>,
+    /// The view's elevation, degrees: 0 level, −90 straight down (default 0).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pitch_deg: Option<f64>,
 }

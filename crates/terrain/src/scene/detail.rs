@@ -42,14 +42,17 @@ pub fn default_bias(scene: &Scene, atlas: &crate::sketch::Atlas, mode: Mode) -> 
     }
 }
 
+/// `[detail]`: the procedural octaves added to the sketch (`docs/scene.md`, `[detail]`).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct DetailSection {
-    /// Noise octaves; by default those whose wavelength is at least [`FINEST_WAVELENGTH_M`].
+    /// Noise octaves, 0 to 24; by default those whose wavelength is at least 0.1 m.
     pub octaves: Option<u32>,
     /// Octave 1's amplitude; by default the sketch's own finest relief carried one octave on.
     pub amplitude_m: Option<f64>,
+    /// Amplitude ratio of each octave to the one before, 0 to 1 (default 0.5).
     pub gain: f64,
+    /// The noise's seed (default 7).
     pub seed: u32,
     /// Octaves subtracted from the split octave: the paper's "more conservative estimate". By
     /// default [`default_bias`]'s.
@@ -95,9 +98,12 @@ crate::names::named_enum! {
     }
 }
 
+/// `[warp]`: the warped mode's sketch map, warp and mesh (`docs/scene.md`, `[warp]`).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct WarpSection {
+    /// Target on-screen size of a mesh quad, pixels: C in the importance `f_px / (C · d)`
+    /// (default 2).
     pub quad_px: f64,
     /// The largest mesh side; with `budget`, a frame draws what its importance asks for, up to it.
     pub mesh: u32,
@@ -111,6 +117,7 @@ pub struct WarpSection {
     pub hold_drift: f64,
     /// Sketch map and warp size (128 in the paper).
     pub size: u32,
+    /// How the warp keeps cells from folding (default `guarded`).
     pub method: WarpMethod,
     /// Largest change of log2(importance) between neighbouring texels; 0 turns the limit off.
     pub max_log2_step: f64,
@@ -138,6 +145,8 @@ impl Default for WarpSection {
     }
 }
 
+/// `[importance]`: the terms of the importance, samples per metre, that the warp spaces the
+/// mesh by (`docs/scene.md`, `[importance]`).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ImportanceSection {
@@ -180,6 +189,8 @@ impl Default for ImportanceSection {
     }
 }
 
+/// `[geomipmap]`: the GeoMipMap baseline (de Boer, *Fast Terrain Rendering Using Geometrical
+/// MipMapping*, 2000).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct GeoMipMapSection {

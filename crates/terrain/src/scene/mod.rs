@@ -43,29 +43,64 @@ pub use render::{
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
+/// A scene file's contents: which sketch to draw, from where and how, one section per table of
+/// `docs/scene.md`. Read with [`Scene::load`] (a file) or [`Scene::parse`] (text), which check
+/// every key's range; an absent section takes its defaults.
+///
+/// ```
+/// use terrain::{Mode, Scene};
+///
+/// let text = r#"
+///     [sketch]
+///     synthetic = "hills"
+///     [camera]
+///     width = 320
+///     height = 200
+///     [render]
+///     mode = "geomipmap"
+/// "#;
+/// let scene = Scene::parse(text, ".".into()).unwrap();
+/// assert_eq!(scene.render.mode, Mode::Geomipmap);
+/// assert_eq!((scene.camera.width, scene.camera.height), (320, 200));
+/// assert_eq!(scene.detail.gain, 0.5, "an absent key takes its default");
+///
+/// // A key out of range is refused, naming it.
+/// let fault = Scene::parse("[sketch]\nsynthetic = \"hills\"\n[detail]\ngain = 3.0\n", ".".into());
+/// assert!(fault.unwrap_err().to_string().contains("detail.gain"));
+/// ```
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
+    /// `[sketch]`: the height map, or a synthetic one, and what lies beyond it.
     pub sketch: SketchSection,
     /// Without it, the default view of the whole sketch (`scene::place`).
     #[serde(default)]
     pub camera: CameraSection,
+    /// `[detail]`: the procedural octaves added to the sketch.
     #[serde(default)]
     pub detail: DetailSection,
+    /// `[warp]`: the warped mode's sketch map, warp and mesh.
     #[serde(default)]
     pub warp: WarpSection,
+    /// `[importance]`: how densely the warped mesh samples the ground where.
     #[serde(default)]
     pub importance: ImportanceSection,
+    /// `[render]`: the level-of-detail mode and the picture's options.
     #[serde(default)]
     pub render: RenderSection,
+    /// `[geomipmap]`: de Boer's GeoMipMap baseline.
     #[serde(default)]
     pub geomipmap: GeoMipMapSection,
+    /// `[reference]`: the ray-marched reference.
     #[serde(default)]
     pub reference: ReferenceSection,
+    /// `[light]`: the sun, the air and the exposure.
     #[serde(default)]
     pub light: LightSection,
+    /// `[stream]`: the tile cache of a sketch streamed from a tile pyramid.
     #[serde(default)]
     pub stream: StreamSection,
+    /// `[path]`: the camera path `fly` and `compare` follow; without it, a default one.
     pub path: Option<PathSection>,
     /// A planet: the sketch is global and wraps a sphere (`sketch.synthetic = "planet"` implies
     /// one with the defaults).
@@ -79,14 +114,24 @@ pub struct Scene {
     pub source: Option<PathBuf>,
 }
 
+/// `[sketch]`: the height map to draw. Exactly one of `path` and `synthetic` is given.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SketchSection {
+    /// The height map file, a glob of tiles or a tile pyramid's folder, relative to the scene
+    /// file (`docs/formats.md` lists the formats).
     pub path: Option<PathBuf>,
+    /// A generated sketch of 30 m cells instead of a file: `gaussian`, `hills`, `ridges`,
+    /// `cliff`, `flat`, `spike` or `planet`.
     pub synthetic: Option<String>,
+    /// Cell size in metres, overriding the file's (> 0; PNG files carry none: 1 m).
     pub spacing_m: Option<f64>,
+    /// World position of the sketch's south-west node, metres (default: the origin).
     pub origin_m: Option<[f64; 2]>,
+    /// Multiplies every height (> 0; default 1).
     pub height_scale: Option<f64>,
+    /// Nodes per side of a synthetic sketch, 2 to 4097 (default 257); a planet's width, 8 to
+    /// 16384 (default 1024, its height half that).
     pub size: Option<usize>,
     /// For 8/16-bit PNG sketches: the heights that pixel value 0 and the maximum stand for.
     pub height_range_m: Option<[f64; 2]>,
@@ -129,6 +174,7 @@ impl Scene {
 }
 
 impl Scene {
+    /// `p`, a path the scene names, relative to the scene file's folder (`base_dir`).
     pub fn resolve(&self, p: &Path) -> PathBuf {
         self.base_dir.join(p)
     }

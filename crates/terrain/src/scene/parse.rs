@@ -12,7 +12,12 @@ pub enum Fault {
     /// In the scene's text; the reason names the key (and the line, where the parser knows it).
     Text(String),
     /// In the override `arg` (`key.path=value`).
-    Override { arg: String, reason: String },
+    Override {
+        /// The override as given, `key.path=value`.
+        arg: String,
+        /// Why it was refused: no such key, a value of the wrong type or out of range.
+        reason: String,
+    },
 }
 
 impl std::fmt::Display for Fault {
@@ -35,6 +40,20 @@ impl Fault {
 }
 
 impl Scene {
+    /// Reads and checks the scene file at `path`, its relative paths taken from its folder; a
+    /// sketch's path stands for a scene of every default ([`is_sketch_path`]).
+    ///
+    /// ```
+    /// use terrain::Scene;
+    /// use std::path::Path;
+    ///
+    /// // Doc tests run in crates/terrain; the bundled scenes lie at the workspace's root.
+    /// let scene = Scene::load(Path::new("../../sketches/jacksboro.toml"))?;
+    /// assert!(scene.sketch.path.is_some());
+    /// let missing = Scene::load(Path::new("no-such.toml")).unwrap_err();
+    /// assert!(missing.to_string().starts_with("scene no-such.toml"));
+    /// # Ok::<(), terrain::Error>(())
+    /// ```
     pub fn load(path: &Path) -> Result<Scene> {
         Scene::load_with(path, &[])
     }
@@ -57,6 +76,8 @@ impl Scene {
         Ok(scene)
     }
 
+    /// Like [`Scene::parse`], with `key.path=value` overrides applied before the scene is
+    /// checked; a fault an override causes is blamed on it ([`Fault::Override`]).
     pub fn parse_with(
         text: &str,
         base_dir: PathBuf,

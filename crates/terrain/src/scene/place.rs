@@ -308,14 +308,18 @@ pub fn default_path(scene: &Scene, atlas: &Atlas) -> PathSection {
 pub struct CameraReport {
     /// World metres.
     pub position: [f64; 3],
+    /// The point looked at, world metres.
     pub look_at: [f64; 3],
     /// Above the surface under the eye.
     pub altitude_m: f64,
+    /// The view's compass direction, degrees: 0 north, 90 east.
     pub heading_deg: f64,
+    /// The view's elevation, degrees: 0 level, −90 straight down.
     pub pitch_deg: f64,
-    /// Where the sketch has a georeference that converts.
+    /// The eye's latitude, degrees, where the sketch has a georeference that converts.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lat_deg: Option<f64>,
+    /// The eye's longitude, degrees, east positive, where `lat_deg` is given.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lon_deg: Option<f64>,
     /// The eye in the file's own coordinates, where the sketch has a georeference.

@@ -6,7 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 /// A sketch read from a tile pyramid (`terrain tiles`) streams through the tile cache (see
-/// [`crate::tiles::cache`]); these are its budgets.
+/// `tiles::cache`); these are its budgets.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct StreamSection {
@@ -34,6 +34,7 @@ impl Default for StreamSection {
     }
 }
 
+/// `[reference]`: the ray-marched reference every mode is compared with.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ReferenceSection {
@@ -47,7 +48,7 @@ impl Default for ReferenceSection {
     }
 }
 
-/// The sun and the air (see [`crate::light`]).
+/// The sun and the air (see [`Light`](crate::Light)).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LightSection {
@@ -55,10 +56,12 @@ pub struct LightSection {
     pub sun_azimuth_deg: Option<f64>,
     /// Degrees above the horizon; below 0 the sun has set (35 unless the time is given).
     pub sun_elevation_deg: Option<f64>,
-    /// The sun from the time instead: the place's latitude, the day of the year (1–366) and
-    /// the local solar time in hours (12 at solar noon).
+    /// The sun from the time instead: the place's latitude, degrees, north positive, with
+    /// `day_of_year` and `solar_time_h`.
     pub latitude_deg: Option<f64>,
+    /// The day of the year, 1 to 366 (172: the June solstice), for the sun from the time.
     pub day_of_year: Option<u32>,
+    /// The local solar time in hours, 0 to 24 (12 at solar noon), for the sun from the time.
     pub solar_time_h: Option<f64>,
     /// Meteorological visibility at sea level, km: the haze's density.
     pub haze_visibility_km: f64,
@@ -99,9 +102,15 @@ impl LightSection {
 crate::names::named_enum! {
     /// The level-of-detail scheme that draws the terrain (`render.mode`, `--mode`).
     pub enum Mode ("mode") {
+        /// Geometry image warping (Dachsbacher & Stamminger 2004): the CPU stage's warped
+        /// sketch map upsampled to a mesh on the GPU. The default.
         Warped = "warped",
+        /// GeoMipMap (de Boer 2000): a baked grid of blocks, each at the level its projected
+        /// error allows.
         Geomipmap = "geomipmap",
+        /// Every vertex of the baked grid, every frame.
         Bruteforce = "bruteforce",
+        /// The exact surface, ray-marched per pixel: slow, for comparisons.
         Reference = "reference",
         /// Spherical clipmaps (Clasen & Hege 2006): planet scenes only.
         Clipmaps = "clipmaps",
@@ -131,9 +140,11 @@ impl Mode {
     }
 }
 
+/// `[render]`: the level-of-detail mode and the picture's options.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RenderSection {
+    /// The scheme that draws the terrain (default `warped`; `--mode` overrides).
     pub mode: Mode,
     /// The mesh modes shade with the terrain function's normal at each pixel, as the reference
     /// does; `false`: the mesh's normals plus bump detail (`detail.bump`).
@@ -168,7 +179,9 @@ crate::names::named_enum! {
         /// 4× on a hardware GPU; off on a software rasterizer, where it costs several times
         /// the terrain pass (docs/decisions.md, “Multisampling”).
         Auto = "auto",
+        /// One sample per pixel.
         Off = "off",
+        /// 4 samples per pixel, refused on a planet.
         X4 = "4x",
     }
 }
@@ -182,6 +195,7 @@ crate::names::named_enum! {
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlanetSection {
+    /// The planet's radius at height 0, metres, 1000 to 10⁹ (default the Earth's mean, 6371 km).
     pub radius_m: f64,
     /// Bearing steps of every clipmap ring (the paper's n).
     pub phi_steps: u32,

@@ -18,8 +18,10 @@ pub const FOOT_M: f64 = 0.3048;
 /// US survey foot, metres.
 pub const US_SURVEY_FOOT_M: f64 = 1200.0 / 3937.0;
 
+/// The unit of a file's horizontal coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Units {
+    /// Geographic: longitude and latitude, degrees.
     Degrees,
     /// Projected, metres per unit (1 for metres).
     Linear(f64),
@@ -30,12 +32,15 @@ pub enum Units {
 /// The position of a grid's nodes in its file's coordinate system.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Georef {
-    /// The south-west node.
+    /// The south-west node's x (easting or longitude), in `units`.
     pub west: f64,
+    /// The south-west node's y (northing or latitude), in `units`.
     pub south: f64,
-    /// Node spacing along x (east) and y (north), positive, in `units`.
+    /// Node spacing along x (east), positive, in `units`.
     pub cell_x: f64,
+    /// Node spacing along y (north), positive, in `units`.
     pub cell_y: f64,
+    /// What the coordinates measure.
     pub units: Units,
     /// The coordinate system's EPSG code, where the file names one.
     pub epsg: Option<u16>,

@@ -16,8 +16,11 @@ use std::path::Path;
 /// What a file does not say about itself, from the scene.
 #[derive(Clone, Debug, Default)]
 pub struct LoadOptions {
+    /// Cell size in metres, overriding the file's (`sketch.spacing_m`).
     pub spacing_m: Option<f64>,
+    /// World position of the south-west node, metres (`sketch.origin_m`; default the origin).
     pub origin_m: Option<DVec2>,
+    /// Multiplies every height (`sketch.height_scale`; default 1).
     pub height_scale: Option<f64>,
     /// For 8/16-bit images: the heights that pixel values 0 and the maximum stand for.
     pub height_range_m: Option<[f64; 2]>,
@@ -28,9 +31,13 @@ pub struct LoadOptions {
 /// A grid as a format reader produces it, before filling and the pyramid.
 #[derive(Clone, Debug)]
 pub struct RawGrid {
+    /// Nodes per row.
     pub width: usize,
+    /// Rows.
     pub height: usize,
+    /// Node spacing along x (east), metres.
     pub dx: f64,
+    /// Node spacing along y (north), metres.
     pub dy: f64,
     /// Row-major, row 0 south. Non-finite values are nodata.
     pub data: Vec<f32>,
@@ -323,7 +330,7 @@ pub fn scale_heights(data: &mut [f32], opts: &LoadOptions) -> Result<()> {
 }
 
 impl Atlas {
-    /// A synthetic sketch (see [`synthetic::NAMES`]), `size`² nodes.
+    /// A synthetic sketch (see `sketch::synthetic::NAMES`), `size`² nodes.
     pub fn synthetic(name: &str, size: usize, opts: &LoadOptions) -> Result<Atlas> {
         if !(2..=4097).contains(&size) {
             return Err(Error::value(

@@ -2,9 +2,9 @@
 //!
 //! Rules:
 //! - Row 0 is the southern edge; texel (i, j) is the grid node at `origin + (i·dx, j·dy)`.
-//! - Every height is finite and within ±[`MAX_HEIGHT_M`]: nodata, NaN and heights beyond it are
-//!   filled from valid neighbours by the loader ([`fill`]) and counted in [`Atlas::nodata`], never
-//!   passed on.
+//! - Every height is finite and within ±`MAX_HEIGHT_M` (1000 km): nodata, NaN and heights
+//!   beyond it are filled from valid neighbours by the loader (`fill`) and counted in
+//!   [`Atlas::nodata`], never passed on.
 //! - Level l of the pyramid is a 2×2 box average of level l−1 (sizes halved rounding down, as
 //!   texture mips are), so a level-l texel's centre lies at level-0 coordinate `2^l·i + (2^l − 1)/2`.
 //!   Sampling between levels is trilinear on the CPU, bicubic per level on the GPU.
@@ -54,7 +54,8 @@ pub(crate) const MAX_HEIGHT_M: f64 = 1.0e6;
 static CELL_LIMIT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(MAX_CELLS);
 
 /// Lowers the largest grid any reader allocates, for the whole process: for a fuzz harness or a
-/// service that must bound its memory below the default (values above [`MAX_CELLS`] are clamped).
+/// service that must bound its memory below the default (values above `MAX_CELLS`, 2^28, are
+/// clamped).
 pub fn limit_cells(cells: usize) {
     CELL_LIMIT.store(cells.min(MAX_CELLS), std::sync::atomic::Ordering::Relaxed);
 }
@@ -69,16 +70,21 @@ pub(crate) fn max_cells() -> usize {
 /// whole.
 pub(crate) const CURVATURE_WINDOW: usize = 512;
 
+/// The sketch in memory: its heights in metres on a regular grid, with the mip pyramid the CPU
+/// stage and the GPU sample (see the module's rules for its layout).
 #[derive(Clone, Debug)]
 pub struct Atlas {
-    /// Grid spacing in metres along x (east) and y (north).
+    /// Grid spacing in metres along x (east).
     pub dx: f64,
+    /// Grid spacing in metres along y (north).
     pub dy: f64,
     /// World position of the south-west node.
     pub origin: DVec2,
     /// Cells that held nodata or NaN in the file and were filled.
     pub nodata: usize,
+    /// The lowest height of level 0, metres (after `sketch.height_scale`).
     pub min_m: f32,
+    /// The highest height of level 0, metres (after `sketch.height_scale`).
     pub max_m: f32,
     /// The mean height of the edge nodes: where a plain beyond the sketch lies.
     pub edge_mean_m: f32,
@@ -100,6 +106,7 @@ pub struct Atlas {
 }
 
 impl Atlas {
+    /// Nodes per row of level 0 (west to east).
     pub fn width(&self) -> usize {
         self.levels[0].width
     }
@@ -146,7 +153,7 @@ impl Atlas {
     /// (|h_xx|, |h_yy|, |h_xy|, the heights raised to `water_m`) at its own spacing, as the
     /// importance's geometric-error term takes them from the sketch map, averaged over the level.
     /// A level not held in memory (a streamed pyramid's finest) is measured on its central
-    /// window of at most [`CURVATURE_WINDOW`]² texels, read from its tiles (NaN where they cannot
+    /// window of at most 512² texels, read from its tiles (NaN where they cannot
     /// be read): counting only the levels in memory gave a sketch larger than memory, seen from
     /// high up, less of the error term than the same sketch held whole (jacksboro-high over its
     /// pyramid with `stream.cpu_mb = 0.1`, levels 0 and 1 on disk: warped needed 0.963×
@@ -185,6 +192,7 @@ impl Atlas {
         pyramid.central_window(l, CURVATURE_WINDOW).ok()
     }
 
+    /// Rows of level 0 (south to north).
     pub fn height(&self) -> usize {
         self.levels[0].height
     }

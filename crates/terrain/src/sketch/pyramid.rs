@@ -8,8 +8,11 @@
 /// One level of the pyramid: a row-major grid of finite heights.
 #[derive(Clone, Debug)]
 pub struct Level {
+    /// Texels per row.
     pub width: usize,
+    /// Rows.
     pub height: usize,
+    /// Heights in metres, row-major, row 0 south; empty for a streamed level not held in memory.
     pub data: Vec<f32>,
 }
 

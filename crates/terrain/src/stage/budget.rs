@@ -57,6 +57,8 @@ impl Budget {
         self.current = None;
     }
 
+    /// The mesh sides a frame may choose among, vertices, ascending from `warp.min_mesh` to
+    /// `warp.mesh`.
     pub fn rungs(&self) -> &[u32] {
         &self.rungs
     }

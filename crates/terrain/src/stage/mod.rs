@@ -1,7 +1,7 @@
 //! The CPU stage of a frame: sketch map → importance map → row and column warp → Φ.
 //!
 //! [`CpuStage`] owns every buffer the stage needs, sized once for the scene's `warp.size`, so a
-//! frame allocates nothing; its three parts are timed separately (the [`budget`], a sum over the
+//! frame allocates nothing; its three parts are timed separately (the [`Budget`], a sum over the
 //! importance map, counts with the warp).
 
 pub(crate) mod budget;
@@ -32,18 +32,25 @@ use std::time::Instant;
 /// Microseconds spent in each part of the stage.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct StageTimes {
+    /// Cutting the visible region out of the sketch and resampling it to the sketch map, µs.
     pub sketch_map_us: f64,
+    /// The importance map over the sketch map, µs.
     pub importance_us: f64,
+    /// The row and column warp to Φ (with the mesh budget), µs.
     pub warp_us: f64,
 }
 
 impl StageTimes {
+    /// The three parts together, µs.
     pub fn total_us(&self) -> f64 {
         self.sketch_map_us + self.importance_us + self.warp_us
     }
 }
 
+/// The CPU stage of the warped mode: each frame, sketch map → importance → warp → Φ, into
+/// buffers sized once for the scene's `warp.size`.
 pub struct CpuStage {
+    /// The sketch map: the visible region resampled to `warp.size`² texels.
     pub sketch_map: SketchMap,
     /// The importance the last warp was made for: only a frame that warps anew updates it, and
     /// the held warp's drift check compares against it (`stage::hold`). A caller that updates it
@@ -51,7 +58,9 @@ pub struct CpuStage {
     pub importance: ImportanceMap,
     /// The importance on a sample of rows, for a held warp's drift check.
     probe: ImportanceMap,
+    /// The warp and its Φ.
     pub warp: Warp,
+    /// The importance's terms and constants, from the scene's `[importance]` and `[warp]`.
     pub params: ImportanceParams,
     /// The mesh the importance asks for (`warp.budget`); `None`: always `warp.mesh`.
     pub budget: Option<Budget>,
@@ -187,6 +196,8 @@ fn heading_of(camera: &Camera, last: Option<Heading>, diagonal: bool) -> Heading
 }
 
 impl CpuStage {
+    /// The stage of `scene` with `detail` (whose octaves enter the geometric-error term); reads
+    /// `importance.max_map` where the scene gives one.
     pub fn new(scene: &Scene, detail: &Detail) -> Result<CpuStage> {
         let n = scene.warp.size as usize;
         let imp = &scene.importance;

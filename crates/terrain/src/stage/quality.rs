@@ -20,25 +20,38 @@ pub(crate) const BIN_EDGES_LOG2: [f64; 13] = [
     -3.0, -2.5, -2.0, -1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0,
 ];
 
+/// One bin of the density ratio's histogram: half an octave wide, the ends open.
 #[derive(Clone, Debug, Serialize)]
 pub struct Bin {
     /// Ratio range [lo, hi) of the bin; 0 and infinity at the open ends.
     pub lo: f64,
+    /// The bin's upper edge (exclusive); infinity for the last bin.
     pub hi: f64,
+    /// Visible cells whose ratio falls in the bin.
     pub cells: usize,
 }
 
+/// How well one warp met its importance: the density ratio (obtained ÷ demanded sample density)
+/// over the visible cells, and the cells that fold or are not finite. `warp` and
+/// `render --json` report it.
 #[derive(Clone, Debug, Serialize)]
 pub struct Quality {
+    /// Cells whose centre lies in view (`S_f ≥ 0.5`) and whose ratio is finite.
     pub cells_visible: usize,
+    /// Share of the visible cells whose ratio lies in [½, 2], 0 to 1.
     pub ratio_within_0_5_2: f64,
+    /// Share of the visible cells whose ratio lies in [½, 1], 0 to 1.
     pub ratio_within_0_5_1: f64,
+    /// The median ratio over the visible cells (NaN where none is).
     pub ratio_median: f64,
     /// The visible cells over the cells their importance demands (`Σ 1/r²` over them): 1 when
     /// the view gets as many cells as it asks for, less when cells went where nothing shows.
     pub demand_met: f64,
+    /// Cells of Φ, visible or not, whose signed area is ≤ 0 (folded).
     pub flipped_cells: usize,
+    /// Non-finite values met: in Φ, in the importance map, and visible cells' ratios.
     pub nonfinite: usize,
+    /// The visible cells' ratios by half-octave bins from ⅛ to 8, the ends open.
     pub histogram: Vec<Bin>,
 }
 

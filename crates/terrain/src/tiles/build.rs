@@ -47,19 +47,41 @@ pub struct BuildOptions {
 /// What a build did, for the command's report.
 #[derive(Clone, Debug, Serialize)]
 pub struct BuildSummary {
+    /// Level 0's nodes per row.
     pub width: usize,
+    /// Level 0's rows.
     pub height: usize,
+    /// Mip levels, level 0 included.
     pub levels: usize,
+    /// Tiles of every level.
     pub tiles: usize,
     /// Tiles this run encoded; the others were whole from an earlier, interrupted run.
     pub tiles_written: usize,
+    /// Source files read (one, or the tiles a glob matched).
     pub sources: usize,
     /// Bytes of the finished pyramid's files.
     pub disk_bytes: u64,
+    /// Wall time of the build, seconds.
     pub seconds: f64,
 }
 
 /// Converts `src` into a pyramid in `out` (created, or resumed where a run stopped).
+///
+/// `src` is any sketch file or a quoted glob of tiles on one grid; a scene whose `sketch.path`
+/// names `out` then streams it.
+///
+/// ```no_run
+/// use std::path::Path;
+/// use terrain::tiles::{self, BuildOptions};
+///
+/// let summary = tiles::build(
+///     Path::new("dem/*.hgt"),
+///     Path::new("dem-pyramid"),
+///     &BuildOptions { threads: 0, ..Default::default() },
+/// )?;
+/// println!("{} levels, {} tiles", summary.levels, summary.tiles);
+/// # Ok::<(), terrain::Error>(())
+/// ```
 pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary> {
     let start = Instant::now();
     if super::is_pyramid(src) {

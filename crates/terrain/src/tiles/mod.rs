@@ -53,20 +53,27 @@ pub(crate) const FORMAT: &str = "terrain-tiles 1";
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Meta {
+    /// The layout's name and version, `terrain-tiles 1`; another is refused.
     pub format: String,
     /// What it was converted from, for `terrain info`.
     pub source: String,
-    /// Level 0's nodes.
+    /// Level 0's nodes per row (west to east).
     pub width: usize,
+    /// Level 0's rows (south to north).
     pub height: usize,
-    /// Node spacing in metres, east and north.
+    /// Node spacing east, metres.
     pub dx_m: f64,
+    /// Node spacing north, metres.
     pub dy_m: f64,
+    /// Interior nodes per tile side ([`TILE`]).
     pub tile: usize,
+    /// Border nodes on each side of a tile ([`BORDER`]).
     pub border: usize,
     /// Each level's nodes, level 0 first.
     pub levels: Vec<[usize; 2]>,
+    /// The lowest height of level 0, metres.
     pub min_m: f32,
+    /// The highest height of level 0, metres.
     pub max_m: f32,
     /// The mean of level 0's edge nodes (where a plain beyond the sketch lies).
     pub edge_mean_m: f32,
@@ -83,9 +90,13 @@ pub struct Meta {
 pub struct MetaGeoref {
     /// `degrees`, or metres per unit for a projected system.
     pub units: String,
+    /// The south-west node's x (easting or longitude), in `units`.
     pub west: f64,
+    /// The south-west node's y (northing or latitude), in `units`.
     pub south: f64,
+    /// Node spacing along x (east), in `units`.
     pub cell_x: f64,
+    /// Node spacing along y (north), in `units`.
     pub cell_y: f64,
     /// The coordinate system's EPSG code, where the source named one.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -33,7 +33,9 @@ type Recent = Vec<((usize, usize, usize), Arc<Vec<f32>>)>;
 /// An opened pyramid folder.
 #[derive(Clone, Debug)]
 pub struct Pyramid {
+    /// The pyramid's folder, holding `pyramid.toml` and the tiles.
     pub dir: PathBuf,
+    /// Its `pyramid.toml`.
     pub meta: Meta,
     /// The tiles point queries read last, most recent first (shared by clones).
     recent: Arc<Mutex<Recent>>,
@@ -139,7 +141,7 @@ impl Pyramid {
 
     /// Height at level `l`'s node coordinates (x, y), bilinear, clamped to the level: the nodes
     /// come from the one tile holding (x, y) (its border holds the next node), and the rule is
-    /// `Level::bilinear`'s ([`crate::sketch::bilinear_cell`]), so it equals the level held in
+    /// `Level::bilinear`'s (`sketch::bilinear_cell`), so it equals the level held in
     /// memory bit for bit.
     pub fn bilinear(&self, l: usize, x: f64, y: f64) -> Result<f32> {
         let [w, h] = self.meta.levels[l];

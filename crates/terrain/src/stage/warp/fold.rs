@@ -51,7 +51,7 @@ impl Warp {
         self.guarded_columns = self.follows_mean.iter().filter(|&&m| m).count();
     }
 }
-/// Whether every cell between columns s and s+1 of Φ is sound (see [`cell_turn`]).
+/// Whether every cell between columns s and s+1 of Φ is sound (see `cell_turn`).
 #[inline(always)]
 pub fn pair_unfolded(phi: &[[f32; 2]], n: usize, s: usize) -> bool {
     let mut least = f32::INFINITY;

@@ -89,8 +89,12 @@ use crate::scene::WarpMethod;
 use crate::stage::lines::{LANES, LaneScratch, LineScratch};
 use crate::stage::transpose;
 
+/// The row and column warp (Dachsbacher & Stamminger 2004): moves the n × n sketch map's
+/// grid so samples are spaced inversely to the importance, giving Φ. Holds every buffer it
+/// needs, sized once for n.
 pub struct Warp {
     n: usize,
+    /// How folds are kept away: the paper's passes alone, or guarded (`warp.method`).
     pub method: WarpMethod,
     /// Largest log2 step of importance between 4-neighbours; 0: no limit.
     pub max_log2_step: f32,
@@ -123,7 +127,7 @@ pub struct Warp {
     /// Whether the last frame ran [`Warp::run_across`].
     pub across: bool,
     /// Folded column pairs at which the guard sends every column to the mean at once
-    /// ([`fallback_pairs`] of n); `usize::MAX`: only the guard's rounds.
+    /// (`fallback_pairs` of n); `usize::MAX`: only the guard's rounds.
     pub fallback_pairs: usize,
 }
 
@@ -136,6 +140,8 @@ pub fn fallback_pairs(n: usize) -> usize {
 }
 
 impl Warp {
+    /// A warp of an n × n grid by `method`, the importance limited to `max_log2_step` octaves
+    /// between neighbours (0: no limit).
     pub fn new(n: usize, method: WarpMethod, max_log2_step: f32) -> Warp {
         Warp {
             n,
@@ -166,6 +172,7 @@ impl Warp {
         }
     }
 
+    /// The grid's side, texels (`warp.size`).
     pub fn n(&self) -> usize {
         self.n
     }
