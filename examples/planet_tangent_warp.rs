@@ -49,8 +49,7 @@ fn main() -> anyhow::Result<()> {
         storage_bytes: 1 << 27,
     })?;
     let positions = |mode: Mode, scene: &Scene, atlas: &Atlas, cam: &terrain::Camera| {
-        let mut r =
-            Renderer::with_context(ctx.clone(), scene, atlas.clone(), mode, View::Shaded, true)?;
+        let mut r = Renderer::with_context(ctx.clone(), scene, atlas.clone(), mode, View::Shaded)?;
         let frame = r.render(cam)?;
         anyhow::Ok((r.read_positions(cam)?, frame.gpu.triangles))
     };

@@ -51,7 +51,7 @@ fn shot(s: &Scene, mode: Mode) -> Vec<u8> {
 /// A frame of `scene` in `mode` with its pixels' world positions (x, y, z, 1 on ground / 0 on
 /// sky, f64, row-major), and the renderer that drew it.
 fn render_with_positions(scene: &Scene, mode: Mode) -> (Renderer, Vec<u8>, Vec<f64>) {
-    let mut r = Renderer::with_positions(scene, mode, View::Shaded, true).expect("renderer");
+    let mut r = Renderer::new(scene, mode, View::Shaded).expect("renderer");
     let camera = terrain::scene::camera_of(scene, &r.atlas).unwrap();
     let frame = r.render(&camera).expect("frame");
     let world = terrain::world_positions(&r.read_positions(&camera).unwrap(), &camera);
@@ -206,7 +206,7 @@ fn deferred_shading_draws_what_forward_draws() {
             scene.render.mode = mode;
             scene.render.deferred = deferred;
             scene.render.msaa = Msaa::Off;
-            let mut r = Renderer::with_positions(&scene, mode, view, true).expect("renderer");
+            let mut r = Renderer::new(&scene, mode, view).expect("renderer");
             assert_eq!(r.deferred, deferred, "{name}: shaded deferred as asked");
             let camera = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
             let rgba = r.render(&camera).expect("frame").rgba;
@@ -415,7 +415,7 @@ fn multisampling_smooths_edges_toward_the_supersampled_reference_and_keeps_posit
     let shot = |mode: Mode, msaa: &str| {
         let mut s = bundled("jacksboro", 128, 256);
         s.render.msaa = terrain::scene::Msaa::parse(msaa).unwrap();
-        let mut r = Renderer::with_positions(&s, mode, View::Shaded, true).unwrap();
+        let mut r = Renderer::new(&s, mode, View::Shaded).unwrap();
         let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
         let frame = r.render(&camera).unwrap();
         let positions = r.read_positions(&camera).unwrap();

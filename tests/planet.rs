@@ -156,8 +156,7 @@ fn the_reference_marches_the_same_planet() {
         let (r, mesh) = render(&s);
         let camera = terrain::scene::camera_of(&s, &r.atlas).expect("camera");
         drop(r);
-        let mut reference =
-            Renderer::with_positions(&s, Mode::Reference, View::Shaded, true).expect("reference");
+        let mut reference = Renderer::new(&s, Mode::Reference, View::Shaded).expect("reference");
         let image = reference.render(&camera).expect("frame");
         let db = psnr(&mesh.rgba, &image.rgba);
         eprintln!("{altitude} m: clipmaps against the reference {db:.1} dB");
@@ -200,8 +199,7 @@ fn moving_the_camera_a_metre_moves_the_picture_as_the_geometry_predicts() {
     // One metre north.
     moved.camera.lat_deg = Some(46.5 + (1.0f64 / 6_371_000.0).to_degrees());
     let shot = |scene: &Scene| {
-        let mut r =
-            Renderer::with_positions(scene, Mode::Clipmaps, View::Shaded, true).expect("renderer");
+        let mut r = Renderer::new(scene, Mode::Clipmaps, View::Shaded).expect("renderer");
         let camera = terrain::scene::camera_of(scene, &r.atlas).expect("camera");
         r.render(&camera).expect("frame");
         let hits = world_hits(&r, &camera);

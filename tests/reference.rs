@@ -96,12 +96,10 @@ fn meshes_stay_within_pixels_of_the_reference() {
         let camera = terrain::scene::camera_of(&scene, &reference.atlas).unwrap();
         let truth_image = reference.render(&camera).unwrap().rgba;
         let truth = reference.read_positions(&camera).unwrap();
-        let mut warped =
-            Renderer::with_positions(&scene, Mode::Warped, View::Shaded, true).unwrap();
+        let mut warped = Renderer::new(&scene, Mode::Warped, View::Shaded).unwrap();
         let warped_image = warped.render(&camera).unwrap().rgba;
         let w = warped.read_positions(&camera).unwrap();
-        let mut gmm =
-            Renderer::with_positions(&scene, Mode::Geomipmap, View::Shaded, true).unwrap();
+        let mut gmm = Renderer::new(&scene, Mode::Geomipmap, View::Shaded).unwrap();
         let gmm_image = gmm.render(&camera).unwrap().rgba;
         let g = gmm.read_positions(&camera).unwrap();
         let width32 = camera.width;
@@ -153,7 +151,7 @@ fn mesh_positions_hold_from_20_km_up() {
     let truth = reference.read_positions(&camera).unwrap();
     let footprint = camera.eye.z * 2.0 * camera.tan_half_y() / camera.height as f64;
     for mode in [Mode::Warped, Mode::Geomipmap] {
-        let mut r = Renderer::with_positions(&scene, mode, View::Shaded, true).unwrap();
+        let mut r = Renderer::new(&scene, mode, View::Shaded).unwrap();
         r.render(&camera).unwrap();
         let p = r.read_positions(&camera).unwrap();
         let (mut sum, mut count) = (0.0, 0usize);

@@ -28,9 +28,9 @@ use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::gpu::alloc::{Alloc, Ledger};
 use crate::gpu::context::GpuContext;
-use crate::gpu::frame_io::ColourReadback;
 use crate::gpu::output::OutputPass;
 pub use crate::gpu::output::Targets;
+use crate::gpu::snapshot::Snapshot;
 pub use crate::gpu::uniforms::View;
 use crate::query::Ground;
 use crate::render::{Renderer, needs};
@@ -256,52 +256,22 @@ impl Terrain {
         ground.height_at(DVec2::new(x, y), 0.0)
     }
 
-    /// Draws `camera`'s frame into textures of its own and reads the colour back: RGBA, rows
-    /// top first, in the colour target's format (8 bits a channel).
+    /// Draws `camera`'s frame into textures of its own and reads the colour back: rows top
+    /// first, in the colour target's format (four bytes a pixel, single-sampled targets). The
+    /// commands' snapshots are made the same way ([`crate::gpu::snapshot`]).
     pub fn render_to_image(&mut self, camera: &Camera) -> Result<Vec<u8>> {
-        if self.targets.samples != 1 || self.targets.colour.block_copy_size(None) != Some(4) {
-            return Err(Error::Internal(
-                "render_to_image reads single-sampled targets of four bytes a pixel",
-            ));
-        }
-        let device = self.ctx.device.clone();
-        let size = wgpu::Extent3d {
-            width: camera.width,
-            height: camera.height,
-            depth_or_array_layers: 1,
-        };
-        let texture = |format, usage, label| {
-            #[allow(clippy::disallowed_methods)]
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size,
-                mip_level_count: 1,
-                sample_count: self.targets.samples,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
-        let colour = texture(self.targets.colour, usage, "host colour");
-        let depth = texture(self.targets.depth, usage, "host depth");
-        self.prepare(camera)?;
-        let mut encoder = device.create_command_encoder(&Default::default());
-        let (cv, dv) = (
-            colour.create_view(&Default::default()),
-            depth.create_view(&Default::default()),
-        );
-        clear(&mut encoder, &cv, &dv);
-        self.record(&mut encoder, &cv, &dv)?;
         let alloc = Alloc {
-            device: &device,
+            device: &self.ctx.device,
             ledger: &self._ledger,
         };
-        let readback = ColourReadback::new(&alloc, camera.width, camera.height);
-        readback.record(&mut encoder, &colour);
+        let snapshot = Snapshot::new(&alloc, self.targets, camera.width, camera.height)?;
+        self.prepare(camera)?;
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        self.renderer.host_record(&mut encoder)?;
+        self.recorded = true;
+        snapshot.record(&mut encoder, &self.output, &self.output_group);
         self.ctx.queue.submit([encoder.finish()]);
-        readback.read(&self.ctx)
+        snapshot.read(&self.ctx)
     }
 }
 
@@ -314,7 +284,7 @@ fn build(
     mode: Mode,
     view: View,
 ) -> Result<Renderer> {
-    Renderer::with_context(ctx.clone(), scene, atlas, mode, view, true)
+    Renderer::with_context(ctx.clone(), scene, atlas, mode, view)
 }
 
 /// The output pass's bind group over `renderer`'s frame.

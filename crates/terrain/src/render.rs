@@ -13,6 +13,8 @@ use crate::error::Result;
 use crate::gpu::alloc::{Alloc, Buffer, Ledger};
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::frame_io::{FrameStats, PassTimes, Timer, uniform_buffer, upload_atlas};
+use crate::gpu::output::{OutputPass, Targets};
+use crate::gpu::snapshot::Snapshot;
 use crate::gpu::stream::{AtlasBinding, Stream};
 use crate::gpu::uniforms::{FrameInputs, FrameUniforms, View};
 use crate::lod::{CpuTimes, Lod, Shared};
@@ -91,10 +93,31 @@ pub struct Renderer {
     sketch: SketchGpu,
     timer: Option<Timer>,
     lod: Box<dyn Lod>,
+    /// Writes the frame into a snapshot's textures, as into a host's targets.
+    output: OutputPass,
+    /// The output pass's reading of the scheme's frame at [`Renderer::size`]'s size.
+    output_group: wgpu::BindGroup,
+    /// The textures and read-back of the last snapshot's size (made at the first).
+    snapshot: Option<Snapshot>,
     ledger: Ledger,
     /// The image size the scheme's targets are made for: a camera of another size remakes them
     /// alone ([`Lod::resize`]).
     size: (u32, u32),
+}
+
+/// The targets of a command's snapshot: what `terrain render` writes.
+const SNAPSHOT: Targets = Targets {
+    colour: wgpu::TextureFormat::Rgba8UnormSrgb,
+    depth: wgpu::TextureFormat::Depth32Float,
+    samples: 1,
+};
+
+/// The output pass's bind group over the frame `lod` leaves.
+fn bind_output(ctx: &GpuContext, output: &OutputPass, lod: &dyn Lod) -> Result<wgpu::BindGroup> {
+    let source = lod.output().ok_or(crate::Error::Internal(
+        "the scheme keeps no frame for the output pass",
+    ))?;
+    output.bind(&ctx.device, source)
 }
 
 /// What a scene in `mode` needs of the adapter: the atlas, and the mode's own largest binding
@@ -116,19 +139,9 @@ impl Renderer {
     /// A renderer of `scene` in `mode` drawing `view`, on a device of its own: reads the sketch,
     /// opens a device that meets [`needs`], builds the pipelines and buffers once.
     pub fn new(scene: &Scene, mode: Mode, view: View) -> Result<Renderer> {
-        Renderer::with_positions(scene, mode, view, false)
-    }
-
-    /// `positions`: also write each pixel's ground position (the reference always does).
-    pub fn with_positions(
-        scene: &Scene,
-        mode: Mode,
-        view: View,
-        positions: bool,
-    ) -> Result<Renderer> {
         let atlas = scene::load_atlas(scene)?;
         let ctx = GpuContext::new(&needs(scene, mode, &atlas))?;
-        Renderer::with_context(ctx, scene, atlas, mode, view, positions)
+        Renderer::with_context(ctx, scene, atlas, mode, view)
     }
 
     /// On a device shared with other renderers.
@@ -138,7 +151,6 @@ impl Renderer {
         atlas: Atlas,
         mode: Mode,
         view: View,
-        positions: bool,
     ) -> Result<Renderer> {
         ctx.check(&needs(scene, mode, &atlas))?;
         let detail = scene::detail_for(scene, &atlas, mode);
@@ -188,7 +200,8 @@ impl Renderer {
             frame: &frame,
             atlas_binding: &atlas_binding,
             view,
-            positions,
+            // The output pass reads each pixel's view distance: a host's depth, a snapshot's.
+            positions: true,
             samples,
             deferred: mode.is_mesh() && ctx.deferred(scene.render.deferred, samples),
         };
@@ -205,7 +218,12 @@ impl Renderer {
         let lod = crate::lod::scheme(mode, &shared)?;
         let deferred = shared.deferred;
         let shader_key = crate::lod::shader_key(&shared, mode);
+        let output = OutputPass::new(&alloc, SNAPSHOT, shader_key)?;
+        let output_group = bind_output(&ctx, &output, lod.as_ref())?;
         Ok(Renderer {
+            output,
+            output_group,
+            snapshot: None,
             samples,
             deferred,
             shader_key,
@@ -235,6 +253,7 @@ impl Renderer {
                 ledger: &self.ledger,
             };
             self.lod.resize(&alloc, size.0, size.1)?;
+            self.output_group = bind_output(&self.ctx, &self.output, self.lod.as_ref())?;
             self.size = size;
         }
         Ok(())
@@ -371,7 +390,17 @@ impl Renderer {
         let mut stream_us = stream_start.elapsed().as_secs_f64() * 1e6;
         let timer = self.timer.as_ref();
         let ran = self.lod.record(ctx, &mut encoder, timer);
-        self.lod.record_read_back(&mut encoder);
+        let alloc = Alloc {
+            device: &ctx.device,
+            ledger: &self.ledger,
+        };
+        let snapshot = match self.snapshot.take() {
+            Some(s) if s.size() == self.size => s,
+            _ => Snapshot::new(&alloc, SNAPSHOT, self.size.0, self.size.1)?,
+        };
+        self.output.prepare(&ctx.queue, camera);
+        snapshot.record(&mut encoder, &self.output, &self.output_group);
+        let snapshot = self.snapshot.insert(snapshot);
         if let Some(t) = timer {
             t.resolve(&mut encoder, ran);
         }
@@ -380,7 +409,7 @@ impl Renderer {
         }
         let start = Instant::now();
         ctx.queue.submit([encoder.finish()]);
-        let rgba = self.lod.read_image(ctx)?;
+        let rgba = snapshot.read(ctx)?;
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
         let stream_start = Instant::now();
         let stream = match &mut self.sketch {
@@ -495,7 +524,7 @@ impl Renderer {
     }
 
     /// Ground positions of the last frame's pixels, relative to `camera`'s ground point (w = 1
-    /// on ground, 0 on sky); the renderer must have been built with positions on.
+    /// on ground, 0 on sky), from the view distances every frame keeps for the output pass.
     pub fn read_positions(&self, camera: &Camera) -> Result<Vec<[f32; 4]>> {
         self.lod.read_positions(&self.ctx, camera)
     }

@@ -170,8 +170,7 @@ impl Cache {
                     c
                 }
             };
-            let r =
-                Renderer::with_context(ctx, scene, atlas, scene.render.mode, View::Shaded, false)?;
+            let r = Renderer::with_context(ctx, scene, atlas, scene.render.mode, View::Shaded)?;
             self.renderer = Some(r);
             self.key = key;
         }

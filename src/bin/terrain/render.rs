@@ -126,7 +126,7 @@ pub fn run(a: Args) -> Result<()> {
     if let Some(size) = a.size {
         (scene.camera.width, scene.camera.height) = size;
     }
-    let mut r = Renderer::with_positions(&scene, mode, a.view, a.positions.is_some())?;
+    let mut r = Renderer::new(&scene, mode, a.view)?;
     let camera = scene::camera_of(&scene, r.atlas())?;
     let camera_report = scene::camera_report(&scene, r.atlas(), &camera)?;
     let frames = frames(&mut r, &camera, &scene, a.repeat)?;

@@ -47,14 +47,7 @@ pub(super) fn renderer(
     s: &Setting,
 ) -> Result<Renderer> {
     let scene = s.apply(scene);
-    Renderer::with_context(
-        ctx.clone(),
-        &scene,
-        atlas.clone(),
-        s.mode(),
-        View::Shaded,
-        true,
-    )
+    Renderer::with_context(ctx.clone(), &scene, atlas.clone(), s.mode(), View::Shaded)
 }
 
 /// Measures `s` after a warm-up: its image and positions against `truth`, and its times over
@@ -189,7 +182,6 @@ pub(super) fn converged_reference(
         atlas.clone(),
         Mode::Reference,
         View::Shaded,
-        true,
     )?;
     let (mut truth0, mut frame) = truth(&mut reference, camera)?;
     let mut step = *march_step(&mut reference);

@@ -23,9 +23,10 @@
 //! `strip.png`, `reference.png`, `reference_positions.npy` (world x, y, z and ground flag per
 //! pixel, f64).
 //!
-//! Rejected alternative: timing each setting with a separate renderer built without positions
-//! and measuring it with another. It would bake every baseline grid twice (over a second each on
-//! llvmpipe) to remove a cost all modes share alike.
+//! Positions come from the frame each setting is timed with: every renderer keeps its pixels'
+//! view distances (the output pass reads them for snapshots and hosts), a cost all modes share
+//! alike. Rejected alternative: a second renderer per setting for its image, which would bake
+//! every baseline grid twice (over a second each on llvmpipe).
 
 pub mod figures;
 mod measure;

@@ -25,6 +25,7 @@ pub mod output;
 pub mod planet;
 pub mod reference;
 pub mod shaders;
+pub mod snapshot;
 pub mod stream;
 pub mod terrain;
 pub mod uniforms;

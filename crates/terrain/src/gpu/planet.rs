@@ -5,7 +5,7 @@
 //! with an infinite far plane, so a view holds ground from a metre to 20,000 km away without
 //! z-fighting. Owns the colour and depth targets.
 
-use super::alloc::{Alloc, Buffer, Texture};
+use super::alloc::{Alloc, Buffer};
 use super::bindings::{Binding, bind_group, buffer, layout};
 use super::shader_module;
 use super::shaders::Key;
@@ -125,11 +125,6 @@ impl PlanetPass {
     pub fn resize(&mut self, device: &Alloc, width: u32, height: u32) -> Result<()> {
         self.targets = make(device, (width, height), &self.sizing)?;
         Ok(())
-    }
-
-    /// The frame's colour.
-    pub fn colour(&self) -> &Texture {
-        &self.targets.colour
     }
 
     /// Ground positions of the last frame's pixels, drawn from `camera` (metres in its nadir's

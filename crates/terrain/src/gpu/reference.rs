@@ -121,14 +121,6 @@ impl ReferencePass {
         );
     }
 
-    /// The image as RGBA8 sRGB, rows top first.
-    pub fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
-        Ok(read_vec4(ctx, &self.colour)?
-            .iter()
-            .flat_map(|c| [srgb(c[0]), srgb(c[1]), srgb(c[2]), 255])
-            .collect())
-    }
-
     /// The frame's display colour and hit positions.
     pub fn output(&self) -> super::output::Source<'_> {
         super::output::Source::Buffers {
@@ -140,17 +132,6 @@ impl ReferencePass {
     pub fn read_positions(&self, ctx: &GpuContext) -> Result<Vec<[f32; 4]>> {
         read_vec4(ctx, &self.position)
     }
-}
-
-/// Linear to 8-bit sRGB, as the render targets' sRGB format encodes.
-fn srgb(v: f32) -> u8 {
-    let v = v.clamp(0.0, 1.0);
-    let e = if v <= 0.003_130_8 {
-        12.92 * v
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    };
-    (e * 255.0 + 0.5) as u8
 }
 
 impl Inputs {

@@ -24,7 +24,7 @@ use crate::error::{Error, Result};
 use crate::geomipmap::{BlockGpu, Blocks, Grid, LodParams, Selection, Templates};
 use crate::gpu::alloc::Buffer;
 use crate::gpu::context::GpuContext;
-use crate::gpu::frame_io::{ColourReadback, Timer, read_vec4, uniform_buffer};
+use crate::gpu::frame_io::{Timer, read_vec4, uniform_buffer};
 use crate::gpu::normals::NormalsPass;
 use crate::gpu::shaders::Key;
 use crate::gpu::terrain::{TerrainPass, Variant};
@@ -166,7 +166,6 @@ pub struct Baselines {
     /// Whether a note has said so (once per renderer).
     noted: bool,
     terrain: TerrainPass,
-    readback: ColourReadback,
     /// Precomputation (bake, δ, quadtree), milliseconds.
     pub precompute_ms: f64,
 }
@@ -271,7 +270,6 @@ impl Baselines {
         let (width, height) = (scene.camera.width, scene.camera.height);
         let detailed = bake.as_ref().map(|b| &*b.detailed);
         let terrain = TerrainPass::new(device, s.frame, detailed, n, width, height, &variant)?;
-        let readback = ColourReadback::new(device, width, height);
         let mut selection = Selection::default();
         if kind == Mode::Bruteforce {
             selection.all_at(&grid, &blocks, 0);
@@ -297,7 +295,6 @@ impl Baselines {
             dropped: 0,
             noted: false,
             terrain,
-            readback,
         })
     }
 }
@@ -366,7 +363,6 @@ impl Lod for Baselines {
 
     fn resize(&mut self, alloc: &crate::gpu::alloc::Alloc, width: u32, height: u32) -> Result<()> {
         self.terrain.resize(alloc, width, height)?;
-        self.readback = ColourReadback::new(alloc, width, height);
         Ok(())
     }
 
@@ -417,16 +413,8 @@ impl Lod for Baselines {
         &[TerrainPass::NAME]
     }
 
-    fn record_read_back(&self, encoder: &mut wgpu::CommandEncoder) {
-        self.readback.record(encoder, self.terrain.colour());
-    }
-
     fn output(&self) -> Option<crate::gpu::output::Source<'_>> {
         self.terrain.output()
-    }
-
-    fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
-        self.readback.read(ctx)
     }
 
     fn read_positions(&self, ctx: &GpuContext, camera: &Camera) -> Result<Vec<[f32; 4]>> {

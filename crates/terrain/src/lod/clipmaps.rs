@@ -15,7 +15,7 @@ use crate::error::{Error, Result};
 use crate::gpu::alloc::Buffer;
 use crate::gpu::clipmaps::{ClipmapsPass, PlanetUniforms};
 use crate::gpu::context::GpuContext;
-use crate::gpu::frame_io::{ColourReadback, Timer};
+use crate::gpu::frame_io::Timer;
 use crate::gpu::planet::PlanetPass;
 use crate::gpu::uniforms::FrameInputs;
 use crate::planet::rings::{Rings, Span, visible_span};
@@ -40,7 +40,6 @@ pub struct Clipmaps {
     planet_uniforms: Buffer,
     clipmaps: ClipmapsPass,
     pass: PlanetPass,
-    readback: ColourReadback,
     /// The last frame's levels and uniforms.
     pub span: Span,
     /// The last frame's planet uniform block; `None` before the first frame.
@@ -94,7 +93,6 @@ impl Clipmaps {
             planet_uniforms,
             clipmaps,
             pass,
-            readback: ColourReadback::new(device, size.0, size.1),
             span: Span {
                 first_level: 0,
                 last_level: 0,
@@ -194,7 +192,6 @@ impl Lod for Clipmaps {
 
     fn resize(&mut self, alloc: &crate::gpu::alloc::Alloc, width: u32, height: u32) -> Result<()> {
         self.pass.resize(alloc, width, height)?;
-        self.readback = ColourReadback::new(alloc, width, height);
         Ok(())
     }
 
@@ -243,18 +240,8 @@ impl Lod for Clipmaps {
         &PASSES
     }
 
-    fn record_read_back(&self, encoder: &mut wgpu::CommandEncoder) {
-        if self.uniforms.is_some() {
-            self.readback.record(encoder, self.pass.colour());
-        }
-    }
-
     fn output(&self) -> Option<crate::gpu::output::Source<'_>> {
         self.pass.output()
-    }
-
-    fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
-        self.readback.read(ctx)
     }
 
     fn read_positions(&self, ctx: &GpuContext, camera: &Camera) -> Result<Vec<[f32; 4]>> {

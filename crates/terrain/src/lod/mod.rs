@@ -168,14 +168,8 @@ pub trait Lod: Any {
         encoder: &mut wgpu::CommandEncoder,
         timer: Option<&Timer>,
     ) -> &'static [&'static str];
-    /// Records the copy of the frame's image that [`read_image`](Lod::read_image) reads: a
-    /// snapshot's frame records it after [`record`](Lod::record); a host's frame, which never reads
-    /// its image back, does not.
-    fn record_read_back(&self, _encoder: &mut wgpu::CommandEncoder) {}
-    /// The image of the submitted frame: RGBA8 sRGB, rows top first.
-    fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>>;
-    /// Where the recorded frame is left, for writing into a host's targets
-    /// ([`crate::gpu::output`]); `None` where the renderer was built without positions.
+    /// Where the recorded frame is left, for the output pass to write into a host's targets or a
+    /// snapshot's ([`crate::gpu::output`]); `None` where the scheme keeps no view distances.
     fn output(&self) -> Option<crate::gpu::output::Source<'_>>;
     /// Ground positions of the last frame's pixels, relative to `camera`'s ground point (w = 1
     /// on ground, 0 on sky).

@@ -112,10 +112,6 @@ impl Lod for Reference {
         Some(self.pass.output())
     }
 
-    fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
-        self.pass.read_image(ctx)
-    }
-
     fn read_positions(&self, ctx: &GpuContext, _: &Camera) -> Result<Vec<[f32; 4]>> {
         self.pass.read_positions(ctx)
     }

@@ -8,7 +8,7 @@ use crate::camera::Camera;
 use crate::error::Result;
 use crate::gpu::alloc::Buffer;
 use crate::gpu::context::GpuContext;
-use crate::gpu::frame_io::{ColourReadback, Timer, read_pod, read_vec4};
+use crate::gpu::frame_io::{Timer, read_pod, read_vec4};
 use crate::gpu::mesh_split::MeshSplitPass;
 use crate::gpu::normals::NormalsPass;
 use crate::gpu::terrain::{TerrainPass, Variant};
@@ -45,7 +45,6 @@ pub struct Warped {
     normals: Option<NormalsPass>,
     terrain: TerrainPass,
     importance: Option<Buffer>,
-    readback: ColourReadback,
     /// Whether the GPU's Φ (and importance) buffers hold the stage's current warp.
     phi_on_gpu: bool,
 }
@@ -109,7 +108,6 @@ impl Warped {
             )?),
             None => None,
         };
-        let readback = ColourReadback::new(device, width, height);
         Ok(Warped {
             stage,
             warp_zoom,
@@ -117,7 +115,6 @@ impl Warped {
             normals,
             terrain,
             importance,
-            readback,
             phi_on_gpu: false,
         })
     }
@@ -169,7 +166,6 @@ impl Lod for Warped {
 
     fn resize(&mut self, alloc: &crate::gpu::alloc::Alloc, width: u32, height: u32) -> Result<()> {
         self.terrain.resize(alloc, width, height)?;
-        self.readback = ColourReadback::new(alloc, width, height);
         Ok(())
     }
 
@@ -244,16 +240,8 @@ impl Lod for Warped {
         }
     }
 
-    fn record_read_back(&self, encoder: &mut wgpu::CommandEncoder) {
-        self.readback.record(encoder, self.terrain.colour());
-    }
-
     fn output(&self) -> Option<crate::gpu::output::Source<'_>> {
         self.terrain.output()
-    }
-
-    fn read_image(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
-        self.readback.read(ctx)
     }
 
     fn read_positions(&self, ctx: &GpuContext, camera: &Camera) -> Result<Vec<[f32; 4]>> {

@@ -54,7 +54,6 @@ impl CpuPath {
                 want.atlas.clone(),
                 want.mode,
                 want.view(),
-                false,
             )?),
         };
         let mut frame = if want.frozen {

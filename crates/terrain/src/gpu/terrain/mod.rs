@@ -305,11 +305,6 @@ impl TerrainPass {
         Ok(())
     }
 
-    /// The frame's colour, resolved.
-    pub fn colour(&self) -> &Texture {
-        &self.targets.colour
-    }
-
     pub fn triangles(&self) -> u64 {
         self.index_count as u64 / 3
     }

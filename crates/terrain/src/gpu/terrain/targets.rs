@@ -23,7 +23,7 @@ pub(in crate::gpu) struct Sizing {
 
 /// The targets [`make`] builds, with their views.
 pub(in crate::gpu) struct Targets {
-    pub colour: Texture,
+    _colour: Texture,
     pub colour_view: wgpu::TextureView,
     pub depth_view: wgpu::TextureView,
     _depth: Texture,
@@ -125,7 +125,7 @@ pub(in crate::gpu) fn make(
         depth_copy_view: depth_copy
             .as_ref()
             .map(|t| t.create_view(&Default::default())),
-        colour,
+        _colour: colour,
         _depth: depth,
         depth_copy,
         multisampled,
