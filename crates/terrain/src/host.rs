@@ -258,7 +258,7 @@ impl Terrain {
 
     /// Draws `camera`'s frame into textures of its own and reads the colour back: rows top
     /// first, in the colour target's format (four bytes a pixel, single-sampled targets). The
-    /// commands' snapshots are made the same way ([`crate::gpu::snapshot`]).
+    /// commands' snapshots are made the same way.
     pub fn render_to_image(&mut self, camera: &Camera) -> Result<Vec<u8>> {
         let alloc = Alloc {
             device: &self.ctx.device,
