@@ -7,6 +7,8 @@
 //! submits, reads the image back and times it (timestamp queries keyed by pass name where the
 //! adapter has them, wall time around submit always).
 
+mod build;
+
 use crate::camera::Camera;
 use crate::detail::Detail;
 use crate::error::Result;
@@ -152,95 +154,7 @@ impl Renderer {
         mode: Mode,
         view: View,
     ) -> Result<Renderer> {
-        ctx.check(&needs(scene, mode, &atlas))?;
-        let detail = scene::detail_for(scene, &atlas, mode);
-        let ledger = Ledger::default();
-        let alloc = Alloc {
-            device: &ctx.device,
-            ledger: &ledger,
-        };
-        let planet = scene.planet().is_some();
-        let frame = uniform_buffer(&alloc);
-        let sketch = match &atlas.pyramid {
-            Some(pyramid) => {
-                if mode.bakes_whole_sketch() {
-                    return Err(crate::Error::value(
-                        "render.mode",
-                        format!(
-                            "{mode} bakes the whole sketch, and {} is a tile pyramid streamed \
-                             in tiles: draw it in warped or reference mode",
-                            pyramid.dir.display()
-                        ),
-                    ));
-                }
-                let cfg = scene::stream_config(scene);
-                SketchGpu::Streamed(Box::new(Stream::new(&ctx, &alloc, pyramid, cfg)?))
-            }
-            None => SketchGpu::Whole(upload_atlas(&alloc, &atlas)),
-        };
-        let atlas_binding = match &sketch {
-            SketchGpu::Whole(b) => AtlasBinding {
-                atlas: wgpu::Buffer::clone(b),
-                marks: None,
-            },
-            SketchGpu::Streamed(s) => s.binding(),
-        };
-        // Planets are not multisampled (nor supersampled) yet.
-        let samples = if planet {
-            1
-        } else {
-            ctx.samples(scene.render.msaa)
-        };
-        let shared = Shared {
-            ctx: &ctx,
-            alloc,
-            scene,
-            atlas: &atlas,
-            detail: &detail,
-            frame: &frame,
-            atlas_binding: &atlas_binding,
-            view,
-            // The output pass reads each pixel's view distance: a host's depth, a snapshot's.
-            positions: true,
-            samples,
-            deferred: mode.is_mesh() && ctx.deferred(scene.render.deferred, samples),
-        };
-        if planet != (mode == Mode::Clipmaps) && mode != Mode::Reference {
-            return Err(crate::Error::value(
-                "render.mode",
-                if planet {
-                    format!("a planet scene draws with clipmaps, not {mode}")
-                } else {
-                    "clipmaps draws planet scenes (a [planet] section or sketch.synthetic = \"planet\")".to_string()
-                },
-            ));
-        }
-        let lod = crate::lod::scheme(mode, &shared)?;
-        let deferred = shared.deferred;
-        let shader_key = crate::lod::shader_key(&shared, mode);
-        let output = OutputPass::new(&alloc, SNAPSHOT, shader_key)?;
-        let output_group = bind_output(&ctx, &output, lod.as_ref())?;
-        Ok(Renderer {
-            output,
-            output_group,
-            snapshot: None,
-            samples,
-            deferred,
-            shader_key,
-            timer: Timer::new(&ctx, &alloc, lod.passes()),
-            ctx,
-            atlas,
-            detail,
-            light: scene::light_of(scene),
-            outside: scene.sketch.outside,
-            mode,
-            view,
-            frame,
-            sketch,
-            lod,
-            ledger,
-            size: (scene.camera.width, scene.camera.height),
-        })
+        build::renderer(ctx, scene, atlas, mode, view)
     }
 
     /// Fits the scheme's targets to `camera`'s image: nothing happens at the same size, and at
