@@ -134,6 +134,13 @@ pub struct Outcome {
     pub frames: Vec<FrameRecord>,
     pub frame_ms_median: f64,
     pub frame_ms_p95: f64,
+    /// The wall time from one frame's end to the next's, median (ms): what the flight's frames
+    /// cost, read-back and hand-off to the PNG writers included.
+    pub interval_ms_median: f64,
+    /// The CPU stage (or the baselines' block selection) per frame, median (ms).
+    pub cpu_ms_median: f64,
+    /// The GPU's time per frame, median (ms; timestamp queries where the adapter has them).
+    pub gpu_ms_median: f64,
     /// p95 / median of the frame time: how even the flight is.
     pub spread: f64,
     /// The animation written: `animation.mp4`, or `animation.png` (APNG).
@@ -289,6 +296,8 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) 
     remove_frames(out_dir)?;
     let mut records = Vec::with_capacity(cameras.len());
     let writer = FrameWriter::new(w, h);
+    let mut intervals = Vec::with_capacity(cameras.len());
+    let mut last = std::time::Instant::now();
     for (k, (camera, &t)) in cameras.iter().zip(&times).enumerate() {
         let frame = match o.settle {
             true => r.render_settled(camera)?,
@@ -314,6 +323,8 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) 
             file,
         };
         records.push(record);
+        intervals.push(last.elapsed().as_secs_f64() * 1e3);
+        last = std::time::Instant::now();
         progress.advance(1.0, &format!("frame {}/{}", k + 1, cameras.len()));
     }
     writer.finish()?;
@@ -346,6 +357,8 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) 
     };
     let ms: Vec<f64> = records.iter().map(|r| r.frame_ms).collect();
     let (median, p95) = (percentile(&ms, 0.5), percentile(&ms, 0.95));
+    let cpu_ms: Vec<f64> = records.iter().map(|r| r.cpu_stage_us * 1e-3).collect();
+    let gpu_ms: Vec<f64> = records.iter().map(|r| r.gpu_ms).collect();
     let streamed: Vec<StreamStats> = records.iter().filter_map(|r| r.stream).collect();
     let stream = (!streamed.is_empty()).then(|| StreamSummary {
         tiles_loaded_mean: streamed.iter().map(|s| s.loaded as f64).sum::<f64>()
@@ -359,6 +372,9 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) 
         frames: records,
         frame_ms_median: median,
         frame_ms_p95: p95,
+        interval_ms_median: percentile(&intervals, 0.5),
+        cpu_ms_median: percentile(&cpu_ms, 0.5),
+        gpu_ms_median: percentile(&gpu_ms, 0.5),
         spread: p95 / median.max(f64::MIN_POSITIVE),
         animation: mp4.clone().unwrap_or(apng_path),
         mp4,

@@ -54,6 +54,12 @@ struct Report {
     frame_ms_median: f64,
     frame_ms_p95: f64,
     spread_p95_over_median: f64,
+    /// Wall time from one frame's end to the next's, median (ms).
+    interval_ms_median: f64,
+    /// The CPU stage per frame, median (ms).
+    cpu_ms_median: f64,
+    /// The GPU's time per frame, median (ms).
+    gpu_ms_median: f64,
     /// `animation.mp4`, or `animation.png` (APNG).
     animation: PathBuf,
     mp4: Option<PathBuf>,
@@ -86,6 +92,9 @@ pub fn run(a: Args) -> Result<()> {
         frame_ms_median: o.frame_ms_median,
         frame_ms_p95: o.frame_ms_p95,
         spread_p95_over_median: o.spread,
+        interval_ms_median: o.interval_ms_median,
+        cpu_ms_median: o.cpu_ms_median,
+        gpu_ms_median: o.gpu_ms_median,
         animation: o.animation,
         mp4: o.mp4,
         elapsed_s: o.elapsed_s,
