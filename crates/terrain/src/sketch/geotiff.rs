@@ -49,54 +49,150 @@ pub fn read_file(path: &Path) -> Result<RawGrid> {
 }
 
 pub fn read<R: Read + Seek>(path: &Path, reader: R) -> Result<RawGrid> {
-    let bad = |reason: String| Error::sketch(path, reason);
-    let tiff = |what: &'static str| move |e| Error::decode(Role::Sketch, path, what, e);
-    let mut dec = Decoder::new(reader).map_err(tiff("not a readable TIFF"))?;
-    let (w, h) = dec.dimensions().map_err(tiff("TIFF has no dimensions"))?;
-    let (w, h) = RawGrid::check_size(path, w as i64, h as i64)?;
-    // One decoded chunk, in Float64, is the largest buffer the crate needs; a tag claiming more
-    // is damage and must not allocate.
-    let (cw, ch) = dec.chunk_dimensions();
-    let chunk_cells = (cw.min(w as u32) as usize) * (ch.min(h as u32) as usize);
-    let mut limits = Limits::default();
-    limits.decoding_buffer_size = (chunk_cells * 8).max(1 << 20);
-    dec = dec.with_limits(limits);
-    refuse_compression(&mut dec).map_err(bad)?;
-    let samples: u16 = dec
-        .find_tag_unsigned(Tag::SamplesPerPixel)
-        .map_err(tiff("TIFF SamplesPerPixel unreadable"))?
-        .unwrap_or(1);
-    if samples != 1 {
-        return Err(bad(format!(
-            "TIFF has {samples} bands; a height map has one (take it with `gdal_translate -b 1`)"
-        )));
+    let mut tiff = Windows::new(path, reader)?;
+    RawGrid::check_size(path, tiff.width as i64, tiff.height as i64)?;
+    let mut data = vec![f32::NAN; tiff.width * tiff.height];
+    tiff.rows_into(0, tiff.height, &mut data)?;
+    Ok(RawGrid::new(tiff.width, tiff.height, data, tiff.georef))
+}
+
+/// A GeoTIFF opened for reading by bands of rows: its header, layout and georeference read, no
+/// cells. What it holds at once is one decoded chunk and one chunk row of f32 cells.
+pub struct Windows<R: Read + Seek> {
+    path: std::path::PathBuf,
+    dec: Decoder<R>,
+    pub width: usize,
+    pub height: usize,
+    pub georef: Option<Georef>,
+    nodata: Option<f64>,
+    /// Chunk (strip or tile) size, and chunks per chunk row.
+    cw: usize,
+    ch: usize,
+    across: usize,
+    /// The chunk row a band read last and only partly needed (the next band starts in it): its
+    /// index and cells, rows south first.
+    kept: Option<(usize, Vec<f32>)>,
+}
+
+/// Opens a GeoTIFF file for [`Windows::rows_into`], reading its header alone.
+pub fn open(path: &Path) -> Result<Windows<std::io::BufReader<std::fs::File>>> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
+    Windows::new(path, std::io::BufReader::new(file))
+}
+
+impl<R: Read + Seek> Windows<R> {
+    /// Reads the header, layout and georeference; any size up to 2^31 a side is accepted here
+    /// (the caller bounds what it allocates), one chunk row within the cell limit.
+    pub fn new(path: &Path, reader: R) -> Result<Windows<R>> {
+        let bad = |reason: String| Error::sketch(path, reason);
+        let tiff = |what: &'static str| move |e| Error::decode(Role::Sketch, path, what, e);
+        let mut dec = Decoder::new(reader).map_err(tiff("not a readable TIFF"))?;
+        let (w, h) = dec.dimensions().map_err(tiff("TIFF has no dimensions"))?;
+        let (w, h) = RawGrid::check_size_unlimited(path, w as i64, h as i64)?;
+        // One decoded chunk, in Float64, is the largest buffer the crate needs; a tag claiming
+        // more is damage and must not allocate.
+        let (cw, ch) = dec.chunk_dimensions();
+        let (cw, ch) = (cw as usize, ch as usize);
+        let chunk_cells = (cw.min(w) as u128) * (ch.min(h) as u128);
+        if (w as u128) * (ch.min(h) as u128) > super::max_cells() as u128 {
+            return Err(bad(format!(
+                "TIFF chunks of {cw}×{ch} make rows of more than the {} cells held at once; \
+                 rewrite it tiled with `gdal_translate -co TILED=YES -co COMPRESS=DEFLATE IN OUT`",
+                super::max_cells()
+            )));
+        }
+        let mut limits = Limits::default();
+        limits.decoding_buffer_size = (chunk_cells as usize * 8).max(1 << 20);
+        dec = dec.with_limits(limits);
+        refuse_compression(&mut dec).map_err(bad)?;
+        let samples: u16 = dec
+            .find_tag_unsigned(Tag::SamplesPerPixel)
+            .map_err(tiff("TIFF SamplesPerPixel unreadable"))?
+            .unwrap_or(1);
+        if samples != 1 {
+            return Err(bad(format!(
+                "TIFF has {samples} bands; a height map has one (take it with `gdal_translate -b 1`)"
+            )));
+        }
+        let nodata = gdal_nodata(&mut dec);
+        let georef = georef(&mut dec, h).map_err(bad)?;
+        let chunks = match dec.get_chunk_type() {
+            ChunkType::Strip => dec.strip_count(),
+            ChunkType::Tile => dec.tile_count(),
+        }
+        .map_err(tiff("TIFF chunk layout unreadable"))?;
+        let across = w.div_ceil(cw.max(1));
+        let expected = across * h.div_ceil(ch.max(1));
+        if cw == 0 || ch == 0 || chunks as usize != expected {
+            return Err(bad(format!(
+                "TIFF has {chunks} chunks of {cw}×{ch} for {w}×{h} cells; {expected} expected"
+            )));
+        }
+        Ok(Windows {
+            path: path.to_path_buf(),
+            dec,
+            width: w,
+            height: h,
+            georef,
+            nodata,
+            cw,
+            ch,
+            across,
+            kept: None,
+        })
     }
-    let nodata = gdal_nodata(&mut dec);
-    let georef = georef(&mut dec, h).map_err(bad)?;
-    let mut data = vec![f32::NAN; w * h];
-    let (cw, ch) = (cw as usize, ch as usize);
-    let chunks = match dec.get_chunk_type() {
-        ChunkType::Strip => dec.strip_count(),
-        ChunkType::Tile => dec.tile_count(),
+
+    /// Rows `lo..hi` (counted from the south) into `out`, row-major, nodata as NaN: decoded from
+    /// the chunk rows under them alone. A chunk row the band needs only part of is kept, as the
+    /// next band up starts in it.
+    pub fn rows_into(&mut self, lo: usize, hi: usize, out: &mut [f32]) -> Result<()> {
+        let (w, h, ch) = (self.width, self.height, self.ch);
+        assert!(lo < hi && hi <= h && out.len() >= w * (hi - lo));
+        // Chunk row k holds file rows k·ch.. (north first): rows h − min((k+1)·ch, h) .. h − k·ch
+        // from the south.
+        let south = |k: usize| (h - ((k + 1) * ch).min(h), h - k * ch);
+        for k in (h - hi) / ch..=(h - 1 - lo) / ch {
+            let (k0, k1) = south(k);
+            if lo <= k0 && k1 <= hi {
+                self.decode_row(k, (lo, hi), out)?;
+                continue;
+            }
+            if self.kept.as_ref().is_none_or(|(kk, _)| *kk != k) {
+                let mut cells = self.kept.take().map(|(_, c)| c).unwrap_or_default();
+                cells.clear();
+                cells.resize(w * (k1 - k0), f32::NAN);
+                self.decode_row(k, (k0, k1), &mut cells)?;
+                self.kept = Some((k, cells));
+            }
+            let cells = &self.kept.as_ref().expect("kept just now").1;
+            let (a, b) = (lo.max(k0), hi.min(k1));
+            out[(a - lo) * w..(b - lo) * w].copy_from_slice(&cells[(a - k0) * w..(b - k0) * w]);
+        }
+        Ok(())
     }
-    .map_err(tiff("TIFF chunk layout unreadable"))?;
-    let across = w.div_ceil(cw.max(1));
-    let expected = across * h.div_ceil(ch.max(1));
-    if cw == 0 || ch == 0 || chunks as usize != expected {
-        return Err(bad(format!(
-            "TIFF has {chunks} chunks of {cw}×{ch} for {w}×{h} cells; {expected} expected"
-        )));
+
+    /// Decodes chunk row `k` into `out`, which holds rows `rows` (from the south).
+    fn decode_row(&mut self, k: usize, rows: (usize, usize), out: &mut [f32]) -> Result<()> {
+        for c in 0..self.across {
+            let chunk = (k * self.across + c) as u32;
+            let (dw, dh) = self.dec.chunk_data_dimensions(chunk);
+            let values = self
+                .dec
+                .read_chunk(chunk)
+                .map_err(|e| Error::decode(Role::Sketch, &self.path, chunk_name(&self.dec), e))?;
+            let rect = (c * self.cw, k * self.ch, dw as usize, dh as usize);
+            place(
+                &values,
+                rect,
+                (self.width, self.height),
+                rows,
+                self.nodata,
+                out,
+            )
+            .map_err(|reason| Error::sketch(&self.path, reason))?;
+        }
+        Ok(())
     }
-    for k in 0..chunks {
-        let (x0, y0) = ((k as usize % across) * cw, (k as usize / across) * ch);
-        let (dw, dh) = dec.chunk_data_dimensions(k);
-        let (dw, dh) = (dw as usize, dh as usize);
-        let values = dec
-            .read_chunk(k)
-            .map_err(|e| Error::decode(Role::Sketch, path, chunk_name(&dec), e))?;
-        place(&values, (x0, y0, dw, dh), (w, h), nodata, &mut data).map_err(bad)?;
-    }
-    Ok(RawGrid::new(w, h, data, georef))
 }
 
 fn chunk_name<R: Read + Seek>(dec: &Decoder<R>) -> &'static str {
@@ -144,6 +240,7 @@ fn place(
     values: &DecodingResult,
     (x0, y0, dw, dh): (usize, usize, usize, usize),
     (w, h): (usize, usize),
+    rows: (usize, usize),
     nodata: Option<f64>,
     data: &mut [f32],
 ) -> std::result::Result<(), String> {
@@ -151,6 +248,7 @@ fn place(
         src: &[T],
         rect: (usize, usize, usize, usize),
         size: (usize, usize),
+        (lo, hi): (usize, usize),
         data: &mut [f32],
         convert: impl Fn(T) -> f32,
     ) -> std::result::Result<(), String> {
@@ -163,7 +261,11 @@ fn place(
             ));
         }
         for (r, row) in src.chunks_exact(dw).take(dh).enumerate() {
-            let out = (h - 1 - (y0 + r)) * w + x0;
+            let south = h - 1 - (y0 + r);
+            if !(lo..hi).contains(&south) {
+                continue;
+            }
+            let out = (south - lo) * w + x0;
             for (d, &v) in data[out..out + dw].iter_mut().zip(row) {
                 *d = convert(v);
             }
@@ -182,17 +284,17 @@ fn place(
         }
     };
     match values {
-        DecodingResult::U8(v) => copy(v, rect, size, data, |x| cell(x.into())),
-        DecodingResult::I8(v) => copy(v, rect, size, data, |x| cell(x.into())),
-        DecodingResult::U16(v) => copy(v, rect, size, data, |x| cell(x.into())),
-        DecodingResult::I16(v) => copy(v, rect, size, data, |x| cell(x.into())),
-        DecodingResult::U32(v) => copy(v, rect, size, data, |x| cell(x.into())),
-        DecodingResult::I32(v) => copy(v, rect, size, data, |x| cell(x.into())),
-        DecodingResult::U64(v) => copy(v, rect, size, data, |x| cell(x as f64)),
-        DecodingResult::I64(v) => copy(v, rect, size, data, |x| cell(x as f64)),
-        DecodingResult::F16(v) => copy(v, rect, size, data, |x| cell(x.to_f64())),
-        DecodingResult::F32(v) => copy(v, rect, size, data, |x| cell(x.into())),
-        DecodingResult::F64(v) => copy(v, rect, size, data, cell),
+        DecodingResult::U8(v) => copy(v, rect, size, rows, data, |x| cell(x.into())),
+        DecodingResult::I8(v) => copy(v, rect, size, rows, data, |x| cell(x.into())),
+        DecodingResult::U16(v) => copy(v, rect, size, rows, data, |x| cell(x.into())),
+        DecodingResult::I16(v) => copy(v, rect, size, rows, data, |x| cell(x.into())),
+        DecodingResult::U32(v) => copy(v, rect, size, rows, data, |x| cell(x.into())),
+        DecodingResult::I32(v) => copy(v, rect, size, rows, data, |x| cell(x.into())),
+        DecodingResult::U64(v) => copy(v, rect, size, rows, data, |x| cell(x as f64)),
+        DecodingResult::I64(v) => copy(v, rect, size, rows, data, |x| cell(x as f64)),
+        DecodingResult::F16(v) => copy(v, rect, size, rows, data, |x| cell(x.to_f64())),
+        DecodingResult::F32(v) => copy(v, rect, size, rows, data, |x| cell(x.into())),
+        DecodingResult::F64(v) => copy(v, rect, size, rows, data, cell),
     }
 }
 

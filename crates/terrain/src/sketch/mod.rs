@@ -26,7 +26,11 @@ mod pyramid;
 pub mod synthetic;
 mod xyz;
 
-pub use load::{LoadOptions, RawGrid, parse_grid, read_grid, scale_heights, warnings};
+pub(crate) use geotiff::{Windows as TiffWindows, open as open_tiff};
+pub use load::{
+    Beyond, GridHeader, LoadOptions, RawGrid, parse_grid, read_grid, read_header, scale_cells,
+    scale_heights, warnings,
+};
 pub use png::parse_world_file;
 pub(crate) use pyramid::build_pyramid;
 pub use pyramid::{Level, bilinear_blend, bilinear_cell};

@@ -16,6 +16,7 @@
 //! - The scratch folder `.build` is removed once `pyramid.toml` is written.
 
 mod bands;
+mod level0;
 mod resume;
 mod scratch;
 
@@ -27,9 +28,10 @@ use crate::sketch::LoadOptions;
 use crate::sketch::mosaic;
 pub(super) use bands::read_rows;
 use bands::{coarser_band, write_band};
+use level0::is_tiff;
 use resume::{Plan, remove_temporaries, stamp, start_or_resume, tile_is_whole};
 pub use scratch::georef_of;
-use scratch::{copy_sources, level0_band, meta_georef, place};
+use scratch::meta_georef;
 use serde::Serialize;
 use std::os::unix::fs::FileExt;
 use std::path::Path;
@@ -93,8 +95,9 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
         });
     }
     let scratch_dir = out.join(".build");
-    let scratch = copy_sources(&sources, &scratch_dir, &opts.load)?;
-    let (width, height, dx, dy, offsets, georef) = place(src, &sources, &scratch, &opts.load)?;
+    let ((width, height, dx, dy, _, georef), mut level0) =
+        level0::open(src, &sources, &scratch_dir, &opts.load)?;
+    check_band(src, width)?;
     let levels = level_sizes(width, height);
     let mut meta = Meta {
         format: FORMAT.into(),
@@ -129,7 +132,9 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
                 .collect();
             if !missing.is_empty() {
                 let (r0, band) = if l == 0 {
-                    level0_band(&meta, ty, &scratch_dir, &scratch, &offsets)?
+                    let rows = bands::band_rows(ty, height);
+                    let own = (ty * TILE, ((ty + 1) * TILE).min(height));
+                    (rows.0, level0.band(width, rows, own)?)
                 } else {
                     coarser_band(out, &meta, l, ty)?
                 };
@@ -137,6 +142,20 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
                 written += missing.len();
             }
             progress.advance(tx_count as f64, &format!("level {l}, row {ty}"));
+        }
+        if l == 0 {
+            let beyond = level0
+                .scale
+                .as_ref()
+                .map(|load| level0.beyond.check(width * height, load));
+            if let Some(Err(e)) = beyond {
+                // A run again must find the level missing and refuse again, not finish it.
+                let _ = std::fs::remove_dir_all(out.join("L0"));
+                return Err(match e {
+                    Error::Value { reason, .. } => Error::sketch(src, reason),
+                    e => e,
+                });
+            }
         }
     }
     progress.finish();
@@ -153,6 +172,23 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
         disk_bytes: folder_bytes(out),
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// Refuses a sketch whose bands (a tile row and its borders, at level 0's width) would hold more
+/// than the cell limit at once: the limit bounds what is held, not the sketch.
+fn check_band(src: &Path, width: usize) -> Result<()> {
+    let cells = width * (TILE + 2 * BORDER);
+    let limit = crate::sketch::max_cells();
+    if cells > limit {
+        return Err(Error::sketch(
+            src,
+            format!(
+                "a band of {width}×{} nodes is more than the {limit} cells held at once",
+                TILE + 2 * BORDER
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The level-0 statistics from the tiles: range and nodata from their headers, the edge mean
