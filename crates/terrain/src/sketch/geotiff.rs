@@ -5,9 +5,14 @@
 //! coordinate systems and projected ones in metres or feet are honoured.
 //!
 //! Rules:
-//! - The size is checked against [`max_cells`](super::max_cells) before anything is allocated; the
-//!   grid is filled chunk by chunk (strip or tile), converting each to f32 as it is decoded, so a
-//!   Float64 file never holds a second full-size copy.
+//! - The header, layout and georeference are read first, without a cell ([`Windows`]); read
+//!   whole, the size is then checked against [`max_cells`](super::max_cells) before anything is
+//!   allocated, and the grid is filled chunk by chunk (strip or tile), converting each to f32 as it
+//!   is decoded, so a Float64 file never holds a second full-size copy.
+//! - Read by bands of rows (`terrain tiles`, [`Windows::rows_into`]), only the chunk rows under a
+//!   band are decoded, and the one the next band starts in is kept: a file of any size is read
+//!   holding one chunk row, which must lie within the cell limit. A cloud-optimised GeoTIFF's
+//!   overviews are never read (`crate::tiles` averages every coarser level from level 0).
 //! - Lossy or unsupported compressions (JPEG, LERC, WebP, JPEG XL, LZMA, CCITT) are refused by
 //!   name before any data is read, with the command that rewrites the file.
 //! - `GDAL_NODATA` (the one ASCII tag read) is read only when its entry claims at most
@@ -49,8 +54,7 @@ pub fn read_file(path: &Path) -> Result<RawGrid> {
 }
 
 pub fn read<R: Read + Seek>(path: &Path, reader: R) -> Result<RawGrid> {
-    let mut tiff = Windows::new(path, reader)?;
-    RawGrid::check_size(path, tiff.width as i64, tiff.height as i64)?;
+    let mut tiff = Windows::checked(path, reader, true)?;
     let mut data = vec![f32::NAN; tiff.width * tiff.height];
     tiff.rows_into(0, tiff.height, &mut data)?;
     Ok(RawGrid::new(tiff.width, tiff.height, data, tiff.georef))
@@ -84,11 +88,19 @@ impl<R: Read + Seek> Windows<R> {
     /// Reads the header, layout and georeference; any size up to 2^31 a side is accepted here
     /// (the caller bounds what it allocates), one chunk row within the cell limit.
     pub fn new(path: &Path, reader: R) -> Result<Windows<R>> {
+        Windows::checked(path, reader, false)
+    }
+
+    /// [`Windows::new`], or with `whole` the size checked against the cell limit first.
+    fn checked(path: &Path, reader: R, whole: bool) -> Result<Windows<R>> {
         let bad = |reason: String| Error::sketch(path, reason);
         let tiff = |what: &'static str| move |e| Error::decode(Role::Sketch, path, what, e);
         let mut dec = Decoder::new(reader).map_err(tiff("not a readable TIFF"))?;
         let (w, h) = dec.dimensions().map_err(tiff("TIFF has no dimensions"))?;
-        let (w, h) = RawGrid::check_size_unlimited(path, w as i64, h as i64)?;
+        let (w, h) = match whole {
+            true => RawGrid::check_size(path, w as i64, h as i64)?,
+            false => RawGrid::check_size_unlimited(path, w as i64, h as i64)?,
+        };
         // One decoded chunk, in Float64, is the largest buffer the crate needs; a tag claiming
         // more is damage and must not allocate.
         let (cw, ch) = dec.chunk_dimensions();

@@ -197,8 +197,8 @@ pub fn parse_vrt(
     depth: usize,
     read: impl Fn(&Path, usize) -> Result<RawGrid>,
 ) -> Result<RawGrid> {
-    let plan = vrt_plan(path, bytes, depth)?;
-    let (w, h) = RawGrid::check_size(path, plan.width as i64, plan.height as i64)?;
+    let plan = vrt_plan(path, bytes, depth, true)?;
+    let (w, h) = (plan.width, plan.height);
     let mut data = vec![f32::NAN; w * h];
     for source in &plan.sources {
         let src = read(&source.path, depth + 1)?;
@@ -308,11 +308,12 @@ pub fn read_vrt_plan(path: &Path) -> Result<VrtPlan> {
         ));
     }
     let bytes = std::fs::read(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
-    vrt_plan(path, &bytes, 0)
+    vrt_plan(path, &bytes, 0, false)
 }
 
-/// Parses a VRT's XML: its size (any up to 2^31 a side), band 1's sources and its georeference.
-fn vrt_plan(path: &Path, bytes: &[u8], depth: usize) -> Result<VrtPlan> {
+/// Parses a VRT's XML: its size (within the cell limit when `whole`, else any up to 2^31 a
+/// side), band 1's sources and its georeference.
+fn vrt_plan(path: &Path, bytes: &[u8], depth: usize, whole: bool) -> Result<VrtPlan> {
     let bad = |reason: String| Error::sketch(path, format!("VRT {reason}"));
     if depth >= MAX_DEPTH {
         return Err(bad(format!("nests more than {MAX_DEPTH} deep")));
@@ -339,11 +340,14 @@ fn vrt_plan(path: &Path, bytes: &[u8], depth: usize) -> Result<VrtPlan> {
         }
         Ok(f as i64)
     };
-    let (w, h) = RawGrid::check_size_unlimited(
-        path,
+    let (x, y) = (
         int_attr(root, "rasterXSize")?,
         int_attr(root, "rasterYSize")?,
-    )?;
+    );
+    let (w, h) = match whole {
+        true => RawGrid::check_size(path, x, y)?,
+        false => RawGrid::check_size_unlimited(path, x, y)?,
+    };
     let number = |node: roxmltree::Node| -> Result<f64> {
         let t = node.text().unwrap_or("").trim();
         t.parse().map_err(|_| {

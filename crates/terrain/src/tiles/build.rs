@@ -2,10 +2,18 @@
 //! bounded memory, resumably.
 //!
 //! Rules:
-//! - Memory is bounded by the largest single source file plus two bands of level 0's width: level 0
-//!   is cut band by band (one tile row and its borders) from the sources, which are first copied
-//!   one at a time into raw scratch files that a band reads by rows; level l is cut band by band from
-//!   the rows of level l−1's tiles. A 32,768-node-wide sketch holds about 100 MB of bands.
+//! - Memory is bounded by a few bands of level 0's width, whatever the sketch's height: level 0 is
+//!   cut band by band (one tile row and its borders). A single GeoTIFF, and the GeoTIFFs under a
+//!   VRT, are read window by window: a band decodes the strips or tiles under its rows alone
+//!   (`level0`). Other sources, and every tile of a glob, are first copied one at a time into raw
+//!   scratch files that a band reads by rows (a GeoTIFF tile band by band, any other file whole);
+//!   level l is cut band by band from the rows of level l−1's tiles. A 32,768-node-wide sketch
+//!   holds about 100 MB of bands. The cell limit ([`crate::sketch::max_cells`]) bounds a band
+//!   and a GeoTIFF's chunk row, not the sketch; a text grid (ESRI ASCII, XYZ) above 256 MiB is
+//!   refused with the `gdal_translate` command that makes it a tiled GeoTIFF.
+//! - A cloud-optimised GeoTIFF's overviews are ignored: every coarser level is the 2×2 average
+//!   of the one below, so the pyramid is the atlas's whatever resampling made the overviews
+//!   (docs/decisions.md, “Single files read window by window”).
 //! - Nodata is filled within each band by the atlas's rule ([`crate::sketch::fill`]): a hole that a
 //!   band does not close from its own rows is closed from those, not from rows further away, so a
 //!   holed sketch's tiled fill can differ from the whole-grid one near bands' edges. A sketch with

@@ -14,6 +14,11 @@
 //!   over level 0, before the coarser levels.
 //! - A cloud-optimised GeoTIFF's overviews are not read: every coarser level is averaged from
 //!   level 0, so the pyramid does not depend on the resampling GDAL chose for them.
+//!
+//! Rejected alternative: a single GeoTIFF copied into a raw scratch file first, as a glob's tiles
+//! are. Its windows are already addressable by row, and the copy is a second level 0 on disk
+//! (16 GiB of f32 for a 65,536² file) written and read once more
+//! (docs/decisions.md, “Single files read window by window”).
 
 use super::scratch::{Placed, Scratch, copy_source, copy_sources, place, spacing};
 use crate::error::{Error, Result, Role};
