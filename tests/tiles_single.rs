@@ -276,3 +276,23 @@ fn a_text_grid_above_the_stated_size_is_refused_with_the_command_that_rewrites_i
         "{err}"
     );
 }
+
+#[test]
+fn heights_in_another_unit_are_refused_after_level_0_and_again_on_a_second_run() {
+    let dir = scratch("tiles-single-unit");
+    let src = dir.join("cm.tif");
+    write_tiff(&src, (300, 300), (0, 0), |_, _| false);
+    let out = dir.join("pyramid");
+    // 300 m read as 300 × 10⁴ km: every height lies beyond ±1000 km.
+    let load = LoadOptions {
+        height_scale: Some(1e5),
+        ..LoadOptions::default()
+    };
+    let opts = BuildOptions { load, threads: 2 };
+    for run in 0..2 {
+        let err = build(&src, &out, &opts).unwrap_err().to_string();
+        assert!(err.contains("beyond ±1000 km"), "run {run}: {err}");
+        assert!(!err.contains('\n'), "{err}");
+        assert!(!terrain::tiles::is_pyramid(&out));
+    }
+}
