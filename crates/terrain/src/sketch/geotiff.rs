@@ -10,8 +10,9 @@
 //!   allocated, and the grid is filled chunk by chunk (strip or tile), converting each to f32 as it
 //!   is decoded, so a Float64 file never holds a second full-size copy.
 //! - Read by bands of rows (`terrain tiles`, [`Windows::rows_into`]), only the chunk rows under a
-//!   band are decoded, and the one the next band starts in is kept: a file of any size is read
-//!   holding one chunk row, which must lie within the cell limit. A cloud-optimised GeoTIFF's
+//!   band are decoded, and the rows decoded for the next band are kept: a file of any size is
+//!   read decoding each chunk once and holding about one chunk row, which must lie within the
+//!   cell limit. A cloud-optimised GeoTIFF's
 //!   overviews are never read (`crate::tiles` averages every coarser level from level 0).
 //! - Lossy or unsupported compressions (JPEG, LERC, WebP, JPEG XL, LZMA, CCITT) are refused by
 //!   name before any data is read, with the command that rewrites the file.
@@ -56,12 +57,12 @@ pub fn read_file(path: &Path) -> Result<RawGrid> {
 pub fn read<R: Read + Seek>(path: &Path, reader: R) -> Result<RawGrid> {
     let mut tiff = Windows::checked(path, reader, true)?;
     let mut data = vec![f32::NAN; tiff.width * tiff.height];
-    tiff.rows_into(0, tiff.height, &mut data)?;
+    tiff.rows_into(0, tiff.height, tiff.height, &mut data)?;
     Ok(RawGrid::new(tiff.width, tiff.height, data, tiff.georef))
 }
 
 /// A GeoTIFF opened for reading by bands of rows: its header, layout and georeference read, no
-/// cells. What it holds at once is one decoded chunk and one chunk row of f32 cells.
+/// cells. What it holds at once is one decoded chunk and about one chunk row of f32 cells.
 pub struct Windows<R: Read + Seek> {
     path: std::path::PathBuf,
     dec: Decoder<R>,
@@ -73,8 +74,8 @@ pub struct Windows<R: Read + Seek> {
     cw: usize,
     ch: usize,
     across: usize,
-    /// The chunk row a band read last and only partly needed (the next band starts in it): its
-    /// index and cells, rows south first.
+    /// Rows a band read last that the next one asks for again, or that lie above it in a chunk
+    /// row already decoded: the first row (from the south) and the cells.
     kept: Option<(usize, Vec<f32>)>,
 }
 
@@ -155,36 +156,51 @@ impl<R: Read + Seek> Windows<R> {
     }
 
     /// Rows `lo..hi` (counted from the south) into `out`, row-major, nodata as NaN: decoded from
-    /// the chunk rows under them alone. A chunk row the band needs only part of is kept, as the
-    /// next band up starts in it.
-    pub fn rows_into(&mut self, lo: usize, hi: usize, out: &mut [f32]) -> Result<()> {
+    /// the chunk rows under them alone. Rows from `next` (the first row the next call asks for;
+    /// `hi` or above when none) up to the top of the last chunk row decoded are kept, so reading
+    /// bands upwards decodes every chunk once.
+    pub fn rows_into(&mut self, lo: usize, hi: usize, next: usize, out: &mut [f32]) -> Result<()> {
         let (w, h, ch) = (self.width, self.height, self.ch);
         assert!(lo < hi && hi <= h && out.len() >= w * (hi - lo));
         // Chunk row k holds file rows k·ch.. (north first): rows h − min((k+1)·ch, h) .. h − k·ch
         // from the south.
         let south = |k: usize| (h - ((k + 1) * ch).min(h), h - k * ch);
-        for k in (h - hi) / ch..=(h - 1 - lo) / ch {
-            let (k0, k1) = south(k);
-            if lo <= k0 && k1 <= hi {
-                self.decode_row(k, (lo, hi), out)?;
-                continue;
+        // What the call before kept: rows ka..kb, usable when they start at or below `lo`.
+        let (ka, mut kept) = self.kept.take().unwrap_or_default();
+        let kb = ka + kept.len() / w;
+        let usable = ka <= lo && lo < kb;
+        let from_kept = if usable { hi.min(kb) } else { lo };
+        if usable {
+            out[..(from_kept - lo) * w].copy_from_slice(&kept[(lo - ka) * w..(from_kept - ka) * w]);
+        }
+        let top = if from_kept < hi {
+            south((h - hi) / ch).1
+        } else {
+            kb
+        };
+        // Kept for the next call: rows nk0..top, what is already kept moved down in place.
+        let nk0 = next.max(lo);
+        if usable && nk0 < kb {
+            kept.drain(..(nk0 - ka) * w);
+        } else {
+            kept.clear();
+        }
+        kept.resize(top.saturating_sub(nk0) * w, f32::NAN);
+        if from_kept < hi {
+            for k in (h - hi) / ch..=(h - 1 - from_kept) / ch {
+                let targets = [((lo, hi), &mut *out), ((nk0, top.max(nk0)), &mut kept[..])];
+                self.decode_row(k, targets)?;
             }
-            if self.kept.as_ref().is_none_or(|(kk, _)| *kk != k) {
-                let mut cells = self.kept.take().map(|(_, c)| c).unwrap_or_default();
-                cells.clear();
-                cells.resize(w * (k1 - k0), f32::NAN);
-                self.decode_row(k, (k0, k1), &mut cells)?;
-                self.kept = Some((k, cells));
-            }
-            let cells = &self.kept.as_ref().expect("kept just now").1;
-            let (a, b) = (lo.max(k0), hi.min(k1));
-            out[(a - lo) * w..(b - lo) * w].copy_from_slice(&cells[(a - k0) * w..(b - k0) * w]);
+        }
+        if !kept.is_empty() {
+            self.kept = Some((nk0, kept));
         }
         Ok(())
     }
 
-    /// Decodes chunk row `k` into `out`, which holds rows `rows` (from the south).
-    fn decode_row(&mut self, k: usize, rows: (usize, usize), out: &mut [f32]) -> Result<()> {
+    /// Decodes chunk row `k` into each target: a buffer holding rows `.0` (from the south).
+    fn decode_row(&mut self, k: usize, targets: [((usize, usize), &mut [f32]); 2]) -> Result<()> {
+        let mut targets = targets;
         for c in 0..self.across {
             let chunk = (k * self.across + c) as u32;
             let (dw, dh) = self.dec.chunk_data_dimensions(chunk);
@@ -193,15 +209,19 @@ impl<R: Read + Seek> Windows<R> {
                 .read_chunk(chunk)
                 .map_err(|e| Error::decode(Role::Sketch, &self.path, chunk_name(&self.dec), e))?;
             let rect = (c * self.cw, k * self.ch, dw as usize, dh as usize);
-            place(
-                &values,
-                rect,
-                (self.width, self.height),
-                rows,
-                self.nodata,
-                out,
-            )
-            .map_err(|reason| Error::sketch(&self.path, reason))?;
+            for (rows, out) in &mut targets {
+                if rows.0 < rows.1 {
+                    place(
+                        &values,
+                        rect,
+                        (self.width, self.height),
+                        *rows,
+                        self.nodata,
+                        out,
+                    )
+                    .map_err(|reason| Error::sketch(&self.path, reason))?;
+                }
+            }
         }
         Ok(())
     }

@@ -142,7 +142,8 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
                 let (r0, band) = if l == 0 {
                     let rows = bands::band_rows(ty, height);
                     let own = (ty * TILE, ((ty + 1) * TILE).min(height));
-                    (rows.0, level0.band(width, rows, own)?)
+                    let next = own.1.saturating_sub(BORDER);
+                    (rows.0, level0.band(width, rows, own, next)?)
                 } else {
                     coarser_band(out, &meta, l, ty)?
                 };

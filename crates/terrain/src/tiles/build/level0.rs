@@ -135,10 +135,10 @@ impl Grid {
         }
     }
 
-    /// Rows `lo..hi` from the south into `out`.
-    fn rows_into(&mut self, lo: usize, hi: usize, out: &mut [f32]) -> Result<()> {
+    /// Rows `lo..hi` from the south into `out`; `next` is the first row the next band asks for.
+    fn rows_into(&mut self, lo: usize, hi: usize, next: usize, out: &mut [f32]) -> Result<()> {
         match self {
-            Grid::Tiff(t) => t.rows_into(lo, hi, out),
+            Grid::Tiff(t) => t.rows_into(lo, hi, next, out),
             Grid::Raw { path, width } => {
                 let path: &Path = path;
                 let file = File::open(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
@@ -221,12 +221,13 @@ pub(super) struct Level0 {
 
 impl Level0 {
     /// Rows `r0..r1` of a sketch `w` wide, the rows `own` among them counted for the height
-    /// check (bands overlap by their borders).
+    /// check (bands overlap by their borders); `next` is the first row of the band after it.
     pub(super) fn band(
         &mut self,
         w: usize,
         (r0, r1): (usize, usize),
         own: (usize, usize),
+        next: usize,
     ) -> Result<Vec<f32>> {
         let mut band = vec![f32::NAN; w * (r1 - r0)];
         let mut rows = Vec::new();
@@ -240,17 +241,18 @@ impl Level0 {
                 continue;
             }
             let (lo, hi) = (lo as usize, hi as usize);
+            let next = (next as i64 - oy).max(0) as usize;
             let sw = part.grid.width();
             let whole = part.vrt.is_none() && (x0, x1, ox, sw) == (0, w, 0, w);
             if whole && single {
                 // A single source as wide as the sketch: its rows are the band's.
                 let at = (lo as i64 + oy) as usize - r0;
                 part.grid
-                    .rows_into(lo, hi, &mut band[at * w..(at + hi - lo) * w])?;
+                    .rows_into(lo, hi, next, &mut band[at * w..(at + hi - lo) * w])?;
                 continue;
             }
             rows.resize(sw * (hi - lo), 0.0);
-            part.grid.rows_into(lo, hi, &mut rows)?;
+            part.grid.rows_into(lo, hi, next, &mut rows)?;
             for r in lo..hi {
                 let dst = ((r as i64 + oy) as usize - r0) * w;
                 let src = &rows[(r - lo) * sw..(r - lo + 1) * sw];

@@ -76,7 +76,7 @@ pub(super) fn copy_source(
                 let hi = (lo + TILE).min(h);
                 rows.resize(w * (hi - lo), 0.0);
                 let read = tiff
-                    .rows_into(lo, hi, &mut rows)
+                    .rows_into(lo, hi, hi, &mut rows)
                     .and_then(|()| match scale {
                         true => scale_cells(&mut rows, load).map(|b| beyond.add(b)),
                         false => Ok(()),
