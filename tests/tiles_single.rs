@@ -1,8 +1,8 @@
 //! `terrain tiles` on a single GeoTIFF or a VRT, read window by window: every layout and sample
 //! type of docs/formats.md converts to the in-memory atlas bit for bit; a file taller than a band,
 //! holes included, converts to the same tiles as a glob mosaic of the same heights; a huge file's
-//! header is read without its cells; a large text grid is refused with the command that
-//! rewrites it.
+//! header is read without its cells; heights in another unit are refused after level 0's bands;
+//! a large text grid is refused with the command that rewrites it.
 
 mod common;
 

@@ -3,7 +3,7 @@
 //!
 //! Rules:
 //! - A single GeoTIFF is a mosaic of its own chunks: a band decodes only the chunk rows under
-//!   its rows, and keeps the one the next band starts in. What is held at once is a band, one
+//!   its rows, and keeps the decoded rows the next band asks for, so each chunk is decoded once. What is held at once is a band, one
 //!   chunk row and one decoded chunk, whatever the file's size; a chunk row beyond the cell limit
 //!   ([`crate::sketch::max_cells`]) is refused with the command that rewrites the file tiled.
 //! - A VRT's sources are placed as [`crate::sketch::mosaic::parse_vrt`] places them (later over
