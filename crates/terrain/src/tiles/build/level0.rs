@@ -157,7 +157,7 @@ impl Grid {
 /// One source on level 0: its grid, the cells of it that land on the sketch, and where.
 pub(super) struct Part {
     pub(super) grid: Grid,
-    /// The source's columns `.0..​.1` and rows `.2..​.3` (from the south) that lie on the sketch.
+    /// The source's columns `[0]..[1]` and rows `[2]..[3]` (from the south) that lie on the sketch.
     pub(super) clip: [usize; 4],
     /// Added to a source cell's column and row to give the sketch's.
     pub(super) shift: (i64, i64),
