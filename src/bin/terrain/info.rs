@@ -33,9 +33,10 @@ struct Report {
     spacing_m: f64,
     dx_m: f64,
     dy_m: f64,
-    min_m: f32,
-    max_m: f32,
-    nodata: usize,
+    /// Null (with `nodata`) for a GeoTIFF larger than memory, whose header alone is read.
+    min_m: Option<f32>,
+    max_m: Option<f32>,
+    nodata: Option<usize>,
     /// The file's coordinate system and its south-west node there; null when the file has none.
     georef: Option<GeorefReport>,
     /// A tile pyramid's levels (nodes per side, level 0 first) and tiles; absent for a file.
@@ -104,6 +105,12 @@ pub fn run(a: Args) -> Result<()> {
         ..LoadOptions::default()
     };
     crate::warn(&terrain::sketch::warnings(&a.file, &opts));
+    // A header that cannot be read leaves the file to the reader, which says why in its terms.
+    if let Ok(Some(h)) = terrain::sketch::read_header(&a.file, &opts)
+        && (h.width as u128) * (h.height as u128) > terrain::sketch::max_cells() as u128
+    {
+        return header(a, h);
+    }
     let atlas = Atlas::load(&a.file, &opts)?;
     let r = Report {
         file: a.file.display().to_string(),
@@ -112,10 +119,30 @@ pub fn run(a: Args) -> Result<()> {
         spacing_m: atlas.d_atlas(),
         dx_m: atlas.dx,
         dy_m: atlas.dy,
-        min_m: atlas.min_m,
-        max_m: atlas.max_m,
-        nodata: atlas.nodata,
+        min_m: Some(atlas.min_m),
+        max_m: Some(atlas.max_m),
+        nodata: Some(atlas.nodata),
         georef: atlas.georef.map(GeorefReport::new),
+        levels: None,
+        tiles: None,
+    };
+    print(&r, a.json)
+}
+
+/// A GeoTIFF larger than memory, from its header and georeference alone: its heights are read
+/// when `terrain tiles` converts it.
+fn header(a: Args, h: terrain::sketch::GridHeader) -> Result<()> {
+    let r = Report {
+        file: a.file.display().to_string(),
+        width: h.width,
+        height: h.height,
+        spacing_m: h.dx.min(h.dy),
+        dx_m: h.dx,
+        dy_m: h.dy,
+        min_m: None,
+        max_m: None,
+        nodata: None,
+        georef: h.georef.map(GeorefReport::new),
         levels: None,
         tiles: None,
     };
@@ -133,9 +160,9 @@ fn pyramid(a: Args) -> Result<()> {
         spacing_m: m.dx_m.min(m.dy_m),
         dx_m: m.dx_m,
         dy_m: m.dy_m,
-        min_m: m.min_m,
-        max_m: m.max_m,
-        nodata: m.nodata as usize,
+        min_m: Some(m.min_m),
+        max_m: Some(m.max_m),
+        nodata: Some(m.nodata as usize),
         georef: m.georef.as_ref().map(|g| GeorefReport::new(g.georef())),
         levels: Some(m.levels.clone()),
         tiles: Some(m.tile_count()),
@@ -147,8 +174,17 @@ fn print(r: &Report, json: bool) -> Result<()> {
     if json {
         return crate::print_json(r);
     }
+    let heights = match (r.min_m, r.max_m, r.nodata) {
+        (Some(lo), Some(hi), Some(nodata)) => {
+            format!("heights {lo:.1} … {hi:.1} m, {nodata} nodata filled")
+        }
+        _ => format!(
+            "heights not read (more than {} cells: `terrain tiles` converts it)",
+            terrain::sketch::max_cells()
+        ),
+    };
     outln!(
-        "{}: {} × {} cells of {:.2} × {:.2} m ({:.1} × {:.1} km), heights {:.1} … {:.1} m, {} nodata filled{}",
+        "{}: {} × {} cells of {:.2} × {:.2} m ({:.1} × {:.1} km), {heights}{}",
         r.file,
         r.width,
         r.height,
@@ -156,9 +192,6 @@ fn print(r: &Report, json: bool) -> Result<()> {
         r.dy_m,
         (r.width - 1) as f64 * r.dx_m / 1000.0,
         (r.height - 1) as f64 * r.dy_m / 1000.0,
-        r.min_m,
-        r.max_m,
-        r.nodata,
         r.georef
             .as_ref()
             .map(GeorefReport::describe)

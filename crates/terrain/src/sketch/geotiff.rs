@@ -5,9 +5,15 @@
 //! coordinate systems and projected ones in metres or feet are honoured.
 //!
 //! Rules:
-//! - The size is checked against [`max_cells`](super::max_cells) before anything is allocated; the
-//!   grid is filled chunk by chunk (strip or tile), converting each to f32 as it is decoded, so a
-//!   Float64 file never holds a second full-size copy.
+//! - The header, layout and georeference are read first, without a cell ([`Windows`]); read
+//!   whole, the size is then checked against [`max_cells`](super::max_cells) before anything is
+//!   allocated, and the grid is filled chunk by chunk (strip or tile), converting each to f32 as it
+//!   is decoded, so a Float64 file never holds a second full-size copy.
+//! - Read by bands of rows (`terrain tiles`, [`Windows::rows_into`]), only the chunk rows under a
+//!   band are decoded, and the rows decoded for the next band are kept: a file of any size is
+//!   read decoding each chunk once and holding about one chunk row, which must lie within the
+//!   cell limit. A cloud-optimised GeoTIFF's
+//!   overviews are never read (`crate::tiles` averages every coarser level from level 0).
 //! - Lossy or unsupported compressions (JPEG, LERC, WebP, JPEG XL, LZMA, CCITT) are refused by
 //!   name before any data is read, with the command that rewrites the file.
 //! - `GDAL_NODATA` (the one ASCII tag read) is read only when its entry claims at most
@@ -49,54 +55,176 @@ pub fn read_file(path: &Path) -> Result<RawGrid> {
 }
 
 pub fn read<R: Read + Seek>(path: &Path, reader: R) -> Result<RawGrid> {
-    let bad = |reason: String| Error::sketch(path, reason);
-    let tiff = |what: &'static str| move |e| Error::decode(Role::Sketch, path, what, e);
-    let mut dec = Decoder::new(reader).map_err(tiff("not a readable TIFF"))?;
-    let (w, h) = dec.dimensions().map_err(tiff("TIFF has no dimensions"))?;
-    let (w, h) = RawGrid::check_size(path, w as i64, h as i64)?;
-    // One decoded chunk, in Float64, is the largest buffer the crate needs; a tag claiming more
-    // is damage and must not allocate.
-    let (cw, ch) = dec.chunk_dimensions();
-    let chunk_cells = (cw.min(w as u32) as usize) * (ch.min(h as u32) as usize);
-    let mut limits = Limits::default();
-    limits.decoding_buffer_size = (chunk_cells * 8).max(1 << 20);
-    dec = dec.with_limits(limits);
-    refuse_compression(&mut dec).map_err(bad)?;
-    let samples: u16 = dec
-        .find_tag_unsigned(Tag::SamplesPerPixel)
-        .map_err(tiff("TIFF SamplesPerPixel unreadable"))?
-        .unwrap_or(1);
-    if samples != 1 {
-        return Err(bad(format!(
-            "TIFF has {samples} bands; a height map has one (take it with `gdal_translate -b 1`)"
-        )));
+    let mut tiff = Windows::checked(path, reader, true)?;
+    let mut data = vec![f32::NAN; tiff.width * tiff.height];
+    tiff.rows_into(0, tiff.height, tiff.height, &mut data)?;
+    Ok(RawGrid::new(tiff.width, tiff.height, data, tiff.georef))
+}
+
+/// A GeoTIFF opened for reading by bands of rows: its header, layout and georeference read, no
+/// cells. What it holds at once is one decoded chunk and about one chunk row of f32 cells.
+pub struct Windows<R: Read + Seek> {
+    path: std::path::PathBuf,
+    dec: Decoder<R>,
+    pub width: usize,
+    pub height: usize,
+    pub georef: Option<Georef>,
+    nodata: Option<f64>,
+    /// Chunk (strip or tile) size, and chunks per chunk row.
+    cw: usize,
+    ch: usize,
+    across: usize,
+    /// Rows a band read last that the next one asks for again, or that lie above it in a chunk
+    /// row already decoded: the first row (from the south) and the cells.
+    kept: Option<(usize, Vec<f32>)>,
+}
+
+/// Opens a GeoTIFF file for [`Windows::rows_into`], reading its header alone.
+pub fn open(path: &Path) -> Result<Windows<std::io::BufReader<std::fs::File>>> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
+    Windows::new(path, std::io::BufReader::new(file))
+}
+
+impl<R: Read + Seek> Windows<R> {
+    /// Reads the header, layout and georeference; any size up to 2^31 a side is accepted here
+    /// (the caller bounds what it allocates), one chunk row within the cell limit.
+    pub fn new(path: &Path, reader: R) -> Result<Windows<R>> {
+        Windows::checked(path, reader, false)
     }
-    let nodata = gdal_nodata(&mut dec);
-    let georef = georef(&mut dec, h).map_err(bad)?;
-    let mut data = vec![f32::NAN; w * h];
-    let (cw, ch) = (cw as usize, ch as usize);
-    let chunks = match dec.get_chunk_type() {
-        ChunkType::Strip => dec.strip_count(),
-        ChunkType::Tile => dec.tile_count(),
+
+    /// [`Windows::new`], or with `whole` the size checked against the cell limit first.
+    fn checked(path: &Path, reader: R, whole: bool) -> Result<Windows<R>> {
+        let bad = |reason: String| Error::sketch(path, reason);
+        let tiff = |what: &'static str| move |e| Error::decode(Role::Sketch, path, what, e);
+        let mut dec = Decoder::new(reader).map_err(tiff("not a readable TIFF"))?;
+        let (w, h) = dec.dimensions().map_err(tiff("TIFF has no dimensions"))?;
+        let (w, h) = match whole {
+            true => RawGrid::check_size(path, w as i64, h as i64)?,
+            false => RawGrid::check_size_unlimited(path, w as i64, h as i64)?,
+        };
+        // One decoded chunk, in Float64, is the largest buffer the crate needs; a tag claiming
+        // more is damage and must not allocate.
+        let (cw, ch) = dec.chunk_dimensions();
+        let (cw, ch) = (cw as usize, ch as usize);
+        let chunk_cells = (cw.min(w) as u128) * (ch.min(h) as u128);
+        if (w as u128) * (ch.min(h) as u128) > super::max_cells() as u128 {
+            return Err(bad(format!(
+                "TIFF chunks of {cw}×{ch} make rows of more than the {} cells held at once; \
+                 rewrite it tiled with `gdal_translate -co TILED=YES -co COMPRESS=DEFLATE IN OUT`",
+                super::max_cells()
+            )));
+        }
+        let mut limits = Limits::default();
+        limits.decoding_buffer_size = (chunk_cells as usize * 8).max(1 << 20);
+        dec = dec.with_limits(limits);
+        refuse_compression(&mut dec).map_err(bad)?;
+        let samples: u16 = dec
+            .find_tag_unsigned(Tag::SamplesPerPixel)
+            .map_err(tiff("TIFF SamplesPerPixel unreadable"))?
+            .unwrap_or(1);
+        if samples != 1 {
+            return Err(bad(format!(
+                "TIFF has {samples} bands; a height map has one (take it with `gdal_translate -b 1`)"
+            )));
+        }
+        let nodata = gdal_nodata(&mut dec);
+        let georef = georef(&mut dec, h).map_err(bad)?;
+        let chunks = match dec.get_chunk_type() {
+            ChunkType::Strip => dec.strip_count(),
+            ChunkType::Tile => dec.tile_count(),
+        }
+        .map_err(tiff("TIFF chunk layout unreadable"))?;
+        let across = w.div_ceil(cw.max(1));
+        let expected = across * h.div_ceil(ch.max(1));
+        if cw == 0 || ch == 0 || chunks as usize != expected {
+            return Err(bad(format!(
+                "TIFF has {chunks} chunks of {cw}×{ch} for {w}×{h} cells; {expected} expected"
+            )));
+        }
+        Ok(Windows {
+            path: path.to_path_buf(),
+            dec,
+            width: w,
+            height: h,
+            georef,
+            nodata,
+            cw,
+            ch,
+            across,
+            kept: None,
+        })
     }
-    .map_err(tiff("TIFF chunk layout unreadable"))?;
-    let across = w.div_ceil(cw.max(1));
-    let expected = across * h.div_ceil(ch.max(1));
-    if cw == 0 || ch == 0 || chunks as usize != expected {
-        return Err(bad(format!(
-            "TIFF has {chunks} chunks of {cw}×{ch} for {w}×{h} cells; {expected} expected"
-        )));
+
+    /// Rows `lo..hi` (counted from the south) into `out`, row-major, nodata as NaN: decoded from
+    /// the chunk rows under them alone. Rows from `next` (the first row the next call asks for;
+    /// `hi` or above when none) up to the top of the last chunk row decoded are kept, so reading
+    /// bands upwards decodes every chunk once.
+    pub fn rows_into(&mut self, lo: usize, hi: usize, next: usize, out: &mut [f32]) -> Result<()> {
+        let (w, h, ch) = (self.width, self.height, self.ch);
+        assert!(lo < hi && hi <= h && out.len() >= w * (hi - lo));
+        // Chunk row k holds file rows k·ch.. (north first): rows h − min((k+1)·ch, h) .. h − k·ch
+        // from the south.
+        let south = |k: usize| (h - ((k + 1) * ch).min(h), h - k * ch);
+        // What the call before kept: rows ka..kb, usable when they start at or below `lo`.
+        let (ka, mut kept) = self.kept.take().unwrap_or_default();
+        let kb = ka + kept.len() / w;
+        let usable = ka <= lo && lo < kb;
+        let from_kept = if usable { hi.min(kb) } else { lo };
+        if usable {
+            out[..(from_kept - lo) * w].copy_from_slice(&kept[(lo - ka) * w..(from_kept - ka) * w]);
+        }
+        let top = if from_kept < hi {
+            south((h - hi) / ch).1
+        } else {
+            kb
+        };
+        // Kept for the next call: rows nk0..top, what is already kept moved down in place.
+        let nk0 = next.max(lo);
+        if usable && nk0 < kb {
+            kept.drain(..(nk0 - ka) * w);
+        } else {
+            kept.clear();
+        }
+        kept.resize(top.saturating_sub(nk0) * w, f32::NAN);
+        if from_kept < hi {
+            for k in (h - hi) / ch..=(h - 1 - from_kept) / ch {
+                let targets = [((lo, hi), &mut *out), ((nk0, top.max(nk0)), &mut kept[..])];
+                self.decode_row(k, targets)?;
+            }
+        }
+        if !kept.is_empty() {
+            self.kept = Some((nk0, kept));
+        }
+        Ok(())
     }
-    for k in 0..chunks {
-        let (x0, y0) = ((k as usize % across) * cw, (k as usize / across) * ch);
-        let (dw, dh) = dec.chunk_data_dimensions(k);
-        let (dw, dh) = (dw as usize, dh as usize);
-        let values = dec
-            .read_chunk(k)
-            .map_err(|e| Error::decode(Role::Sketch, path, chunk_name(&dec), e))?;
-        place(&values, (x0, y0, dw, dh), (w, h), nodata, &mut data).map_err(bad)?;
+
+    /// Decodes chunk row `k` into each target: a buffer holding rows `.0` (from the south).
+    fn decode_row(&mut self, k: usize, targets: [((usize, usize), &mut [f32]); 2]) -> Result<()> {
+        let mut targets = targets;
+        for c in 0..self.across {
+            let chunk = (k * self.across + c) as u32;
+            let (dw, dh) = self.dec.chunk_data_dimensions(chunk);
+            let values = self
+                .dec
+                .read_chunk(chunk)
+                .map_err(|e| Error::decode(Role::Sketch, &self.path, chunk_name(&self.dec), e))?;
+            let rect = (c * self.cw, k * self.ch, dw as usize, dh as usize);
+            for (rows, out) in &mut targets {
+                if rows.0 < rows.1 {
+                    place(
+                        &values,
+                        rect,
+                        (self.width, self.height),
+                        *rows,
+                        self.nodata,
+                        out,
+                    )
+                    .map_err(|reason| Error::sketch(&self.path, reason))?;
+                }
+            }
+        }
+        Ok(())
     }
-    Ok(RawGrid::new(w, h, data, georef))
 }
 
 fn chunk_name<R: Read + Seek>(dec: &Decoder<R>) -> &'static str {
@@ -144,6 +272,7 @@ fn place(
     values: &DecodingResult,
     (x0, y0, dw, dh): (usize, usize, usize, usize),
     (w, h): (usize, usize),
+    rows: (usize, usize),
     nodata: Option<f64>,
     data: &mut [f32],
 ) -> std::result::Result<(), String> {
@@ -151,6 +280,7 @@ fn place(
         src: &[T],
         rect: (usize, usize, usize, usize),
         size: (usize, usize),
+        (lo, hi): (usize, usize),
         data: &mut [f32],
         convert: impl Fn(T) -> f32,
     ) -> std::result::Result<(), String> {
@@ -163,7 +293,11 @@ fn place(
             ));
         }
         for (r, row) in src.chunks_exact(dw).take(dh).enumerate() {
-            let out = (h - 1 - (y0 + r)) * w + x0;
+            let south = h - 1 - (y0 + r);
+            if !(lo..hi).contains(&south) {
+                continue;
+            }
+            let out = (south - lo) * w + x0;
             for (d, &v) in data[out..out + dw].iter_mut().zip(row) {
                 *d = convert(v);
             }
@@ -182,17 +316,17 @@ fn place(
         }
     };
     match values {
-        DecodingResult::U8(v) => copy(v, rect, size, data, |x| cell(x.into())),
-        DecodingResult::I8(v) => copy(v, rect, size, data, |x| cell(x.into())),
-        DecodingResult::U16(v) => copy(v, rect, size, data, |x| cell(x.into())),
-        DecodingResult::I16(v) => copy(v, rect, size, data, |x| cell(x.into())),
-        DecodingResult::U32(v) => copy(v, rect, size, data, |x| cell(x.into())),
-        DecodingResult::I32(v) => copy(v, rect, size, data, |x| cell(x.into())),
-        DecodingResult::U64(v) => copy(v, rect, size, data, |x| cell(x as f64)),
-        DecodingResult::I64(v) => copy(v, rect, size, data, |x| cell(x as f64)),
-        DecodingResult::F16(v) => copy(v, rect, size, data, |x| cell(x.to_f64())),
-        DecodingResult::F32(v) => copy(v, rect, size, data, |x| cell(x.into())),
-        DecodingResult::F64(v) => copy(v, rect, size, data, cell),
+        DecodingResult::U8(v) => copy(v, rect, size, rows, data, |x| cell(x.into())),
+        DecodingResult::I8(v) => copy(v, rect, size, rows, data, |x| cell(x.into())),
+        DecodingResult::U16(v) => copy(v, rect, size, rows, data, |x| cell(x.into())),
+        DecodingResult::I16(v) => copy(v, rect, size, rows, data, |x| cell(x.into())),
+        DecodingResult::U32(v) => copy(v, rect, size, rows, data, |x| cell(x.into())),
+        DecodingResult::I32(v) => copy(v, rect, size, rows, data, |x| cell(x.into())),
+        DecodingResult::U64(v) => copy(v, rect, size, rows, data, |x| cell(x as f64)),
+        DecodingResult::I64(v) => copy(v, rect, size, rows, data, |x| cell(x as f64)),
+        DecodingResult::F16(v) => copy(v, rect, size, rows, data, |x| cell(x.to_f64())),
+        DecodingResult::F32(v) => copy(v, rect, size, rows, data, |x| cell(x.into())),
+        DecodingResult::F64(v) => copy(v, rect, size, rows, data, cell),
     }
 }
 

@@ -295,6 +295,48 @@ impl Atlas {
 /// Applies `sketch.height_scale` and takes heights beyond ±[`MAX_HEIGHT_M`] as nodata (NaN); more
 /// than 1 % of them beyond is a unit error and refused.
 pub fn scale_heights(data: &mut [f32], opts: &LoadOptions) -> Result<()> {
+    scale_cells(data, opts)?.check(data.len(), opts)
+}
+
+/// Heights that [`scale_cells`] found beyond ±[`MAX_HEIGHT_M`] and made nodata: how many, and
+/// the largest magnitude among them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Beyond {
+    /// Heights made nodata.
+    pub cells: usize,
+    /// The largest magnitude among them, metres after `sketch.height_scale`.
+    pub largest_m: f64,
+}
+
+impl Beyond {
+    /// Counts `other`'s cells too (another band of the same grid).
+    pub fn add(&mut self, other: Beyond) {
+        self.cells += other.cells;
+        self.largest_m = self.largest_m.max(other.largest_m);
+    }
+
+    /// [`scale_heights`]'s refusal for a grid of `total` cells: a few such cells are damage or an
+    /// undeclared nodata; more than 1 % are heights in another unit.
+    pub fn check(&self, total: usize, opts: &LoadOptions) -> Result<()> {
+        if self.cells * 100 <= total {
+            return Ok(());
+        }
+        let scale = opts.height_scale.unwrap_or(1.0);
+        Err(Error::value(
+            "sketch.height_scale",
+            format!(
+                "{} of {total} heights lie beyond ±1000 km (up to {:.3e} m after height_scale {scale}): \
+                 set sketch.height_scale to their unit in metres (0.001 for millimetres)",
+                self.cells, self.largest_m
+            ),
+        ))
+    }
+}
+
+/// [`scale_heights`] cell by cell, without its refusal: each height scaled, those beyond
+/// ±1000 km made nodata and counted, so a grid read in bands ([`crate::tiles`]) scales each band
+/// as the whole grid would and checks the sum at the end.
+pub(crate) fn scale_cells(data: &mut [f32], opts: &LoadOptions) -> Result<Beyond> {
     let scale = opts.height_scale.unwrap_or(1.0);
     if !(scale.is_finite() && scale > 0.0) {
         return Err(Error::value(
@@ -302,31 +344,56 @@ pub fn scale_heights(data: &mut [f32], opts: &LoadOptions) -> Result<()> {
             format!("height scale {scale} is not positive and finite"),
         ));
     }
-    let (mut beyond, mut largest) = (0usize, 0.0f64);
+    let mut beyond = Beyond::default();
     for h in data.iter_mut() {
         let v = *h as f64 * scale;
         *h = if v.abs() <= MAX_HEIGHT_M {
             v as f32
         } else {
             if v.is_finite() {
-                beyond += 1;
-                largest = largest.max(v.abs());
+                beyond.cells += 1;
+                beyond.largest_m = beyond.largest_m.max(v.abs());
             }
             f32::NAN
         };
     }
-    // A few such cells are damage or an undeclared nodata; many are heights in another unit.
-    if beyond * 100 > data.len() {
-        return Err(Error::value(
-            "sketch.height_scale",
-            format!(
-                "{beyond} of {} heights lie beyond ±1000 km (up to {largest:.3e} m after height_scale {scale}): \
-                     set sketch.height_scale to their unit in metres (0.001 for millimetres)",
-                data.len()
-            ),
-        ));
+    Ok(beyond)
+}
+
+/// What a sketch file says of itself before its cells are read: size, spacing (after
+/// `sketch.spacing_m`) and georeference.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridHeader {
+    /// Nodes along x (east).
+    pub width: usize,
+    /// Nodes along y (north).
+    pub height: usize,
+    /// Grid spacing along x, metres.
+    pub dx: f64,
+    /// Grid spacing along y, metres.
+    pub dy: f64,
+    /// Where the file puts its south-west node, when it says.
+    pub georef: Option<Georef>,
+}
+
+/// The header of a sketch whose size its header states and whose cells can be read in bands
+/// (a GeoTIFF), read without a cell; `None` for any other format or a glob. For `terrain info`
+/// on a file larger than memory.
+pub fn read_header(path: &Path, opts: &LoadOptions) -> Result<Option<GridHeader>> {
+    if mosaic::is_glob(path) || !matches!(Format::of(path), Ok(Format::Tiff)) {
+        return Ok(None);
     }
-    Ok(())
+    let tiff = geotiff::open(path)?;
+    let (width, height) = (tiff.width, tiff.height);
+    let grid = RawGrid::new(width, height, Vec::new(), tiff.georef);
+    let (dx, dy) = opts.spacing_m.map_or((grid.dx, grid.dy), |s| (s, s));
+    Ok(Some(GridHeader {
+        width,
+        height,
+        dx,
+        dy,
+        georef: grid.georef,
+    }))
 }
 
 impl Atlas {

@@ -27,8 +27,9 @@ pub(crate) mod synthetic;
 mod xyz;
 
 pub use georef::{Georef, US_SURVEY_FOOT_M, Units};
-pub(crate) use load::scale_heights;
-pub use load::{LoadOptions, RawGrid, parse_grid, read_grid, warnings};
+pub(crate) use geotiff::{Windows as TiffWindows, open as open_tiff};
+pub(crate) use load::{Beyond, scale_cells, scale_heights};
+pub use load::{GridHeader, LoadOptions, RawGrid, parse_grid, read_grid, read_header, warnings};
 pub use mosaic::{is_glob, list_glob};
 pub use png::parse_world_file;
 pub use pyramid::Level;
@@ -60,8 +61,9 @@ pub fn limit_cells(cells: usize) {
     CELL_LIMIT.store(cells.min(MAX_CELLS), std::sync::atomic::Ordering::Relaxed);
 }
 
-/// The largest grid a reader allocates now.
-pub(crate) fn max_cells() -> usize {
+/// The largest grid a reader allocates now (cells): [`limit_cells`]'s, or 2^28; a larger file is
+/// read only by `tiles::build`, band by band.
+pub fn max_cells() -> usize {
     CELL_LIMIT.load(std::sync::atomic::Ordering::Relaxed)
 }
 

@@ -197,6 +197,123 @@ pub fn parse_vrt(
     depth: usize,
     read: impl Fn(&Path, usize) -> Result<RawGrid>,
 ) -> Result<RawGrid> {
+    let plan = vrt_plan(path, bytes, depth, true)?;
+    let (w, h) = (plan.width, plan.height);
+    let mut data = vec![f32::NAN; w * h];
+    for source in &plan.sources {
+        let src = read(&source.path, depth + 1)?;
+        let (s, d) = source.rects(path, src.width, src.height)?;
+        // Rows counted from the north in the VRT, from the south in our grids.
+        for r in 0..s[3] {
+            let (sy, dy) = (s[1] + r, d[1] + r);
+            if !(0..src.height as i64).contains(&sy) || !(0..h as i64).contains(&dy) {
+                continue;
+            }
+            let src_row = (src.height as i64 - 1 - sy) as usize * src.width;
+            let dst_row = (h as i64 - 1 - dy) as usize * w;
+            for c in 0..s[2] {
+                let (sx, dx) = (s[0] + c, d[0] + c);
+                if !(0..src.width as i64).contains(&sx) || !(0..w as i64).contains(&dx) {
+                    continue;
+                }
+                if let Some(v) = source.value(src.data[src_row + sx as usize]) {
+                    data[dst_row + dx as usize] = v;
+                }
+            }
+        }
+    }
+    plan.band_nodata_to_nan(&mut data);
+    Ok(RawGrid::new(w, h, data, plan.georef))
+}
+
+/// A VRT's band 1 as [`parse_vrt`] reads it, its sources not yet opened: what `terrain tiles`
+/// needs to read a VRT band by band.
+#[derive(Clone, Debug)]
+pub struct VrtPlan {
+    pub width: usize,
+    pub height: usize,
+    pub sources: Vec<VrtSource>,
+    /// The band's `NoDataValue`, applied after the sources are placed.
+    pub band_nodata: Option<f64>,
+    pub georef: Option<Georef>,
+}
+
+/// One `SimpleSource` or `ComplexSource`.
+#[derive(Clone, Debug)]
+pub struct VrtSource {
+    pub path: PathBuf,
+    /// `SrcRect` and `DstRect` (xOff, yOff from the north, xSize, ySize); absent: the source's
+    /// whole grid.
+    src_rect: Option<[i64; 4]>,
+    dst_rect: Option<[i64; 4]>,
+    nodata: Option<f64>,
+    scale: f64,
+    offset: f64,
+}
+
+impl VrtSource {
+    /// The source and destination rects for a source of `width` × `height`; refused where they
+    /// differ in size (resampling).
+    pub fn rects(&self, vrt: &Path, width: usize, height: usize) -> Result<([i64; 4], [i64; 4])> {
+        let full = [0, 0, width as i64, height as i64];
+        let (s, d) = (self.src_rect.unwrap_or(full), self.dst_rect.unwrap_or(full));
+        if s[2] != d[2] || s[3] != d[3] {
+            return Err(Error::sketch(
+                vrt,
+                format!(
+                    "VRT source {} is resampled ({}×{} to {}×{}); only same-size sources are read",
+                    self.path.display(),
+                    s[2],
+                    s[3],
+                    d[2],
+                    d[3]
+                ),
+            ));
+        }
+        Ok((s, d))
+    }
+
+    /// What a source's cell puts in the mosaic: nothing for its nodata or a non-finite cell, else
+    /// the cell scaled and offset.
+    pub fn value(&self, v: f32) -> Option<f32> {
+        if !v.is_finite() || self.nodata.is_some_and(|nd| v as f64 == nd) {
+            return None;
+        }
+        Some((v as f64 * self.scale + self.offset) as f32)
+    }
+}
+
+impl VrtPlan {
+    /// The band's nodata cells made NaN.
+    pub fn band_nodata_to_nan(&self, data: &mut [f32]) {
+        if let Some(nd) = self.band_nodata {
+            for v in data {
+                if *v as f64 == nd || *v == nd as f32 {
+                    *v = f32::NAN;
+                }
+            }
+        }
+    }
+}
+
+/// Reads a VRT file's plan (its XML alone).
+pub fn read_vrt_plan(path: &Path) -> Result<VrtPlan> {
+    let len = std::fs::metadata(path)
+        .map_err(|e| Error::io(Role::Sketch, path, e))?
+        .len();
+    if len > MAX_VRT_BYTES {
+        return Err(Error::sketch(
+            path,
+            format!("VRT is {len} bytes; larger than {MAX_VRT_BYTES} is not a mosaic"),
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
+    vrt_plan(path, &bytes, 0, false)
+}
+
+/// Parses a VRT's XML: its size (within the cell limit when `whole`, else any up to 2^31 a
+/// side), band 1's sources and its georeference.
+fn vrt_plan(path: &Path, bytes: &[u8], depth: usize, whole: bool) -> Result<VrtPlan> {
     let bad = |reason: String| Error::sketch(path, format!("VRT {reason}"));
     if depth >= MAX_DEPTH {
         return Err(bad(format!("nests more than {MAX_DEPTH} deep")));
@@ -223,11 +340,14 @@ pub fn parse_vrt(
         }
         Ok(f as i64)
     };
-    let (w, h) = RawGrid::check_size(
-        path,
+    let (x, y) = (
         int_attr(root, "rasterXSize")?,
         int_attr(root, "rasterYSize")?,
-    )?;
+    );
+    let (w, h) = match whole {
+        true => RawGrid::check_size(path, x, y)?,
+        false => RawGrid::check_size_unlimited(path, x, y)?,
+    };
     let number = |node: roxmltree::Node| -> Result<f64> {
         let t = node.text().unwrap_or("").trim();
         t.parse().map_err(|_| {
@@ -249,8 +369,8 @@ pub fn parse_vrt(
         )));
     }
     let band_nodata = child(band, "NoDataValue").map(number).transpose()?;
-    let mut data = vec![f32::NAN; w * h];
     let dir = path.parent().unwrap_or(Path::new("."));
+    let mut sources = Vec::new();
     for source in band.children().filter(|c| c.is_element()) {
         let kind = source.tag_name().name();
         match kind {
@@ -278,67 +398,32 @@ pub fn parse_vrt(
                 )));
             }
         }
-        let src = read(&src_path, depth + 1)?;
-        let rect = |name: &str, default: [i64; 4]| -> Result<[i64; 4]> {
-            match child(source, name) {
-                None => Ok(default),
-                Some(n) => Ok([
-                    int_attr(n, "xOff")?,
-                    int_attr(n, "yOff")?,
-                    int_attr(n, "xSize")?,
-                    int_attr(n, "ySize")?,
-                ]),
-            }
+        let rect = |name: &str| -> Result<Option<[i64; 4]>> {
+            child(source, name)
+                .map(|n| {
+                    Ok([
+                        int_attr(n, "xOff")?,
+                        int_attr(n, "yOff")?,
+                        int_attr(n, "xSize")?,
+                        int_attr(n, "ySize")?,
+                    ])
+                })
+                .transpose()
         };
-        let full = [0, 0, src.width as i64, src.height as i64];
-        let s = rect("SrcRect", full)?;
-        let d = rect("DstRect", full)?;
-        if s[2] != d[2] || s[3] != d[3] {
-            return Err(bad(format!(
-                "source {} is resampled ({}×{} to {}×{}); only same-size sources are read",
-                src_path.display(),
-                s[2],
-                s[3],
-                d[2],
-                d[3]
-            )));
-        }
-        let src_nodata = child(source, "NODATA").map(number).transpose()?;
-        let scale = child(source, "ScaleRatio")
-            .map(number)
-            .transpose()?
-            .unwrap_or(1.0);
-        let offset = child(source, "ScaleOffset")
-            .map(number)
-            .transpose()?
-            .unwrap_or(0.0);
-        // Rows counted from the north in the VRT, from the south in our grids.
-        for r in 0..s[3] {
-            let (sy, dy) = (s[1] + r, d[1] + r);
-            if !(0..src.height as i64).contains(&sy) || !(0..h as i64).contains(&dy) {
-                continue;
-            }
-            let src_row = (src.height as i64 - 1 - sy) as usize * src.width;
-            let dst_row = (h as i64 - 1 - dy) as usize * w;
-            for c in 0..s[2] {
-                let (sx, dx) = (s[0] + c, d[0] + c);
-                if !(0..src.width as i64).contains(&sx) || !(0..w as i64).contains(&dx) {
-                    continue;
-                }
-                let v = src.data[src_row + sx as usize];
-                if !v.is_finite() || src_nodata.is_some_and(|nd| v as f64 == nd) {
-                    continue;
-                }
-                data[dst_row + dx as usize] = (v as f64 * scale + offset) as f32;
-            }
-        }
-    }
-    if let Some(nd) = band_nodata {
-        for v in &mut data {
-            if *v as f64 == nd || *v == nd as f32 {
-                *v = f32::NAN;
-            }
-        }
+        sources.push(VrtSource {
+            src_rect: rect("SrcRect")?,
+            dst_rect: rect("DstRect")?,
+            nodata: child(source, "NODATA").map(number).transpose()?,
+            scale: child(source, "ScaleRatio")
+                .map(number)
+                .transpose()?
+                .unwrap_or(1.0),
+            offset: child(source, "ScaleOffset")
+                .map(number)
+                .transpose()?
+                .unwrap_or(0.0),
+            path: src_path,
+        });
     }
     let srs = child(root, "SRS").and_then(|n| n.text());
     let units = srs.map_or(Units::Unknown, wkt_units);
@@ -365,7 +450,13 @@ pub fn parse_vrt(
         }
         None => None,
     };
-    Ok(RawGrid::new(w, h, data, georef))
+    Ok(VrtPlan {
+        width: w,
+        height: h,
+        sources,
+        band_nodata,
+        georef,
+    })
 }
 
 /// The first child element of `node` named `name`.

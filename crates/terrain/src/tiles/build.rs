@@ -2,10 +2,18 @@
 //! bounded memory, resumably.
 //!
 //! Rules:
-//! - Memory is bounded by the largest single source file plus two bands of level 0's width: level 0
-//!   is cut band by band (one tile row and its borders) from the sources, which are first copied
-//!   one at a time into raw scratch files that a band reads by rows; level l is cut band by band from
-//!   the rows of level l−1's tiles. A 32,768-node-wide sketch holds about 100 MB of bands.
+//! - Memory is bounded by a few bands of level 0's width, whatever the sketch's height: level 0 is
+//!   cut band by band (one tile row and its borders). A single GeoTIFF, and the GeoTIFFs under a
+//!   VRT, are read window by window: a band decodes the strips or tiles under its rows alone
+//!   (`level0`). Other sources, and every tile of a glob, are first copied one at a time into raw
+//!   scratch files that a band reads by rows (a GeoTIFF tile band by band, any other file whole);
+//!   level l is cut band by band from the rows of level l−1's tiles. A 32,768-node-wide sketch
+//!   holds about 100 MB of bands. The cell limit ([`crate::sketch::max_cells`]) bounds a band
+//!   and a GeoTIFF's chunk row, not the sketch; a text grid (ESRI ASCII, XYZ) above 256 MiB is
+//!   refused with the `gdal_translate` command that makes it a tiled GeoTIFF.
+//! - A cloud-optimised GeoTIFF's overviews are ignored: every coarser level is the 2×2 average
+//!   of the one below, so the pyramid is the atlas's whatever resampling made the overviews
+//!   (docs/decisions.md, “Single files read window by window”).
 //! - Nodata is filled within each band by the atlas's rule ([`crate::sketch::fill`]): a hole that a
 //!   band does not close from its own rows is closed from those, not from rows further away, so a
 //!   holed sketch's tiled fill can differ from the whole-grid one near bands' edges. A sketch with
@@ -16,6 +24,7 @@
 //! - The scratch folder `.build` is removed once `pyramid.toml` is written.
 
 mod bands;
+mod level0;
 mod resume;
 mod scratch;
 
@@ -27,9 +36,10 @@ use crate::sketch::LoadOptions;
 use crate::sketch::mosaic;
 pub(super) use bands::read_rows;
 use bands::{coarser_band, write_band};
+use level0::is_tiff;
 use resume::{Plan, remove_temporaries, stamp, start_or_resume, tile_is_whole};
 pub use scratch::georef_of;
-use scratch::{copy_sources, level0_band, meta_georef, place};
+use scratch::meta_georef;
 use serde::Serialize;
 use std::os::unix::fs::FileExt;
 use std::path::Path;
@@ -115,8 +125,9 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
         });
     }
     let scratch_dir = out.join(".build");
-    let scratch = copy_sources(&sources, &scratch_dir, &opts.load)?;
-    let (width, height, dx, dy, offsets, georef) = place(src, &sources, &scratch, &opts.load)?;
+    let ((width, height, dx, dy, _, georef), mut level0) =
+        level0::open(src, &sources, &scratch_dir, &opts.load)?;
+    check_band(src, width)?;
     let levels = level_sizes(width, height);
     let mut meta = Meta {
         format: FORMAT.into(),
@@ -151,7 +162,10 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
                 .collect();
             if !missing.is_empty() {
                 let (r0, band) = if l == 0 {
-                    level0_band(&meta, ty, &scratch_dir, &scratch, &offsets)?
+                    let rows = bands::band_rows(ty, height);
+                    let own = (ty * TILE, ((ty + 1) * TILE).min(height));
+                    let next = own.1.saturating_sub(BORDER);
+                    (rows.0, level0.band(width, rows, own, next)?)
                 } else {
                     coarser_band(out, &meta, l, ty)?
                 };
@@ -159,6 +173,20 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
                 written += missing.len();
             }
             progress.advance(tx_count as f64, &format!("level {l}, row {ty}"));
+        }
+        if l == 0 {
+            let beyond = level0
+                .scale
+                .as_ref()
+                .map(|load| level0.beyond.check(width * height, load));
+            if let Some(Err(e)) = beyond {
+                // A run again must find the level missing and refuse again, not finish it.
+                let _ = std::fs::remove_dir_all(out.join("L0"));
+                return Err(match e {
+                    Error::Value { reason, .. } => Error::sketch(src, reason),
+                    e => e,
+                });
+            }
         }
     }
     progress.finish();
@@ -175,6 +203,23 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
         disk_bytes: folder_bytes(out),
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// Refuses a sketch whose bands (a tile row and its borders, at level 0's width) would hold more
+/// than the cell limit at once: the limit bounds what is held, not the sketch.
+fn check_band(src: &Path, width: usize) -> Result<()> {
+    let cells = width * (TILE + 2 * BORDER);
+    let limit = crate::sketch::max_cells();
+    if cells > limit {
+        return Err(Error::sketch(
+            src,
+            format!(
+                "a band of {width}×{} nodes is more than the {limit} cells held at once",
+                TILE + 2 * BORDER
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The level-0 statistics from the tiles: range and nodata from their headers, the edge mean

@@ -11,7 +11,9 @@ use crate::tiles::codec::encode_tile;
 use crate::tiles::{BORDER, Meta, SIDE, TILE, tile_path};
 use std::path::Path;
 
-/// Level l's rows of band `ty`, each the box average of two rows of level l−1 read from its tiles.
+/// Level l's rows of band `ty`, each the box average of two rows of level l−1, read tile by tile
+/// from its tiles: a 2×2 box never straddles a tile (tiles start at even nodes), so level l−1's
+/// rows are never held whole.
 pub(super) fn coarser_band(
     out: &Path,
     meta: &Meta,
@@ -21,14 +23,24 @@ pub(super) fn coarser_band(
     let [w, h] = meta.levels[l];
     let [fw, _] = meta.levels[l - 1];
     let (r0, r1) = band_rows(ty, h);
-    let fine = read_rows(out, meta, l - 1, 2 * r0, 2 * r1)?;
-    let mut band = Vec::with_capacity(w * (r1 - r0));
-    for j in 0..r1 - r0 {
-        for i in 0..w {
-            let at = |x: usize, y: usize| fine[y * fw + x];
-            let (x, y) = (2 * i, 2 * j);
-            // The atlas's order of additions, so both pyramids agree bit for bit.
-            band.push(0.25 * (at(x, y) + at(x + 1, y) + at(x, y + 1) + at(x + 1, y + 1)));
+    let (t, b, side) = (meta.tile, meta.border, meta.tile + 2 * meta.border);
+    let (tiles_x, _) = meta.tiles(l - 1);
+    let mut band = vec![0f32; w * (r1 - r0)];
+    let (f0, f1) = (2 * r0, 2 * r1);
+    for fty in f0 / t..=(f1 - 1) / t {
+        for ftx in 0..tiles_x {
+            let fine = crate::tiles::read::read_tile_file(&tile_path(out, l - 1, ftx, fty), side)?;
+            let at = |x: usize, y: usize| fine[(y - fty * t + b) * side + x - ftx * t + b];
+            let (y0, y1) = (f0.max(fty * t) / 2, f1.min(fty * t + t) / 2);
+            let (x0, x1) = (ftx * t / 2, ((ftx * t + t) / 2).min(w).min(fw / 2));
+            for j in y0..y1 {
+                for i in x0..x1 {
+                    let (x, y) = (2 * i, 2 * j);
+                    // The atlas's order of additions, so both pyramids agree bit for bit.
+                    band[(j - r0) * w + i] =
+                        0.25 * (at(x, y) + at(x + 1, y) + at(x, y + 1) + at(x + 1, y + 1));
+                }
+            }
         }
     }
     Ok((r0, band))
