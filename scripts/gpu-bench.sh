@@ -92,15 +92,18 @@ elif [ -x "$ROOT/terrain" ]; then
 else
   BIN=$ROOT/target/release/terrain
 fi
+if [ -n "$SCENES" ]; then
+  IFS=, read -r -a VIEWS <<<"$SCENES"
+  for i in "${!VIEWS[@]}"; do
+    case ${VIEWS[$i]} in *.toml) VIEWS[i]=$(realpath -m -- "${VIEWS[$i]}") ;; esac
+  done
+else
+  VIEWS=(jacksboro jacksboro-high gaussian gaussian-high hills hills-high planet-orbit planet-10km planet-ground)
+fi
 cd "$ROOT"
 [ -x "$BIN" ] || die "no terrain binary at $BIN: copy a release build (cargo build --release; target/release/terrain) there, or name it in TERRAIN_BIN"
 [ -d sketches ] || die "no sketches/ folder in $ROOT: copy the repository's sketches/ beside scripts/"
 
-if [ -n "$SCENES" ]; then
-  IFS=, read -r -a VIEWS <<<"$SCENES"
-else
-  VIEWS=(jacksboro jacksboro-high gaussian gaussian-high hills hills-high planet-orbit planet-10km planet-ground)
-fi
 # A view is NAME (sketches/NAME.toml) or a scene file; its name keys the output files.
 scene_of() { case $1 in *.toml) printf '%s' "$1" ;; *) printf 'sketches/%s.toml' "$1" ;; esac; }
 name_of() { local b; b=$(basename -- "$1"); printf '%s' "${b%.toml}"; }
@@ -140,8 +143,8 @@ if cmd == "adapter":
     print(load(sys.argv[2])["adapter"])
 elif cmd == "summary":
     j = load(sys.argv[2])
-    print(f"GPU {j['gpu_ms']:.3f} ms, frame {j['frame_ms']:.3f} ms, {j['triangles']:,} triangles, "
-          f"{j['samples']} samples, median of {j['frames']}")
+    print(f"GPU {ms(j.get('gpu_ms'))} ms, frame {ms(j.get('frame_ms'))} ms, "
+          f"{j['triangles']:,} triangles, {j['samples']} samples, median of {j['frames']}")
 elif cmd == "frames":
     runs = []
     with open(sys.argv[2]) as f:
@@ -208,7 +211,7 @@ echo "adapter: $ADAPTER"
 shopt -s nocasematch
 if [[ $ADAPTER =~ (llvmpipe|lavapipe|softpipe|swiftshader|basic\ render\ driver|(^|[^a-z])warp([^a-z]|$)) ]] &&
   [ "$ALLOW_SOFTWARE" = 0 ]; then
-  echo "gpu-bench.sh: $ADAPTER is a software rasteriser, not a GPU; pass --allow-software to measure it anyway" >&2
+  echo "gpu-bench.sh: $ADAPTER is a software rasteriser, not a GPU (WGPU_BACKEND=vulkan asks for Vulkan's adapters); pass --allow-software to measure it anyway" >&2
   exit 1
 fi
 shopt -u nocasematch
@@ -261,7 +264,9 @@ for v in "${VIEWS[@]}"; do
     done
   done
 done
-py frames "$SCRATCH/runs.tsv" "$OUT/frames.csv"
+if ! py frames "$SCRATCH/runs.tsv" "$OUT/frames.csv" 2>"$OUT/logs/frames-csv.log"; then
+  failed "frames.csv" 1 "$OUT/logs/frames-csv.log"
+fi
 
 # One compare per view: the default sweep of every mode it draws against the reference.
 for v in "${VIEWS[@]}"; do
