@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Every bundled view in every mode it draws, on a GPU, in one run of about 8 minutes on an H100:
+# Every bundled view in every mode it draws, on a GPU, in one run sized to end within 8 minutes:
 # the figures of docs/evaluation.md, GPU costs, for a machine with a GPU but perhaps no network and
 # no Rust toolchain. It runs a release `terrain` built elsewhere and copied beside `sketches/`.
 #
