@@ -133,6 +133,7 @@ pub use detail::Detail;
 pub use error::{Error, Result, Role};
 pub use gpu::alloc;
 pub use gpu::context::{GpuContext, Needs};
+pub use gpu::counters::{FrameCounters, PassCounters};
 pub use gpu::frame_io::PassTimes;
 pub use gpu::output::Targets;
 pub use gpu::uniforms::View;

@@ -74,6 +74,14 @@ struct Report {
     gpu_timing: &'static str,
     /// Per pass that ran, by its name (empty without timestamp queries).
     passes_ms: PassTimes,
+    /// What each pass asked of the GPU in the last frame, by pass name
+    /// (`vertex_invocations`, `fragment_invocations`, `primitives`, `compute_invocations`);
+    /// `null` where the adapter has no pipeline statistics queries (GL).
+    counters: Option<serde_json::Map<String, serde_json::Value>>,
+    /// Pixels of the last frame showing ground.
+    covered_px: u64,
+    /// Fragment shader invocations of every pass per pixel showing ground, where counted.
+    fragments_per_covered_px: Option<f64>,
     gpu_memory_bytes: u64,
     frames: u32,
     output: PathBuf,
@@ -135,8 +143,10 @@ pub fn run(a: Args) -> Result<()> {
     let mut staged = Staged::default();
     output::add_image(&mut staged, &a.output, last.width, last.height, &last.rgba)?;
     let mut luminance = None;
+    let relative = r.read_positions(&camera)?;
+    let covered_px = relative.iter().filter(|p| p[3] > 0.5).count() as u64;
     if let Some(p) = &a.positions {
-        let world = terrain::world_positions(&r.read_positions(&camera)?, &camera);
+        let world = terrain::world_positions(&relative, &camera);
         let ground = world.chunks_exact(4).map(|q| q[3] > 0.5);
         luminance = terrain_cli::eval::metrics::terrain_luminance(&last.rgba, ground);
         let shape = [last.height as usize, last.width as usize, 4];
@@ -175,6 +185,12 @@ pub fn run(a: Args) -> Result<()> {
             "wall time around submit"
         },
         passes_ms: PassTimes::median(&passes),
+        counters: last.counters.as_ref().map(counters_json),
+        covered_px,
+        fragments_per_covered_px: last.counters.as_ref().map(|c| {
+            let fragments: u64 = c.iter().map(|(_, p)| p.fragment_invocations).sum();
+            fragments as f64 / covered_px.max(1) as f64
+        }),
         gpu_memory_bytes: r.gpu_bytes(),
         frames: a.repeat,
         output: a.output.clone(),
@@ -236,4 +252,11 @@ fn frames(
         s.finish();
     }
     Ok(frames)
+}
+
+/// The passes' counts as a JSON object keyed by pass name.
+fn counters_json(c: &terrain::FrameCounters) -> serde_json::Map<String, serde_json::Value> {
+    c.iter()
+        .map(|(name, p)| (name.to_string(), serde_json::json!(p)))
+        .collect()
 }

@@ -236,15 +236,17 @@ impl ClipmapsPass {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         count: u32,
-        timestamps: Option<wgpu::ComputePassTimestampWrites>,
+        probe: super::counters::Probe,
     ) {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(Self::NAME),
-            timestamp_writes: timestamps,
+            timestamp_writes: probe.compute(Self::NAME),
         });
+        probe.begin_compute(&mut pass, Self::NAME, 0);
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.dispatch_workgroups((count + 1).div_ceil(64), 1, 1);
+        probe.end_compute(&mut pass);
     }
 }
 

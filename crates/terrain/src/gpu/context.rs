@@ -67,6 +67,8 @@ impl GpuContext {
         // GeoMipMap over a tile pyramid reads the sketch in its vertex shader, which marks the
         // tiles it reads; where the adapter cannot, that mode says so and the others do not care.
         required_features |= adapter.features() & wgpu::Features::VERTEX_WRITABLE_STORAGE;
+        // Each pass's work counted (`gpu::counters`), where the adapter counts it.
+        required_features |= adapter.features() & wgpu::Features::PIPELINE_STATISTICS_QUERY;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("terrain"),
             required_features,

@@ -80,11 +80,11 @@ impl MeshSplitPass {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         mesh: u32,
-        timestamps: Option<wgpu::ComputePassTimestampWrites>,
+        probe: super::counters::Probe,
     ) {
         let (p, b) = (&self.pipeline, &self.bind_group);
         let cells = mesh.min(self.mesh).saturating_sub(1);
-        dispatch_grid(encoder, "mesh_split", p, b, [cells; 2], timestamps);
+        dispatch_grid(encoder, Self::NAME, p, b, [cells; 2], probe);
     }
 }
 

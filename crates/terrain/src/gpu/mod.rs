@@ -18,6 +18,7 @@ pub mod alloc;
 pub mod bindings;
 pub mod clipmaps;
 pub mod context;
+pub mod counters;
 pub mod frame_io;
 pub mod mesh_split;
 pub mod normals;
@@ -97,20 +98,22 @@ pub(crate) fn shader_module(
 }
 
 /// Records a compute pass running `pipeline` once per cell of a `size[0]` × `size[1]` grid
-/// (mesh vertices or pixels; 8×8 workgroups).
+/// (mesh vertices or pixels; 8×8 workgroups), as pass `name` (its label, timer and counters key).
 pub(crate) fn dispatch_grid(
     encoder: &mut wgpu::CommandEncoder,
-    label: &str,
+    name: &str,
     pipeline: &wgpu::ComputePipeline,
     bind_group: &wgpu::BindGroup,
     size: [u32; 2],
-    timestamps: Option<wgpu::ComputePassTimestampWrites>,
+    probe: counters::Probe,
 ) {
     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some(label),
-        timestamp_writes: timestamps,
+        label: Some(name),
+        timestamp_writes: probe.compute(name),
     });
+    probe.begin_compute(&mut pass, name, 0);
     pass.set_pipeline(pipeline);
     pass.set_bind_group(0, bind_group, &[]);
     pass.dispatch_workgroups(size[0].div_ceil(8), size[1].div_ceil(8), 1);
+    probe.end_compute(&mut pass);
 }

@@ -151,7 +151,7 @@ impl PlanetPass {
         encoder: &mut wgpu::CommandEncoder,
         rings: &Rings,
         span: Span,
-        timestamps: Option<wgpu::RenderPassTimestampWrites>,
+        probe: super::counters::Probe,
     ) {
         let attach = |view| {
             Some(wgpu::RenderPassColorAttachment {
@@ -181,10 +181,11 @@ impl PlanetPass {
                 }),
                 stencil_ops: None,
             }),
-            timestamp_writes: timestamps,
+            timestamp_writes: probe.render(Self::NAME),
             occlusion_query_set: None,
             multiview_mask: None,
         });
+        probe.begin_render(&mut pass, Self::NAME, 0);
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.set_pipeline(&self.planet);
         pass.set_index_buffer(self.index.slice(..), wgpu::IndexFormat::Uint32);
@@ -194,5 +195,6 @@ impl PlanetPass {
         // After the ground, where it left the depth cleared (`SKY_TEST`).
         pass.set_pipeline(&self.sky);
         pass.draw(0..3, 0..1);
+        probe.end_render(&mut pass);
     }
 }

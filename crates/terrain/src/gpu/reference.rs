@@ -105,20 +105,9 @@ impl ReferencePass {
         Ok(())
     }
 
-    pub fn record(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        timestamps: Option<wgpu::ComputePassTimestampWrites>,
-    ) {
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, probe: super::counters::Probe) {
         let (p, b) = (&self.pipeline, &self.bind_group);
-        dispatch_grid(
-            encoder,
-            "reference",
-            p,
-            b,
-            [self.width, self.height],
-            timestamps,
-        );
+        dispatch_grid(encoder, Self::NAME, p, b, [self.width, self.height], probe);
     }
 
     /// The frame's display colour and hit positions.

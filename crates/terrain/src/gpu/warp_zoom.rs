@@ -104,11 +104,11 @@ impl WarpZoomPass {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         mesh: u32,
-        timestamps: Option<wgpu::ComputePassTimestampWrites>,
+        probe: super::counters::Probe,
     ) {
         let (p, b) = (&self.pipeline, &self.bind_group);
         let m = mesh.min(self.mesh);
-        dispatch_grid(encoder, "warp_zoom", p, b, [m; 2], timestamps);
+        dispatch_grid(encoder, Self::NAME, p, b, [m; 2], probe);
     }
 }
 

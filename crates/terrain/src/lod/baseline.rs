@@ -24,7 +24,8 @@ use crate::error::{Error, Result};
 use crate::geomipmap::{BlockGpu, Blocks, Grid, LodParams, Selection, Templates};
 use crate::gpu::alloc::Buffer;
 use crate::gpu::context::GpuContext;
-use crate::gpu::frame_io::{Timer, read_vec4, uniform_buffer};
+use crate::gpu::counters::Probe;
+use crate::gpu::frame_io::{read_vec4, uniform_buffer};
 use crate::gpu::normals::NormalsPass;
 use crate::gpu::shaders::Key;
 use crate::gpu::terrain::{TerrainPass, Variant};
@@ -125,9 +126,9 @@ pub fn bake(s: &Shared, key: Key, k: u32, cells: usize) -> Result<(Grid, Bake)> 
         )?)
     };
     let mut encoder = device.create_command_encoder(&Default::default());
-    warp_zoom.record(&mut encoder, n as u32, None);
+    warp_zoom.record(&mut encoder, n as u32, Probe::default());
     if let Some(pass) = &normals {
-        pass.record(&mut encoder, n as u32, None);
+        pass.record(&mut encoder, n as u32, Probe::default());
     }
     ctx.queue.submit([encoder.finish()]);
     let detailed = warp_zoom.into_detailed();
@@ -395,7 +396,7 @@ impl Lod for Baselines {
         &mut self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
-        t: Option<&Timer>,
+        probe: Probe,
     ) -> &'static [&'static str] {
         let queue = &ctx.queue;
         self.fit();
@@ -408,8 +409,7 @@ impl Lod for Baselines {
         );
         self.terrain.write_indices(queue, &self.indices);
         let draw = !self.indices.is_empty();
-        self.terrain
-            .record(encoder, draw, t.map(|t| t.render(TerrainPass::NAME)));
+        self.terrain.record(encoder, draw, probe);
         &[TerrainPass::NAME]
     }
 

@@ -15,7 +15,7 @@ use crate::error::{Error, Result};
 use crate::gpu::alloc::Buffer;
 use crate::gpu::clipmaps::{ClipmapsPass, PlanetUniforms};
 use crate::gpu::context::GpuContext;
-use crate::gpu::frame_io::Timer;
+use crate::gpu::counters::Probe;
 use crate::gpu::planet::PlanetPass;
 use crate::gpu::uniforms::FrameInputs;
 use crate::planet::rings::{Rings, Span, visible_span};
@@ -226,17 +226,15 @@ impl Lod for Clipmaps {
         &mut self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
-        t: Option<&Timer>,
+        probe: Probe,
     ) -> &'static [&'static str] {
         let Some(u) = &self.uniforms else {
             return &[];
         };
         ctx.queue
             .write_buffer(&self.planet_uniforms, 0, bytemuck::bytes_of(u));
-        let compute = t.map(|t| t.compute(ClipmapsPass::NAME));
-        self.clipmaps.record(encoder, u.vertex_count, compute);
-        let render = t.map(|t| t.render(PlanetPass::NAME));
-        self.pass.record(encoder, &self.rings, self.span, render);
+        self.clipmaps.record(encoder, u.vertex_count, probe);
+        self.pass.record(encoder, &self.rings, self.span, probe);
         &PASSES
     }
 

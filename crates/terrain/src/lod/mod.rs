@@ -29,7 +29,7 @@ use crate::detail::Detail;
 use crate::error::Result;
 use crate::gpu::alloc::Alloc;
 use crate::gpu::context::GpuContext;
-use crate::gpu::frame_io::Timer;
+use crate::gpu::counters::Probe;
 use crate::gpu::shaders::Key;
 use crate::gpu::uniforms::{FrameInputs, View};
 use crate::scene::{Mode, Scene, Triangulation};
@@ -166,7 +166,7 @@ pub trait Lod: Any {
         &mut self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
-        timer: Option<&Timer>,
+        probe: Probe,
     ) -> &'static [&'static str];
     /// Where the recorded frame is left, for the output pass to write into a host's targets or a
     /// snapshot's ([`crate::gpu::output`]); `None` where the scheme keeps no view distances.

@@ -6,7 +6,7 @@ use super::{CpuTimes, Lod, Shared};
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::gpu::context::GpuContext;
-use crate::gpu::frame_io::Timer;
+use crate::gpu::counters::Probe;
 use crate::gpu::reference::ReferencePass;
 use crate::gpu::uniforms::{FrameInputs, View};
 use crate::sketch::Atlas;
@@ -93,7 +93,7 @@ impl Lod for Reference {
         &mut self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
-        t: Option<&Timer>,
+        probe: Probe,
     ) -> &'static [&'static str] {
         if let Some(PlanetMarch {
             buffer,
@@ -103,8 +103,7 @@ impl Lod for Reference {
         {
             ctx.queue.write_buffer(buffer, 0, bytemuck::bytes_of(u));
         }
-        self.pass
-            .record(encoder, t.map(|t| t.compute(ReferencePass::NAME)));
+        self.pass.record(encoder, probe);
         &[ReferencePass::NAME]
     }
 

@@ -8,7 +8,8 @@ use crate::camera::Camera;
 use crate::error::Result;
 use crate::gpu::alloc::Buffer;
 use crate::gpu::context::GpuContext;
-use crate::gpu::frame_io::{Timer, read_pod, read_vec4};
+use crate::gpu::counters::Probe;
+use crate::gpu::frame_io::{read_pod, read_vec4};
 use crate::gpu::mesh_split::MeshSplitPass;
 use crate::gpu::normals::NormalsPass;
 use crate::gpu::terrain::{TerrainPass, Variant};
@@ -197,7 +198,7 @@ impl Lod for Warped {
         &mut self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
-        t: Option<&Timer>,
+        probe: Probe,
     ) -> &'static [&'static str] {
         let visible = self.stage.sketch_map.visible;
         if visible {
@@ -216,21 +217,19 @@ impl Lod for Warped {
                 self.phi_on_gpu = true;
             }
             let m = self.stage.mesh;
-            let warp_zoom = t.map(|t| t.compute(WarpZoomPass::NAME));
-            self.warp_zoom.record(encoder, m, warp_zoom);
+            self.warp_zoom.record(encoder, m, probe);
             match &self.mesh_split {
                 Some(split) => {
                     self.terrain.use_split_mesh(m);
-                    split.record(encoder, m, t.map(|t| t.compute(MeshSplitPass::NAME)));
+                    split.record(encoder, m, probe);
                 }
                 None => self.terrain.use_quad_mesh(queue, m),
             }
             if let Some(normals) = &self.normals {
-                normals.record(encoder, m, t.map(|t| t.compute(NormalsPass::NAME)));
+                normals.record(encoder, m, probe);
             }
         }
-        let terrain = t.map(|t| t.render(TerrainPass::NAME));
-        self.terrain.record(encoder, visible, terrain);
+        self.terrain.record(encoder, visible, probe);
         // A sky-only frame runs the terrain pass alone (for the sky).
         let passes = self.passes();
         if visible {

@@ -88,6 +88,7 @@ pub(super) fn renderer(
         deferred,
         shader_key,
         timer: Timer::new(&ctx, &alloc, lod.passes()),
+        counters: Counters::new(&alloc, lod.passes()),
         ctx,
         atlas,
         detail,

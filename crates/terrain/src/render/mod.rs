@@ -14,6 +14,7 @@ use crate::detail::Detail;
 use crate::error::Result;
 use crate::gpu::alloc::{Alloc, Buffer, Ledger};
 use crate::gpu::context::{GpuContext, Needs};
+use crate::gpu::counters::{Counters, FrameCounters, Probe};
 use crate::gpu::frame_io::{FrameStats, PassTimes, Timer, uniform_buffer, upload_atlas};
 use crate::gpu::output::{OutputPass, Targets};
 use crate::gpu::snapshot::Snapshot;
@@ -48,6 +49,9 @@ pub struct Frame {
     /// The tile cache's own CPU time in the frame: placing tiles, writing pages and the page
     /// table, reading the marks back (µs; 0 for a sketch held whole).
     pub stream_us: f64,
+    /// What each pass asked of the GPU (`gpu::counters`), where the device counts it: by pass
+    /// name, in the order the passes ran.
+    pub counters: Option<FrameCounters>,
 }
 
 /// The sketch on the GPU: the whole pyramid, or a tile pyramid through the tile cache.
@@ -94,6 +98,8 @@ pub struct Renderer {
     frame: Buffer,
     sketch: SketchGpu,
     timer: Option<Timer>,
+    /// The passes' pipeline statistics, where the device counts them.
+    counters: Option<Counters>,
     lod: Box<dyn Lod>,
     /// Writes the frame into a snapshot's textures, as into a host's targets.
     output: OutputPass,
@@ -303,7 +309,11 @@ impl Renderer {
         }
         let mut stream_us = stream_start.elapsed().as_secs_f64() * 1e6;
         let timer = self.timer.as_ref();
-        let ran = self.lod.record(ctx, &mut encoder, timer);
+        let probe = Probe {
+            timer,
+            counters: self.counters.as_ref(),
+        };
+        let ran = self.lod.record(ctx, &mut encoder, probe);
         let alloc = Alloc {
             device: &ctx.device,
             ledger: &self.ledger,
@@ -317,6 +327,9 @@ impl Renderer {
         let snapshot = self.snapshot.insert(snapshot);
         if let Some(t) = timer {
             t.resolve(&mut encoder, ran);
+        }
+        if let Some(c) = &self.counters {
+            c.resolve(&mut encoder);
         }
         if let SketchGpu::Streamed(s) = &self.sketch {
             s.record_marks(&mut encoder);
@@ -339,6 +352,10 @@ impl Renderer {
             Some(t) => t.read(ctx, ran)?,
             None => PassTimes::default(),
         };
+        let counters = match &self.counters {
+            Some(c) => Some(c.read(ctx)?),
+            None => None,
+        };
         let triangles = self.lod.triangles();
         Ok(Frame {
             rgba,
@@ -350,6 +367,7 @@ impl Renderer {
             blocks: self.lod.blocks(),
             stream,
             stream_us,
+            counters,
         })
     }
 
@@ -406,7 +424,7 @@ impl Renderer {
         if let SketchGpu::Streamed(s) = &mut self.sketch {
             s.begin_frame(&self.ctx, encoder)?;
         }
-        self.lod.record(&self.ctx, encoder, None);
+        self.lod.record(&self.ctx, encoder, Probe::default());
         if let SketchGpu::Streamed(s) = &self.sketch {
             s.record_marks(encoder);
         }

@@ -386,8 +386,9 @@ impl TerrainPass {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         draw_terrain: bool,
-        timestamps: Option<wgpu::RenderPassTimestampWrites>,
+        probe: super::counters::Probe,
     ) {
+        let timestamps = probe.render(Self::NAME);
         let attach = |view, resolve_target| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
@@ -444,26 +445,32 @@ impl TerrainPass {
             let gbuffer: Vec<_> = deferred.views.iter().map(|v| attach(v, None)).collect();
             let label = "terrain g-buffer";
             let mut pass = render_pass(encoder, label, &gbuffer, depth(&t.depth_view), begin);
+            probe.begin_render(&mut pass, Self::NAME, 0);
             pass.set_bind_group(0, &self.bind_group, &[]);
             if draw_terrain {
                 self.draw_mesh(&mut pass, &self.ground);
             }
+            probe.end_render(&mut pass);
             drop(pass);
             let mut pass = render_pass(encoder, "terrain shading", &attachments, None, end);
+            probe.begin_render(&mut pass, Self::NAME, 1);
             pass.set_bind_group(0, &self.bind_group, &[]);
             pass.set_bind_group(1, &deferred.bind_group, &[]);
             pass.set_pipeline(&self.screen);
             pass.draw(0..3, 0..1);
+            probe.end_render(&mut pass);
             return;
         }
         let ground_depth = depth(&t.depth_view);
         let mut pass = render_pass(encoder, "terrain", &attachments, ground_depth, timestamps);
+        probe.begin_render(&mut pass, Self::NAME, 0);
         pass.set_bind_group(0, &self.bind_group, &[]);
         if draw_terrain {
             self.draw_mesh(&mut pass, &self.ground);
         }
         pass.set_pipeline(&self.screen);
         pass.draw(0..3, 0..1);
+        probe.end_render(&mut pass);
         drop(pass);
         let Some(Multisampled {
             depth_pass: Some((pipeline, depth_view)),
@@ -483,10 +490,12 @@ impl TerrainPass {
             depth(depth_view),
             None,
         );
+        probe.begin_render(&mut pass, Self::NAME, 2);
         pass.set_bind_group(0, &self.bind_group, &[]);
         if draw_terrain {
             self.draw_mesh(&mut pass, pipeline);
         }
+        probe.end_render(&mut pass);
     }
 }
 
