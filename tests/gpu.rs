@@ -273,7 +273,8 @@ fn gpu_memory_is_counted_from_the_allocations() {
     let n = bundled("hills", 64, 64).warp.size as u64;
     assert_eq!(importance.gpu_bytes() - small.gpu_bytes(), n * n * 4);
     // Lit per pixel, the mesh has no normals: the 64² of them (16 bytes each) are never made,
-    // nor the normals pass's timer slots (two 8-byte queries, 16 bytes each to resolve and read).
+    // nor the normals pass's timer slots (two 8-byte queries, 16 bytes each to resolve and read),
+    // nor its counter slots (three queries of four u64, 256 bytes each to resolve and read).
     let mut lit = bundled("hills", 64, 64);
     lit.render.pixel_normals = true;
     let lit = Renderer::new(&lit, Mode::Warped, View::Shaded).unwrap();
@@ -282,7 +283,16 @@ fn gpu_memory_is_counted_from_the_allocations() {
     } else {
         0
     };
-    assert_eq!(small.gpu_bytes() - lit.gpu_bytes(), 64 * 64 * 16 + timer);
+    let counting = small.ctx.device.features();
+    let counters = if counting.contains(wgpu::Features::PIPELINE_STATISTICS_QUERY) {
+        3 * (4 * 8 + 2 * 256)
+    } else {
+        0
+    };
+    assert_eq!(
+        small.gpu_bytes() - lit.gpu_bytes(),
+        64 * 64 * 16 + timer + counters
+    );
 }
 
 /// Where the mesh samples the sketch at twice its cells or coarser its facets would point-sample

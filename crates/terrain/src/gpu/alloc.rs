@@ -119,7 +119,12 @@ impl Alloc<'_> {
     /// Counted at 8 bytes a query, the size of the timestamp each resolves to.
     #[allow(clippy::disallowed_methods)]
     pub fn create_query_set(&self, desc: &wgpu::QuerySetDescriptor) -> Tracked<wgpu::QuerySet> {
-        let bytes = 8 * u64::from(desc.count);
+        // A query's result: one u64, or one for each statistic a statistics query counts.
+        let words = match desc.ty {
+            wgpu::QueryType::PipelineStatistics(kinds) => kinds.bits().count_ones(),
+            _ => 1,
+        };
+        let bytes = 8 * u64::from(words) * u64::from(desc.count);
         self.ledger.track(self.device.create_query_set(desc), bytes)
     }
 }
