@@ -138,6 +138,9 @@ def load(path):
 def ms(x):
     return "" if x is None else f"{x:.4f}"
 
+def ratio(v):
+    return "" if v is None else f"{v:.3f}"
+
 cmd = sys.argv[1]
 if cmd == "adapter":
     print(load(sys.argv[2])["adapter"])
@@ -158,7 +161,7 @@ elif cmd == "frames":
                 passes.append(p)
     fixed = ["adapter", "scene", "mode", "width", "height", "samples", "deferred", "triangles",
              "frames", "gpu_ms", "frame_ms", "cpu_stage_us", "gpu_wall_ms", "gpu_timing",
-             "gpu_memory_bytes"]
+             "gpu_memory_bytes", "covered_px", "fragments_per_covered_px"]
     with open(sys.argv[3], "w", newline="") as f:
         w = csv.writer(f, lineterminator="\n")
         w.writerow(fixed + [f"pass_{p}_ms" for p in passes])
@@ -166,7 +169,8 @@ elif cmd == "frames":
             w.writerow([j["adapter"], scene, j["mode"], j["width"], j["height"], j["samples"],
                         str(j["deferred"]).lower(), j["triangles"], j["frames"], ms(j["gpu_ms"]),
                         ms(j["frame_ms"]), f"{j['cpu_stage_us']:.1f}", ms(j.get("gpu_wall_ms")),
-                        j.get("gpu_timing", ""), j.get("gpu_memory_bytes", "")]
+                        j.get("gpu_timing", ""), j.get("gpu_memory_bytes", ""),
+                        j.get("covered_px", ""), ratio(j.get("fragments_per_covered_px"))]
                        + [ms((j.get("passes_ms") or {}).get(p)) for p in passes])
 EOF
 )

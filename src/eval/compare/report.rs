@@ -55,9 +55,20 @@ pub struct Row {
     /// queries). Read back by `--replot`: `summary.md` splits a frame-time miss by them.
     #[serde(default)]
     pub passes_ms: PassTimes,
+    /// Pixels of the measured frame showing ground.
+    #[serde(default)]
+    pub covered_px: u64,
+    /// Every pass's fragment shader invocations per pixel showing ground, where the adapter
+    /// counts them (`None` otherwise, and in a report written before they were kept).
+    #[serde(default)]
+    pub fragments_per_covered_px: Option<f64>,
+    /// What each pass asked of the GPU in the measured frame, by pass name (JSON only; empty
+    /// where the adapter has no pipeline statistics queries).
+    #[serde(default)]
+    pub counters: std::collections::BTreeMap<String, terrain::PassCounters>,
 }
 
-pub const CSV_COLUMNS: [&str; 22] = [
+pub const CSV_COLUMNS: [&str; 24] = [
     "mode",
     "setting",
     "triangles",
@@ -80,6 +91,8 @@ pub const CSV_COLUMNS: [&str; 22] = [
     "pareto_psnr",
     "pareto_sse",
     "lod_change_levels",
+    "covered_px",
+    "fragments_per_covered_px",
 ];
 
 /// A row of `report.csv`: [`Row`] without the per-pass times, each figure to the decimals it can
@@ -108,6 +121,8 @@ struct CsvRow<'a> {
     pareto_psnr: bool,
     pareto_sse: bool,
     lod_change_levels: Option<Fixed<4>>,
+    covered_px: u64,
+    fragments_per_covered_px: Option<Fixed<3>>,
 }
 
 impl Row {
@@ -135,6 +150,8 @@ impl Row {
             pareto_psnr: self.pareto_psnr,
             pareto_sse: self.pareto_sse,
             lod_change_levels: self.lod_change_levels.map(Fixed),
+            covered_px: self.covered_px,
+            fragments_per_covered_px: self.fragments_per_covered_px.map(Fixed),
         }
     }
 }
@@ -322,6 +339,9 @@ pub(crate) mod tests {
             pareto_sse: false,
             lod_change_levels: Some(0.25),
             passes_ms: PassTimes::default(),
+            covered_px: 100,
+            fragments_per_covered_px: Some(1.5),
+            counters: Default::default(),
         }
     }
 

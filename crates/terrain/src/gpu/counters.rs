@@ -32,7 +32,7 @@ const PER_PASS: u32 = 3;
 const STRIDE: u64 = wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT;
 
 /// One pass's counts in a frame.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct PassCounters {
     /// Vertex shader invocations.
     pub vertex_invocations: u64,
