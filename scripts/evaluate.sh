@@ -45,6 +45,7 @@ flight-flicker|5 min|mean absolute difference between consecutive frames of the 
 tiles-read|2 min|cargo bench --bench tiles: reading one tile, a point query on a decoded tile
 lod-timings|3 min|every mode'"'"'s CPU time, GPU time and triangles on jacksboro at 512² (examples/lod_timings)
 passes|3 min|jacksboro at 512²: GPU time per pass with the bump, without it, without octaves
+counters|3 min|the GPU'"'"'s work per bundled view at 512², warped and GeoMipMap: triangles, pixels of ground, fragments per pixel of ground (pipeline statistics: lavapipe)
 deferred|6 min|the terrain pass drawn forward and deferred on three views (three runs alternately)
 feature-costs|10 min|the terrain pass of jacksboro at 512² feature by feature (scripts/feature-costs.sh)
 picture-figures|8 min|contrast, PSNR and SNR of the mesh modes against the reference on the six views
@@ -540,6 +541,20 @@ table-passes() {
     esac
     terrain render sketches/jacksboro.toml -o "$OUT/passes.png" --repeat 10 --json "${set[@]+"${set[@]}"}" |
       jq -r --arg l "$label" '"| \($l) | \(.gpu_ms | fx(1)) ms | \(.passes_ms.warp_zoom | fx(1)) ms | \(.passes_ms.mesh_split | fx(1)) ms | \(.passes_ms.normals | fx(1)) ms | \(.passes_ms.terrain | fx(1)) ms | \(.cpu_stage_us / 1000 | fx(1)) ms |"'
+  done
+}
+
+table-counters() {
+  head_line counters
+  echo '| view | mode | triangles | pixels of ground | fragments per pixel of ground | vertex invocations | primitives |'
+  echo '|---|---|---|---|---|---|---|'
+  local v m
+  for v in "${VIEWS[@]}"; do
+    for m in warped geomipmap; do
+      terrain render "sketches/$v.toml" -o "$OUT/counters.png" --size 512 --mode "$m" --json |
+        jq -r --arg v "$v" --arg m "$m" 'if .counters == null then error("the adapter counts nothing: install mesa-vulkan-drivers (lavapipe)") else . end
+          | "| \($v) | \($m) | \(.triangles) | \(.covered_px) | \(.fragments_per_covered_px | fx(2)) | \([.counters[].vertex_invocations] | add) | \([.counters[].primitives] | add) |"'
+    done
   done
 }
 
