@@ -22,7 +22,7 @@ use super::{CpuTimes, Lod, Shared};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::geomipmap::{BlockGpu, Blocks, Grid, LodParams, Selection, Templates};
-use crate::gpu::alloc::Buffer;
+use crate::gpu::alloc::{Alloc, Buffer, Ledger};
 use crate::gpu::context::GpuContext;
 use crate::gpu::counters::Probe;
 use crate::gpu::frame_io::{read_vec4, uniform_buffer};
@@ -167,6 +167,8 @@ pub struct Baselines {
     /// Whether a note has said so (once per renderer).
     noted: bool,
     terrain: TerrainPass,
+    /// The renderer's ledger, which the index buffer's growth is counted in.
+    ledger: Ledger,
     /// Precomputation (bake, δ, quadtree), milliseconds.
     pub precompute_ms: f64,
 }
@@ -296,6 +298,7 @@ impl Baselines {
             dropped: 0,
             noted: false,
             terrain,
+            ledger: s.alloc.ledger.clone(),
         })
     }
 }
@@ -407,7 +410,11 @@ impl Lod for Baselines {
             0,
             bytemuck::cast_slice(&self.selection.gpu),
         );
-        self.terrain.write_indices(queue, &self.indices);
+        let device = Alloc {
+            device: &ctx.device,
+            ledger: &self.ledger,
+        };
+        self.terrain.write_indices(&device, queue, &self.indices);
         let draw = !self.indices.is_empty();
         self.terrain.record(encoder, draw, probe);
         &[TerrainPass::NAME]

@@ -81,6 +81,8 @@ pub struct TerrainPass {
     bind_group: wgpu::BindGroup,
     index: Buffer,
     index_count: u32,
+    /// GeoMipMap: the most indices a frame may draw, which the index buffer grows to at most.
+    index_cap: u64,
     /// The side of the quad mesh the index buffer holds (warped mode; 0 for GeoMipMap).
     quad_mesh: u32,
     /// What the targets are made of besides the size.
@@ -255,15 +257,10 @@ impl TerrainPass {
         let bind_group =
             bindings::bind_group(device, Self::NAME, &layout, BINDINGS, 0, key, &resources)?;
         let (index, index_count) = match &variant.geomipmap {
-            Some((_, capacity)) => {
-                let index = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("block indices"),
-                    size: capacity * 4,
-                    usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
-                (index, 0)
-            }
+            // Room for what frames draw, grown as they need it (`write_indices`), never past
+            // the capacity: a baked grid's capacity is every block at level 0, which no view
+            // draws (72 MB of indices for the bundled DEM).
+            Some((_, capacity)) => (block_indices(device, (*capacity).min(FIRST_INDICES)), 0),
             None => {
                 let indices = quad_indices(mesh);
                 // STORAGE: an adaptive triangulation's indices are written by `mesh_split` (and
@@ -292,6 +289,7 @@ impl TerrainPass {
             screen,
             bind_group,
             index_count,
+            index_cap: variant.geomipmap.as_ref().map_or(0, |(_, cap)| *cap),
             quad_mesh: if variant.geomipmap.is_some() { 0 } else { mesh },
             index,
             sizing,
@@ -367,7 +365,17 @@ impl TerrainPass {
     }
 
     /// The GeoMipMap variant's indices for this frame.
-    pub fn write_indices(&mut self, queue: &wgpu::Queue, indices: &[u32]) {
+    pub fn write_indices(&mut self, device: &Alloc, queue: &wgpu::Queue, indices: &[u32]) {
+        let room = self.index.size() / 4;
+        if indices.len() as u64 > room {
+            let needed = indices.len() as u64;
+            let grown = needed
+                .next_power_of_two()
+                .max(2 * room)
+                .min(self.index_cap)
+                .max(needed);
+            self.index = block_indices(device, grown);
+        }
         queue.write_buffer(&self.index, 0, bytemuck::cast_slice(indices));
         self.index_count = indices.len() as u32;
     }
@@ -497,6 +505,19 @@ impl TerrainPass {
         }
         probe.end_render(&mut pass);
     }
+}
+
+/// Indices a GeoMipMap frame's buffer holds at first (256 KiB).
+const FIRST_INDICES: u64 = 1 << 16;
+
+/// An index buffer for `count` of a GeoMipMap frame's indices, rewritten every frame.
+fn block_indices(device: &Alloc, count: u64) -> Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("block indices"),
+        size: count * 4,
+        usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }
 
 /// Two counter-clockwise triangles per cell, split along (s,t)–(s+1,t+1): the diagonal the warp's
