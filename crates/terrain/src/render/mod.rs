@@ -3,9 +3,12 @@
 //! scene; pipelines and buffers are built once and reused across frames and cameras.
 //!
 //! A frame: the scheme prepares on the CPU for the camera; the renderer fills the uniform block
-//! (its shared part, then the scheme's), the scheme records its named passes, the renderer
-//! submits, reads the image back and times it (timestamp queries keyed by pass name where the
-//! adapter has them, wall time around submit always).
+//! (its shared part, then the scheme's), the scheme records its named passes, the output pass
+//! writes the frame into a snapshot's textures (`gpu::snapshot`, as into a host's targets), and
+//! the renderer submits, reads the image back, times it (timestamp queries keyed by pass name
+//! where the adapter has them, wall time around submit always) and reads what each pass asked of
+//! the GPU (`gpu::counters`, where the adapter counts it). A camera of another image size makes
+//! the size-dependent targets again, nothing else.
 
 mod build;
 
