@@ -123,3 +123,47 @@ fn a_flight_of_many_files_says_so_before_it_starts() {
         "{line}"
     );
 }
+
+/// `fly`'s frames overlap each frame's CPU stage with the GPU's drawing of the frame before
+/// (`Renderer::render_each`); the frames are those drawn one at a time, byte for byte, in the
+/// warped mode (whose stage holds its warp from frame to frame) and GeoMipMap, and at a size
+/// that changes along the way.
+#[test]
+fn frames_drawn_with_the_next_ones_stage_overlapped_equal_frames_drawn_one_at_a_time() {
+    use terrain::scene::{Mode, Scene};
+    use terrain::{Renderer, View};
+    let mut scene = Scene::load(&manifest_dir().join("sketches/jacksboro.toml")).unwrap();
+    (scene.camera.width, scene.camera.height) = (64, 48);
+    for mode in [Mode::Warped, Mode::Geomipmap] {
+        let mut r = Renderer::new(&scene, mode, View::Shaded).unwrap();
+        let base = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
+        let cameras: Vec<_> = (0..5)
+            .map(|k| {
+                let mut c = base.clone();
+                c.eye += c.forward * (40.0 * k as f64);
+                if k == 3 {
+                    (c.width, c.height) = (48, 64);
+                }
+                c
+            })
+            .collect();
+        let one_at_a_time: Vec<Vec<u8>> =
+            cameras.iter().map(|c| r.render(c).unwrap().rgba).collect();
+        let mut r = Renderer::new(&scene, mode, View::Shaded).unwrap();
+        let mut overlapped = Vec::new();
+        r.render_each(&cameras, |k, frame| {
+            assert_eq!(
+                (frame.width, frame.height),
+                (cameras[k].width, cameras[k].height)
+            );
+            overlapped.push(frame.rgba);
+            Ok(true)
+        })
+        .unwrap();
+        assert_eq!(overlapped.len(), cameras.len());
+        for (k, (a, b)) in overlapped.iter().zip(&one_at_a_time).enumerate() {
+            let differing = a.iter().zip(b).filter(|(x, y)| x != y).count();
+            assert_eq!(differing, 0, "{mode} frame {k}: {differing} bytes differ");
+        }
+    }
+}

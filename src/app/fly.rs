@@ -298,17 +298,15 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) 
     let writer = FrameWriter::new(w, h);
     let mut intervals = Vec::with_capacity(cameras.len());
     let mut last = std::time::Instant::now();
-    for (k, (camera, &t)) in cameras.iter().zip(&times).enumerate() {
-        let frame = match o.settle {
-            true => r.render_settled(camera)?,
-            false => r.render(camera)?,
-        };
+    let count = cameras.len();
+    // Each frame written and recorded as it is read back; whether to go on.
+    let mut take = |k: usize, frame: terrain::Frame| -> Result<bool> {
+        let (camera, t) = (&cameras[k], times[k]);
         let file = format!("frame-{k:05}.png");
         if !writer.write(out_dir.join(&file), frame.rgba) {
-            break; // every writer stopped: `finish` says why
+            return Ok(false); // every writer stopped: `finish` says why
         }
-        let p = &frame.gpu.passes;
-        let record = FrameRecord {
+        records.push(FrameRecord {
             frame: k,
             time_s: t,
             eye_m: camera.eye.to_array(),
@@ -317,15 +315,25 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) 
             gpu_ms: frame.gpu.gpu_ms,
             frame_ms: frame.gpu.gpu_ms + (frame.cpu_us + frame.stream_us) * 1e-3,
             triangles: frame.gpu.triangles,
-            passes_ms: p.clone(),
+            passes_ms: frame.gpu.passes.clone(),
             stream: frame.stream,
             stream_us: frame.stream_us,
             file,
-        };
-        records.push(record);
+        });
         intervals.push(last.elapsed().as_secs_f64() * 1e3);
         last = std::time::Instant::now();
-        progress.advance(1.0, &format!("frame {}/{}", k + 1, cameras.len()));
+        progress.advance(1.0, &format!("frame {}/{count}", k + 1));
+        Ok(true)
+    };
+    if o.settle {
+        // Each frame waits for its tiles, frame after frame: nothing to overlap.
+        for (k, camera) in cameras.iter().enumerate() {
+            if !take(k, r.render_settled(camera)?)? {
+                break;
+            }
+        }
+    } else {
+        r.render_each(&cameras, take)?;
     }
     writer.finish()?;
     progress.finish();

@@ -1,5 +1,6 @@
 //! The GPU context: a headless device on whatever adapter the machine has (`WGPU_BACKEND` chooses
-//! among backends; without a GPU, Mesa's llvmpipe through GL), its limits checked up front.
+//! among backends; without a GPU, Mesa's lavapipe through Vulkan where it is installed, else
+//! llvmpipe through GL), its limits checked up front.
 
 use crate::error::{Error, Result};
 

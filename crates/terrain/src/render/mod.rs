@@ -57,6 +57,18 @@ pub struct Frame {
     pub counters: Option<FrameCounters>,
 }
 
+/// A frame submitted and not yet read back ([`Renderer::render_each`]).
+struct Submitted {
+    size: (u32, u32),
+    cpu: CpuTimes,
+    ran: &'static [&'static str],
+    start: Instant,
+    /// The tile cache's CPU time so far.
+    stream_us: f64,
+    triangles: u64,
+    blocks: Option<usize>,
+}
+
 /// The sketch on the GPU: the whole pyramid, or a tile pyramid through the tile cache.
 enum SketchGpu {
     Whole(Buffer),
@@ -301,6 +313,13 @@ impl Renderer {
     }
 
     fn draw(&mut self, camera: &Camera, cpu: CpuTimes) -> Result<Frame> {
+        let submitted = self.submit(camera, cpu)?;
+        self.finish(submitted)
+    }
+
+    /// Records and submits the frame of `camera`, whose CPU work `cpu` took, without waiting
+    /// for it.
+    fn submit(&mut self, camera: &Camera, cpu: CpuTimes) -> Result<Submitted> {
         let uniforms = self.uniforms(camera);
         let ctx = &self.ctx;
         ctx.queue
@@ -310,7 +329,7 @@ impl Renderer {
         if let SketchGpu::Streamed(s) = &mut self.sketch {
             s.begin_frame(ctx, &mut encoder)?;
         }
-        let mut stream_us = stream_start.elapsed().as_secs_f64() * 1e6;
+        let stream_us = stream_start.elapsed().as_secs_f64() * 1e6;
         let timer = self.timer.as_ref();
         let probe = Probe {
             timer,
@@ -327,7 +346,7 @@ impl Renderer {
         };
         self.output.prepare(&ctx.queue, camera);
         snapshot.record(&mut encoder, &self.output, &self.output_group);
-        let snapshot = self.snapshot.insert(snapshot);
+        self.snapshot = Some(snapshot);
         if let Some(t) = timer {
             t.resolve(&mut encoder, ran);
         }
@@ -339,39 +358,84 @@ impl Renderer {
         }
         let start = Instant::now();
         ctx.queue.submit([encoder.finish()]);
+        Ok(Submitted {
+            size: (camera.width, camera.height),
+            cpu,
+            ran,
+            start,
+            stream_us,
+            triangles: self.lod.triangles(),
+            blocks: self.lod.blocks(),
+        })
+    }
+
+    /// Waits for the submitted frame and reads it back: its image, times and counts.
+    fn finish(&mut self, f: Submitted) -> Result<Frame> {
+        let ctx = &self.ctx;
+        let snapshot = self.snapshot.as_ref().ok_or(crate::Error::Internal(
+            "a frame finished that was never submitted",
+        ))?;
         let rgba = snapshot.read(ctx)?;
-        let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        let wall_ms = f.start.elapsed().as_secs_f64() * 1e3;
         let stream_start = Instant::now();
         let stream = match &mut self.sketch {
             SketchGpu::Streamed(s) => Some(s.end_frame(ctx)?),
             SketchGpu::Whole(_) => None,
         };
-        if stream.is_some() {
-            stream_us += stream_start.elapsed().as_secs_f64() * 1e6;
-        } else {
-            stream_us = 0.0;
-        }
+        let stream_us = match stream {
+            Some(_) => f.stream_us + stream_start.elapsed().as_secs_f64() * 1e6,
+            None => 0.0,
+        };
+        let timer = self.timer.as_ref();
         let passes = match timer {
-            Some(t) => t.read(ctx, ran)?,
+            Some(t) => t.read(ctx, f.ran)?,
             None => PassTimes::default(),
         };
         let counters = match &self.counters {
             Some(c) => Some(c.read(ctx)?),
             None => None,
         };
-        let triangles = self.lod.triangles();
         Ok(Frame {
             rgba,
-            width: camera.width,
-            height: camera.height,
-            cpu: cpu.stage,
-            cpu_us: cpu.us,
-            gpu: FrameStats::new(passes, timer.is_some(), wall_ms, triangles),
-            blocks: self.lod.blocks(),
+            width: f.size.0,
+            height: f.size.1,
+            cpu: f.cpu.stage,
+            cpu_us: f.cpu.us,
+            gpu: FrameStats::new(passes, timer.is_some(), wall_ms, f.triangles),
+            blocks: f.blocks,
             stream,
             stream_us,
             counters,
         })
+    }
+
+    /// The frames of `cameras` in turn, each handed to `each` as it is read back; each frame's
+    /// CPU work (the warped mode's stage, GeoMipMap's selection) runs while the GPU draws the
+    /// frame before, so a frame costs the larger of the two, not their sum. `each` returns
+    /// whether to go on.
+    pub fn render_each(
+        &mut self,
+        cameras: &[Camera],
+        mut each: impl FnMut(usize, Frame) -> Result<bool>,
+    ) -> Result<()> {
+        let Some(first) = cameras.first() else {
+            return Ok(());
+        };
+        self.fit(first)?;
+        let mut cpu = self.lod.prepare(&self.atlas, first);
+        for (k, camera) in cameras.iter().enumerate() {
+            self.fit(camera)?;
+            let submitted = self.submit(camera, cpu)?;
+            // The next frame's CPU work, while the GPU draws this one.
+            if let Some(next) = cameras.get(k + 1) {
+                cpu = self.lod.prepare(&self.atlas, next);
+            }
+            let frame = self.finish(submitted)?;
+            if !each(k, frame)? {
+                break;
+            }
+        }
+        Ok(())
     }
 
     /// A host's frame, first half: the CPU work for `camera` and the frame's uniforms. Over a
