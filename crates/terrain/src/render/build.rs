@@ -1,5 +1,5 @@
 //! Building a renderer: the sketch on the GPU (whole, or through the tile cache), the scheme of
-//! its mode, the timer, and the output pass its snapshots are written with.
+//! its mode and the timer and counters of its passes.
 
 use super::*;
 
@@ -78,12 +78,8 @@ pub(super) fn renderer(
     let lod = crate::lod::scheme(mode, &shared)?;
     let deferred = shared.deferred;
     let shader_key = crate::lod::shader_key(&shared, mode);
-    let output = OutputPass::new(&alloc, SNAPSHOT, shader_key)?;
-    let output_group = bind_output(&ctx, &output, lod.as_ref())?;
     Ok(Renderer {
-        output,
-        output_group,
-        snapshot: None,
+        snapshots: None,
         samples,
         deferred,
         shader_key,

@@ -57,6 +57,14 @@ pub struct Frame {
     pub counters: Option<FrameCounters>,
 }
 
+/// What a command's snapshots are written with: the output pass, its reading of the scheme's
+/// frame at the renderer's size, and the textures of the last snapshot's size.
+struct Snapshots {
+    pass: OutputPass,
+    group: wgpu::BindGroup,
+    textures: Snapshot,
+}
+
 /// A frame submitted and not yet read back ([`Renderer::render_each`]).
 struct Submitted {
     size: (u32, u32),
@@ -116,12 +124,8 @@ pub struct Renderer {
     /// The passes' pipeline statistics, where the device counts them.
     counters: Option<Counters>,
     lod: Box<dyn Lod>,
-    /// Writes the frame into a snapshot's textures, as into a host's targets.
-    output: OutputPass,
-    /// The output pass's reading of the scheme's frame at [`Renderer::size`]'s size.
-    output_group: wgpu::BindGroup,
-    /// The textures and read-back of the last snapshot's size (made at the first).
-    snapshot: Option<Snapshot>,
+    /// What snapshots are written with, made at the first (a host's frames need none).
+    snapshots: Option<Snapshots>,
     ledger: Ledger,
     /// The image size the scheme's targets are made for: a camera of another size remakes them
     /// alone ([`Lod::resize`]).
@@ -188,7 +192,9 @@ impl Renderer {
                 ledger: &self.ledger,
             };
             self.lod.resize(&alloc, size.0, size.1)?;
-            self.output_group = bind_output(&self.ctx, &self.output, self.lod.as_ref())?;
+            if let Some(s) = &mut self.snapshots {
+                s.group = bind_output(&self.ctx, &s.pass, self.lod.as_ref())?;
+            }
             self.size = size;
         }
         Ok(())
@@ -340,13 +346,26 @@ impl Renderer {
             device: &ctx.device,
             ledger: &self.ledger,
         };
-        let snapshot = match self.snapshot.take() {
-            Some(s) if s.size() == self.size => s,
-            _ => Snapshot::new(&alloc, SNAPSHOT, self.size.0, self.size.1)?,
+        let (w, h) = self.size;
+        let s = match self.snapshots.take() {
+            Some(mut s) => {
+                if s.textures.size() != self.size {
+                    s.textures = Snapshot::new(&alloc, SNAPSHOT, w, h)?;
+                }
+                s
+            }
+            None => {
+                let pass = OutputPass::new(&alloc, SNAPSHOT, self.shader_key)?;
+                Snapshots {
+                    group: bind_output(ctx, &pass, self.lod.as_ref())?,
+                    pass,
+                    textures: Snapshot::new(&alloc, SNAPSHOT, w, h)?,
+                }
+            }
         };
-        self.output.prepare(&ctx.queue, camera);
-        snapshot.record(&mut encoder, &self.output, &self.output_group);
-        self.snapshot = Some(snapshot);
+        s.pass.prepare(&ctx.queue, camera);
+        s.textures.record(&mut encoder, &s.pass, &s.group);
+        self.snapshots = Some(s);
         if let Some(t) = timer {
             t.resolve(&mut encoder, ran);
         }
@@ -372,10 +391,10 @@ impl Renderer {
     /// Waits for the submitted frame and reads it back: its image, times and counts.
     fn finish(&mut self, f: Submitted) -> Result<Frame> {
         let ctx = &self.ctx;
-        let snapshot = self.snapshot.as_ref().ok_or(crate::Error::Internal(
+        let snapshot = self.snapshots.as_ref().ok_or(crate::Error::Internal(
             "a frame finished that was never submitted",
         ))?;
-        let rgba = snapshot.read(ctx)?;
+        let rgba = snapshot.textures.read(ctx)?;
         let wall_ms = f.start.elapsed().as_secs_f64() * 1e3;
         let stream_start = Instant::now();
         let stream = match &mut self.sketch {
