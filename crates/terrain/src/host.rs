@@ -25,7 +25,7 @@
 //! the CPU every frame.
 
 use crate::camera::Camera;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::gpu::alloc::{Alloc, Ledger};
 use crate::gpu::context::GpuContext;
 use crate::gpu::output::OutputPass;
@@ -162,7 +162,7 @@ impl Terrain {
         };
         let renderer = build(&ctx, &scene, atlas, mode, view)?;
         let output = OutputPass::new(&alloc, targets, renderer.shader_key)?;
-        let output_group = bind_output(&ctx, &output, &renderer)?;
+        let output_group = renderer.bind_output(&output)?;
         Ok(Terrain {
             size: (scene.camera.width, scene.camera.height),
             ctx,
@@ -214,7 +214,7 @@ impl Terrain {
     fn fit(&mut self, camera: &Camera) -> Result<()> {
         let size = (camera.width, camera.height);
         if size != self.size {
-            self.output_group = bind_output(&self.ctx, &self.output, &self.renderer)?;
+            self.output_group = self.renderer.bind_output(&self.output)?;
             self.size = size;
         }
         Ok(())
@@ -285,18 +285,6 @@ fn build(
     view: View,
 ) -> Result<Renderer> {
     Renderer::with_context(ctx.clone(), scene, atlas, mode, view)
-}
-
-/// The output pass's bind group over `renderer`'s frame.
-fn bind_output(
-    ctx: &GpuContext,
-    output: &OutputPass,
-    renderer: &Renderer,
-) -> Result<wgpu::BindGroup> {
-    let source = renderer.output().ok_or(Error::Internal(
-        "the renderer keeps no frame for a host's targets",
-    ))?;
-    output.bind(&ctx.device, source)
 }
 
 /// Clears a host's targets as a frame starts: black, and depth 0 (reversed-Z's far).

@@ -145,7 +145,7 @@ pub use lod::reference::Reference;
 pub use lod::warped::Warped;
 pub use names::Named;
 pub use query::{Ground, PlanetGround};
-pub use render::{Frame, Renderer, needs, world_positions};
+pub use render::{Frame, Renderer, covered_px, needs, world_positions};
 pub use scene::{Mode, Scene};
 pub use sketch::Atlas;
 

@@ -144,7 +144,7 @@ pub fn run(a: Args) -> Result<()> {
     output::add_image(&mut staged, &a.output, last.width, last.height, &last.rgba)?;
     let mut luminance = None;
     let relative = r.read_positions(&camera)?;
-    let covered_px = relative.iter().filter(|p| p[3] > 0.5).count() as u64;
+    let covered_px = terrain::covered_px(&relative);
     if let Some(p) = &a.positions {
         let world = terrain::world_positions(&relative, &camera);
         let ground = world.chunks_exact(4).map(|q| q[3] > 0.5);
@@ -187,10 +187,7 @@ pub fn run(a: Args) -> Result<()> {
         passes_ms: PassTimes::median(&passes),
         counters: last.counters.as_ref().map(counters_json),
         covered_px,
-        fragments_per_covered_px: last.counters.as_ref().map(|c| {
-            let fragments: u64 = c.iter().map(|(_, p)| p.fragment_invocations).sum();
-            fragments as f64 / covered_px.max(1) as f64
-        }),
+        fragments_per_covered_px: last.fragments_per_px(covered_px),
         gpu_memory_bytes: r.gpu_bytes(),
         frames: a.repeat,
         output: a.output.clone(),

@@ -74,7 +74,7 @@ fn measure(
         frames.push(&last);
     }
     let positions = r.read_positions(camera)?;
-    let covered_px = positions.iter().filter(|p| p[3] > 0.5).count() as u64;
+    let covered_px = terrain::covered_px(&positions);
     let width = camera.width;
     let sse = metrics::screen_space_error(&positions, &truth.positions, width as usize, o.window);
     let (pre_ms, pre_bytes) = r.precompute().unwrap_or((0.0, 0));
@@ -103,10 +103,7 @@ fn measure(
         lod_change_levels: None,
         passes_ms: PassTimes::default(),
         covered_px,
-        fragments_per_covered_px: last.counters.as_ref().map(|c| {
-            let fragments: u64 = c.iter().map(|(_, p)| p.fragment_invocations).sum();
-            fragments as f64 / covered_px.max(1) as f64
-        }),
+        fragments_per_covered_px: last.fragments_per_px(covered_px),
         counters: last
             .counters
             .iter()

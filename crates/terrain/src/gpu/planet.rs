@@ -32,20 +32,15 @@ pub struct PlanetPass {
     bind_group: wgpu::BindGroup,
     index: Buffer,
     sizing: Sizing,
-    /// The colour, the depth, and each pixel's depth as a colour target when positions are
-    /// asked for.
+    /// The colour, the depth, and each pixel's view distance as a colour target.
     targets: Targets,
 }
 
 impl PlanetPass {
     /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
-    /// The frame's colour and view distances, where positions were asked for.
-    pub fn output(&self) -> Option<super::output::Source<'_>> {
-        let depth = self.targets.depth_copy_view.as_ref()?;
-        Some(super::output::Source::Targets {
-            colour: &self.targets.colour_view,
-            depth,
-        })
+    /// The frame's colour and view distances.
+    pub fn output(&self) -> super::output::Source<'_> {
+        self.targets.output()
     }
 
     pub const NAME: &'static str = "planet";
@@ -62,11 +57,8 @@ impl PlanetPass {
         (width, height): (u32, u32),
         key: Key,
     ) -> Result<PlanetPass> {
-        let positions = key.contains(Key::POSITIONS);
-        let mut targets = vec![Some(wgpu::ColorTargetState::from(COLOUR))];
-        if positions {
-            targets.push(Some(DEPTH_COPY.into()));
-        }
+        // The view distances the output pass reads (`POSITIONS`, always set for a planet).
+        let targets = [Some(COLOUR.into()), Some(DEPTH_COPY.into())];
         let layout = layout(device, Self::NAME, BINDINGS, 0, key);
         let module = shader_module(device, Self::NAME, key)?;
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -106,7 +98,6 @@ impl PlanetPass {
         let sizing = Sizing {
             key,
             samples: 1,
-            positions,
             depth_pipeline: None,
             gbuffer: None,
         };
@@ -134,13 +125,7 @@ impl PlanetPass {
         ctx: &super::context::GpuContext,
         camera: &crate::camera::Camera,
     ) -> Result<Vec<[f32; 4]>> {
-        let depth = self
-            .targets
-            .depth_copy
-            .as_ref()
-            .ok_or(crate::error::Error::Internal(
-                "positions were not asked for when the renderer was built",
-            ))?;
+        let depth = &self.targets.depth_copy;
         let view_proj = super::uniforms::view_proj(camera, super::uniforms::frame_origin(camera));
         super::frame_io::positions_from_depth(ctx, depth, view_proj, camera.near)
     }
@@ -165,11 +150,7 @@ impl PlanetPass {
             })
         };
         let t = &self.targets;
-        let copy = t.depth_copy_view.as_ref().map(attach);
-        let attachments: Vec<_> = [Some(attach(&t.colour_view)), copy]
-            .into_iter()
-            .flatten()
-            .collect();
+        let attachments = [attach(&t.colour_view), attach(&t.depth_copy_view)];
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(Self::NAME),
             color_attachments: &attachments,

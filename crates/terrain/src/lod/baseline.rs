@@ -265,7 +265,6 @@ impl Baselines {
                 .map(|normals| wgpu::Buffer::clone(normals)),
             importance: None,
             geomipmap: Some((wgpu::Buffer::clone(&block_buffer), capacity.1 as u64)),
-            positions: s.positions,
             atlas: s.atlas_binding.clone(),
             samples: s.samples,
         };
@@ -420,7 +419,7 @@ impl Lod for Baselines {
         &[TerrainPass::NAME]
     }
 
-    fn output(&self) -> Option<crate::gpu::output::Source<'_>> {
+    fn output(&self) -> crate::gpu::output::Source<'_> {
         self.terrain.output()
     }
 

@@ -238,7 +238,7 @@ impl Lod for Clipmaps {
         &PASSES
     }
 
-    fn output(&self) -> Option<crate::gpu::output::Source<'_>> {
+    fn output(&self) -> crate::gpu::output::Source<'_> {
         self.pass.output()
     }
 

@@ -50,8 +50,6 @@ pub struct Shared<'a> {
     /// The sketch's pyramid on the GPU: whole, or the tile cache's pages (and its marks).
     pub atlas_binding: &'a crate::gpu::stream::AtlasBinding,
     pub view: View,
-    /// Also write each pixel's ground position (for screen-space error).
-    pub positions: bool,
     /// Samples per pixel: 4 where `render.msaa` asks and the adapter allows, else 1 (the
     /// reference supersamples when it is 4).
     pub samples: u32,
@@ -107,8 +105,9 @@ pub fn shader_key(s: &Shared, mode: Mode) -> Key {
             key.set(Key::BUMP, bump);
             key.set(Key::BUMP_FADE, bump && scene.detail.bump_fade);
             shadows(&mut key);
-            // Multisampled, the depth copy is a pass of its own (`gpu::terrain`).
-            key.set(Key::POSITIONS, s.positions && s.samples == 1);
+            // The view distances the output pass reads: a second target of the frame's pass;
+            // multisampled, a pass of its own (`gpu::terrain`).
+            key.set(Key::POSITIONS, s.samples == 1);
             key.set(Key::DEFERRED, s.deferred);
             if mode == Mode::Warped {
                 let adaptive = scene.warp.triangulation == Triangulation::Adaptive;
@@ -129,7 +128,8 @@ pub fn shader_key(s: &Shared, mode: Mode) -> Key {
         Mode::Clipmaps => {
             key.set(Key::BUMP, bump);
             key.set(Key::BUMP_FADE, bump && scene.detail.bump_fade);
-            key.set(Key::POSITIONS, s.positions);
+            // Its view distances, for the output pass, in the frame's own pass.
+            key.set(Key::POSITIONS, true);
         }
     }
     key
@@ -169,8 +169,8 @@ pub trait Lod: Any {
         probe: Probe,
     ) -> &'static [&'static str];
     /// Where the recorded frame is left, for the output pass to write into a host's targets or a
-    /// snapshot's ([`crate::gpu::output`]); `None` where the scheme keeps no view distances.
-    fn output(&self) -> Option<crate::gpu::output::Source<'_>>;
+    /// snapshot's ([`crate::gpu::output`]): every frame keeps its view distances for it.
+    fn output(&self) -> crate::gpu::output::Source<'_>;
     /// Ground positions of the last frame's pixels, relative to `camera`'s ground point (w = 1
     /// on ground, 0 on sky).
     fn read_positions(&self, ctx: &GpuContext, camera: &Camera) -> Result<Vec<[f32; 4]>>;

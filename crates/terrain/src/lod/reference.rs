@@ -107,8 +107,8 @@ impl Lod for Reference {
         &[ReferencePass::NAME]
     }
 
-    fn output(&self) -> Option<crate::gpu::output::Source<'_>> {
-        Some(self.pass.output())
+    fn output(&self) -> crate::gpu::output::Source<'_> {
+        self.pass.output()
     }
 
     fn read_positions(&self, ctx: &GpuContext, _: &Camera) -> Result<Vec<[f32; 4]>> {

@@ -85,7 +85,6 @@ impl Warped {
                 .map(|pass| wgpu::Buffer::clone(&pass.normals)),
             importance: importance.as_ref().map(|b| wgpu::Buffer::clone(b)),
             geomipmap: None,
-            positions: s.positions,
             atlas: s.atlas_binding.clone(),
             samples: s.samples,
         };
@@ -239,7 +238,7 @@ impl Lod for Warped {
         }
     }
 
-    fn output(&self) -> Option<crate::gpu::output::Source<'_>> {
+    fn output(&self) -> crate::gpu::output::Source<'_> {
         self.terrain.output()
     }
 

@@ -59,8 +59,6 @@ pub(super) fn renderer(
         frame: &frame,
         atlas_binding: &atlas_binding,
         view,
-        // The output pass reads each pixel's view distance: a host's depth, a snapshot's.
-        positions: true,
         samples,
         deferred: mode.is_mesh() && ctx.deferred(scene.render.deferred, samples),
     };

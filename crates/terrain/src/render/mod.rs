@@ -65,6 +65,16 @@ struct Snapshots {
     textures: Snapshot,
 }
 
+impl Frame {
+    /// Every pass's fragment shader invocations per pixel of `px` (the pixels showing ground,
+    /// [`covered_px`]), where the device counts them.
+    pub fn fragments_per_px(&self, px: u64) -> Option<f64> {
+        let counters = self.counters.as_ref()?;
+        let fragments: u64 = counters.iter().map(|(_, c)| c.fragment_invocations).sum();
+        Some(fragments as f64 / px.max(1) as f64)
+    }
+}
+
 /// A frame submitted and not yet read back ([`Renderer::render_each`]).
 struct Submitted {
     size: (u32, u32),
@@ -141,10 +151,7 @@ const SNAPSHOT: Targets = Targets {
 
 /// The output pass's bind group over the frame `lod` leaves.
 fn bind_output(ctx: &GpuContext, output: &OutputPass, lod: &dyn Lod) -> Result<wgpu::BindGroup> {
-    let source = lod.output().ok_or(crate::Error::Internal(
-        "the scheme keeps no frame for the output pass",
-    ))?;
-    output.bind(&ctx.device, source)
+    output.bind(&ctx.device, lod.output())
 }
 
 /// What a scene in `mode` needs of the adapter: the atlas, and the mode's own largest binding
@@ -440,7 +447,6 @@ impl Renderer {
         let Some(first) = cameras.first() else {
             return Ok(());
         };
-        self.fit(first)?;
         let mut cpu = self.lod.prepare(&self.atlas, first);
         for (k, camera) in cameras.iter().enumerate() {
             self.fit(camera)?;
@@ -517,9 +523,9 @@ impl Renderer {
         Ok(())
     }
 
-    /// Where the last recorded frame lies, for the output pass.
-    pub(crate) fn output(&self) -> Option<crate::gpu::output::Source<'_>> {
-        self.lod.output()
+    /// `output`'s bind group over the frame the scheme leaves (a host's output pass).
+    pub(crate) fn bind_output(&self, output: &OutputPass) -> Result<wgpu::BindGroup> {
+        bind_output(&self.ctx, output, self.lod.as_ref())
     }
 
     /// Bytes of GPU memory the renderer holds now: its uniforms, the atlas, the timer's
@@ -551,6 +557,11 @@ impl Renderer {
     pub fn visible(&self) -> bool {
         self.lod.visible()
     }
+}
+
+/// Pixels showing ground among `relative` ([`Renderer::read_positions`]: w = 1 on ground).
+pub fn covered_px(relative: &[[f32; 4]]) -> u64 {
+    relative.iter().filter(|p| p[3] > 0.5).count() as u64
 }
 
 /// Positions as the passes write them (f32, relative to `camera`'s ground point, w = 1 on ground)

@@ -87,9 +87,9 @@ pub struct TerrainPass {
     quad_mesh: u32,
     /// What the targets are made of besides the size.
     sizing: targets::Sizing,
-    /// The colour, the depth and its copy (when the variant asks for positions); multisampled,
-    /// the colour's samples (resolved into the colour) and with positions the single-sampled
-    /// depth pass; deferred, the G-buffer `ground` writes and `screen` shades the picture from.
+    /// The colour, the depth and its copy (the view distances); multisampled, the colour's
+    /// samples (resolved into the colour) and the single-sampled depth pass; deferred, the
+    /// G-buffer `ground` writes and `screen` shades the picture from.
     targets: targets::Targets,
 }
 
@@ -137,9 +137,6 @@ pub struct Variant {
     /// GeoMipMap: the per-frame block records and the most indices a frame can draw. The index
     /// buffer is then rewritten every frame instead of holding the warped mesh's quads.
     pub geomipmap: Option<(wgpu::Buffer, u64)>,
-    /// Also write each pixel's depth, from which its ground position is recovered (for
-    /// screen-space error); multisampled, in a pass of its own.
-    pub positions: bool,
     /// The sketch's pyramid: the surface types read its curvature, the shadow ray and pixel
     /// normals its heights.
     pub atlas: AtlasBinding,
@@ -178,8 +175,8 @@ impl TerrainPass {
 
         let layout = bindings::layout(device, Self::NAME, BINDINGS, 0, key);
         let module = shader_module(device, "terrain", key)?;
-        // Multisampled with positions: the same shaders with the depth copy's entry point.
-        let depth_module = if variant.positions && multisampled {
+        // Multisampled: the same shaders with the depth copy's entry point.
+        let depth_module = if multisampled {
             Some(shader_module(device, "terrain", key | Key::POSITIONS)?)
         } else {
             None
@@ -279,7 +276,6 @@ impl TerrainPass {
         let sizing = targets::Sizing {
             key,
             samples: variant.samples,
-            positions: variant.positions,
             depth_pipeline,
             gbuffer,
         };
@@ -308,28 +304,20 @@ impl TerrainPass {
     }
 
     /// Ground positions of the last frame's pixels, drawn from `camera` (metres from its frame
-    /// origin, w = 1 on ground), recovered from the depth copy; needs `positions` in the variant.
+    /// origin, w = 1 on ground), recovered from the depth copy.
     pub fn read_positions(
         &self,
         ctx: &super::context::GpuContext,
         camera: &crate::camera::Camera,
     ) -> Result<Vec<[f32; 4]>> {
         let view_proj = super::uniforms::view_proj(camera, super::uniforms::frame_origin(camera));
-        let depth = self.targets.depth_copy.as_ref().ok_or_else(|| {
-            crate::error::Error::Internal(
-                "positions were not asked for when the renderer was built",
-            )
-        })?;
+        let depth = &self.targets.depth_copy;
         super::frame_io::positions_from_depth(ctx, depth, view_proj, camera.near)
     }
 
-    /// The frame's colour and view distances, where positions were asked for.
-    pub fn output(&self) -> Option<super::output::Source<'_>> {
-        let depth = self.targets.depth_copy_view.as_ref()?;
-        Some(super::output::Source::Targets {
-            colour: &self.targets.colour_view,
-            depth,
-        })
+    /// The frame's colour and view distances.
+    pub fn output(&self) -> super::output::Source<'_> {
+        self.targets.output()
     }
 
     /// The warped variant draws a `mesh`² quad mesh this frame (at most the size it was built
@@ -417,11 +405,10 @@ impl TerrainPass {
         let attachments = match &t.multisampled {
             Some(ms) => vec![attach(&ms.colour, Some(&t.colour_view))],
             None => {
-                let copy = t.depth_copy_view.as_ref().map(|v| attach(v, None));
-                [Some(attach(&t.colour_view, None)), copy]
-                    .into_iter()
-                    .flatten()
-                    .collect()
+                vec![
+                    attach(&t.colour_view, None),
+                    attach(&t.depth_copy_view, None),
+                ]
             }
         };
         // The depth, cleared; every pass's own (nothing reads it after).
@@ -487,10 +474,7 @@ impl TerrainPass {
         else {
             return;
         };
-        let copy = [
-            None,
-            t.depth_copy_view.as_ref().and_then(|v| attach(v, None)),
-        ];
+        let copy = [None, attach(&t.depth_copy_view, None)];
         let mut pass = render_pass(
             encoder,
             "terrain depth copy",

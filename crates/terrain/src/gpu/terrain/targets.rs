@@ -13,8 +13,6 @@ use crate::gpu::shaders::Key;
 pub(in crate::gpu) struct Sizing {
     pub key: Key,
     pub samples: u32,
-    /// Each pixel's depth copied for positions.
-    pub positions: bool,
     /// Draws the depth copy of a multisampled frame.
     pub depth_pipeline: Option<wgpu::RenderPipeline>,
     /// The G-buffer's layout, when shading is deferred.
@@ -27,10 +25,21 @@ pub(in crate::gpu) struct Targets {
     pub colour_view: wgpu::TextureView,
     pub depth_view: wgpu::TextureView,
     _depth: Texture,
-    pub depth_copy: Option<Texture>,
-    pub depth_copy_view: Option<wgpu::TextureView>,
+    /// Each pixel's view distance as a colour target: for the output pass and positions.
+    pub depth_copy: Texture,
+    pub depth_copy_view: wgpu::TextureView,
     pub(super) multisampled: Option<Multisampled>,
     pub(super) deferred: Option<Deferred>,
+}
+
+impl Targets {
+    /// The frame's colour and view distances, for the output pass.
+    pub fn output(&self) -> crate::gpu::output::Source<'_> {
+        crate::gpu::output::Source::Targets {
+            colour: &self.colour_view,
+            depth: &self.depth_copy_view,
+        }
+    }
 }
 
 /// The targets of a `width` × `height` frame drawn as `sizing` says.
@@ -69,12 +78,10 @@ pub(in crate::gpu) fn make(
     );
     let drawn = wgpu::TextureUsages::RENDER_ATTACHMENT;
     let depth = target_of(DEPTH, drawn, "depth", n);
-    let depth_copy = sizing.positions.then(|| {
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::COPY_SRC
-            | wgpu::TextureUsages::TEXTURE_BINDING;
-        target(DEPTH_COPY, usage, "depth copy")
-    });
+    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+        | wgpu::TextureUsages::COPY_SRC
+        | wgpu::TextureUsages::TEXTURE_BINDING;
+    let depth_copy = target(DEPTH_COPY, usage, "depth copy");
     let multisampled = multisampled.then(|| {
         let colour = target_of(COLOUR, drawn, "colour samples", n);
         let mut ms = Multisampled {
@@ -122,9 +129,7 @@ pub(in crate::gpu) fn make(
     Ok(Targets {
         colour_view: colour.create_view(&Default::default()),
         depth_view: depth.create_view(&Default::default()),
-        depth_copy_view: depth_copy
-            .as_ref()
-            .map(|t| t.create_view(&Default::default())),
+        depth_copy_view: depth_copy.create_view(&Default::default()),
         _colour: colour,
         _depth: depth,
         depth_copy,
