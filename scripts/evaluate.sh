@@ -45,7 +45,7 @@ flight-flicker|5 min|mean absolute difference between consecutive frames of the 
 tiles-read|2 min|cargo bench --bench tiles: reading one tile, a point query on a decoded tile
 lod-timings|3 min|every mode'"'"'s CPU time, GPU time and triangles on jacksboro at 512² (examples/lod_timings)
 passes|3 min|jacksboro at 512²: GPU time per pass with the bump, without it, without octaves
-counters|3 min|the GPU'"'"'s work per bundled view at 512², warped and GeoMipMap: triangles, pixels of ground, fragments per pixel of ground (pipeline statistics: lavapipe)
+counters|5 min|the GPU'"'"'s work per bundled view at 512², warped and GeoMipMap: triangles, pixels of ground, fragments per pixel of ground (pipeline statistics: lavapipe), work per pixel (the counting variant), PSNR against the reference
 deferred|6 min|the terrain pass drawn forward and deferred on three views (three runs alternately)
 feature-costs|10 min|the terrain pass of jacksboro at 512² feature by feature (scripts/feature-costs.sh)
 picture-figures|8 min|contrast, PSNR and SNR of the mesh modes against the reference on the six views
@@ -546,14 +546,16 @@ table-passes() {
 
 table-counters() {
   head_line counters
-  echo '| view | mode | triangles | pixels of ground | fragments per pixel of ground | vertex invocations | primitives |'
-  echo '|---|---|---|---|---|---|---|'
-  local v m
+  echo '| view | mode | triangles | pixels of ground | fragments per pixel of ground | octaves / shadow steps / atlas taps per pixel of ground | vertex invocations | primitives | PSNR |'
+  echo '|---|---|---|---|---|---|---|---|---|'
+  local v m psnr
   for v in "${VIEWS[@]}"; do
+    terrain render "sketches/$v.toml" -o "$OUT/counters-ref.png" --size 512 --mode reference >/dev/null
     for m in warped geomipmap; do
-      terrain render "sketches/$v.toml" -o "$OUT/counters.png" --size 512 --mode "$m" --json |
-        jq -r --arg v "$v" --arg m "$m" 'if .counters == null then error("the adapter counts nothing: install mesa-vulkan-drivers (lavapipe)") else . end
-          | "| \($v) | \($m) | \(.triangles) | \(.covered_px) | \(.fragments_per_covered_px | fx(2)) | \([.counters[].vertex_invocations] | add) | \([.counters[].primitives] | add) |"'
+      terrain render "sketches/$v.toml" -o "$OUT/counters.png" --size 512 --mode "$m" --json >"$OUT/counters.json"
+      psnr=$(cargo run --release --example image_metrics -- "$OUT/counters-ref.png" "$OUT/counters.png" 2>>"$LOG" | awk '{ print $2 }')
+      jq -r --arg v "$v" --arg m "$m" --arg psnr "$(fix 2 "$psnr")" 'if .counters == null then error("the adapter counts nothing: install mesa-vulkan-drivers (lavapipe)") else . end
+          | "| \($v) | \($m) | \(.triangles) | \(.covered_px) | \(.fragments_per_covered_px | fx(2)) | \(.work_per_px.octaves | fx(2)) / \(.work_per_px.shadow_steps | fx(2)) / \(.work_per_px.atlas_taps | fx(1)) | \([.counters[].vertex_invocations] | add) | \([.counters[].primitives] | add) | \($psnr) dB |"' "$OUT/counters.json"
     done
   done
 }

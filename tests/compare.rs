@@ -41,6 +41,7 @@ fn compare_reports_every_setting_with_every_column_filled() {
         "1",
         "--path-frames",
         "3",
+        "--work",
         // A held warp may not change at all over two steps; warped anew each frame, it must.
         "--set",
         "warp.hold=false",
@@ -126,6 +127,9 @@ fn compare_reports_every_setting_with_every_column_filled() {
                 .unwrap_or_else(|_| panic!("{name}: {line}"))
         };
         assert!(num("triangles") > 0.0, "no triangles: {line}");
+        // `--work`: every mode's shading reads the sketch and evaluates the noise.
+        assert!(num("atlas_taps_per_px") >= 1.0, "atlas taps: {line}");
+        assert!(num("octaves_per_px") > 0.0, "octaves: {line}");
         let covered = num("covered_px");
         assert!(
             covered > 0.0 && covered <= 64.0 * 64.0,

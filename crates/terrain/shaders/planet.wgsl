@@ -20,6 +20,12 @@
 
 @fragment
 fn sky_fs(in: SkyOut) -> FragOut {
+    let out = planet_sky_of(in);
+    add_work();
+    return out;
+}
+
+fn planet_sky_of(in: SkyOut) -> FragOut {
     if (frame.camera.view == VIEW_COVERAGE) {
         return frag_out(vec3<f32>(0.0), 0.0);
     }
@@ -110,6 +116,12 @@ fn planet_vs(@builtin(vertex_index) i: u32) -> VsOut {
 
 @fragment
 fn planet_fs(in: VsOut) -> FragOut {
+    let out = planet_shade(in);
+    add_work();
+    return out;
+}
+
+fn planet_shade(in: VsOut) -> FragOut {
     let r = planet.radius;
     let from_centre = in.local + vec3<f32>(0.0, 0.0, r);
     let up = normalize(from_centre);

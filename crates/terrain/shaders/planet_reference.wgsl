@@ -108,4 +108,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let ray = trace(ndc);
     colour_out[k] = vec4<f32>(display(ray.colour), 1.0);
     position_out[k] = ray.hit;
+    add_work();
 }

@@ -156,4 +156,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     position_out[k] = centre.hit;
     colour_out[k] = vec4<f32>(centre.colour, 1.0);
 #endif
+    add_work();
 }

@@ -58,7 +58,9 @@ fn vertex_normal(i: u32) -> vec3<f32> {
 
 @fragment
 fn sky_fs(in: SkyOut) -> FragOut {
-    return sky(in);
+    let out = sky(in);
+    add_work();
+    return out;
 }
 
 fn sky(in: SkyOut) -> FragOut {
@@ -405,7 +407,9 @@ fn terrain_fs(in: VsOut) -> FragOut {
     if (!inside_sketch(in.local.xy)) {
         discard;
     }
-    return shade(surface_of(in));
+    let out = shade(surface_of(in));
+    add_work();
+    return out;
 }
 
 fn shade(in: Surface) -> FragOut {
@@ -470,7 +474,9 @@ fn gbuffer_fs(in: VsOut) -> GBuffer {
     if (!inside_sketch(in.local.xy)) {
         discard;
     }
-    return gbuffer_of(surface_of(in));
+    let out = gbuffer_of(surface_of(in));
+    add_work();
+    return out;
 }
 
 @group(1) @binding(0) var gbuffer_local_w: texture_2d<u32>;
@@ -484,14 +490,18 @@ fn deferred_fs(in: SkyOut) -> FragOut {
     let local_w = textureLoad(gbuffer_local_w, p, 0);
     // view_w is the clip w of a fragment in front of the near plane, above 0: the clear value's
     // 0 bits mark a pixel with no ground.
+    var out: FragOut;
     if (local_w.w == 0u) {
-        return sky(in);
+        out = sky(in);
+    } else {
+        out = shade(surface_from(GBuffer(
+            local_w,
+            textureLoad(gbuffer_normal_split, p, 0),
+            textureLoad(gbuffer_inscatter_spacing, p, 0),
+            textureLoad(gbuffer_through_wire, p, 0),
+        )));
     }
-    return shade(surface_from(GBuffer(
-        local_w,
-        textureLoad(gbuffer_normal_split, p, 0),
-        textureLoad(gbuffer_inscatter_spacing, p, 0),
-        textureLoad(gbuffer_through_wire, p, 0),
-    )));
+    add_work();
+    return out;
 }
 #endif

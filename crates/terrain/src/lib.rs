@@ -137,6 +137,7 @@ pub use gpu::counters::{FrameCounters, PassCounters};
 pub use gpu::frame_io::PassTimes;
 pub use gpu::output::Targets;
 pub use gpu::uniforms::View;
+pub use gpu::work::{Work, WorkPerPx};
 pub use host::{Description, FrameInfo, Terrain, clear};
 pub use light::Light;
 pub use lod::baseline::Baselines;

@@ -33,6 +33,11 @@ pub struct Args {
     /// Frames per second along the path.
     #[arg(long, default_value_t = 15.0, value_parser = args::fps)]
     path_fps: f64,
+    /// Also counts what each setting's shading evaluates per pixel (noise octaves, shadow steps,
+    /// atlas taps), its frame drawn once more in the counting variant: the report's
+    /// `*_per_px` columns.
+    #[arg(long)]
+    work: bool,
     /// Only redraws error_vs_time and summary.md from --out-dir's report.json.
     #[arg(long)]
     replot: bool,
@@ -63,6 +68,7 @@ pub fn run(a: Args) -> Result<()> {
         path_frames: a.path_frames as usize,
         path_fps: a.path_fps,
         keep_bytes: a.keep_mib.saturating_mul(1 << 20),
+        work: a.work,
         ..Default::default()
     };
     let name = a

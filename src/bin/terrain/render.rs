@@ -10,7 +10,7 @@ use terrain::scene;
 use terrain::scene::CameraReport;
 use terrain::scene::{Mode, Scene};
 use terrain::{Error, Role};
-use terrain::{Frame, Renderer};
+use terrain::{Frame, Renderer, Work, WorkPerPx};
 use terrain_cli::app::output::{self, ImageFormat, Staged};
 use terrain_cli::app::progress::Spinner;
 
@@ -82,6 +82,9 @@ struct Report {
     covered_px: u64,
     /// Fragment shader invocations of every pass per pixel showing ground, where counted.
     fragments_per_covered_px: Option<f64>,
+    /// What the shading evaluated per pixel showing ground (`octaves`, `shadow_steps`,
+    /// `atlas_taps`): the frame drawn once more by a renderer in the counting variant.
+    work_per_px: WorkPerPx,
     gpu_memory_bytes: u64,
     frames: u32,
     output: PathBuf,
@@ -153,6 +156,11 @@ pub fn run(a: Args) -> Result<()> {
         staged.add(p, &output::npy_f64(&shape, &world))?;
     }
     staged.commit()?;
+    let work = if a.json {
+        counted_work(&r, &scene, mode, a.view, &camera)?
+    } else {
+        Default::default()
+    };
 
     let median = |f: &dyn Fn(&Frame) -> f64| {
         let mut v: Vec<f64> = frames.iter().map(f).collect();
@@ -188,6 +196,7 @@ pub fn run(a: Args) -> Result<()> {
         counters: last.counters.as_ref().map(counters_json),
         covered_px,
         fragments_per_covered_px: last.fragments_per_px(covered_px),
+        work_per_px: work.per_px(covered_px),
         gpu_memory_bytes: r.gpu_bytes(),
         frames: a.repeat,
         output: a.output.clone(),
@@ -223,6 +232,23 @@ pub fn run(a: Args) -> Result<()> {
         report.gpu_timing
     );
     Ok(())
+}
+
+/// What the shading of `camera`'s frame evaluates, counted by a renderer in the counting variant
+/// beside `r` (on its device), its frames drawn as `r`'s were.
+fn counted_work(
+    r: &Renderer,
+    scene: &Scene,
+    mode: Mode,
+    view: View,
+    camera: &terrain::Camera,
+) -> Result<Work> {
+    let ctx = r.ctx().clone();
+    let mut counting = Renderer::counting_work(ctx, scene, r.atlas().clone(), mode, view)?;
+    let frames = frames(&mut counting, camera, scene, 1)?;
+    let last = frames.last().context("no frame counted")?;
+    last.work
+        .context("a counting renderer's frame carries its work")
 }
 
 /// One warm-up frame (shader compilation, first-use allocation), then `repeat` timed ones; a

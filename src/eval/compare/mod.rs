@@ -81,6 +81,8 @@ pub struct Options {
     /// The GPU memory the renderers kept for timing in rounds may hold ([`rounds::KEEP_BYTES`];
     /// 0: every setting timed alone).
     pub keep_bytes: u64,
+    /// Each row's work per pixel counted too (`--work`, [`terrain::Renderer::counting_work`]).
+    pub work: bool,
 }
 
 impl Default for Options {
@@ -94,6 +96,7 @@ impl Default for Options {
             window: 16,
             settings: None,
             keep_bytes: rounds::KEEP_BYTES,
+            work: false,
         }
     }
 }
@@ -276,13 +279,18 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     let steps = flight.as_ref().map_or(&[][..], |(_, c)| &c[..]);
     let mut rounds = Rounds::new(o.keep_bytes);
     let mut run_setting = |s: &Setting, row: usize| -> Result<(Row, Vec<u8>)> {
-        rounds.measure(
+        let (mut row, rgba) = rounds.measure(
             s,
             row,
             o.repeat,
             || renderer(&ctx, &scene, &atlas, s),
             |r, frames| measure_lod(r, s, &camera, &truth0, o, frames, steps),
-        )
+        )?;
+        if o.work {
+            let work = measure::count_work(&ctx, &scene, &atlas, s, &camera)?;
+            row.work_per_px = Some(work.per_px(row.covered_px));
+        }
+        Ok((row, rgba))
     };
     let mut runs = Runs::default();
     for s in &settings {

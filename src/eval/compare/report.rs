@@ -62,13 +62,16 @@ pub struct Row {
     /// counts them (`None` otherwise, and in a report written before they were kept).
     #[serde(default)]
     pub fragments_per_covered_px: Option<f64>,
+    /// What the shading evaluated per pixel showing ground, where counted (`compare --work`).
+    #[serde(default)]
+    pub work_per_px: Option<terrain::WorkPerPx>,
     /// What each pass asked of the GPU in the measured frame, by pass name (JSON only; empty
     /// where the adapter has no pipeline statistics queries).
     #[serde(default)]
     pub counters: std::collections::BTreeMap<String, terrain::PassCounters>,
 }
 
-pub const CSV_COLUMNS: [&str; 24] = [
+pub const CSV_COLUMNS: [&str; 27] = [
     "mode",
     "setting",
     "triangles",
@@ -93,6 +96,9 @@ pub const CSV_COLUMNS: [&str; 24] = [
     "lod_change_levels",
     "covered_px",
     "fragments_per_covered_px",
+    "octaves_per_px",
+    "shadow_steps_per_px",
+    "atlas_taps_per_px",
 ];
 
 /// A row of `report.csv`: [`Row`] without the per-pass times, each figure to the decimals it can
@@ -123,6 +129,9 @@ struct CsvRow<'a> {
     lod_change_levels: Option<Fixed<4>>,
     covered_px: u64,
     fragments_per_covered_px: Option<Fixed<3>>,
+    octaves_per_px: Option<Fixed<3>>,
+    shadow_steps_per_px: Option<Fixed<3>>,
+    atlas_taps_per_px: Option<Fixed<3>>,
 }
 
 impl Row {
@@ -152,6 +161,9 @@ impl Row {
             lod_change_levels: self.lod_change_levels.map(Fixed),
             covered_px: self.covered_px,
             fragments_per_covered_px: self.fragments_per_covered_px.map(Fixed),
+            octaves_per_px: self.work_per_px.map(|w| Fixed(w.octaves)),
+            shadow_steps_per_px: self.work_per_px.map(|w| Fixed(w.shadow_steps)),
+            atlas_taps_per_px: self.work_per_px.map(|w| Fixed(w.atlas_taps)),
         }
     }
 }
@@ -341,6 +353,7 @@ pub(crate) mod tests {
             passes_ms: PassTimes::default(),
             covered_px: 100,
             fragments_per_covered_px: Some(1.5),
+            work_per_px: None,
             counters: Default::default(),
         }
     }

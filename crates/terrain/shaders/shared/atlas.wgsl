@@ -17,6 +17,8 @@
 // which the cache reads back after the frame to load and to keep. A tile that has just arrived
 // blends in over the next coarser resident level as its fade rises, so nothing pops.
 
+#import work
+
 @group(0) @binding(1) var<storage, read> atlas: array<f32>;
 #ifdef STREAMED
 @group(0) @binding(7) var<storage, read_write> wanted: array<u32>;
@@ -32,6 +34,7 @@ struct Texels {
 }
 
 fn load(t: Texels, x: i32, y: i32) -> f32 {
+    count_atlas_tap();
     let c = vec2<u32>(clamp(vec2<i32>(x, y), vec2<i32>(0), t.size - 1) - t.origin);
     return atlas[t.base + c.y * t.stride + c.x];
 }

@@ -1,5 +1,7 @@
 // Band-limited gradient noise: the twin of src/detail.rs, line for line.
 
+#import work
+
 fn hash(x_in: u32) -> u32 {
     var x = x_in;
     x ^= x >> 16u;
@@ -40,6 +42,7 @@ fn gradient_noise(cell: vec2<i32>, f: vec2<f32>, seed: u32) -> vec3<f32> {
 
 // n_k and its gradient per metre at `local` metres from the frame origin.
 fn octave_local(o: Octave, local: vec2<f32>) -> vec3<f32> {
+    count_octave();
     let q = local * o.scale + o.phase;
     let c = floor(q);
     let cell = o.lattice + vec2<i32>(c);

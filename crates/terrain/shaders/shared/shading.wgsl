@@ -253,6 +253,7 @@ fn detail_visibility(local: vec2<f32>, footprint: f32) -> f32 {
     let z0 = max(caster + surface_octaves(local, fine).x, frame.atlas.water_m);
     var seen = 1.0;
     for (var i = 0; i < NEAR_STEPS; i++) {
+        count_shadow_step();
         let p = local + sun.xy * t;
         let ground = atlas_bilinear((p + frame.atlas.offset) * frame.atlas.inv_spacing, 0u)
             + surface_octaves(p, max(fine, 0.5 * t)).x;
@@ -286,6 +287,7 @@ fn sun_visibility(local: vec3<f32>, footprint: f32) -> f32 {
     var t = 2.0 * d;
     var seen = 1.0;
     for (var i = 0; i < SHADOW_STEPS; i++) {
+        count_shadow_step();
         let p = start + sun * t;
         if (p.z > frame.atlas.max_m) {
             break;

@@ -65,6 +65,7 @@ fn map_offset(v: vec4<f32>) -> vec2<f32> {
 // Texel (i, j) of level `l`: wrapped across the date line, continued across a pole on the
 // opposite meridian.
 fn planet_texel(i_in: i32, j_in: i32, l: u32) -> f32 {
+    count_atlas_tap();
     let w = i32(frame.atlas.level[l].x);
     let h = i32(frame.atlas.level[l].y);
     var i = i_in;
@@ -188,6 +189,7 @@ fn gradient_noise3(cell: vec3<i32>, f: vec3<f32>, seed: u32) -> vec4<f32> {
 // n_k and its gradient per metre (world axes) at `rel` metres (world axes) from the nadir on the
 // sphere.
 fn octave_rel(o: SphereOctave, rel: vec3<f32>) -> vec4<f32> {
+    count_octave();
     let q = rel * o.scale + o.phase;
     let c = floor(q);
     let n = gradient_noise3(o.lattice + vec3<i32>(c), q - c, o.seed);

@@ -118,6 +118,12 @@ impl Binding {
         Binding::storage_rw(7, "wanted", stages).when(|k| k.contains(Key::STREAMED))
     }
 
+    /// The counting variant's tallies (`shaders/shared/work.wgsl`, [`super::work`]), declared
+    /// wherever the sketch is read.
+    pub const fn work(stages: S) -> Binding {
+        Binding::storage_rw(8, "work", stages).when(|k| k.contains(Key::COUNT_WORK))
+    }
+
     /// Whether variant `key` declares it.
     pub fn declared(&self, key: Key) -> bool {
         (self.when)(key)

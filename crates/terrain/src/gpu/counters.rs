@@ -8,8 +8,8 @@
 //! times passes) and wraps each of its GPU passes in a statistics query (where it counts them);
 //! a pass of several GPU passes (the terrain's G-buffer and shading) counts each in a slot of its
 //! own, summed by name when read. A query left unwritten is never resolved. Rejected: counting
-//! in the shaders with atomics, which changes the work it counts and needs a variant of every
-//! pass.
+//! invocations in the shaders with atomics, which changes the work it counts; what a pixel's
+//! shading evaluates is counted so, in a variant of its own ([`super::work`]).
 
 use super::alloc::{Alloc, Buffer, Tracked};
 use super::context::GpuContext;

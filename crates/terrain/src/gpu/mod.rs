@@ -31,6 +31,7 @@ pub mod stream;
 pub mod terrain;
 pub mod uniforms;
 pub mod warp_zoom;
+pub mod work;
 
 use crate::error::Result;
 use bindings::Binding;

@@ -21,6 +21,7 @@ pub const BINDINGS: &[Binding] = &[
     Binding::frame(S::VERTEX_FRAGMENT),
     Binding::atlas(S::VERTEX_FRAGMENT),
     Binding::wanted(S::VERTEX_FRAGMENT),
+    Binding::work(S::FRAGMENT),
     Binding::uniform(2, "planet", S::VERTEX_FRAGMENT),
     Binding::storage(3, "hemisphere", S::VERTEX),
     Binding::storage(4, "vertices", S::VERTEX),

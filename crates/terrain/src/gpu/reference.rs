@@ -16,6 +16,7 @@ pub const BINDINGS: &[Binding] = &[
     Binding::frame(S::COMPUTE),
     Binding::atlas(S::COMPUTE),
     Binding::wanted(S::COMPUTE),
+    Binding::work(S::COMPUTE),
     Binding::storage_rw(2, "colour_out", S::COMPUTE),
     Binding::storage_rw(3, "position_out", S::COMPUTE),
 ];
@@ -25,6 +26,7 @@ pub const PLANET_BINDINGS: &[Binding] = &[
     Binding::frame(S::COMPUTE),
     Binding::atlas(S::COMPUTE),
     Binding::wanted(S::COMPUTE),
+    Binding::work(S::COMPUTE),
     Binding::storage_rw(2, "colour_out", S::COMPUTE),
     Binding::storage_rw(3, "position_out", S::COMPUTE),
     Binding::uniform(4, "planet", S::COMPUTE),

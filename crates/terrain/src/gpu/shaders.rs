@@ -10,7 +10,7 @@
 
 use crate::error::{Error, Result};
 
-const SHARED: [(&str, &str); 8] = [
+const SHARED: [(&str, &str); 9] = [
     ("frame", include_str!("../../shaders/shared/frame.wgsl")),
     ("noise", include_str!("../../shaders/shared/noise.wgsl")),
     ("atlas", include_str!("../../shaders/shared/atlas.wgsl")),
@@ -19,6 +19,7 @@ const SHARED: [(&str, &str); 8] = [
     ("sphere", include_str!("../../shaders/shared/sphere.wgsl")),
     ("raster", include_str!("../../shaders/shared/raster.wgsl")),
     ("fade", include_str!("../../shaders/shared/fade.wgsl")),
+    ("work", include_str!("../../shaders/shared/work.wgsl")),
 ];
 
 /// A shader variant: a set of [`FLAGS`], a bit each. One key is derived per scene and mode
@@ -57,6 +58,7 @@ flags!(
     GRID_STREAMED,
     DEFERRED,
     FROM_BUFFERS,
+    COUNT_WORK,
 );
 
 impl Key {
@@ -199,6 +201,20 @@ mod tests {
         assert_eq!(Key::of(&key.defs()), key);
         assert!(key.contains(Key::NOISE) && !key.contains(Key::NOISE | Key::BUMP));
         assert!(key.any(Key::NOISE | Key::BUMP) && !key.any(Key::BUMP));
-        assert_eq!(FLAGS.len(), 16);
+        assert_eq!(FLAGS.len(), 17);
+    }
+
+    #[test]
+    fn only_the_counting_variant_tallies() {
+        for shader in super::super::SHADERS {
+            let plain = compose(shader.name, &["NOISE", "DETAIL", "SHADOWS"]).unwrap();
+            assert!(
+                !plain.contains("tally.") && !plain.contains("atomicAdd"),
+                "{}",
+                shader.name
+            );
+        }
+        let counting = compose("terrain", &["COUNT_WORK", "SHADOWS"]).unwrap();
+        assert!(counting.contains("tally.y += 1u") && counting.contains("atomicAdd(&work"));
     }
 }

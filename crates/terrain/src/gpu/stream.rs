@@ -18,11 +18,14 @@ use crate::tiles::Pyramid;
 use crate::tiles::cache::{Budget, StreamStats, TileCache};
 
 /// The sketch's atlas as a pass binds it: the heights and, for a streamed pyramid, the marks
-/// (`atlas` and `wanted` in `shaders/shared/atlas.wgsl`, [`super::bindings::Binding::atlas`]).
+/// (`atlas` and `wanted` in `shaders/shared/atlas.wgsl`, [`super::bindings::Binding::atlas`]);
+/// in the counting variant, the tallies every reader of the sketch declares (`work`,
+/// [`super::work`]).
 #[derive(Clone)]
 pub struct AtlasBinding {
     pub atlas: wgpu::Buffer,
     pub marks: Option<wgpu::Buffer>,
+    pub work: Option<wgpu::Buffer>,
 }
 
 impl AtlasBinding {
@@ -31,6 +34,9 @@ impl AtlasBinding {
         let mut r = vec![("atlas", buffer(&self.atlas))];
         if let Some(marks) = &self.marks {
             r.push(("wanted", buffer(marks)));
+        }
+        if let Some(work) = &self.work {
+            r.push(("work", buffer(work)));
         }
         r
     }
@@ -161,6 +167,7 @@ impl Stream {
         AtlasBinding {
             atlas: wgpu::Buffer::clone(&self.atlas),
             marks: Some(wgpu::Buffer::clone(&self.marks)),
+            work: None,
         }
     }
 

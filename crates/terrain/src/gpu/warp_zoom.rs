@@ -26,6 +26,7 @@ pub const BINDINGS: &[Binding] = &[
     Binding::frame(S::COMPUTE),
     Binding::atlas(S::COMPUTE),
     Binding::wanted(S::COMPUTE),
+    Binding::work(S::COMPUTE),
     Binding::storage(2, "phi", S::COMPUTE),
     Binding::storage_rw(3, "detailed", S::COMPUTE),
     Binding::storage_rw(4, "centres", S::COMPUTE).when(|k| k.contains(Key::CENTRES)),

@@ -94,6 +94,8 @@ pub fn shader_key(s: &Shared, mode: Mode) -> Key {
     };
     key.set(Key::NOISE, noise);
     key.set(Key::STREAMED, s.atlas_binding.marks.is_some());
+    // The counting variant: a renderer made to count gives its passes the tallies.
+    key.set(Key::COUNT_WORK, s.atlas_binding.work.is_some());
     match mode {
         Mode::Warped | Mode::Geomipmap | Mode::Bruteforce => {
             let pixel_normals = scene.render.pixel_normals;

@@ -3,13 +3,15 @@
 
 use super::*;
 
-/// The renderer of `scene` in `mode` drawing `view` over `atlas`, on `ctx`.
+/// The renderer of `scene` in `mode` drawing `view` over `atlas`, on `ctx`; where `count_work`,
+/// in the counting variant (`gpu::work`).
 pub(super) fn renderer(
     ctx: GpuContext,
     scene: &Scene,
     atlas: Atlas,
     mode: Mode,
     view: View,
+    count_work: bool,
 ) -> Result<Renderer> {
     ctx.check(&needs(scene, mode, &atlas))?;
     let detail = scene::detail_for(scene, &atlas, mode);
@@ -37,13 +39,16 @@ pub(super) fn renderer(
         }
         None => SketchGpu::Whole(upload_atlas(&alloc, &atlas)),
     };
-    let atlas_binding = match &sketch {
+    let work = count_work.then(|| Tally::new(&alloc));
+    let mut atlas_binding = match &sketch {
         SketchGpu::Whole(b) => AtlasBinding {
             atlas: wgpu::Buffer::clone(b),
             marks: None,
+            work: None,
         },
         SketchGpu::Streamed(s) => s.binding(),
     };
+    atlas_binding.work = work.as_ref().map(|w| wgpu::Buffer::clone(&w.buffer));
     // Planets are not multisampled (nor supersampled) yet.
     let samples = if planet {
         1
@@ -83,6 +88,7 @@ pub(super) fn renderer(
         shader_key,
         timer: Timer::new(&ctx, &alloc, lod.passes()),
         counters: Counters::new(&alloc, lod.passes()),
+        work,
         ctx,
         atlas,
         detail,

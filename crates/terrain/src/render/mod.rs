@@ -23,6 +23,7 @@ use crate::gpu::output::{OutputPass, Targets};
 use crate::gpu::snapshot::Snapshot;
 use crate::gpu::stream::{AtlasBinding, Stream};
 use crate::gpu::uniforms::{FrameInputs, FrameUniforms, View};
+use crate::gpu::work::{Tally, Work};
 use crate::lod::{CpuTimes, Lod, Shared};
 use crate::scene;
 use crate::scene::{Mode, Scene};
@@ -55,6 +56,9 @@ pub struct Frame {
     /// What each pass asked of the GPU (`gpu::counters`), where the device counts it: by pass
     /// name, in the order the passes ran.
     pub counters: Option<FrameCounters>,
+    /// What the shading evaluated, summed over its pixels, in a renderer made to count it
+    /// ([`Renderer::counting_work`]).
+    pub work: Option<Work>,
 }
 
 /// What a command's snapshots are written with: the output pass, its reading of the scheme's
@@ -133,6 +137,8 @@ pub struct Renderer {
     timer: Option<Timer>,
     /// The passes' pipeline statistics, where the device counts them.
     counters: Option<Counters>,
+    /// The counting variant's tallies, in a renderer made to count them.
+    work: Option<Tally>,
     lod: Box<dyn Lod>,
     /// What snapshots are written with, made at the first (a host's frames need none).
     snapshots: Option<Snapshots>,
@@ -186,7 +192,20 @@ impl Renderer {
         mode: Mode,
         view: View,
     ) -> Result<Renderer> {
-        build::renderer(ctx, scene, atlas, mode, view)
+        build::renderer(ctx, scene, atlas, mode, view, false)
+    }
+
+    /// A renderer in the counting variant (`gpu::work`): its passes tally what they evaluate
+    /// per pixel, and each frame carries the sums ([`Frame::work`]). The pictures are those of
+    /// [`Renderer::with_context`]; the times are not, for the tallies' atomics slow the shading.
+    pub fn counting_work(
+        ctx: GpuContext,
+        scene: &Scene,
+        atlas: Atlas,
+        mode: Mode,
+        view: View,
+    ) -> Result<Renderer> {
+        build::renderer(ctx, scene, atlas, mode, view, true)
     }
 
     /// Fits the scheme's targets to `camera`'s image: nothing happens at the same size, and at
@@ -348,7 +367,13 @@ impl Renderer {
             timer,
             counters: self.counters.as_ref(),
         };
+        if let Some(w) = &self.work {
+            w.clear(&mut encoder);
+        }
         let ran = self.lod.record(ctx, &mut encoder, probe);
+        if let Some(w) = &self.work {
+            w.copy(&mut encoder);
+        }
         let alloc = Alloc {
             device: &ctx.device,
             ledger: &self.ledger,
@@ -421,6 +446,10 @@ impl Renderer {
             Some(c) => Some(c.read(ctx)?),
             None => None,
         };
+        let work = match &self.work {
+            Some(w) => Some(w.read(ctx)?),
+            None => None,
+        };
         Ok(Frame {
             rgba,
             width: f.size.0,
@@ -432,6 +461,7 @@ impl Renderer {
             stream,
             stream_us,
             counters,
+            work,
         })
     }
 
