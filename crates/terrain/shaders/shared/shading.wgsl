@@ -266,40 +266,21 @@ fn detail_visibility(local: vec2<f32>, footprint: f32) -> f32 {
 #endif
 
 // How much of the sun the ground at `local` sees, its pixel `footprint` metres wide: past the
-// detail (DETAIL_SHADOWS), then past the sketch: a ray marched toward the sun in steps that grow
-// with distance, each sampling the pyramid level whose texels match the step (a cone), soft by
-// the closest miss (the penumbra of a sun of finite size), until it rises above the sketch's
-// highest point, on no level finer than the pixel's footprint. That ray leaves from the sketch's
-// own height under the pixel, two cells out (where the detail's ends): the detail a mesh or the
-// reference adds is the detail's to shadow, so a dip in it is not shadowed by the bare sketch
-// around it, in every mode alike.
+// detail (DETAIL_SHADOWS), then past the sketch on no level finer than the pixel's footprint
+// (`sketch_sun_visibility`; with SUN_MAP, its values made once per sun direction, sampled).
 fn sun_visibility(local: vec3<f32>, footprint: f32) -> f32 {
-    let sun = frame.shading.sun;
-    if (sun.z <= 0.0) {
+    if (frame.shading.sun.z <= 0.0) {
         return 0.0;
     }
-    let d = frame.atlas.d_atlas;
     // The sketch under a pixel is band-limited to its footprint: the ray reads no level finer
     // than the footprint's, so a far pixel neither pays for nor (streamed) asks for level-0
     // tiles whose detail it cannot show.
-    let lf = clamp(log2(max(footprint / d, 1.0)), 0.0, f32(frame.atlas.levels - 1u));
-    let start = vec3<f32>(local.xy, shadow_caster(local.xy, u32(lf)));
-    var t = 2.0 * d;
-    var seen = 1.0;
-    for (var i = 0; i < SHADOW_STEPS; i++) {
-        count_shadow_step();
-        let p = start + sun * t;
-        if (p.z > frame.atlas.max_m) {
-            break;
-        }
-        let l = u32(clamp(max(log2(max(0.25 * t / d, 1.0)), lf), 0.0, f32(frame.atlas.levels - 1u)));
-        let clearance = p.z - shadow_caster(p.xy, l);
-        seen = min(seen, clamp(0.5 + clearance / (0.03 * t), 0.0, 1.0));
-        if (seen <= 0.0) {
-            break;
-        }
-        t += max(0.25 * t, 0.5 * d);
-    }
+    let lf = clamp(log2(max(footprint / frame.atlas.d_atlas, 1.0)), 0.0, f32(frame.atlas.levels - 1u));
+#ifdef SUN_MAP
+    var seen = sun_seen_at(local.xy, u32(lf));
+#else
+    var seen = sketch_sun_visibility(local.xy, u32(lf));
+#endif
 #ifdef DETAIL_SHADOWS
     // The detail's march, the costlier, only where the sketch leaves some sun.
     if (seen > 0.0) {
@@ -308,6 +289,124 @@ fn sun_visibility(local: vec3<f32>, footprint: f32) -> f32 {
 #endif
     return seen;
 }
+
+// A ray that passes beyond the sketch's edge below its highest point, in the sun clearance map
+// (src/gpu/sun_map.rs): the ground beyond (a plain, the sea) steps its clearance, which then does
+// not interpolate between texels; near such a texel the march runs per pixel.
+const LEFT_SKETCH: f32 = 1.0e30;
+
+// How much of the sun the sketch leaves at `local`, read from level `l` and coarser.
+fn sketch_sun_visibility(local: vec2<f32>, l: u32) -> f32 {
+    if (!on_sketch(local, 0.0) && !meets_sketch(local)) {
+        return clamp(0.5 + flat_clearance(local, l), 0.0, 1.0);
+    }
+    return clamp(0.5 + sketch_sun_clearance(local, l, true, false), 0.0, 1.0);
+}
+
+// Whether the sun ray from `local` beside the sketch crosses the sketch's rectangle below its
+// highest point (the slab test; the ray leaves from the ground beyond, `shadow_caster`).
+fn meets_sketch(local: vec2<f32>) -> bool {
+    let sun = frame.shading.sun;
+    var near = 0.0;
+    var far = 1.0e30;
+    for (var a = 0; a < 2; a++) {
+        let lo = sketch_lo()[a] - local[a];
+        let hi = sketch_hi()[a] - local[a];
+        if (abs(sun[a]) < 1e-9) {
+            if (lo > 0.0 || hi < 0.0) {
+                return false;
+            }
+        } else {
+            let t1 = lo / sun[a];
+            let t2 = hi / sun[a];
+            near = max(near, min(t1, t2));
+            far = min(far, max(t1, t2));
+        }
+    }
+    return far >= near && shadow_caster(local, 0u) + sun.z * near <= frame.atlas.max_m;
+}
+
+// The march's clearance over flat ground beyond the sketch that its ray never crosses: the
+// ground (a plain, the sea) shadows only itself, alike at every step, so the first step tells.
+fn flat_clearance(local: vec2<f32>, l: u32) -> f32 {
+    let t = 2.0 * frame.atlas.d_atlas;
+    let z0 = shadow_caster(local, l);
+    let z = z0 + frame.shading.sun.z * t;
+    if (z > frame.atlas.max_m) {
+        return 0.5;
+    }
+    return min(0.5, (z - z0) / (0.03 * t));
+}
+
+// The sketch's shadow at `local`: a ray marched toward the sun in steps that grow with distance,
+// each sampling the pyramid level whose texels match the step (a cone) from level `l` on, until it
+// rises above the sketch's highest point; its least clearance over the ground, in penumbra widths
+// (3 % of the distance, a sun of finite size), is the shadow: clamp(0.5 + clearance, 0, 1) of the
+// sun is seen. The ray leaves from the sketch's own height under the point, two cells out (where
+// the detail's ends): the detail a mesh or the reference adds is the detail's to shadow, so a dip
+// in it is not shadowed by the bare sketch around it, in every mode alike. Above 0.5 the sun is
+// whole, so no more is kept; `stop` ends the march once the sun is gone (below −0.5), `edge`
+// once the ray passes beyond the sketch's edge, with LEFT_SKETCH.
+fn sketch_sun_clearance(local: vec2<f32>, l: u32, stop: bool, edge: bool) -> f32 {
+    let sun = frame.shading.sun;
+    let d = frame.atlas.d_atlas;
+    let lf = f32(l);
+    let start = vec3<f32>(local, shadow_caster(local, l));
+    var t = 2.0 * d;
+    var least = 0.5;
+    for (var i = 0; i < SHADOW_STEPS; i++) {
+        count_shadow_step();
+        let p = start + sun * t;
+        if (p.z > frame.atlas.max_m) {
+            break;
+        }
+        if (edge && !on_sketch(p.xy, 0.0)) {
+            return LEFT_SKETCH;
+        }
+        let level = u32(clamp(max(log2(max(0.25 * t / d, 1.0)), lf), 0.0, f32(frame.atlas.levels - 1u)));
+        least = min(least, (p.z - shadow_caster(p.xy, level)) / (0.03 * t));
+        if (stop && least <= -0.5) {
+            break;
+        }
+        t += max(0.25 * t, 0.5 * d);
+    }
+    return least;
+}
+
+#ifdef SUN_MAP
+// The sketch's sun clearance map (src/gpu/sun_map.rs): `sketch_sun_clearance` from the centre
+// of every texel of every level, laid out as the atlas's levels, remade when the sun moves. The
+// clearance, not the visibility, is interpolated: it follows the ground's height under the
+// point smoothly, where the visibility clamped from it turns from sun to shadow within a texel.
+@group(0) @binding(9) var<storage, read> sun_seen: array<f32>;
+
+fn seen_texel(l: u32, x: i32, y: i32) -> f32 {
+    count_atlas_tap();
+    let c = vec2<u32>(clamp(vec2<i32>(x, y), vec2<i32>(0), vec2<i32>(frame.atlas.level[l].xy) - 1));
+    return sun_seen[frame.atlas.level[l].z + c.y * frame.atlas.level[l].x + c.x];
+}
+
+// The map's level `l` at `local`, bilinear between the texel centres the march left from;
+// where one of the four lies off the sketch (a coarse level's last texel reaches past its edge,
+// and the plain or the sea around it, which the sketch shadows near its edges, has no texels),
+// the march.
+fn sun_seen_at(local: vec2<f32>, l: u32) -> f32 {
+    let x = level_coords((local + frame.atlas.offset) * frame.atlas.inv_spacing, l);
+    let s = f32(1u << l);
+    let far = s * (floor(x) + 1.0) + 0.5 * (s - 1.0);
+    if (any(x < vec2<f32>(0.0)) || any(far > vec2<f32>(frame.atlas.level[0].xy - 1u))) {
+        return sketch_sun_visibility(local, l);
+    }
+    let i = vec2<i32>(floor(x));
+    let f = x - floor(x);
+    let a = vec2<f32>(seen_texel(l, i.x, i.y), seen_texel(l, i.x + 1, i.y));
+    let b = vec2<f32>(seen_texel(l, i.x, i.y + 1), seen_texel(l, i.x + 1, i.y + 1));
+    if (max(max(a.x, a.y), max(b.x, b.y)) >= LEFT_SKETCH) {
+        return sketch_sun_visibility(local, l);
+    }
+    return clamp(0.5 + mix(mix(a.x, a.y, f.x), mix(b.x, b.y, f.x), f.y), 0.0, 1.0);
+}
+#endif
 #endif
 
 // The lit colour of ground at `local` with normal `n`, seen from `to_eye` (distance `dist`):

@@ -124,6 +124,13 @@ impl Binding {
         Binding::storage_rw(8, "work", stages).when(|k| k.contains(Key::COUNT_WORK))
     }
 
+    /// The sketch's sun visibility map (`shaders/shared/shading.wgsl`, [`super::sun_map`]),
+    /// declared wherever the shadow is.
+    pub const fn sun_seen(stages: S) -> Binding {
+        Binding::storage(9, "sun_seen", stages)
+            .when(|k| k.contains(Key::SHADOWS.union(Key::SUN_MAP)))
+    }
+
     /// Whether variant `key` declares it.
     pub fn declared(&self, key: Key) -> bool {
         (self.when)(key)

@@ -174,6 +174,7 @@ pub const BINDINGS: &[Binding] = &[
     Binding::atlas(S::COMPUTE),
     Binding::wanted(S::COMPUTE),
     Binding::work(S::COMPUTE),
+    Binding::sun_seen(S::COMPUTE),
     Binding::uniform(2, "planet", S::COMPUTE),
     Binding::storage(3, "hemisphere", S::COMPUTE),
     Binding::storage_rw(4, "vertices", S::COMPUTE),

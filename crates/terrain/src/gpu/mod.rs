@@ -28,6 +28,7 @@ pub mod reference;
 pub mod shaders;
 pub mod snapshot;
 pub mod stream;
+pub mod sun_map;
 pub mod terrain;
 pub mod uniforms;
 pub mod warp_zoom;
@@ -49,7 +50,7 @@ pub struct Shader {
 
 /// Every pass's shader, a row a pass: the one list `compose` finds a pass's WGSL in and the
 /// naga checks run over.
-pub const SHADERS: [Shader; 9] = [
+pub const SHADERS: [Shader; 10] = [
     shader!("warp_zoom", warp_zoom::BINDINGS),
     shader!("mesh_split", mesh_split::BINDINGS),
     shader!("normals", normals::BINDINGS),
@@ -59,6 +60,7 @@ pub const SHADERS: [Shader; 9] = [
     shader!("planet", planet::BINDINGS),
     shader!("planet_reference", reference::PLANET_BINDINGS),
     shader!("output", output::BINDINGS),
+    shader!("sun_map", sun_map::BINDINGS),
 ];
 
 /// A compute pipeline for pass `name` in variant `key`, entry point `main`.

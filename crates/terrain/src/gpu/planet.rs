@@ -22,6 +22,7 @@ pub const BINDINGS: &[Binding] = &[
     Binding::atlas(S::VERTEX_FRAGMENT),
     Binding::wanted(S::VERTEX_FRAGMENT),
     Binding::work(S::FRAGMENT),
+    Binding::sun_seen(S::FRAGMENT),
     Binding::uniform(2, "planet", S::VERTEX_FRAGMENT),
     Binding::storage(3, "hemisphere", S::VERTEX),
     Binding::storage(4, "vertices", S::VERTEX),

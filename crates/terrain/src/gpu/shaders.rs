@@ -59,6 +59,7 @@ flags!(
     DEFERRED,
     FROM_BUFFERS,
     COUNT_WORK,
+    SUN_MAP,
 );
 
 impl Key {
@@ -127,6 +128,42 @@ pub fn compose(name: &str, flags: &[&str]) -> Result<String> {
     let mut imported: Vec<&str> = Vec::new();
     expand(name, source, flags, &mut imported, &mut out)?;
     Ok(out)
+}
+
+/// The flags pass `name`'s WGSL or any file it may import tests (`#ifdef`): every other flag
+/// leaves its source alone, which lets the checks compose each distinct variant once.
+#[cfg(test)]
+pub fn tested_flags(name: &str) -> Key {
+    fn walk<'a>(source: &'a str, seen: &mut Vec<&'a str>, names: &mut Vec<&'a str>) {
+        for line in source.lines().map(str::trim) {
+            if let Some(flag) = line.strip_prefix("#ifdef ") {
+                names.push(flag.trim());
+            } else if let Some(import) = line.strip_prefix("#import ") {
+                let import = import.trim();
+                if let Some((key, text)) = SHARED.iter().find(|(n, _)| *n == import)
+                    && !seen.contains(key)
+                {
+                    seen.push(key);
+                    walk(text, seen, names);
+                }
+            }
+        }
+    }
+    let source = super::SHADERS
+        .iter()
+        .find(|s| s.name == name)
+        .map(|s| s.source);
+    let mut names = Vec::new();
+    walk(source.unwrap_or_default(), &mut Vec::new(), &mut names);
+    Key::of(&names)
+}
+
+/// Only the flags of `self` that `mask` holds too.
+impl std::ops::BitAnd for Key {
+    type Output = Key;
+    fn bitand(self, mask: Key) -> Key {
+        Key(self.0 & mask.0)
+    }
 }
 
 fn expand<'a>(
@@ -201,7 +238,7 @@ mod tests {
         assert_eq!(Key::of(&key.defs()), key);
         assert!(key.contains(Key::NOISE) && !key.contains(Key::NOISE | Key::BUMP));
         assert!(key.any(Key::NOISE | Key::BUMP) && !key.any(Key::BUMP));
-        assert_eq!(FLAGS.len(), 17);
+        assert_eq!(FLAGS.len(), 18);
     }
 
     #[test]

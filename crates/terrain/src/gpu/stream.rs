@@ -26,6 +26,8 @@ pub struct AtlasBinding {
     pub atlas: wgpu::Buffer,
     pub marks: Option<wgpu::Buffer>,
     pub work: Option<wgpu::Buffer>,
+    /// The sketch's sun visibility map, where the frames sample it ([`super::sun_map`]).
+    pub sun_seen: Option<wgpu::Buffer>,
 }
 
 impl AtlasBinding {
@@ -37,6 +39,9 @@ impl AtlasBinding {
         }
         if let Some(work) = &self.work {
             r.push(("work", buffer(work)));
+        }
+        if let Some(seen) = &self.sun_seen {
+            r.push(("sun_seen", buffer(seen)));
         }
         r
     }
@@ -168,6 +173,7 @@ impl Stream {
             atlas: wgpu::Buffer::clone(&self.atlas),
             marks: Some(wgpu::Buffer::clone(&self.marks)),
             work: None,
+            sun_seen: None,
         }
     }
 

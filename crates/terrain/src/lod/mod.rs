@@ -96,6 +96,7 @@ pub fn shader_key(s: &Shared, mode: Mode) -> Key {
     key.set(Key::STREAMED, s.atlas_binding.marks.is_some());
     // The counting variant: a renderer made to count gives its passes the tallies.
     key.set(Key::COUNT_WORK, s.atlas_binding.work.is_some());
+    let sun_map = s.atlas_binding.sun_seen.is_some() && scene.render.shadows;
     match mode {
         Mode::Warped | Mode::Geomipmap | Mode::Bruteforce => {
             let pixel_normals = scene.render.pixel_normals;
@@ -107,6 +108,7 @@ pub fn shader_key(s: &Shared, mode: Mode) -> Key {
             key.set(Key::BUMP, bump);
             key.set(Key::BUMP_FADE, bump && scene.detail.bump_fade);
             shadows(&mut key);
+            key.set(Key::SUN_MAP, sun_map);
             // The view distances the output pass reads: a second target of the frame's pass;
             // multisampled, a pass of its own (`gpu::terrain`).
             key.set(Key::POSITIONS, s.samples == 1);

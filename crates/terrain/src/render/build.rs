@@ -40,11 +40,19 @@ pub(super) fn renderer(
         None => SketchGpu::Whole(upload_atlas(&alloc, &atlas)),
     };
     let work = count_work.then(|| Tally::new(&alloc));
+    // The mesh modes sample the sketch's shadow from a map made once per sun direction.
+    let sun_map = match &sketch {
+        SketchGpu::Whole(b) if mode.is_mesh() && scene.render.shadows && scene.render.sun_map => {
+            Some(SunMap::new(&alloc, &frame, &atlas, b)?)
+        }
+        _ => None,
+    };
     let mut atlas_binding = match &sketch {
         SketchGpu::Whole(b) => AtlasBinding {
             atlas: wgpu::Buffer::clone(b),
             marks: None,
             work: None,
+            sun_seen: sun_map.as_ref().map(|m| wgpu::Buffer::clone(&m.seen)),
         },
         SketchGpu::Streamed(s) => s.binding(),
     };
@@ -89,6 +97,7 @@ pub(super) fn renderer(
         timer: Timer::new(&ctx, &alloc, lod.passes()),
         counters: Counters::new(&alloc, lod.passes()),
         work,
+        sun_map,
         ctx,
         atlas,
         detail,

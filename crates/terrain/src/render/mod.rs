@@ -22,6 +22,7 @@ use crate::gpu::frame_io::{FrameStats, PassTimes, Timer, uniform_buffer, upload_
 use crate::gpu::output::{OutputPass, Targets};
 use crate::gpu::snapshot::Snapshot;
 use crate::gpu::stream::{AtlasBinding, Stream};
+use crate::gpu::sun_map::SunMap;
 use crate::gpu::uniforms::{FrameInputs, FrameUniforms, View};
 use crate::gpu::work::{Tally, Work};
 use crate::lod::{CpuTimes, Lod, Shared};
@@ -139,6 +140,8 @@ pub struct Renderer {
     counters: Option<Counters>,
     /// The counting variant's tallies, in a renderer made to count them.
     work: Option<Tally>,
+    /// The sketch's sun visibility map, where the scheme samples it.
+    sun_map: Option<SunMap>,
     lod: Box<dyn Lod>,
     /// What snapshots are written with, made at the first (a host's frames need none).
     snapshots: Option<Snapshots>,
@@ -370,6 +373,7 @@ impl Renderer {
         if let Some(w) = &self.work {
             w.clear(&mut encoder);
         }
+        self.record_sun_map(&mut encoder);
         let ran = self.lod.record(ctx, &mut encoder, probe);
         if let Some(w) = &self.work {
             w.copy(&mut encoder);
@@ -546,11 +550,20 @@ impl Renderer {
         if let SketchGpu::Streamed(s) = &mut self.sketch {
             s.begin_frame(&self.ctx, encoder)?;
         }
+        self.record_sun_map(encoder);
         self.lod.record(&self.ctx, encoder, Probe::default());
         if let SketchGpu::Streamed(s) = &self.sketch {
             s.record_marks(encoder);
         }
         Ok(())
+    }
+
+    /// The sun visibility map made again where the sun moved since it was made (after the
+    /// frame's uniforms are written, before the passes that sample it).
+    fn record_sun_map(&self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(m) = &self.sun_map {
+            m.record(encoder, self.light.sun.as_vec3().to_array());
+        }
     }
 
     /// `output`'s bind group over the frame the scheme leaves (a host's output pass).

@@ -153,6 +153,9 @@ pub struct RenderSection {
     pub shadows: bool,
     /// With `shadows`, the procedural detail shadows itself too.
     pub detail_shadows: bool,
+    /// With `shadows`, the mesh modes read the sketch's shadow from its sun clearance map, made
+    /// once per sun direction (`gpu::sun_map`); `false`: the ray marched at every pixel.
+    pub sun_map: bool,
     /// Anti-aliasing: the mesh modes multisampled and the reference supersampled alike.
     pub msaa: Msaa,
     /// Single-sampled frames of the mesh modes shade each pixel once, from a G-buffer the mesh
@@ -166,6 +169,7 @@ impl Default for RenderSection {
             pixel_normals: false,
             shadows: true,
             detail_shadows: false,
+            sun_map: true,
             msaa: Msaa::Auto,
             deferred: true,
         }

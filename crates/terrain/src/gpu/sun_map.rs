@@ -1,0 +1,98 @@
+//! The sketch's sun visibility map (`shaders/sun_map.wgsl`): how much of the sun the sketch
+//! leaves at the centre of every texel of every pyramid level, the shadow ray of
+//! `shaders/shared/shading.wgsl` (`sketch_sun_visibility`) marched once per texel instead of once
+//! per pixel and frame. The terrain pass samples it bilinearly on the level of the pixel's
+//! footprint (`SUN_MAP`), the level its per-pixel march would have read from.
+//!
+//! Rules: made for a whole sketch drawn by the mesh modes with shadows on (a tile pyramid and
+//! the reference march per pixel); remade on the frame whose sun differs from the one it was made
+//! for, and only then; laid out as the atlas's levels, a float per texel. Rejected: a horizon
+//! angle per texel and direction (Max's horizon maps), which serves every sun direction but
+//! not the march's soft penumbra nor its cone of coarser levels, and costs a float per texel for
+//! each direction kept.
+
+use super::alloc::{Alloc, Buffer};
+use super::bindings::{Binding, bind_group, buffer, layout};
+use super::compute_pipeline;
+use super::shaders::Key;
+use crate::error::Result;
+use crate::sketch::Atlas;
+use std::cell::Cell;
+use wgpu::ShaderStages as S;
+
+/// `shaders/sun_map.wgsl`'s bindings.
+pub const BINDINGS: &[Binding] = &[
+    Binding::frame(S::COMPUTE),
+    Binding::atlas(S::COMPUTE),
+    Binding::wanted(S::COMPUTE),
+    Binding::work(S::COMPUTE),
+    Binding::sun_seen(S::COMPUTE),
+    Binding::storage_rw(10, "seen_out", S::COMPUTE),
+];
+
+pub struct SunMap {
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    /// A float per atlas texel, at the atlas's own indices.
+    pub seen: Buffer,
+    /// Level 0's texels: the pass's grid.
+    size: [u32; 2],
+    /// The sun direction the map holds, once made.
+    made_for: Cell<Option<[f32; 3]>>,
+}
+
+impl SunMap {
+    /// The pass's name: its label and its WGSL file.
+    pub const NAME: &'static str = "sun_map";
+
+    /// The map of `atlas` (whole, uploaded as `atlas_buffer`), read with the frame's uniforms.
+    pub fn new(
+        device: &Alloc,
+        frame: &wgpu::Buffer,
+        atlas: &Atlas,
+        atlas_buffer: &wgpu::Buffer,
+    ) -> Result<SunMap> {
+        // The march alone: no detail, no tallies, the sketch read whole.
+        let (name, key) = (Self::NAME, Key::SHADOWS);
+        let layout = layout(device, name, BINDINGS, 0, key);
+        let pipeline = compute_pipeline(device, name, key, &layout)?;
+        let seen = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("sun seen"),
+            size: atlas_buffer.size(),
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let resources = [
+            ("frame", buffer(frame)),
+            ("atlas", buffer(atlas_buffer)),
+            ("seen_out", buffer(&seen)),
+        ];
+        let bind_group = bind_group(device, name, &layout, BINDINGS, 0, key, &resources)?;
+        let level0 = &atlas.levels[0];
+        Ok(SunMap {
+            pipeline,
+            bind_group,
+            seen,
+            size: [level0.width as u32, level0.height as u32],
+            made_for: Cell::new(None),
+        })
+    }
+
+    /// Records the map's making where the frame's `sun` is not the one it holds; the frame's
+    /// uniforms must already be written.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, sun: [f32; 3]) {
+        if self.made_for.get() == Some(sun) {
+            return;
+        }
+        self.made_for.set(Some(sun));
+        let probe = super::counters::Probe::default();
+        super::dispatch_grid(
+            encoder,
+            Self::NAME,
+            &self.pipeline,
+            &self.bind_group,
+            self.size,
+            probe,
+        );
+    }
+}
