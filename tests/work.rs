@@ -36,7 +36,8 @@ fn both(scene: &Scene, mode: Mode) -> (Vec<u8>, Vec<u8>, Work) {
 #[test]
 fn counting_changes_no_pixel_and_counts_each_kind_of_work() {
     for mode in [Mode::Warped, Mode::Geomipmap] {
-        let scene = jacksboro(96, |_| {});
+        // The shadow marched at every pixel, not read from the sun clearance map.
+        let scene = jacksboro(96, |s| s.render.sun_map = false);
         let (plain, counted, work) = both(&scene, mode);
         assert!(
             plain == counted,
@@ -60,7 +61,10 @@ fn work_left_out_of_a_scene_is_not_counted() {
         "no shadows, no shadow steps: {work:?}"
     );
     assert!(work.octaves > 0, "{work:?}");
-    let scene = jacksboro(64, |s| s.detail.octaves = Some(0));
+    let scene = jacksboro(64, |s| {
+        s.detail.octaves = Some(0);
+        s.render.sun_map = false;
+    });
     let (_, _, work) = both(&scene, Mode::Warped);
     assert_eq!(work.octaves, 0, "no noise, no octaves: {work:?}");
     assert!(work.shadow_steps > 0 && work.atlas_taps > 0, "{work:?}");
@@ -97,6 +101,8 @@ fn render_json_reports_the_work_per_pixel_showing_ground() {
         "--size",
         "48",
         "--json",
+        "--set",
+        "render.sun_map=false",
     ]);
     assert_eq!(code, 0, "{stderr}");
     let r: serde_json::Value = serde_json::from_str(&stdout).unwrap();
