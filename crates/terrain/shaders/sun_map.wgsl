@@ -1,6 +1,6 @@
 // The sketch's sun clearance map (src/gpu/sun_map.rs): shared/shading.wgsl's
 // `sketch_sun_clearance` marched from the centre of every texel of every level of the whole
-// sketch, made once per sun direction; the terrain pass then samples it (SUN_MAP) where it
+// sketch, made once per sun direction; the terrain pass then reads it (SUN_MAP) where it
 // marched per pixel. One invocation per level-0 texel, which also fills the coarser levels' texel
 // of its own index while there is one.
 

@@ -353,7 +353,11 @@ pub(crate) mod tests {
             passes_ms: PassTimes::default(),
             covered_px: 100,
             fragments_per_covered_px: Some(1.5),
-            work_per_px: None,
+            work_per_px: Some(terrain::WorkPerPx {
+                octaves: 4.0,
+                shadow_steps: 0.5,
+                atlas_taps: 24.0,
+            }),
             counters: Default::default(),
         }
     }

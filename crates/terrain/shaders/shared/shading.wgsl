@@ -291,8 +291,8 @@ fn sun_visibility(local: vec3<f32>, footprint: f32) -> f32 {
 }
 
 // A ray that passes beyond the sketch's edge below its highest point, in the sun clearance map
-// (src/gpu/sun_map.rs): the ground beyond (a plain, the sea) steps its clearance, which then does
-// not interpolate between texels; near such a texel the march runs per pixel.
+// (src/gpu/sun_map.rs): the ground beyond (a plain, the sea) changes its clearance abruptly
+// between texels; near such a texel the march runs per pixel.
 const LEFT_SKETCH: f32 = 1.0e30;
 
 // How much of the sun the sketch leaves at `local`, read from level `l` and coarser.
@@ -375,9 +375,7 @@ fn sketch_sun_clearance(local: vec2<f32>, l: u32, stop: bool, edge: bool) -> f32
 
 #ifdef SUN_MAP
 // The sketch's sun clearance map (src/gpu/sun_map.rs): `sketch_sun_clearance` from the centre
-// of every texel of every level, laid out as the atlas's levels, remade when the sun moves. The
-// clearance, not the visibility, is interpolated: it follows the ground's height under the
-// point smoothly, where the visibility clamped from it turns from sun to shadow within a texel.
+// of every texel of every level, laid out as the atlas's levels, remade when the sun moves.
 @group(0) @binding(9) var<storage, read> sun_seen: array<f32>;
 
 fn seen_texel(l: u32, x: i32, y: i32) -> f32 {
@@ -386,10 +384,11 @@ fn seen_texel(l: u32, x: i32, y: i32) -> f32 {
     return sun_seen[frame.atlas.level[l].z + c.y * frame.atlas.level[l].x + c.x];
 }
 
-// The map's level `l` at `local`, bilinear between the texel centres the march left from;
-// where one of the four lies off the sketch (a coarse level's last texel reaches past its edge,
-// and the plain or the sea around it, which the sketch shadows near its edges, has no texels),
-// the march.
+// The sketch's shadow at `local` from the map's level `l`: where the four texel centres around it
+// all see the whole sun, or all none of it, so does `local` (a shadow narrower than a texel between
+// them is lost); elsewhere (shadow boundaries and penumbrae, which no interpolation of the
+// texels' values follows on steep ground, the sketch's edges, the plain or the sea around it,
+// which the sketch shadows near its edges) the march.
 fn sun_seen_at(local: vec2<f32>, l: u32) -> f32 {
     let x = level_coords((local + frame.atlas.offset) * frame.atlas.inv_spacing, l);
     let s = f32(1u << l);
@@ -401,10 +400,15 @@ fn sun_seen_at(local: vec2<f32>, l: u32) -> f32 {
     let f = x - floor(x);
     let a = vec2<f32>(seen_texel(l, i.x, i.y), seen_texel(l, i.x + 1, i.y));
     let b = vec2<f32>(seen_texel(l, i.x, i.y + 1), seen_texel(l, i.x + 1, i.y + 1));
-    if (max(max(a.x, a.y), max(b.x, b.y)) >= LEFT_SKETCH) {
-        return sketch_sun_visibility(local, l);
+    let lo = min(min(a.x, a.y), min(b.x, b.y));
+    let hi = max(max(a.x, a.y), max(b.x, b.y));
+    if (lo >= 0.5 && hi < LEFT_SKETCH) {
+        return 1.0;
     }
-    return clamp(0.5 + mix(mix(a.x, a.y, f.x), mix(b.x, b.y, f.x), f.y), 0.0, 1.0);
+    if (hi <= -0.5) {
+        return 0.0;
+    }
+    return sketch_sun_visibility(local, l);
 }
 #endif
 #endif

@@ -1,15 +1,16 @@
-//! The sketch's sun visibility map (`shaders/sun_map.wgsl`): how much of the sun the sketch
-//! leaves at the centre of every texel of every pyramid level, the shadow ray of
-//! `shaders/shared/shading.wgsl` (`sketch_sun_visibility`) marched once per texel instead of once
-//! per pixel and frame. The terrain pass samples it bilinearly on the level of the pixel's
-//! footprint (`SUN_MAP`), the level its per-pixel march would have read from.
+//! The sketch's sun clearance map (`shaders/sun_map.wgsl`): the shadow ray of
+//! `shaders/shared/shading.wgsl` (`sketch_sun_clearance`) marched once from the centre of every
+//! texel of every pyramid level, its least clearance kept, instead of once per pixel and frame.
+//! The terrain pass reads the four texels around a pixel on the level of its footprint, the level
+//! its own march would start from (`SUN_MAP`): where all four see the whole sun, or none of it,
+//! so does the pixel; elsewhere, on shadow boundaries and near the sketch's edges, it marches.
 //!
 //! Rules: made for a whole sketch drawn by the mesh modes with shadows on (a tile pyramid and
 //! the reference march per pixel); remade on the frame whose sun differs from the one it was made
-//! for, and only then; laid out as the atlas's levels, a float per texel. Rejected: a horizon
-//! angle per texel and direction (Max's horizon maps), which serves every sun direction but
-//! not the march's soft penumbra nor its cone of coarser levels, and costs a float per texel for
-//! each direction kept.
+//! for, and only then; laid out as the atlas's levels, a float per texel. Rejected:
+//! interpolating the texels' clearance or visibility, which loses steep ridges' shadows (a steep
+//! crop of the bundled DEM: 36 dB from the march; docs/decisions.md, “The sketch's shadow from a
+//! map”).
 
 use super::alloc::{Alloc, Buffer};
 use super::bindings::{Binding, bind_group, buffer, layout};
