@@ -36,7 +36,9 @@
 //!   length is checked, and a checked loop stays scalar. A frustum plane with the whole row
 //!   inside is skipped.
 //! - The row loops are built for AVX-512 and AVX2 and chosen at run time; the same operations in
-//!   the same order, so the same bits.
+//!   the same order, so the same bits. The AVX-512 build has a second copy for maps of the
+//!   default side, 128 (`rows::<128>`): with the row's length a constant, each row loop is whole
+//!   vectors, without the loop's remainder and its checks.
 //! - The error term's octave level is an exponent plus a quintic (`log2_approx`), not the library
 //!   call `f32::log2`; the octave prefix is summed over each row's few octaves
 //!   (`ErrorTerm::add_curvature_row`); the row's octave range and the last loop's tallies go in

@@ -48,11 +48,12 @@ impl ImportanceMap {
             unsafe { self.rows_avx2(map, atlas_bounds, camera, surface_max, p, row_step) };
             return;
         }
-        self.rows(map, atlas_bounds, camera, surface_max, p, row_step);
+        self.rows::<0>(map, atlas_bounds, camera, surface_max, p, row_step);
     }
 
     /// [`ImportanceMap::rows`] compiled for AVX-512's sixteen f32 lanes: the same loops in
-    /// registers twice as wide. The same operations in the same order: the same bits.
+    /// registers twice as wide, with a copy for maps of side 128. The same operations in the same
+    /// order: the same bits.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx2")]
     unsafe fn rows_avx512(
@@ -64,7 +65,11 @@ impl ImportanceMap {
         p: &ImportanceParams,
         row_step: usize,
     ) {
-        self.rows(map, atlas_bounds, camera, surface_max, p, row_step);
+        if map.n == 128 {
+            self.rows::<128>(map, atlas_bounds, camera, surface_max, p, row_step);
+        } else {
+            self.rows::<0>(map, atlas_bounds, camera, surface_max, p, row_step);
+        }
     }
 
     /// [`ImportanceMap::rows`] compiled for AVX2's eight f32 lanes (the build's baseline, SSE2,
@@ -80,13 +85,15 @@ impl ImportanceMap {
         p: &ImportanceParams,
         row_step: usize,
     ) {
-        self.rows(map, atlas_bounds, camera, surface_max, p, row_step);
+        self.rows::<0>(map, atlas_bounds, camera, surface_max, p, row_step);
     }
 
+    /// The map's rows for a map of side `N`, or of any side where `N` is 0 (the module doc's
+    /// copy for the default side).
     // The row loops index five parallel slices by column; zipped iterators would hide that.
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn rows(
+    fn rows<const N: usize>(
         &mut self,
         map: &SketchMap,
         atlas_bounds: (DVec2, DVec2),
@@ -95,7 +102,8 @@ impl ImportanceMap {
         p: &ImportanceParams,
         row_step: usize,
     ) {
-        let n = map.n;
+        let n = if N == 0 { map.n } else { N };
+        assert_eq!(n, map.n, "the map's side");
         let d0 = map.spacing;
         let corner = map.origin.extend(0.0);
         // Region-local: x and y along the region's axes (`SketchMap::local`), z up.
@@ -386,7 +394,7 @@ mod tests {
         ] {
             let (mut dispatched, mut baseline) = (ImportanceMap::new(128), ImportanceMap::new(128));
             dispatched.update(&map, bounds, &camera, None, &p);
-            baseline.rows(&map, bounds, &camera, None, &p, 1);
+            baseline.rows::<0>(&map, bounds, &camera, None, &p, 1);
             let bits =
                 |m: &ImportanceMap| m.importance.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
             // The AVX2 build too, where the dispatch took AVX-512.

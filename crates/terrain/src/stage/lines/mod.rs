@@ -8,6 +8,9 @@
 //! - [`lane_mappings`] maps [`LANES`] lines at once, each lane bit-identical to
 //!   [`line_mapping`]; the warp's passes use it. With AVX-512F or AVX2 it runs as intrinsics
 //!   (`x86`), otherwise as plain Rust (`portable`).
+//! - [`row_samples`] and [`column_points`] are the warp's two interpolation loops over a group of
+//!   whole lines as one AVX-512 kernel each, lane for lane [`lerp_lanes`]'s operations; without
+//!   AVX-512F they decline and the caller's loop runs.
 //! - Non-finite or negative importance counts as 0; a line with no weight stays put.
 //!
 //! Why lanes across lines: a line's running sum is a chain of dependent additions, one per
@@ -260,6 +263,67 @@ pub fn lerp_lanes(values: &[f32], lines: &LaneLines, a: &[f64; LANES]) -> [f32; 
     std::array::from_fn(|l| lerp_at(&values[lines.start[l]..][..lines.n], a[l]))
 }
 
+/// The row pass's loop over [`LANES`] whole lines `first ..` of `values` (`lines`, made for
+/// it): for each output s, lane l's `(a·d0) as f32` to `x[s·n + first + l]` and its line
+/// interpolated at a ([`lerp_lanes`]) to `v[s·n + first + l]`, a = `maps[s][l]`. One AVX-512
+/// kernel, so that the loop carries no dispatch, bounds checks or copies through the stack; false,
+/// having done nothing, where the processor lacks AVX-512F (the caller's loop then does it, the
+/// same bits).
+#[inline(always)]
+pub fn row_samples(
+    values: &[f32],
+    lines: &LaneLines,
+    maps: &[[f64; LANES]],
+    d0: f32,
+    x: &mut [f32],
+    v: &mut [f32],
+    first: usize,
+) -> bool {
+    let n = lines.n;
+    assert!(
+        values.len() == lines.len
+            && first + LANES <= n
+            && x.len() >= maps.len() * n
+            && v.len() >= maps.len() * n,
+        "the row pass's lines"
+    );
+    #[cfg(target_arch = "x86_64")]
+    if crate::stage::simd::avx512() && values.len() < i32::MAX as usize {
+        // SAFETY: the processor has AVX-512F and AVX2 and the indices fit an i32, checked just
+        // above; the bounds, just before.
+        unsafe { x86::row_samples(values, lines, maps, d0 as f64, x, v, first) };
+        return true;
+    }
+    false
+}
+
+/// The column pass's loop over [`LANES`] whole columns `s0 ..`, whose row-warped x are lines
+/// of `row_x` (`lines`, made for it): for each output t, point `s0 + l` of Φ's row t is lane
+/// l's line interpolated at b ([`lerp_lanes`]) and `(b·d0) as f32`, b = `maps[t][l]`. As
+/// [`row_samples`]: one AVX-512 kernel, or false, having done nothing.
+#[inline(always)]
+pub fn column_points(
+    row_x: &[f32],
+    lines: &LaneLines,
+    maps: &[[f64; LANES]],
+    d0: f32,
+    phi: &mut [[f32; 2]],
+    s0: usize,
+) -> bool {
+    let n = lines.n;
+    assert!(
+        row_x.len() == lines.len && s0 + LANES <= n && phi.len() >= maps.len() * n,
+        "the column pass's lines"
+    );
+    #[cfg(target_arch = "x86_64")]
+    if crate::stage::simd::avx512() && row_x.len() < i32::MAX as usize {
+        // SAFETY: as in `row_samples`.
+        unsafe { x86::column_points(row_x, lines, maps, d0 as f64, phi, s0) };
+        return true;
+    }
+    false
+}
+
 /// `values` linearly interpolated at fractional index `a` (a mapping's, in [0, len − 1]; outside
 /// it the end segments extend, and NaN gives NaN).
 #[inline(always)]
@@ -412,6 +476,55 @@ pub(crate) mod tests {
                         }
                     }
                 }
+            }
+        }
+    }
+
+    /// The passes' kernels give `lerp_at`'s bits for every lane and sample, at mappings inside
+    /// a line and outside it (NaN too), and the coordinates' `(a·d0) as f32`.
+    #[test]
+    fn the_pass_kernels_equal_lerp_at_bit_for_bit() {
+        let (n, count, first, d0) = (19, 12, 3, 2.5f32);
+        let values: Vec<f32> = (0..count * n)
+            .map(|i| ((i * 37) % 23) as f32 * 1.7 - 9.0)
+            .collect();
+        let maps: Vec<[f64; LANES]> = (0..n)
+            .map(|k| {
+                std::array::from_fn(|l| match (k + l) % 6 {
+                    0 => k as f64 * 0.93,
+                    1 => -0.5 - k as f64,
+                    2 => 17.99 + k as f64,
+                    3 => f64::NAN,
+                    4 => 18.0,
+                    _ => (k * l) as f64 * 0.37,
+                })
+            })
+            .collect();
+        let lines = LaneLines::new(&values, n, first);
+        let (mut x, mut v) = (vec![0.0; n * n], vec![0.0; n * n]);
+        let mut phi = vec![[0.0; 2]; n * n];
+        let rows = row_samples(&values, &lines, &maps, d0, &mut x, &mut v, first);
+        let columns = column_points(&values, &lines, &maps, d0, &mut phi, first);
+        assert_eq!((rows, columns), (crate::stage::simd::avx512(), rows));
+        if !rows {
+            eprintln!("skipped: the kernels need AVX-512F, which this processor lacks");
+            return;
+        }
+        let same = |got: f32, want: f32, at: &str| {
+            assert_eq!(got.is_nan(), want.is_nan(), "{at}");
+            if !want.is_nan() {
+                assert_eq!(got.to_bits(), want.to_bits(), "{at}");
+            }
+        };
+        for (k, a) in maps.iter().enumerate() {
+            for l in 0..LANES {
+                let value = lerp_at(&values[(first + l) * n..][..n], a[l]);
+                let coordinate = (a[l] * d0 as f64) as f32;
+                let at = format!("output {k} lane {l} at {}", a[l]);
+                same(v[k * n + first + l], value, &at);
+                same(x[k * n + first + l], coordinate, &at);
+                same(phi[k * n + first + l][0], value, &at);
+                same(phi[k * n + first + l][1], coordinate, &at);
             }
         }
     }

@@ -94,7 +94,10 @@ pub unsafe fn mappings(imp: &[[f32; LANES]], scratch: &mut LaneScratch, out: &mu
 /// Each output then loads two registers of pairs and parts them, where [`mappings`] gathers
 /// `u` twice. Rejected: the ends scattered with `vscatterdpd` (scatters are slow on AMD EPYC),
 /// and each end as a scalar store of its own (a pair is one 128-bit store; docs/decisions.md,
-/// “Warp in lanes of eight”).
+/// “Warp in lanes of eight”); each lane's byte offsets worked out in the register, a third
+/// fewer instructions in the scatter and no faster; the next group's running sums made inside
+/// this group's output loop, to overlap their chain of additions with the divisions, slower; a
+/// copy for lines of 128, no faster (docs/decisions.md, “The CPU stage under 100 µs”).
 ///
 /// # Safety
 /// As [`mappings`], with AVX-512F as well.
@@ -296,4 +299,100 @@ unsafe fn weight(p: *const f32) -> __m256d {
         _mm256_cmp_pd::<_CMP_LT_OQ>(v, inf),
     );
     _mm256_and_pd(v, ok)
+}
+
+/// Lane l's value of its line at `a[l]` and the weights of [`lerp_avx512`], with `a` in a
+/// register: [`lerp_index`]'s clamp, conversions and offsets on all eight lanes at once.
+#[inline]
+#[target_feature(enable = "avx512f,avx2")]
+unsafe fn lerp_wide(values: *const f32, base: __m256i, top: __m512d, a: __m512d) -> __m256 {
+    // min's second operand wins over NaN, and max's: NaN becomes 0, as `as usize` has it.
+    let i = _mm512_cvttpd_epi32(_mm512_max_pd(_mm512_min_pd(top, a), _mm512_setzero_pd()));
+    let f = _mm512_cvtpd_ps(_mm512_sub_pd(a, _mm512_cvtepi32_pd(i)));
+    // SAFETY: the caller's lines hold every index, each a line's start plus at most n − 2, and
+    // its pair ends inside the line.
+    let pairs = unsafe {
+        _mm512_castpd_ps(_mm512_i32gather_pd::<4>(
+            _mm256_add_epi32(base, i),
+            values.cast(),
+        ))
+    };
+    let parted = _mm512_permutexvar_ps(
+        _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 9, 11, 13, 15),
+        pairs,
+    );
+    let v0 = _mm512_castps512_ps256(parted);
+    let v1 = _mm256_castpd_ps(_mm512_extractf64x4_pd::<1>(_mm512_castps_pd(parted)));
+    _mm256_add_ps(v0, _mm256_mul_ps(_mm256_sub_ps(v1, v0), f))
+}
+
+/// The row pass's loop over a group of eight whole lines in one kernel (`super::row_samples`):
+/// for each output s, `(a·d0) as f32` to `x[s·n + first ..]` and [`lerp_avx512`]'s value to
+/// `v[s·n + first ..]`, a = `maps[s]`.
+///
+/// # Safety
+/// The processor must have AVX-512F and AVX2; `lines` was made for `values` (fewer than 2^31
+/// samples); `x` and `v` hold `maps.len()` lines of `lines.n` samples and
+/// `first + LANES ≤ lines.n`.
+#[target_feature(enable = "avx512f,avx2")]
+pub unsafe fn row_samples(
+    values: &[f32],
+    lines: &LaneLines,
+    maps: &[[f64; LANES]],
+    d0: f64,
+    x: &mut [f32],
+    v: &mut [f32],
+    first: usize,
+) {
+    let n = lines.n;
+    // SAFETY: `start32` holds eight lanes; map s and the stores' eight samples at
+    // s·n + first + l, l < LANES, lie inside their buffers (the caller's bounds).
+    unsafe {
+        let base = _mm256_loadu_si256(lines.start32.as_ptr().cast());
+        let top = _mm512_set1_pd((n - 2) as f64);
+        let d0 = _mm512_set1_pd(d0);
+        let (xp, vp) = (x.as_mut_ptr().add(first), v.as_mut_ptr().add(first));
+        for (s, a) in maps.iter().enumerate() {
+            let a = _mm512_loadu_pd(a.as_ptr());
+            _mm256_storeu_ps(xp.add(s * n), _mm512_cvtpd_ps(_mm512_mul_pd(a, d0)));
+            _mm256_storeu_ps(vp.add(s * n), lerp_wide(values.as_ptr(), base, top, a));
+        }
+    }
+}
+
+/// The column pass's loop over a group of eight whole columns in one kernel
+/// (`super::column_points`): for each output t, point `s0 + l` of Φ's row t is lane l's
+/// [`lerp_avx512`] of `row_x` at b and `(b·d0) as f32`, b = `maps[t]`.
+///
+/// # Safety
+/// The processor must have AVX-512F and AVX2; `lines` was made for `row_x` (fewer than 2^31
+/// samples); `phi` holds `maps.len()` rows of `lines.n` points and `s0 + LANES ≤ lines.n`.
+#[target_feature(enable = "avx512f,avx2")]
+pub unsafe fn column_points(
+    row_x: &[f32],
+    lines: &LaneLines,
+    maps: &[[f64; LANES]],
+    d0: f64,
+    phi: &mut [[f32; 2]],
+    s0: usize,
+) {
+    let n = lines.n;
+    // SAFETY: `start32` holds eight lanes; map t and the eight points at t·n + s0 + l, l < LANES,
+    // lie inside their buffers (the caller's bounds).
+    unsafe {
+        let base = _mm256_loadu_si256(lines.start32.as_ptr().cast());
+        let top = _mm512_set1_pd((n - 2) as f64);
+        let d0 = _mm512_set1_pd(d0);
+        // x and y of each lane side by side.
+        let zip = _mm512_setr_epi32(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23);
+        let out = phi.as_mut_ptr().add(s0).cast::<f32>();
+        for (t, b) in maps.iter().enumerate() {
+            let b = _mm512_loadu_pd(b.as_ptr());
+            let x = lerp_wide(row_x.as_ptr(), base, top, b);
+            let y = _mm512_cvtpd_ps(_mm512_mul_pd(b, d0));
+            let p =
+                _mm512_permutex2var_ps(_mm512_castps256_ps512(x), zip, _mm512_castps256_ps512(y));
+            _mm512_storeu_ps(out.add(2 * t * n), p);
+        }
+    }
 }

@@ -109,8 +109,11 @@ fn pairs_unfolded_lanes(phi: &[[f32; 2]], n: usize, s: usize) -> [bool; LANES] {
 
 /// [`pairs_unfolded_lanes`] in AVX-512F: each row's eight points and the eight beside them,
 /// loaded whole and parted into x and y, so that the eight turns are plain vector arithmetic
-/// (interleaved points leave the lane loop to shuffles). The same operations in the same order,
-/// `f32::min`'s choice of the number over NaN included: the same results. Rejected: the check
+/// (interleaved points leave the lane loop to shuffles). The same turns; where the plain Rust
+/// keeps the least of each cell's four values, NaN passed over, and asks whether it is positive,
+/// the kernel ors each value's `≤ 0` (false for NaN) into a lane's fold: the same answer for any
+/// input, four comparisons and ors where `f32::min` takes a minimum, a NaN test and a blend for
+/// each. Rejected: the check
 /// made in `store_columns` from the points in registers as they are stored, slower
 /// (docs/decisions.md, “Warp in lanes of eight”).
 #[cfg(target_arch = "x86_64")]
@@ -138,13 +141,10 @@ mod x86 {
             };
             (part(_mm512_loadu_ps(at)), part(_mm512_loadu_ps(at.add(2))))
         };
-        // f32::min: the number where one operand is NaN.
-        let min = |a: __m256, b: __m256| {
-            let m = _mm256_min_ps(a, b);
-            _mm256_blendv_ps(m, a, _mm256_cmp_ps::<_CMP_UNORD_Q>(b, b))
-        };
+        // All ones in the lanes of a pair with a cell value ≤ 0 so far.
         let zero = _mm256_setzero_ps();
-        let mut least = _mm256_set1_ps(f32::INFINITY);
+        let at_most_zero = |v: __m256| _mm256_cmp_ps::<_CMP_LE_OQ>(v, zero);
+        let mut folded = zero;
         let mut lo = row(0);
         const BLOCK: usize = 16;
         'blocks: for t0 in (0..n - 1).step_by(BLOCK) {
@@ -160,20 +160,20 @@ mod x86 {
                 };
                 let abc = turn(ax, ay, bx, by, cx, cy);
                 let cda = turn(cx, cy, dx, dy, ax, ay);
-                let t_min = min(
-                    min(min(abc, cda), _mm256_sub_ps(bx, ax)),
-                    _mm256_sub_ps(cx, dx),
+                let turns = _mm256_or_ps(at_most_zero(abc), at_most_zero(cda));
+                let edges = _mm256_or_ps(
+                    at_most_zero(_mm256_sub_ps(bx, ax)),
+                    at_most_zero(_mm256_sub_ps(cx, dx)),
                 );
-                // `if turn < least { least = turn }`: min_ps keeps its second operand on NaN.
-                least = _mm256_min_ps(t_min, least);
+                folded = _mm256_or_ps(folded, _mm256_or_ps(turns, edges));
                 lo = hi;
             }
-            if _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(least, zero)) == 0 {
+            if _mm256_movemask_ps(folded) == 0xff {
                 break 'blocks;
             }
         }
-        let sound = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(least, zero));
-        std::array::from_fn(|l| sound & (1 << l) != 0)
+        let folded = _mm256_movemask_ps(folded);
+        std::array::from_fn(|l| folded & (1 << l) == 0)
     }
 }
 

@@ -53,6 +53,11 @@
 //! Speed (docs/decisions.md, “Warp in lanes of eight”):
 //! - `run` is built for AVX-512 and AVX2 and chosen at run time: otherwise the calls into the AVX2
 //!   kernels are not inlined.
+//! - With AVX-512F, the row pass's and the column pass's loops over a group of eight whole lines
+//!   are one kernel each (`lines::row_samples`, `lines::column_points`): built from the lanes'
+//!   generic code, every sample also paid the run-time choice of build, bounds checks and copies
+//!   through the stack, more instructions than the gather it waits on. A partial last group and
+//!   the AVX2 build keep the generic loops, with the same bits.
 //! - The all-mean pass interpolates columns put side by side instead of gathering them, and the
 //!   importance is read in place unless `max_log2_step` limits it (then a copy a frame).
 //! - The fold check takes eight column pairs at once (in AVX-512F where the processor has it,

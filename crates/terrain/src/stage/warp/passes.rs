@@ -6,7 +6,8 @@
 use super::{Warp, pair_unfolded, pairs_unfolded};
 use crate::scene::WarpMethod;
 use crate::stage::lines::{
-    LANES, LaneLines, lane_mappings, lerp_at, lerp_lanes, lerp_weight, line_mapping,
+    LANES, LaneLines, column_points, lane_mappings, lerp_at, lerp_lanes, lerp_weight, line_mapping,
+    row_samples,
 };
 
 impl Warp {
@@ -115,6 +116,12 @@ impl Warp {
             lane_mappings(&self.lanes_in, &mut self.lanes, &mut self.lanes_out);
             let kept = LANES.min(n - t0);
             let lines = LaneLines::new(importance, n, t0);
+            if kept == LANES {
+                let (x, v) = (&mut self.row_x, &mut self.row_importance);
+                if row_samples(importance, &lines, &self.lanes_out, d0, x, v, t0) {
+                    continue;
+                }
+            }
             for (s, a) in self.lanes_out.iter().enumerate() {
                 let x = a.map(|a| (a * d0 as f64) as f32);
                 let v = lerp_lanes(importance, &lines, a);
@@ -133,6 +140,12 @@ impl Warp {
         side_by_side(&self.row_importance, n, s0, &mut self.lanes_in);
         lane_mappings(&self.lanes_in, &mut self.lanes, &mut self.lanes_out);
         let maps = &self.lanes_out;
+        if s0 + LANES <= n {
+            let lines = LaneLines::new(&self.row_x, n, s0);
+            if column_points(&self.row_x, &lines, maps, d0, &mut self.phi, s0) {
+                return;
+            }
+        }
         store_columns(&mut self.phi, &self.row_x, n, s0, d0, |t| maps[t]);
     }
 
