@@ -7,7 +7,8 @@
 //!
 //! Rules: made for a whole sketch drawn by the mesh modes with shadows on (a tile pyramid and
 //! the reference march per pixel); remade on the frame whose sun differs from the one it was made
-//! for, and only then; laid out as the atlas's levels, a float per texel. Rejected:
+//! for, and only then, its pipeline compiled for that frame and let go after it (a renderer keeps
+//! no code it runs once); laid out as the atlas's levels, a float per texel. Rejected:
 //! interpolating the texels' clearance or visibility, which loses steep ridges' shadows (a steep
 //! crop of the bundled DEM: 36 dB from the march; docs/decisions.md, “The sketch's shadow from a
 //! map”).
@@ -32,7 +33,7 @@ pub const BINDINGS: &[Binding] = &[
 ];
 
 pub struct SunMap {
-    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
     bind_group: wgpu::BindGroup,
     /// A float per atlas texel, at the atlas's own indices.
     pub seen: Buffer,
@@ -56,7 +57,6 @@ impl SunMap {
         // The march alone: no detail, no tallies, the sketch read whole.
         let (name, key) = (Self::NAME, Key::SHADOWS);
         let layout = layout(device, name, BINDINGS, 0, key);
-        let pipeline = compute_pipeline(device, name, key, &layout)?;
         let seen = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("sun seen"),
             size: atlas_buffer.size(),
@@ -71,7 +71,7 @@ impl SunMap {
         let bind_group = bind_group(device, name, &layout, BINDINGS, 0, key, &resources)?;
         let level0 = &atlas.levels[0];
         Ok(SunMap {
-            pipeline,
+            layout,
             bind_group,
             seen,
             size: [level0.width as u32, level0.height as u32],
@@ -81,19 +81,20 @@ impl SunMap {
 
     /// Records the map's making where the frame's `sun` is not the one it holds; the frame's
     /// uniforms must already be written.
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, sun: [f32; 3]) {
+    pub fn record(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        sun: [f32; 3],
+    ) -> Result<()> {
         if self.made_for.get() == Some(sun) {
-            return;
+            return Ok(());
         }
-        self.made_for.set(Some(sun));
+        let pipeline = compute_pipeline(device, Self::NAME, Key::SHADOWS, &self.layout)?;
         let probe = super::counters::Probe::default();
-        super::dispatch_grid(
-            encoder,
-            Self::NAME,
-            &self.pipeline,
-            &self.bind_group,
-            self.size,
-            probe,
-        );
+        let (b, size) = (&self.bind_group, self.size);
+        super::dispatch_grid(encoder, Self::NAME, &pipeline, b, size, probe);
+        self.made_for.set(Some(sun));
+        Ok(())
     }
 }

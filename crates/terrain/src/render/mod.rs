@@ -373,7 +373,7 @@ impl Renderer {
         if let Some(w) = &self.work {
             w.clear(&mut encoder);
         }
-        self.record_sun_map(&mut encoder);
+        self.record_sun_map(&mut encoder)?;
         let ran = self.lod.record(ctx, &mut encoder, probe);
         if let Some(w) = &self.work {
             w.copy(&mut encoder);
@@ -550,7 +550,7 @@ impl Renderer {
         if let SketchGpu::Streamed(s) = &mut self.sketch {
             s.begin_frame(&self.ctx, encoder)?;
         }
-        self.record_sun_map(encoder);
+        self.record_sun_map(encoder)?;
         self.lod.record(&self.ctx, encoder, Probe::default());
         if let SketchGpu::Streamed(s) = &self.sketch {
             s.record_marks(encoder);
@@ -560,9 +560,14 @@ impl Renderer {
 
     /// The sun visibility map made again where the sun moved since it was made (after the
     /// frame's uniforms are written, before the passes that sample it).
-    fn record_sun_map(&self, encoder: &mut wgpu::CommandEncoder) {
-        if let Some(m) = &self.sun_map {
-            m.record(encoder, self.light.sun.as_vec3().to_array());
+    fn record_sun_map(&self, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        match &self.sun_map {
+            Some(m) => m.record(
+                &self.ctx.device,
+                encoder,
+                self.light.sun.as_vec3().to_array(),
+            ),
+            None => Ok(()),
         }
     }
 
