@@ -267,7 +267,7 @@ fn detail_visibility(local: vec2<f32>, footprint: f32) -> f32 {
 
 // How much of the sun the ground at `local` sees, its pixel `footprint` metres wide: past the
 // detail (DETAIL_SHADOWS), then past the sketch on no level finer than the pixel's footprint
-// (`sketch_sun_visibility`; with SUN_MAP, its values made once per sun direction, sampled).
+// (`sketch_sun_visibility`; with SUN_MAP, read from the sun clearance map where it decides).
 fn sun_visibility(local: vec3<f32>, footprint: f32) -> f32 {
     if (frame.shading.sun.z <= 0.0) {
         return 0.0;
