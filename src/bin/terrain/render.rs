@@ -10,7 +10,7 @@ use terrain::scene;
 use terrain::scene::CameraReport;
 use terrain::scene::{Mode, Scene};
 use terrain::{Error, Role};
-use terrain::{Frame, Renderer, Work, WorkPerPx};
+use terrain::{Frame, Renderer, WorkPerPx};
 use terrain_cli::app::output::{self, ImageFormat, Staged};
 use terrain_cli::app::progress::Spinner;
 
@@ -157,7 +157,8 @@ pub fn run(a: Args) -> Result<()> {
     }
     staged.commit()?;
     let work = if a.json {
-        counted_work(&r, &scene, mode, a.view, &camera)?
+        let (ctx, atlas) = (r.ctx(), r.atlas());
+        terrain_cli::eval::counted_work(ctx, &scene, atlas, mode, a.view, &camera)?
     } else {
         Default::default()
     };
@@ -232,23 +233,6 @@ pub fn run(a: Args) -> Result<()> {
         report.gpu_timing
     );
     Ok(())
-}
-
-/// What the shading of `camera`'s frame evaluates, counted by a renderer in the counting variant
-/// beside `r` (on its device), its frames drawn as `r`'s were.
-fn counted_work(
-    r: &Renderer,
-    scene: &Scene,
-    mode: Mode,
-    view: View,
-    camera: &terrain::Camera,
-) -> Result<Work> {
-    let ctx = r.ctx().clone();
-    let mut counting = Renderer::counting_work(ctx, scene, r.atlas().clone(), mode, view)?;
-    let frames = frames(&mut counting, camera, scene, 1)?;
-    let last = frames.last().context("no frame counted")?;
-    last.work
-        .context("a counting renderer's frame carries its work")
 }
 
 /// One warm-up frame (shader compilation, first-use allocation), then `repeat` timed ones; a

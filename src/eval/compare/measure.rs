@@ -50,25 +50,6 @@ pub(super) fn renderer(
     Renderer::with_context(ctx.clone(), &scene, atlas.clone(), s.mode(), View::Shaded)
 }
 
-/// What `s`'s shading evaluates in its frame of `camera`, counted by a renderer in the counting
-/// variant, made for this and dropped after (its frame drawn as the measured one was: settled).
-pub(super) fn count_work(
-    ctx: &GpuContext,
-    scene: &Scene,
-    atlas: &Atlas,
-    s: &Setting,
-    camera: &Camera,
-) -> Result<terrain::Work> {
-    let scene = s.apply(scene);
-    let mut r =
-        Renderer::counting_work(ctx.clone(), &scene, atlas.clone(), s.mode(), View::Shaded)?;
-    super::rounds::set_tau(&mut r, s);
-    let frame = r.render_settled(camera)?;
-    frame.work.ok_or(terrain::Error::Internal(
-        "a counting renderer's frame carries its work",
-    ))
-}
-
 /// Measures `s` after a warm-up: its image and positions against `truth`, and its times over
 /// `timed` frames drawn one after another (at least the one whose image is kept; a row timed in
 /// rounds, `rounds`, has its times replaced there).

@@ -287,7 +287,8 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
             |r, frames| measure_lod(r, s, &camera, &truth0, o, frames, steps),
         )?;
         if o.work {
-            let work = measure::count_work(&ctx, &scene, &atlas, s, &camera)?;
+            let (scene, view) = (s.apply(&scene), terrain::View::Shaded);
+            let work = crate::eval::counted_work(&ctx, &scene, &atlas, s.mode(), view, &camera)?;
             row.work_per_px = Some(work.per_px(row.covered_px));
         }
         Ok((row, rgba))

@@ -96,7 +96,8 @@ pub fn shader_key(s: &Shared, mode: Mode) -> Key {
     key.set(Key::STREAMED, s.atlas_binding.marks.is_some());
     // The counting variant: a renderer made to count gives its passes the tallies.
     key.set(Key::COUNT_WORK, s.atlas_binding.work.is_some());
-    let sun_map = s.atlas_binding.sun_seen.is_some() && scene.render.shadows;
+    // The sketch's shadow from its sun clearance map: a renderer made with one binds it.
+    let sun_map = s.atlas_binding.sun_seen.is_some();
     match mode {
         Mode::Warped | Mode::Geomipmap | Mode::Bruteforce => {
             let pixel_normals = scene.render.pixel_normals;
