@@ -390,7 +390,7 @@ fn a_low_sun_behind_a_cliff_shadows_the_plain_at_its_foot() {
 fn the_world_beyond_the_sketch_is_drawn_alike_and_counted_as_sky() {
     let corner = |mode: Mode, outside: &str| {
         let mut s = bundled("hills-high", 64, 64);
-        s.sketch.outside = terrain::scene::Outside::parse(outside).unwrap();
+        s.sketch.outside = Some(terrain::scene::Outside::parse(outside).unwrap());
         let (_, rgba, world) = render_with_positions(&s, mode);
         // The top-left pixel lies beyond the sketch in this view.
         assert_eq!(

@@ -71,6 +71,7 @@ fn code() -> BTreeMap<String, BTreeSet<String>> {
         keys(serde_introspect::<ReferenceSection>()),
     );
     m.insert("light".into(), keys(serde_introspect::<LightSection>()));
+    m.insert("surface".into(), keys(serde_introspect::<SurfaceSection>()));
     m.insert("stream".into(), keys(serde_introspect::<StreamSection>()));
     m.insert("planet".into(), keys(serde_introspect::<PlanetSection>()));
     m.insert("path".into(), keys(serde_introspect::<PathSection>()));

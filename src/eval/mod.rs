@@ -1,9 +1,11 @@
 //! Evaluation: image [`metrics`] against the ray-marched reference, the [`compare`] sweeps and
-//! their reports, and the [`plot`]s they draw.
+//! their reports, the [`plot`]s they draw, and how well a picture shows the land's form
+//! ([`relief`]).
 
 pub mod compare;
 pub mod metrics;
 pub mod plot;
+pub mod relief;
 
 /// The `q` quantile of `v` (not empty) by nearest rank: the value at `⌊len·q⌋` in order, so
 /// that the median of an odd count is its middle value, and each quartile of 15 frames has three

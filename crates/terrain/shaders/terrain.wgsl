@@ -375,7 +375,9 @@ fn octaves_gradient(in: Surface, footprint: f32, n: vec3<f32>, split: f32, terra
             grad += frame.detail.octave[k - 1u].weight * share * octave_local(frame.detail.octave[k - 1u], in.local.xy).yz;
         }
     }
-    return grad;
+    // Faded at the shore as the terrain function's octaves are (the mesh's height stands for
+    // the sketch's there: within the band it carries little of the octaves).
+    return shore(in.local.z) * grad;
 }
 #endif
 #endif

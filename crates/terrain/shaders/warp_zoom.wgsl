@@ -78,10 +78,12 @@ fn detailed_at(p: vec2<f32>, d_max: f32) -> vec2<f32> {
     var z = atlas_height(p, frame.atlas.d_atlas * exp2(-o_sketch));
 #ifdef DETAIL
     let last = min(frame.detail.octaves, u32(max(ceil(o), 0.0)));
+    var octaves = 0.0;
     for (var k = 1u; k <= last; k++) {
         let g = clamp(o - f32(k) + 1.0, 0.0, 1.0);
-        z += frame.detail.octave[k - 1u].weight * g * octave_local(frame.detail.octave[k - 1u], p).x;
+        octaves += frame.detail.octave[k - 1u].weight * g * octave_local(frame.detail.octave[k - 1u], p).x;
     }
+    z += shore(z) * octaves;
 #endif
     // Under the water the surface is the water's, flat.
     return vec2<f32>(max(z, frame.atlas.water_m), o);

@@ -84,6 +84,13 @@ impl Detail {
     pub fn reach_m(&self) -> f64 {
         (1..=self.octaves).map(|k| self.weight(k)).sum()
     }
+
+    /// The band above the water's surface over which the octaves fade in: twice their reach,
+    /// so that within it their share times their reach stays below the height above the water
+    /// ([`shore`]).
+    pub fn shore_m(&self) -> f64 {
+        2.0 * self.reach_m()
+    }
     fn lattice_scale(&self, k: u32) -> f64 {
         self.frequency(k) * LATTICE_PER_CYCLE
     }
@@ -241,6 +248,18 @@ pub fn gradient_noise(cell: IVec2, f: Vec2, seed: u32) -> (f32, Vec2) {
         + u.x * u.y * (ga - gb - gc + gd)
         + du * (Vec2::new(u.y, u.x) * k + Vec2::new(vb - va, vc - va));
     (value * VALUE_SCALE, grad * VALUE_SCALE)
+}
+
+/// The share of the octaves that ground whose sketch height is `z` carries, over water at
+/// `water_m` and a shore band `shore_m` wide ([`Detail::shore_m`]): 0 at the water, 1 from the
+/// band's top, a smoothstep between (the shaders' `shore` in frame.wgsl). smoothstep(x)·reach ≤
+/// 2x·reach for x in [0, 1], which is the height above the water: no octave takes land under it.
+pub fn shore(z: f64, water_m: f64, shore_m: f64) -> f64 {
+    if shore_m <= 0.0 {
+        return 1.0;
+    }
+    let x = ((z - water_m) / shore_m).clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
 }
 
 #[cfg(test)]

@@ -26,6 +26,8 @@ pub enum Role {
     Manifest,
     /// `compare --replot`'s report.json.
     Report,
+    /// `surface.color_ramp`: a colour ramp in gdaldem `color-relief`'s text format.
+    ColorRamp,
 }
 
 impl fmt::Display for Role {
@@ -39,6 +41,7 @@ impl fmt::Display for Role {
             Role::OutputFolder => "output folder",
             Role::Manifest => "manifest",
             Role::Report => "report",
+            Role::ColorRamp => "colour ramp",
         })
     }
 }

@@ -126,6 +126,7 @@ mod render;
 pub mod scene;
 pub mod sketch;
 pub mod stage;
+pub mod surface;
 pub mod tiles;
 
 pub use camera::{Camera, Geo};

@@ -37,7 +37,7 @@ impl<'a> Ground<'a> {
         Ground {
             atlas,
             detail,
-            outside: scene.sketch.outside,
+            outside: scene.outside(atlas),
         }
     }
 
@@ -75,7 +75,8 @@ impl<'a> Ground<'a> {
         if !self.inside(p) {
             return Ok(self.beyond());
         }
-        let land = self.sketch_at(p, footprint_m)? + self.octaves_at(p, footprint_m).0;
+        let sketch = self.sketch_at(p, footprint_m)?;
+        let land = sketch + self.shore(sketch) * self.octaves_at(p, footprint_m).0;
         Ok(Some(land.max(self.atlas.water_m as f64)))
     }
 
@@ -88,7 +89,8 @@ impl<'a> Ground<'a> {
         if !self.inside(p) || z <= self.atlas.water_m as f64 {
             return Ok(Some(DVec3::Z));
         }
-        let g = self.sketch_gradient(p, footprint_m)? + self.octaves_at(p, footprint_m).1;
+        let fade = self.shore(self.sketch_at(p, footprint_m)?);
+        let g = self.sketch_gradient(p, footprint_m)? + fade * self.octaves_at(p, footprint_m).1;
         Ok(Some(DVec3::new(-g.x, -g.y, 1.0).normalize()))
     }
 
@@ -175,6 +177,11 @@ impl<'a> Ground<'a> {
             return Ok(a);
         }
         Ok(a + (sample(uv, l0 + 1)? - a) * t)
+    }
+
+    /// The octaves' share over sketch height `z` ([`crate::detail::shore`]).
+    fn shore(&self, z: f64) -> f64 {
+        crate::detail::shore(z, self.atlas.water_m as f64, self.detail.shore_m())
     }
 
     /// The octaves' height and gradient at `p`, each weighted by its pixel share.

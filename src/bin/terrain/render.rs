@@ -13,6 +13,7 @@ use terrain::{Error, Role};
 use terrain::{Frame, Renderer, WorkPerPx};
 use terrain_cli::app::output::{self, ImageFormat, Staged};
 use terrain_cli::app::progress::Spinner;
+use terrain_cli::eval::relief;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -100,6 +101,10 @@ struct Report {
     terrain_luminance_mean: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     terrain_luminance_std: Option<f64>,
+    /// With `--positions`: Pearson's r between the luma of the pixels over the sketch and Horn's
+    /// hillshade of the sketch under the scene's sun there (`eval::relief`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    relief_r: Option<f64>,
 }
 
 /// The detail used, defaults resolved from the sketch included (`docs/scene.md`, `[detail]`).
@@ -145,13 +150,15 @@ pub fn run(a: Args) -> Result<()> {
     // The image and the positions land together or not at all.
     let mut staged = Staged::default();
     output::add_image(&mut staged, &a.output, last.width, last.height, &last.rgba)?;
-    let mut luminance = None;
+    let (mut luminance, mut relief) = (None, None);
     let relative = r.read_positions(&camera)?;
     let covered_px = terrain::covered_px(&relative);
     if let Some(p) = &a.positions {
         let world = terrain::world_positions(&relative, &camera);
         let ground = world.chunks_exact(4).map(|q| q[3] > 0.5);
         luminance = terrain_cli::eval::metrics::terrain_luminance(&last.rgba, ground);
+        let shade = relief::hillshade(r.atlas(), scene::light_of(&scene).sun);
+        relief = relief::relief_r(&last.rgba, &world, r.atlas(), &shade);
         let shape = [last.height as usize, last.width as usize, 4];
         staged.add(p, &output::npy_f64(&shape, &world))?;
     }
@@ -216,6 +223,7 @@ pub fn run(a: Args) -> Result<()> {
         }),
         terrain_luminance_mean: luminance.map(|l| l.0),
         terrain_luminance_std: luminance.map(|l| l.1),
+        relief_r: relief,
     };
     if a.json {
         return crate::print_json(&report);

@@ -34,7 +34,7 @@ struct CameraUniforms {
     pad: u32,
 }
 
-// The sun, the air and the surface types' variation (src/light.rs).
+// The sun, the air and what lies beyond the sketch (src/light.rs).
 struct ShadingUniforms {
     sun: vec3<f32>,              // direction to the sun
     daylight: f32,               // the sky's share of its daylight (0 after dusk)
@@ -46,7 +46,6 @@ struct ShadingUniforms {
     haze_height_m: f32,          // haze scale height
     outside: u32,                // beyond the sketch: 0 nothing, 1 a plain, 2 the sea
     plain_m: f32,                // the plain's height (the mean of the sketch's edges)
-    turbulence: array<Octave, 2>,
 }
 
 // The sketch's pyramid in the atlas buffer.
@@ -68,7 +67,8 @@ struct DetailUniforms {
     octave: array<Octave, 24>,
     octaves: u32,
     bias: f32,
-    pad: vec2<u32>,
+    shore_m: f32,                // the band above the water over which the octaves fade in
+    pad: u32,
 }
 
 // The mesh the terrain pass draws: the warped geometry image (or GeoMipMap's baked grid).
@@ -113,6 +113,18 @@ struct Frame {
 // pixel octave (octave k is drawn with share clamp(o − k + 1, 0, 1)).
 fn footprint_octave(footprint: f32) -> f32 {
     return log2(frame.atlas.d_atlas / max(footprint, 1e-6));
+}
+
+// The share of the octaves ground whose sketch height is `z` carries: none at the water's
+// surface, all from `shore_m` (twice the octaves' reach) above it, a smoothstep between. Within
+// the band the share is below (z − water) / reach, so the octaves never take land below the
+// water nor leave a pool on it: the shore is the sketch's own contour at every distance
+// (`detail::shore` is the twin).
+fn shore(z: f32) -> f32 {
+    if (frame.detail.shore_m <= 0.0) {
+        return 1.0;
+    }
+    return smoothstep(frame.atlas.water_m, frame.atlas.water_m + frame.detail.shore_m, z);
 }
 
 // The sketch's rectangle in frame coordinates (metres from the frame origin): its south-west and

@@ -2,11 +2,8 @@
 // aerial perspective from one single-scattering atmosphere (the twin of src/light.rs), surface
 // types from slope, height, aspect and curvature, water, sun and sky light, the sketch's shadow
 // (SHADOWS) and the detail's (DETAIL_SHADOWS), the world beyond the sketch, exposure and the
-// tone map. Needs `frame` and the atlas; turbulence needs the noise.
+// tone map. Needs `frame` and the atlas.
 #import atlas
-#ifdef NOISE
-#import noise
-#endif
 #ifdef DETAIL_SHADOWS
 #import surface
 #endif
@@ -140,78 +137,135 @@ fn display(c_in: vec3<f32>) -> vec3<f32> {
     return mix(c, vec3<f32>(new_peak), g);
 }
 
-// Low-frequency turbulence that moves the boundaries between surface types, each octave faded
-// out as its lattice cells shrink from four to two pixels `footprint` wide, as a texture's mip
-// would: a boundary finer than the pixel would alias, and differently in every mode.
-fn turbulence(local: vec2<f32>, footprint: f32) -> vec2<f32> {
-#ifdef NOISE
-    let o = frame.shading.turbulence;
-    let fade = vec2<f32>(1.0) - smoothstep(vec2<f32>(0.25), vec2<f32>(0.5), footprint * vec2<f32>(o[0].scale, o[1].scale));
-    return fade * vec2<f32>(octave_local(o[0], local).x, octave_local(o[1], local).x);
-#else
-    return vec2<f32>(0.0);
-#endif
-}
-
 // The sketch's form around `local` at the scale e of the pixel's footprint (at least four
-// sketch cells): its gradient (xy) and how much the ground lies below its surroundings e metres
+// sketch cells): its gradient (xy); how much the ground lies below its surroundings e metres
 // around (a gully, > 0) or above them (a ridge, < 0) per metre of e (z), read on the pyramid
-// level whose texels are half of e. The surface types follow this form, not the shading normal:
-// it is the same in every mode, whatever mesh carries the surface, and band-limited to the pixel.
-fn sketch_form(local: vec2<f32>, footprint: f32) -> vec3<f32> {
+// level whose texels are half of e; and (w) how far it lies below the land B = max(BROAD_M,
+// 4e) around it per metre of B (> 0 toward the valley floor), read alike on B's level. The
+// surface types follow this form, not the shading normal: it is the same in every mode, whatever
+// mesh carries the surface, and band-limited to the pixel.
+fn sketch_form(local: vec2<f32>, footprint: f32) -> vec4<f32> {
     // The plain and the sea beyond the sketch are level.
     if (!on_sketch(local, 0.0)) {
-        return vec3<f32>(0.0);
+        return vec4<f32>(0.0);
     }
     let e = max(footprint, 4.0 * frame.atlas.d_atlas);
-    let l = u32(clamp(log2(e / frame.atlas.d_atlas) - 1.0, 0.0, f32(frame.atlas.levels - 1u)));
     let uv = (local + frame.atlas.offset) * frame.atlas.inv_spacing;
-    let du = e * frame.atlas.inv_spacing;
+    let near = ring(uv, e);
+    return vec4<f32>(near, ring(uv, max(BROAD_M, 4.0 * e)).z);
+}
+
+// The land B metres around `uv` (level-0 texel coordinates), read on the level whose texels are
+// half of B: its gradient (xy) and how far the centre lies below the mean of the four points B
+// away, per metre of B (z).
+fn ring(uv: vec2<f32>, b: f32) -> vec3<f32> {
+    let l = u32(clamp(log2(b / frame.atlas.d_atlas) - 1.0, 0.0, f32(frame.atlas.levels - 1u)));
+    let du = b * frame.atlas.inv_spacing;
     let h = atlas_bilinear(uv, l);
     let east = atlas_bilinear(uv + vec2<f32>(du.x, 0.0), l);
     let west = atlas_bilinear(uv - vec2<f32>(du.x, 0.0), l);
     let north = atlas_bilinear(uv + vec2<f32>(0.0, du.y), l);
     let south = atlas_bilinear(uv - vec2<f32>(0.0, du.y), l);
-    let gradient = vec2<f32>(east - west, north - south) / (2.0 * e);
-    return vec3<f32>(gradient, (0.25 * (east + west + north + south) - h) / e);
+    let gradient = vec2<f32>(east - west, north - south) / (2.0 * b);
+    return vec3<f32>(gradient, (0.25 * (east + west + north + south) - h) / b);
 }
 
-// The surface types: rock on cliffs and sharp ridges, scree below them, soil on steep ground and
-// in gullies, forest in patches on moderate slopes below the tree line (denser in hollows and on
-// slopes facing away from the sun's side of the sky), grass elsewhere, sand at the shore, snow
-// above the snow line (lower facing north) where it can lie. Turbulence at 600 m and 150 m moves
-// every boundary.
+// The least width of the land a point's height above its surroundings is measured over: a
+// valley's floor lies below its ridges over a few kilometres.
+const BROAD_M: f32 = 2000.0;
+
+// The surface types, each from what the ground is, never from a pattern of its own (docs/picture.md,
+// "Surface types"): grass, lusher toward the valley floor and drier on crests; forest on moderate
+// slopes and in hollows below the tree line; bare soil on steep ground; rock and scree on cliffs;
+// sand at the shore; snow above the snow line (lower facing north) where it can lie. The
+// vegetation differs in hue, not brightness (Rec. 709 luminance 0.15 within 5 %), and the bare
+// ground and the shore are at most 1.6 times as bright: the light, not the colour, draws the
+// relief. Every weight
+// is a smoothstep of the form at the pixel's footprint, so a transition is as wide as the
+// landform that makes it.
 fn albedo(local: vec3<f32>, footprint: f32) -> vec3<f32> {
-    let t = turbulence(local.xy, footprint);
-    let tt = t.x + 0.5 * t.y;
-    let h = local.z + 40.0 * tt;
     let form = sketch_form(local.xy, footprint);
     let steepness = length(form.xy);
     let slope = 1.0 - inverseSqrt(1.0 + steepness * steepness);
-    let cav = form.z;
+    let hollow = form.z;
+    // Above the land around, per metre of its width.
+    let above = -form.w;
+    let h = local.z;
     // Facing north: the ground falls toward the north.
     let north = -form.y / max(steepness, 1e-3) * smoothstep(0.0, 0.05, slope);
-    let grass = mix(vec3<f32>(0.13, 0.24, 0.06), vec3<f32>(0.30, 0.33, 0.13), clamp(0.5 + 0.7 * t.y - 0.4 * t.x, 0.0, 1.0));
-    let forest = mix(vec3<f32>(0.035, 0.070, 0.030), vec3<f32>(0.06, 0.09, 0.035), 0.5 + 0.5 * t.y);
-    let soil = vec3<f32>(0.30, 0.22, 0.14);
-    let scree = mix(vec3<f32>(0.42, 0.40, 0.36), vec3<f32>(0.52, 0.49, 0.44), 0.5 + 0.5 * t.y);
-    let rock = mix(vec3<f32>(0.22, 0.21, 0.20), vec3<f32>(0.38, 0.35, 0.31), 0.5 + 0.5 * tt);
-    let sand = vec3<f32>(0.62, 0.55, 0.40);
-    let snow = vec3<f32>(0.86, 0.88, 0.93);
-    var c = grass;
-    let tree_line = 1600.0 + 200.0 * t.x;
-    let wooded = smoothstep(0.0, 0.25, 0.45 * t.x + 0.35 * t.y + 0.3 * north + 10.0 * cav + 0.02)
-        * (1.0 - smoothstep(0.22, 0.32, slope)) * (1.0 - smoothstep(tree_line - 100.0, tree_line, h));
+    let meadow = vec3<f32>(0.100, 0.175, 0.062);
+    let heath = vec3<f32>(0.190, 0.150, 0.092);
+    let forest = vec3<f32>(0.070, 0.170, 0.085);
+    let soil = vec3<f32>(0.250, 0.205, 0.150);
+    let scree = vec3<f32>(0.260, 0.250, 0.235);
+    let rock = vec3<f32>(0.230, 0.222, 0.210);
+    let sand = vec3<f32>(0.220, 0.195, 0.145);
+    let snow = vec3<f32>(0.800, 0.820, 0.870);
+    // Grass: dry on crests, lush toward the valley floor.
+    let dry = smoothstep(-0.02, 0.05, above - 2.0 * hollow);
+    var c = mix(meadow, heath, dry);
+    // Forest: moderate slopes, hollows and slopes facing north, up to the tree line.
+    let tree_line = 1700.0;
+    let moist = 0.5 + 8.0 * hollow - 4.0 * above + 0.25 * north;
+    let wooded = smoothstep(0.01, 0.06, slope) * (1.0 - smoothstep(0.25, 0.35, slope))
+        * smoothstep(0.3, 0.8, moist) * (1.0 - smoothstep(tree_line - 150.0, tree_line, h));
     c = mix(c, forest, wooded);
-    c = mix(c, soil, smoothstep(0.16, 0.26, slope + 0.06 * t.y + 2.0 * max(cav, 0.0)) * (1.0 - wooded));
-    let steep = slope + 0.08 * tt - 2.0 * cav;
-    c = mix(c, scree, smoothstep(0.26, 0.36, slope + 0.08 * t.y) * smoothstep(-0.01, 0.02, cav));
-    c = mix(c, rock, smoothstep(0.36, 0.48, steep));
-    c = mix(c, sand, 1.0 - smoothstep(frame.atlas.water_m + 2.0, frame.atlas.water_m + 8.0, h));
-    let snow_line = 1800.0 - 250.0 * north;
-    let snowy = smoothstep(snow_line, snow_line + 150.0, h) * (1.0 - smoothstep(0.45, 0.6, slope));
+    // Bare ground where the slope sheds its soil, scree below cliffs, rock on them.
+    c = mix(c, soil, smoothstep(0.22, 0.32, slope) * (1.0 - wooded));
+    c = mix(c, scree, smoothstep(0.30, 0.40, slope) * smoothstep(-0.01, 0.02, hollow));
+    c = mix(c, rock, smoothstep(0.38, 0.50, slope - 2.0 * hollow));
+    c = mix(c, sand, 1.0 - smoothstep(frame.atlas.water_m + 1.0, frame.atlas.water_m + 5.0, h));
+    let snow_line = 1900.0 - 250.0 * north;
+    let snowy = smoothstep(snow_line, snow_line + 200.0, h) * (1.0 - smoothstep(0.45, 0.6, slope));
     return mix(c, snow, snowy);
 }
+
+#ifdef RAMP
+// The colour ramp's stops (src/surface/ramp.rs), ordered by height: the colour as the ramp file
+// encodes it (0–1) and the height in metres (w).
+@group(0) @binding(10) var<storage, read> ramp: array<vec4<f32>>;
+
+// The ramp's colour at height `h`, as gdaldem `color-relief` gives it: linear in the encoded
+// values between the two stops around `h`, the end colours beyond them; decoded from sRGB.
+fn ramp_albedo(h: f32) -> vec3<f32> {
+    let n = arrayLength(&ramp);
+    var c = ramp[n - 1u].rgb;
+    if (h <= ramp[0].w) {
+        c = ramp[0].rgb;
+    } else {
+        for (var i = 1u; i < n; i++) {
+            if (h < ramp[i].w) {
+                let a = ramp[i - 1u];
+                let t = (h - a.w) / (ramp[i].w - a.w);
+                c = mix(a.rgb, ramp[i].rgb, t);
+                break;
+            }
+        }
+    }
+    let linear = select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
+    return MAP_WHITE * linear;
+}
+
+// The reflectance a map's white stands for (paper's, a little below fresh snow's): lit on level
+// ground by the sun the exposure is metered for, it lands below the tone map's shoulder, so the
+// map's colours keep their proportions instead of bleaching toward white.
+const MAP_WHITE: f32 = 0.6;
+
+// How much of the light's variation over the relief a map's colours show (1: all of it, as the
+// natural surface does): GIS maps lay their hillshade over a colour ramp at part opacity, so the
+// colours still read as the map's while the relief shows through.
+const MAP_RELIEF: f32 = 0.5;
+
+// The sketch's own height under the pixel, on the level of its footprint: the ramp colours the
+// land the user gave; the octaves below it add light, not colour.
+fn ramp_height(local: vec2<f32>, footprint: f32) -> f32 {
+    if (!on_sketch(local, 0.0)) {
+        return select(frame.shading.plain_m, frame.atlas.water_m, frame.shading.outside == 2u);
+    }
+    let l = clamp(log2(max(footprint / frame.atlas.d_atlas, 1.0)), 0.0, f32(frame.atlas.levels - 1u));
+    return atlas_bilinear((local + frame.atlas.offset) * frame.atlas.inv_spacing, u32(l));
+}
+#endif
 
 #ifdef SHADOWS
 const SHADOW_STEPS: i32 = 40;
@@ -250,13 +304,13 @@ fn detail_visibility(local: vec2<f32>, footprint: f32) -> f32 {
     }
     let grow = pow(t_end / t, 1.0 / f32(NEAR_STEPS));
     let caster = atlas_bilinear((local + frame.atlas.offset) * frame.atlas.inv_spacing, 0u);
-    let z0 = max(caster + surface_octaves(local, fine).x, frame.atlas.water_m);
+    let z0 = max(caster + shore(caster) * surface_octaves(local, fine).x, frame.atlas.water_m);
     var seen = 1.0;
     for (var i = 0; i < NEAR_STEPS; i++) {
         count_shadow_step();
         let p = local + sun.xy * t;
-        let ground = atlas_bilinear((p + frame.atlas.offset) * frame.atlas.inv_spacing, 0u)
-            + surface_octaves(p, max(fine, 0.5 * t)).x;
+        let sketch = atlas_bilinear((p + frame.atlas.offset) * frame.atlas.inv_spacing, 0u);
+        let ground = sketch + shore(sketch) * surface_octaves(p, max(fine, 0.5 * t)).x;
         let under = max(ground, frame.atlas.water_m);
         seen = min(seen, clamp(0.5 + (z0 + sun.z * t - under) / (0.03 * t), 0.0, 1.0));
         t *= grow;
@@ -419,7 +473,13 @@ fn sun_seen_at(local: vec2<f32>, l: u32) -> f32 {
 // the sky it reflects (Schlick).
 fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32> {
     let sun_light = sun_at(local.z);
-    if (on_water(local.z)) {
+    // A ramp colours the bed under the water too, as a map's depth tints do.
+#ifdef RAMP
+    let water = false;
+#else
+    let water = on_water(local.z);
+#endif
+    if (water) {
         let up = vec3<f32>(0.0, 0.0, 1.0);
         let cos_v = clamp(to_eye.z / dist, 0.0, 1.0);
         let fresnel = 0.02 + 0.98 * pow(1.0 - cos_v, 5.0);
@@ -435,7 +495,14 @@ fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32
     }
 #endif
     let light = sun_light * sun + frame.shading.sky_light * (0.5 + 0.5 * n.z);
+#ifdef RAMP
+    // A map's colours carry the relief as a map's hillshade overlay does, at part strength: the
+    // light on level ground, moved MAP_RELIEF of the way to this ground's own.
+    let level = sun_light * max(frame.shading.sun.z, 0.0) + frame.shading.sky_light;
+    return ramp_albedo(ramp_height(local.xy, footprint)) * mix(level, light, MAP_RELIEF);
+#else
     return albedo(local, footprint) * light;
+#endif
 }
 
 // The world beyond the sketch seen along `dir` from `eye`: a plain at the sketch's mean edge

@@ -25,7 +25,8 @@ fn surface_octaves(p: vec2<f32>, footprint: f32) -> vec3<f32> {
 
 // The terrain function at `p`: the ground, or the water's flat surface over it.
 fn surface_height(p: vec2<f32>, footprint: f32) -> f32 {
-    return max(atlas_height(p, footprint) + surface_octaves(p, footprint).x, frame.atlas.water_m);
+    let sketch = atlas_height(p, footprint);
+    return max(sketch + shore(sketch) * surface_octaves(p, footprint).x, frame.atlas.water_m);
 }
 
 // Its gradient; level on the water.
@@ -38,6 +39,9 @@ fn surface_gradient(p: vec2<f32>, footprint: f32) -> vec2<f32> {
 
 // The ground's gradient (no water): the octaves' analytically, the sketch's by central
 // differences of the bicubic.
+// The shore's fade scales the octaves' gradient and leaves its own out (a slope of at most
+// reach / shore_m, a half, times the octaves' value).
 fn land_gradient(p: vec2<f32>, footprint: f32) -> vec2<f32> {
-    return sketch_gradient(p, footprint) + surface_octaves(p, footprint).yz;
+    let fade = shore(atlas_height(p, footprint));
+    return sketch_gradient(p, footprint) + fade * surface_octaves(p, footprint).yz;
 }

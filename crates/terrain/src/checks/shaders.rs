@@ -129,8 +129,7 @@ fn uniform_structs_match_the_wgsl_field_by_field() {
                 haze_per_m,
                 haze_height_m,
                 outside,
-                plain_m,
-                turbulence
+                plain_m
             }),
             size_of::<ShadingUniforms>(),
         ),
@@ -156,6 +155,7 @@ fn uniform_structs_match_the_wgsl_field_by_field() {
                 octave,
                 octaves,
                 bias,
+                shore_m,
                 pad
             }),
             size_of::<DetailUniforms>(),

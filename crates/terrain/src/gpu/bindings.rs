@@ -131,6 +131,12 @@ impl Binding {
             .when(|k| k.contains(Key::SHADOWS.union(Key::SUN_MAP)))
     }
 
+    /// The colour ramp's stops (`shaders/shared/shading.wgsl`, [`crate::surface::ramp`]),
+    /// declared wherever the ground is lit with `surface.style = "ramp"`.
+    pub const fn ramp(stages: S) -> Binding {
+        Binding::storage(10, "ramp", stages).when(|k| k.contains(Key::RAMP))
+    }
+
     /// Whether variant `key` declares it.
     pub fn declared(&self, key: Key) -> bool {
         (self.when)(key)

@@ -5,6 +5,7 @@ use super::alloc::{Alloc, Buffer, Tracked};
 use super::context::GpuContext;
 use super::uniforms::FrameUniforms;
 use crate::error::{Error, Result};
+use crate::scene::Scene;
 use crate::sketch::Atlas;
 use serde::de::{Deserializer, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
@@ -114,6 +115,33 @@ pub fn upload_atlas(device: &Alloc, atlas: &Atlas) -> Buffer {
         contents: bytemuck::cast_slice(&texels),
         usage: wgpu::BufferUsages::STORAGE,
     })
+}
+
+/// The scene's colour ramp as the shading reads it (`ramp` in `shaders/shared/shading.wgsl`):
+/// each stop's encoded colour (0–1) and its height in metres, percentages resolved against the
+/// sketch's range; `None` for a scene drawn without one, or a planet (its own surface types).
+pub fn upload_ramp(device: &Alloc, scene: &Scene, atlas: &Atlas) -> Result<Option<Buffer>> {
+    if scene.planet().is_some() {
+        return Ok(None);
+    }
+    let Some(ramp) = scene.color_ramp()? else {
+        return Ok(None);
+    };
+    let stops: Vec<[f32; 4]> = ramp
+        .stops(atlas.min_m as f64, atlas.max_m as f64)
+        .iter()
+        .map(|s| {
+            let [r, g, b, _] = s.rgba.map(|c| c as f32 / 255.0);
+            [r, g, b, s.height_m as f32]
+        })
+        .collect();
+    Ok(Some(device.create_buffer_init(
+        &wgpu::util::BufferInitDescriptor {
+            label: Some("colour ramp"),
+            contents: bytemuck::cast_slice(&stops),
+            usage: wgpu::BufferUsages::STORAGE,
+        },
+    )))
 }
 
 /// A mappable buffer for one read-back, dropped before the call that made it returns; the only

@@ -18,6 +18,7 @@ pub const BINDINGS: &[Binding] = &[
     Binding::wanted(S::COMPUTE),
     Binding::work(S::COMPUTE),
     Binding::sun_seen(S::COMPUTE),
+    Binding::ramp(S::COMPUTE),
     Binding::storage_rw(2, "colour_out", S::COMPUTE),
     Binding::storage_rw(3, "position_out", S::COMPUTE),
 ];
@@ -29,6 +30,7 @@ pub const PLANET_BINDINGS: &[Binding] = &[
     Binding::wanted(S::COMPUTE),
     Binding::work(S::COMPUTE),
     Binding::sun_seen(S::COMPUTE),
+    Binding::ramp(S::COMPUTE),
     Binding::storage_rw(2, "colour_out", S::COMPUTE),
     Binding::storage_rw(3, "position_out", S::COMPUTE),
     Binding::uniform(4, "planet", S::COMPUTE),

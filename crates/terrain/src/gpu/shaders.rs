@@ -60,6 +60,7 @@ flags!(
     FROM_BUFFERS,
     COUNT_WORK,
     SUN_MAP,
+    RAMP,
 );
 
 impl Key {
@@ -238,7 +239,7 @@ mod tests {
         assert_eq!(Key::of(&key.defs()), key);
         assert!(key.contains(Key::NOISE) && !key.contains(Key::NOISE | Key::BUMP));
         assert!(key.any(Key::NOISE | Key::BUMP) && !key.any(Key::BUMP));
-        assert_eq!(FLAGS.len(), 18);
+        assert_eq!(FLAGS.len(), 19);
     }
 
     #[test]

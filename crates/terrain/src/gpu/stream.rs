@@ -28,6 +28,8 @@ pub struct AtlasBinding {
     pub work: Option<wgpu::Buffer>,
     /// The sketch's sun visibility map, where the frames sample it ([`super::sun_map`]).
     pub sun_seen: Option<wgpu::Buffer>,
+    /// The colour ramp's stops, where the ground is drawn with one ([`crate::surface::ramp`]).
+    pub ramp: Option<wgpu::Buffer>,
 }
 
 impl AtlasBinding {
@@ -42,6 +44,9 @@ impl AtlasBinding {
         }
         if let Some(seen) = &self.sun_seen {
             r.push(("sun_seen", buffer(seen)));
+        }
+        if let Some(ramp) = &self.ramp {
+            r.push(("ramp", buffer(ramp)));
         }
         r
     }
@@ -174,6 +179,7 @@ impl Stream {
             marks: Some(wgpu::Buffer::clone(&self.marks)),
             work: None,
             sun_seen: None,
+            ramp: None,
         }
     }
 

@@ -29,6 +29,8 @@ pub const BINDINGS: &[Binding] = &[
     Binding::wanted(S::COMPUTE),
     Binding::work(S::COMPUTE),
     Binding::sun_seen(S::COMPUTE),
+    // Declared where the shading it imports draws a ramp (never set for this pass's scenes).
+    Binding::ramp(S::COMPUTE),
     Binding::storage_rw(10, "seen_out", S::COMPUTE),
 ];
 

@@ -77,7 +77,6 @@ pub struct ShadingUniforms {
     pub outside: u32,
     /// The plain's height: the mean of the sketch's edge heights.
     pub plain_m: f32,
-    pub turbulence: [OctaveGpu; 2],
 }
 
 /// The sketch's pyramid in the atlas buffer.
@@ -109,7 +108,9 @@ pub struct DetailUniforms {
     pub octave: [OctaveGpu; MAX_OCTAVES],
     pub octaves: u32,
     pub bias: f32,
-    pub pad: [u32; 2],
+    /// The band above the water over which the octaves fade in (`detail::Detail::shore_m`).
+    pub shore_m: f32,
+    pub pad: u32,
 }
 
 /// The mesh the terrain pass draws: the warped geometry image, or GeoMipMap's baked grid.
@@ -261,7 +262,7 @@ impl FrameUniforms {
         let origin = frame_origin(f.camera);
         FrameUniforms {
             camera: CameraUniforms::new(f.camera, origin, f.view),
-            shading: ShadingUniforms::new(f.detail, f.light, f.atlas, f.outside, origin),
+            shading: ShadingUniforms::new(f.light, f.atlas, f.outside),
             atlas: AtlasUniforms::new(f.atlas, origin),
             detail: DetailUniforms::new(f.detail, origin),
             mesh: MeshUniforms {
@@ -329,19 +330,7 @@ impl CameraUniforms {
 }
 
 impl ShadingUniforms {
-    pub fn new(
-        detail: &Detail,
-        light: &Light,
-        atlas: &Atlas,
-        outside: Outside,
-        origin: DVec2,
-    ) -> ShadingUniforms {
-        // Two octaves of turbulence, 600 m and 150 m, for the surface types' boundaries.
-        let turbulence_seed = crate::detail::hash(detail.seed ^ 0x5eed);
-        let turbulence = [600.0, 150.0].map(|wavelength: f64| {
-            let rel = origin - detail.lattice_origin_m;
-            OctaveFrame::split(rel, 1.6 / wavelength, 1.0, turbulence_seed).into()
-        });
+    pub fn new(light: &Light, atlas: &Atlas, outside: Outside) -> ShadingUniforms {
         ShadingUniforms {
             sun: light.sun.as_vec3().to_array(),
             daylight: light.daylight as f32,
@@ -357,7 +346,6 @@ impl ShadingUniforms {
                 Outside::Ocean => 2,
             },
             plain_m: atlas.edge_mean_m,
-            turbulence,
         }
     }
 }
@@ -389,7 +377,8 @@ impl DetailUniforms {
             octave,
             octaves: detail.octaves.min(MAX_OCTAVES as u32),
             bias: detail.bias as f32,
-            pad: [0; 2],
+            shore_m: detail.shore_m() as f32,
+            pad: 0,
         }
     }
 }

@@ -273,11 +273,14 @@ fn detailed_at(f: &FrameUniforms, atlas: &Atlas, detail: bool, p: Vec2, d_max: f
     let mut z = atlas_height(f, atlas, p, sketch_spacing(f.atlas.d_atlas, o_sketch));
     if detail {
         let last = f.detail.octaves.min(o.ceil().max(0.0) as u32);
+        let mut octaves = 0.0;
         for k in 1..=last {
             let g = (o - k as f32 + 1.0).clamp(0.0, 1.0);
             let oct = &f.detail.octave[(k - 1) as usize];
-            z += oct.weight * g * octave_local(oct, p);
+            octaves += oct.weight * g * octave_local(oct, p);
         }
+        let (water, band) = (f.atlas.water_m as f64, f.detail.shore_m as f64);
+        z += crate::detail::shore(z as f64, water, band) as f32 * octaves;
     }
     (z.max(f.atlas.water_m), o)
 }

@@ -98,6 +98,8 @@ pub fn shader_key(s: &Shared, mode: Mode) -> Key {
     key.set(Key::COUNT_WORK, s.atlas_binding.work.is_some());
     // The sketch's shadow from its sun clearance map: a renderer made with one binds it.
     let sun_map = s.atlas_binding.sun_seen.is_some();
+    // The ground coloured by a ramp: a renderer made for one binds its stops.
+    key.set(Key::RAMP, s.atlas_binding.ramp.is_some());
     match mode {
         Mode::Warped | Mode::Geomipmap | Mode::Bruteforce => {
             let pixel_normals = scene.render.pixel_normals;

@@ -53,10 +53,13 @@ pub(super) fn renderer(
             marks: None,
             work: None,
             sun_seen: sun_map.as_ref().map(|m| wgpu::Buffer::clone(&m.seen)),
+            ramp: None,
         },
         SketchGpu::Streamed(s) => s.binding(),
     };
     atlas_binding.work = work.as_ref().map(|w| wgpu::Buffer::clone(&w.buffer));
+    let ramp = upload_ramp(&alloc, scene, &atlas)?;
+    atlas_binding.ramp = ramp.as_ref().map(|b| wgpu::Buffer::clone(b));
     // Planets are not multisampled (nor supersampled) yet.
     let samples = if planet {
         1
@@ -89,6 +92,7 @@ pub(super) fn renderer(
     let lod = crate::lod::scheme(mode, &shared)?;
     let deferred = shared.deferred;
     let shader_key = crate::lod::shader_key(&shared, mode);
+    let outside = scene.outside(&atlas);
     Ok(Renderer {
         snapshots: None,
         samples,
@@ -98,11 +102,12 @@ pub(super) fn renderer(
         counters: Counters::new(&alloc, lod.passes()),
         work,
         sun_map,
+        _ramp: ramp,
         ctx,
         atlas,
         detail,
         light: scene::light_of(scene),
-        outside: scene.sketch.outside,
+        outside,
         mode,
         view,
         frame,

@@ -18,7 +18,9 @@ use crate::error::Result;
 use crate::gpu::alloc::{Alloc, Buffer, Ledger};
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::counters::{Counters, FrameCounters, Probe};
-use crate::gpu::frame_io::{FrameStats, PassTimes, Timer, uniform_buffer, upload_atlas};
+use crate::gpu::frame_io::{
+    FrameStats, PassTimes, Timer, uniform_buffer, upload_atlas, upload_ramp,
+};
 use crate::gpu::output::{OutputPass, Targets};
 use crate::gpu::snapshot::Snapshot;
 use crate::gpu::stream::{AtlasBinding, Stream};
@@ -142,6 +144,8 @@ pub struct Renderer {
     work: Option<Tally>,
     /// The sketch's sun visibility map, where the scheme samples it.
     sun_map: Option<SunMap>,
+    /// The colour ramp's stops, where the ground is drawn with one (bound by the passes).
+    _ramp: Option<Buffer>,
     lod: Box<dyn Lod>,
     /// What snapshots are written with, made at the first (a host's frames need none).
     snapshots: Option<Snapshots>,

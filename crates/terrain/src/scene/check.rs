@@ -181,6 +181,13 @@ impl Scene {
         open_range("light.haze_height_m", l.haze_height_m, 0.0, 1e6)?;
         within("light.exposure_ev", l.exposure_ev, -16.0, 16.0)?;
         within("sketch.water_level_m", self.sketch.water_level_m, -1e6, 1e6)?;
+        if self.surface.style() == super::Style::Ramp && self.planet().is_some() {
+            return Err(
+                "surface.style = \"ramp\": a planet is drawn with its own surface types; \
+                 colour ramps drape planar sketches"
+                    .into(),
+            );
+        }
         let i = &self.importance;
         open_range("importance.error_px", i.error_px, 0.0, 1e4)?;
         up_to_one("importance.error_flat_share", i.error_flat_share)?;

@@ -18,6 +18,7 @@ mod parse;
 pub(crate) mod place;
 mod render;
 mod starter;
+mod surface;
 
 pub(crate) use build::stream_config;
 pub use build::{
@@ -28,6 +29,7 @@ pub use place::{
     CameraReport, DEFAULT_PATH_S, camera_report, default_path, pose, resolve_key, world_of_map,
 };
 pub use starter::starter;
+pub use surface::{Style, SurfaceSection};
 
 pub(crate) use camera::Placement;
 pub use camera::{CameraSection, PathKey, PathSection};
@@ -100,6 +102,9 @@ pub struct Scene {
     /// `[stream]`: the tile cache of a sketch streamed from a tile pyramid.
     #[serde(default)]
     pub stream: StreamSection,
+    /// `[surface]`: the ground's colour: natural surface types or a colour ramp.
+    #[serde(default)]
+    pub surface: SurfaceSection,
     /// `[path]`: the camera path `fly` and `compare` follow; without it, a default one.
     pub path: Option<PathSection>,
     /// A planet: the sketch is global and wraps a sphere (`sketch.synthetic = "planet"` implies
@@ -135,16 +140,27 @@ pub struct SketchSection {
     pub size: Option<usize>,
     /// For 8/16-bit PNG sketches: the heights that pixel value 0 and the maximum stand for.
     pub height_range_m: Option<[f64; 2]>,
-    /// The world beyond the sketch's edges.
-    #[serde(default = "default_outside")]
-    pub outside: Outside,
+    /// The world beyond the sketch's edges; without it, the sea where most of the sketch's edge
+    /// nodes lie below `water_level_m`, else the plain ([`Scene::outside`]).
+    pub outside: Option<Outside>,
     /// Ground below this height lies under flat water.
     #[serde(default)]
     pub water_level_m: f64,
 }
 
-fn default_outside() -> Outside {
-    Outside::Plain
+impl Scene {
+    /// What lies beyond `atlas`, the scene's sketch: `sketch.outside`, or where the scene does not
+    /// say, what the sketch's edge continues into: the sea where most of its nodes lie under
+    /// water, else the plain.
+    pub fn outside(&self, atlas: &crate::sketch::Atlas) -> Outside {
+        self.sketch
+            .outside
+            .unwrap_or(if atlas.edge_under_water() > 0.5 {
+                Outside::Ocean
+            } else {
+                Outside::Plain
+            })
+    }
 }
 
 crate::names::named_enum! {

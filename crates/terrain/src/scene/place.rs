@@ -150,7 +150,7 @@ pub fn surface_m(scene: &Scene, atlas: &Atlas, p: DVec2) -> Result<f64> {
     let water = atlas.water_m as f64;
     Ok(match super::ground_under(atlas, p)? {
         Some(ground) => ground,
-        None if scene.sketch.outside == Outside::Ocean => water.max(0.0),
+        None if scene.outside(atlas) == Outside::Ocean => water.max(0.0),
         None => water.max(atlas.edge_mean_m as f64),
     })
 }

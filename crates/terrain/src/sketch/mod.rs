@@ -108,6 +108,16 @@ pub struct Atlas {
 }
 
 impl Atlas {
+    /// The share of the sketch's edge nodes (on the finest level held in memory) below the
+    /// water's surface: above one half, the world beyond the sketch is the sea.
+    pub fn edge_under_water(&self) -> f64 {
+        let level = &self.levels[self.resident_from.min(self.levels.len() - 1)];
+        let (under, n) = level.edge().fold((0usize, 0usize), |(u, n), z| {
+            (u + usize::from(z < self.water_m), n + 1)
+        });
+        under as f64 / n.max(1) as f64
+    }
+
     /// Nodes per row of level 0 (west to east).
     pub fn width(&self) -> usize {
         self.levels[0].width

@@ -19,11 +19,28 @@ pub struct Level {
 impl Level {
     /// The mean height of the edge nodes.
     pub(super) fn edge_mean(&self) -> f32 {
+        let (sum, n) = self
+            .edge()
+            .fold((0.0, 0usize), |(s, n), z| (s + z as f64, n + 1));
+        (sum / n.max(1) as f64) as f32
+    }
+
+    /// The heights of the edge nodes, each once (none without data).
+    pub(super) fn edge(&self) -> impl Iterator<Item = f32> + '_ {
         let (w, h) = (self.width, self.height);
-        let at = |i: usize, j: usize| self.data[j * w + i] as f64;
-        let rows: f64 = (0..w).map(|i| at(i, 0) + at(i, h - 1)).sum();
-        let cols: f64 = (1..h - 1).map(|j| at(0, j) + at(w - 1, j)).sum();
-        ((rows + cols) / (2 * w + 2 * (h - 2)) as f64) as f32
+        let held = self.data.len() == w * h && w > 0 && h > 0;
+        let at = move |i: usize, j: usize| self.data[j * w + i];
+        let rows = (0..w).filter(move |_| held).flat_map(move |i| {
+            let top = (h > 1).then(|| at(i, h - 1));
+            std::iter::once(at(i, 0)).chain(top)
+        });
+        let cols = (1..h.saturating_sub(1))
+            .filter(move |_| held)
+            .flat_map(move |j| {
+                let east = (w > 1).then(|| at(w - 1, j));
+                std::iter::once(at(0, j)).chain(east)
+            });
+        rows.chain(cols)
     }
 
     /// [`Atlas::level_curvature`] of this level, of spacing `dx` × `dy`: NaN without data or

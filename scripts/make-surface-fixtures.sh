@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# Writes the surface and relief fixtures in tests/data/surface/ with GDAL (Debian's gdal-bin):
+#
+# - coast-4326.tif: a coast with bathymetry, EPSG:4326, 120 × 91 cells of 1/30°, heights
+#   −1437…2205 m (Vancouver Island and the Strait of Georgia: matplotlib's `topobathy.npz`
+#   sample, fetched from the matplotlib wheel on PyPI); coast-plain.tif: the same heights in a
+#   TIFF without any georeference.
+# - jacksboro-utm.tif: the bundled Jacksboro DEM warped to UTM 17N (EPSG:32617), 120 m cells.
+# - ramp.txt: gdaldem's documented example ramp at the DEM's heights; jacksboro-ramp.tif:
+#   `gdaldem color-relief` of jacksboro-utm.tif with it, on the DEM's own grid.
+#
+# The files are committed; run this again only to change them:
+#
+#   sudo apt-get install gdal-bin && scripts/make-surface-fixtures.sh
+set -euo pipefail
+export GDAL_PAM_ENABLED=NO
+cd "$(dirname "$0")/.."
+out=tests/data/surface
+rm -rf "$out" && mkdir -p "$out"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+
+python3 -m pip download -q --no-deps --only-binary=:all: -d "$tmp" matplotlib==3.11.2
+python3 - "$tmp" <<'PY'
+import glob, io, sys, zipfile
+tmp = sys.argv[1]
+wheel = zipfile.ZipFile(glob.glob(f"{tmp}/matplotlib-*.whl")[0])
+data = wheel.read("matplotlib/mpl-data/sample_data/topobathy.npz")
+# The .npz is a zip of .npy arrays: read them without numpy.
+arrays = {}
+with zipfile.ZipFile(io.BytesIO(data)) as z:
+    for name in z.namelist():
+        raw = z.read(name)
+        header_len = int.from_bytes(raw[8:10], "little")
+        header = raw[10:10 + header_len].decode()
+        shape = tuple(int(v) for v in header.split("'shape': (")[1].split(")")[0].split(",") if v.strip())
+        import array
+        a = array.array("f")
+        a.frombytes(raw[10 + header_len:])
+        arrays[name[:-4]] = (shape, a)
+(rows, cols), topo = arrays["topo"]
+lon = arrays["longitude"][1]
+lat = arrays["latitude"][1]
+cell = (lon[-1] - lon[0]) / (cols - 1)
+# Node-registered in the sample; as an ESRI grid of cells centred on the nodes.
+west = lon[0] - 360.0 - cell / 2
+south = lat[0] - cell / 2
+north_first = lat[0] > lat[-1]
+with open(f"{tmp}/coast.asc", "w") as f:
+    f.write(f"ncols {cols}\nnrows {rows}\nxllcorner {west:.10f}\nyllcorner {min(lat[0], lat[-1]) - cell / 2:.10f}\n")
+    f.write(f"cellsize {cell:.10f}\n")
+    order = range(rows) if north_first else range(rows - 1, -1, -1)
+    for r in order:
+        f.write(" ".join(f"{topo[r * cols + c]:.1f}" for c in range(cols)) + "\n")
+PY
+gdal_translate -q -of GTiff -a_srs EPSG:4326 -ot Float32 "$tmp/coast.asc" "$out/coast-4326.tif"
+gdal_translate -q -of GTiff -ot Float32 -co PROFILE=BASELINE "$tmp/coast.asc" "$out/coast-plain.tif"
+
+gdal_translate -q -a_srs EPSG:4326 sketches/jacksboro_fault_dem.asc "$tmp/jacksboro.tif"
+gdalwarp -q -t_srs EPSG:32617 -tr 120 120 -r bilinear -ot Float32 "$tmp/jacksboro.tif" "$out/jacksboro-utm.tif"
+
+cat > "$out/ramp.txt" <<'RAMP'
+# gdaldem's documented example ramp, its heights scaled to the DEM's 248-1069 m: metres, a
+# percentage, a colour name, and each kind of separator.
+1000 white
+900 235:220:175
+50%	190 185 135
+400,240,250,150
+250 50 180 50
+nv 0 0 0 0
+RAMP
+gdaldem color-relief -q "$out/jacksboro-utm.tif" "$out/ramp.txt" "$out/jacksboro-ramp.tif"
+gdalinfo --version > "$out/GDAL_VERSION"
