@@ -109,7 +109,8 @@ fn a_png_without_units_is_warned_about_once_by_every_command() {
     let dir = scratch("first-run-png-units");
     let png = dir.join("dem.png");
     write_png16(&png, 16);
-    let camera = "[camera]\nposition = [-20.0, -20.0, 60000.0]\nlook_at = [8.0, 8.0, 30000.0]\n";
+    // Over the sketch (a camera farther off than the sketch's size is a warning of its own).
+    let camera = "[camera]\nposition = [4.0, 4.0, 60000.0]\nlook_at = [8.0, 8.0, 30000.0]\n";
     let bare = dir.join("bare.toml");
     std::fs::write(&bare, format!("[sketch]\npath = \"dem.png\"\n{camera}")).unwrap();
     let (png, bare, d) = (
@@ -195,9 +196,123 @@ fn a_png_without_units_is_warned_about_once_by_every_command() {
         1,
         &["rgb.png", "grayscale"],
     );
-    // Stated heights on cells of 1 m are a small map, not a wrong one.
+    // Stated heights on guessed cells: the line names the cells alone.
     std::fs::remove_file(dir.join("dem.pgw")).unwrap();
-    assert!(warnings(&["info", png, "--height-scale", "0.01"]).is_empty());
+    let lines = warnings(&["info", png, "--height-scale", "0.01"]);
+    assert!(
+        lines.len() == 1
+            && lines[0].contains("1 m")
+            && lines[0].contains("sketch.spacing_m")
+            && !lines[0].contains("height_range_m"),
+        "{lines:?}"
+    );
+    assert!(warnings(&["info", png, "--height-scale", "0.01", "--spacing-m", "30"]).is_empty());
+}
+
+/// A 120 × 91 Float32 TIFF of heights −1437 … 2205 m without a georeference (no ModelPixelScale,
+/// ModelTiepoint or ModelTransformation tag): what a program that knows no GeoTIFF writes.
+fn write_plain_tiff(path: &Path) {
+    let (w, h) = (120u32, 91u32);
+    let data: Vec<f32> = (0..w * h)
+        .map(|k| -1437.0 + 3642.0 * ((k % w) as f32 / (w - 1) as f32))
+        .collect();
+    let f = std::fs::File::create(path).unwrap();
+    let mut enc = tiff::encoder::TiffEncoder::new(f).unwrap();
+    enc.write_image::<tiff::encoder::colortype::Gray32Float>(w, h, &data)
+        .unwrap();
+}
+
+#[test]
+fn a_tiff_without_a_georeference_is_warned_about_once_like_a_png() {
+    let dir = scratch("first-run-plain-tiff");
+    let tif = dir.join("plain.tif");
+    write_plain_tiff(&tif);
+    let tif = tif.to_str().unwrap();
+    let shot = dir.join("x.png");
+    let shot = shot.to_str().unwrap();
+    for args in [
+        &["info", tif][..],
+        &["render", tif, "-o", shot, "--size", "16"],
+    ] {
+        let lines = warnings(args);
+        assert_eq!(lines.len(), 1, "{args:?}: {lines:?}");
+        for part in ["plain.tif", "no georeference", "1 m", "sketch.spacing_m"] {
+            assert!(
+                lines[0].contains(part),
+                "{args:?}: {lines:?} lacks {part:?}"
+            );
+        }
+    }
+    // The spacing stated: nothing left to guess, and 3.6 km across a 3.6 km relief is terrain.
+    assert!(warnings(&["info", tif, "--spacing-m", "30"]).is_empty());
+    let set = ["--set", "sketch.spacing_m=30"];
+    assert!(warnings(&["render", tif, "-o", shot, "--size", "16", set[0], set[1]]).is_empty());
+}
+
+#[test]
+fn a_relief_taller_than_three_times_the_sketch_names_the_likely_unit() {
+    let dir = scratch("first-run-tall-relief");
+    let tif = dir.join("plain.tif");
+    write_plain_tiff(&tif);
+    let tif = tif.to_str().unwrap();
+    // 1 m cells stated: 3642 m of relief over 119 m is no landscape.
+    let lines = warnings(&["info", tif, "--spacing-m", "1"]);
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    for part in [
+        "plain.tif",
+        "3642 m",
+        "119 m",
+        "degrees",
+        "feet",
+        "sketch.spacing_m",
+        "sketch.height_scale",
+    ] {
+        assert!(lines[0].contains(part), "{lines:?} lacks {part:?}");
+    }
+    // Just under three times its extent (1190 m at 10 m cells): quiet.
+    assert!(warnings(&["info", tif, "--spacing-m", "10.3"]).is_empty());
+    // The same through a scene, once per command however often the sketch is read.
+    let shot = dir.join("x.png");
+    let set = ["--set", "sketch.spacing_m=1"];
+    let args = [
+        "render",
+        tif,
+        "-o",
+        shot.to_str().unwrap(),
+        "--size",
+        "16",
+        set[0],
+        set[1],
+    ];
+    let lines = warnings(&args);
+    assert!(lines.len() == 1 && lines[0].contains("relief"), "{lines:?}");
+}
+
+#[test]
+fn a_png_that_fails_to_read_gets_its_error_alone() {
+    let dir = scratch("first-run-damaged-png");
+    let whole = dir.join("whole.png");
+    write_png16(&whole, 16);
+    let bytes = std::fs::read(&whole).unwrap();
+    // Its header intact (the units it would guess are known), its pixels cut short.
+    let cut = dir.join("cut.png");
+    std::fs::write(&cut, &bytes[..bytes.len() * 2 / 3]).unwrap();
+    let scene = dir.join("cut.toml");
+    std::fs::write(&scene, "[sketch]\npath = \"cut.png\"\n").unwrap();
+    let shot = dir.join("x.png");
+    refused(&["info", cut.to_str().unwrap()], 1, &["cut.png", "PNG"]);
+    refused(
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            shot.to_str().unwrap(),
+        ],
+        1,
+        &["cut.png", "PNG"],
+    );
+    // The intact file still warns about its units.
+    assert_eq!(warnings(&["info", whole.to_str().unwrap()]).len(), 1);
 }
 
 #[test]

@@ -474,3 +474,64 @@ fn a_jobs_file_and_warp_take_a_sketch_for_a_scene() {
     let json: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert!(json["cells_visible"].as_u64().unwrap() > 0, "{json}");
 }
+
+/// A camera or a path key placed far off the sketch (a latitude and longitude half a world away
+/// from a UTM sketch, a position 1000 km off) is said once each, naming the key and the distance;
+/// places on the sketch are not.
+#[test]
+fn places_far_off_the_sketch_are_warned_about_once() {
+    let dir = scratch("own-sketch-off-map");
+    std::fs::copy(
+        formats().join("utm-metres-Float32.tif"),
+        dir.join("utm.tif"),
+    )
+    .unwrap();
+    let scene = dir.join("far.toml");
+    std::fs::write(
+        &scene,
+        "[sketch]\npath = \"utm.tif\"\n[camera]\nlat_deg = 10.0\nlon_deg = 20.0\n\
+         altitude_m = 500.0\n[path]\nkeys = [{ map_xy = [746500.0, 4057000.0], altitude_m = \
+         100.0 }, { position = [1.0e6, 0.0, 800.0] }]\n",
+    )
+    .unwrap();
+    let shot = dir.join("x.png");
+    let (code, _, err) = terrain(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        shot.to_str().unwrap(),
+        "--size",
+        "16",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("warning:")).collect();
+    assert_eq!(lines.len(), 2, "{err}");
+    assert!(
+        lines[0].contains("far.toml")
+            && lines[0].contains("camera.lat_deg/lon_deg")
+            && lines[0].contains("16566.6 km"),
+        "{lines:?}"
+    );
+    assert!(
+        lines[1].contains("path.keys[1].position") && lines[1].contains("997.2 km"),
+        "{lines:?}"
+    );
+    // Placed on the sketch: quiet.
+    let near = dir.join("near.toml");
+    std::fs::write(
+        &near,
+        "[sketch]\npath = \"utm.tif\"\n[camera]\nmap_xy = [746500.0, 4057000.0]\n\
+         altitude_m = 500.0\npitch_deg = -30.0\n",
+    )
+    .unwrap();
+    let (code, _, err) = terrain(&[
+        "render",
+        near.to_str().unwrap(),
+        "-o",
+        shot.to_str().unwrap(),
+        "--size",
+        "16",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("warning:"), "{err}");
+}

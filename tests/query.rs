@@ -163,6 +163,44 @@ fn the_height_command_answers_what_the_library_does() {
     assert!((len - 1.0).abs() < 1e-9, "{n}");
 }
 
+/// A point more than the sketch's size off it is answered (the plain's height) with one warning
+/// naming the argument and the distance; a point on the sketch or just beside it is not warned
+/// about, and a point where nothing is drawn gets its error alone.
+#[test]
+fn a_height_far_off_the_sketch_is_warned_about() {
+    let utm = manifest_dir().join("tests/data/formats/utm-metres-Float32.tif");
+    let utm = utm.to_str().unwrap();
+    let warned = |args: &[&str]| {
+        let mut all = vec!["height", utm];
+        all.extend_from_slice(args);
+        let (code, _, err) = terrain(&all);
+        (code, err)
+    };
+    for near in [["--xy", "100,100"], ["--xy", "5000,100"]] {
+        let (code, err) = warned(&near);
+        assert!(code == 0 && err.is_empty(), "{near:?}: {err}");
+    }
+    for (far, distance) in [
+        (["--xy", "10000,100"], "7.2 km"),
+        (["--lat-lon", "10,20"], "16566.6 km"),
+    ] {
+        let (code, err) = warned(&far);
+        assert_eq!(code, 0, "{far:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{far:?}: {err}");
+        let given = format!("{} {}", far[0], far[1]);
+        assert!(
+            err.starts_with("warning: ") && err.contains(&given) && err.contains(distance),
+            "{far:?}: {err}"
+        );
+    }
+    let (code, err) = warned(&["--xy", "-1e6,100", "--set", "sketch.outside=void"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.lines().count() == 1 && err.starts_with("error:"),
+        "{err}"
+    );
+}
+
 #[test]
 fn a_ray_cast_down_lands_on_the_height() {
     let scene = Scene::load(&manifest_dir().join("sketches/jacksboro.toml")).unwrap();

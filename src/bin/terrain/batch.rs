@@ -62,11 +62,6 @@ pub fn run(a: Args) -> Result<()> {
     if a.merge {
         return merge(&a);
     }
-    // The jobs' base scene names the sketch; a jobs file that does not load is reported by the
-    // batch itself, in its one line.
-    if let Ok(base) = terrain_cli::app::batch::Jobs::load(&a.jobs).and_then(|j| j.base_scene()) {
-        crate::warn_sketch(&base);
-    }
     let o = terrain_cli::app::batch::Options {
         shard: a.shard.unwrap_or((0, 1)),
         resume: a.resume,

@@ -127,12 +127,16 @@ pub fn run(a: Args) -> Result<()> {
 }
 
 fn planar(a: &Args, scene: &Scene, atlas: &Atlas, detail: &terrain::Detail) -> Result<Report> {
-    let p = match (a.xy, a.map_xy, a.lat_lon) {
-        (Some(xy), _, _) => glam::DVec2::from(xy),
-        (_, Some(map), _) => scene::world_of_map(atlas, map).map_err(|why| Error::Value {
-            key: "--map-xy",
-            reason: why,
-        })?,
+    // The point, and how it was given for a warning about it.
+    let (p, given) = match (a.xy, a.map_xy, a.lat_lon) {
+        (Some([x, y]), _, _) => (glam::DVec2::new(x, y), format!("--xy {x},{y}")),
+        (_, Some([x, y]), _) => {
+            let p = scene::world_of_map(atlas, [x, y]).map_err(|why| Error::Value {
+                key: "--map-xy",
+                reason: why,
+            })?;
+            (p, format!("--map-xy {x},{y}"))
+        }
         (_, _, Some([lat, lon])) => {
             let map = atlas
                 .georef
@@ -143,10 +147,11 @@ fn planar(a: &Args, scene: &Scene, atlas: &Atlas, detail: &terrain::Detail) -> R
                     key: "--lat-lon",
                     reason: why,
                 })?;
-            scene::world_of_map(atlas, map).map_err(|why| Error::Value {
+            let p = scene::world_of_map(atlas, map).map_err(|why| Error::Value {
                 key: "--lat-lon",
                 reason: why,
-            })?
+            })?;
+            (p, format!("--lat-lon {lat},{lon}"))
         }
         (None, None, None) => {
             let why = "give the point by --xy, --map-xy or --lat-lon".to_string();
@@ -157,6 +162,9 @@ fn planar(a: &Args, scene: &Scene, atlas: &Atlas, detail: &terrain::Detail) -> R
             .into());
         }
     };
+    // A point far off the sketch is most often a coordinate of another place or system.
+    let far = scene::off_map_warning(atlas, &format!("{given} lies"), p)
+        .map(|line| format!("{line}: the height there is what sketch.outside draws"));
     let ground = Ground::new(scene, atlas, detail);
     let Some(z) = ground.height_at(p, a.footprint_m)? else {
         let why = format!(
@@ -166,6 +174,8 @@ fn planar(a: &Args, scene: &Scene, atlas: &Atlas, detail: &terrain::Detail) -> R
         return Err(Error::Query(why).into());
     };
     let normal = ground.normal_at(p, a.footprint_m)?.map(|n| n.to_array());
+    // Said with an answer only: a point nothing is drawn at gets its error alone.
+    crate::warn(&far.into_iter().collect::<Vec<_>>());
     let (lat_deg, lon_deg) = match a.lat_lon {
         Some([lat, lon]) => (Some(lat), Some(lon)),
         None => (None, None),

@@ -3,7 +3,7 @@
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
-use terrain::sketch::{Atlas, LoadOptions};
+use terrain::sketch::{Atlas, Extent, LoadOptions};
 use terrain::sketch::{Georef, Units};
 
 #[derive(clap::Args)]
@@ -104,14 +104,14 @@ pub fn run(a: Args) -> Result<()> {
         height_scale: a.height_scale,
         ..LoadOptions::default()
     };
-    crate::warn(&terrain::sketch::warnings(&a.file, &opts));
     // A header that cannot be read leaves the file to the reader, which says why in its terms.
     if let Ok(Some(h)) = terrain::sketch::read_header(&a.file, &opts)
         && (h.width as u128) * (h.height as u128) > terrain::sketch::max_cells() as u128
     {
-        return header(a, h);
+        return header(a, h, &opts);
     }
     let atlas = Atlas::load(&a.file, &opts)?;
+    crate::warn(&terrain::sketch::warnings(&a.file, &opts, &atlas.extent()));
     let r = Report {
         file: a.file.display().to_string(),
         width: atlas.width(),
@@ -131,7 +131,18 @@ pub fn run(a: Args) -> Result<()> {
 
 /// A GeoTIFF larger than memory, from its header and georeference alone: its heights are read
 /// when `terrain tiles` converts it.
-fn header(a: Args, h: terrain::sketch::GridHeader) -> Result<()> {
+fn header(a: Args, h: terrain::sketch::GridHeader, opts: &LoadOptions) -> Result<()> {
+    // Heights unread: the cells' size is all there is to doubt.
+    let extent = Extent {
+        width: h.width,
+        height: h.height,
+        dx: h.dx,
+        dy: h.dy,
+        min_m: 0.0,
+        max_m: 0.0,
+        georeferenced: h.georef.is_some(),
+    };
+    crate::warn(&terrain::sketch::warnings(&a.file, opts, &extent));
     let r = Report {
         file: a.file.display().to_string(),
         width: h.width,
@@ -153,6 +164,11 @@ fn header(a: Args, h: terrain::sketch::GridHeader) -> Result<()> {
 fn pyramid(a: Args) -> Result<()> {
     let p = terrain::tiles::Pyramid::open(&a.file)?;
     let m = &p.meta;
+    crate::warn(&terrain::sketch::warnings(
+        &a.file,
+        &LoadOptions::default(),
+        &m.extent(),
+    ));
     let r = Report {
         file: a.file.display().to_string(),
         width: m.width,

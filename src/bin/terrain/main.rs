@@ -171,26 +171,18 @@ fn one_line(e: &anyhow::Error) -> String {
     line
 }
 
-/// The scene at `path` with its `--set` overrides, after warning about what its sketch leaves
-/// the loader to guess: every command that reads a scene loads it here.
+/// The scene at `path` with its `--set` overrides: every command that reads a scene loads it
+/// here. What its sketch leaves in doubt is warned about once the sketch is read
+/// (`scene::load_atlas`), never before: a file that fails to read gets its error alone.
 fn load_scene(path: &std::path::Path, set: &[String]) -> anyhow::Result<terrain::scene::Scene> {
-    let scene = terrain::scene::Scene::load_with(path, set)?;
-    warn_sketch(&scene);
-    Ok(scene)
+    Ok(terrain::scene::Scene::load_with(path, set)?)
 }
 
-/// Warns about what the scene's sketch leaves the loader to guess (a PNG's units).
-fn warn_sketch(scene: &terrain::scene::Scene) {
-    if let Some(sketch) = &scene.sketch.path {
-        let opts = terrain::scene::scene_load_options(scene);
-        warn(&terrain::sketch::warnings(&scene.resolve(sketch), &opts));
-    }
-}
-
-/// The library's warnings on stderr, one `warning:` line each (the library prints nothing).
+/// The library's warnings on stderr, one `warning:` line each and each once per command (the
+/// library prints nothing).
 fn warn(lines: &[String]) {
     for line in lines {
-        eprintln!("warning: {line}");
+        notes::warning(line);
     }
 }
 

@@ -37,8 +37,11 @@ pub fn run(a: Args) -> Result<()> {
         },
         threads: a.threads,
     };
-    crate::warn(&terrain::sketch::warnings(&a.src, &opts.load));
     let s = build(&a.src, &a.out_dir, &opts)?;
+    // Said once the source was read whole, from what the pyramid recorded of it.
+    let meta = terrain::tiles::Pyramid::open(&a.out_dir)?.meta;
+    let extent = meta.extent();
+    crate::warn(&terrain::sketch::warnings(&a.src, &opts.load, &extent));
     if a.json {
         return crate::print_json(&s);
     }

@@ -31,11 +31,36 @@ pub(crate) fn stream_config(scene: &Scene) -> crate::gpu::stream::StreamConfig {
     }
 }
 
-/// The scene's sketch atlas, from its file or synthetic generator.
+/// The scene's sketch atlas, from its file or synthetic generator. What the sketch and the
+/// scene's places leave in doubt ([`warnings`]) goes to the `log` crate as warnings once the
+/// sketch is read: every command reads its scene's sketch here, and a file that fails to read
+/// gets its error alone.
 pub fn load_atlas(scene: &Scene) -> Result<Atlas> {
     let mut atlas = load_sketch(scene)?;
     atlas.water_m = scene.sketch.water_level_m as f32;
+    for line in warnings(scene, &atlas) {
+        log::warn!("{line}");
+    }
     Ok(atlas)
+}
+
+/// What the scene's sketch file took on trust (`sketch::warnings`) and the scene's places that
+/// lie far off the sketch (`scene::off_map_warnings`), one line each; nothing for a planet,
+/// whose sketch is global and whose places are latitudes and longitudes.
+pub fn warnings(scene: &Scene, atlas: &Atlas) -> Vec<String> {
+    if scene.planet().is_some() {
+        return Vec::new();
+    }
+    let mut lines = match &scene.sketch.path {
+        Some(p) => crate::sketch::warnings(
+            &scene.resolve(p),
+            &scene_load_options(scene),
+            &atlas.extent(),
+        ),
+        None => Vec::new(),
+    };
+    lines.extend(super::place::off_map_warnings(scene, atlas));
+    lines
 }
 
 fn load_sketch(scene: &Scene) -> Result<Atlas> {

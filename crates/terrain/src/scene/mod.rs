@@ -23,10 +23,12 @@ mod surface;
 pub(crate) use build::stream_config;
 pub use build::{
     camera_of, detail_for, detail_of, ground_under, light_of, load_atlas, scene_load_options,
+    warnings,
 };
 pub use parse::{Fault, is_sketch_path, scene_text};
 pub use place::{
-    CameraReport, DEFAULT_PATH_S, camera_report, default_path, pose, resolve_key, world_of_map,
+    CameraReport, DEFAULT_PATH_S, camera_report, default_path, off_map_warning, off_map_warnings,
+    pose, resolve_key, world_of_map,
 };
 pub use starter::starter;
 pub use surface::{Style, SurfaceSection};

@@ -92,6 +92,64 @@ fn eye_of(scene: &Scene, atlas: &Atlas, table: &str, p: &Placement) -> Result<Op
     Ok(Some(xy.extend(ground + p.altitude_m.unwrap_or(0.0))))
 }
 
+/// One line for each place the scene gives (`[camera]`, each `[path]` key) that lies more than
+/// the sketch's size outside the sketch: a view from there shows little or none of it, and a
+/// place that far off is most often a coordinate of another place or system (a latitude on a
+/// projected sketch far from it). Places that do not resolve are left to the error that says
+/// why when the camera is made.
+pub fn off_map_warnings(scene: &Scene, atlas: &Atlas) -> Vec<String> {
+    let mut places = vec![("camera".to_string(), scene.camera.placement())];
+    if let Some(path) = &scene.path {
+        for (k, key) in path.keys.iter().enumerate() {
+            places.push((format!("path.keys[{k}]"), key.placement()));
+        }
+    }
+    let file = scene
+        .source
+        .as_ref()
+        .map(|p| format!("{}: ", p.display()))
+        .unwrap_or_default();
+    places
+        .iter()
+        .filter_map(|(table, p)| {
+            let eye = eye_of(scene, atlas, table, p).ok().flatten()?;
+            let key = match (p.position, p.map_xy) {
+                (Some(_), _) => "position",
+                (None, Some(_)) => "map_xy",
+                (None, None) => "lat_deg/lon_deg",
+            };
+            let what = format!("{file}{table}.{key} places the camera");
+            off_map_warning(atlas, &what, eye.truncate())
+                .map(|line| format!("{line}: the view from there may hold none of it"))
+        })
+        .collect()
+}
+
+/// Where the world point `p`, given by `what` (a key or an argument and what it places), lies
+/// more than the sketch's size (its larger side) outside the sketch's rectangle: `{what} {d}
+/// outside the sketch, farther than its size ({s})`, for the caller to add what follows.
+pub fn off_map_warning(atlas: &Atlas, what: &str, p: DVec2) -> Option<String> {
+    let (lo, hi) = (atlas.origin, atlas.max_corner());
+    let size = (hi - lo).max_element();
+    let outside = (lo - p).max(p - hi).max(DVec2::ZERO).length();
+    (outside > size).then(|| {
+        format!(
+            "{what} {} outside the sketch, farther than its size ({})",
+            distance(outside),
+            distance(size)
+        )
+    })
+}
+
+/// A distance for a message: kilometres from 1 km up, else metres.
+fn distance(m: f64) -> String {
+    if m >= 1000.0 {
+        format!("{:.1} km", m / 1000.0)
+    } else {
+        format!("{m:.0} m")
+    }
+}
+
 fn georef<'a>(
     scene: &Scene,
     atlas: &'a Atlas,

@@ -2,7 +2,8 @@
 //! ([`RawGrid`]), the dispatch by format, and the atlas made of it (scale, nodata fill, pyramid).
 //!
 //! Rule: the file's name alone picks its reader ([`Format::of`], the one place that knows the
-//! extensions); guesses the library takes on trust come back as [`warnings`], never printed.
+//! extensions); guesses the library takes on trust come back as [`warnings`] after a read succeeds, never
+//! printed.
 
 use super::georef::Georef;
 use super::{
@@ -183,16 +184,78 @@ fn read_at_depth(path: &Path, opts: &LoadOptions, depth: usize) -> Result<RawGri
     }
 }
 
-/// What reading the sketch at `path` with `opts` would take on trust where neither the file nor
-/// the options say (a PNG's units), one line each for the program to show: the library prints
-/// nothing. Cheap (a PNG's header); empty where nothing is guessed or the file cannot be read.
-pub fn warnings(path: &Path, opts: &LoadOptions) -> Vec<String> {
-    match Format::of(path) {
-        Ok(Format::Png) if !mosaic::is_glob(path) => {
-            png::units_warning(path, opts).into_iter().collect()
-        }
-        _ => Vec::new(),
+/// What a read found of a sketch, for [`warnings`]: its nodes, their spacing in metres (after
+/// `sketch.spacing_m`), its height range (after `sketch.height_scale`) and whether its file
+/// placed it. [`Atlas::extent`] gives it for a sketch in memory; a tile pyramid's `pyramid.toml`
+/// holds the same figures.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Extent {
+    /// Nodes along x (east).
+    pub width: usize,
+    /// Nodes along y (north).
+    pub height: usize,
+    /// Node spacing along x, metres.
+    pub dx: f64,
+    /// Node spacing along y, metres.
+    pub dy: f64,
+    /// The lowest height, metres (0 with `max_m` where the heights were not read).
+    pub min_m: f64,
+    /// The highest height, metres.
+    pub max_m: f64,
+    /// Whether the file (or its world file) gave the cells' size and place.
+    pub georeferenced: bool,
+}
+
+/// A relief more than this many times the sketch's horizontal extent is no landscape's (the
+/// steepest mountains rise about their own width): a unit mistaken, most likely.
+const TALL_RELIEF: f64 = 3.0;
+
+/// What a successful read of the sketch at `path` with `opts` took on trust where neither the
+/// file nor the options say, one line each for the program to show (the library prints
+/// nothing): the cell size of a file without a georeference (1 m), a PNG's height units, or,
+/// where nothing was guessed, a relief too tall for the sketch's extent. One cause is said
+/// once: a guessed unit explains the tall relief it makes, so the relief is not said again.
+/// Called after the read, never before: a file that fails to read gets its error alone.
+pub fn warnings(path: &Path, opts: &LoadOptions, extent: &Extent) -> Vec<String> {
+    match guessed_units(path, opts, extent.georeferenced) {
+        Some(line) => vec![line],
+        None => tall_relief(path, extent).into_iter().collect(),
     }
+}
+
+/// The line for the units a read guessed, if it guessed any.
+fn guessed_units(path: &Path, opts: &LoadOptions, georeferenced: bool) -> Option<String> {
+    // A pyramid records the spacing it was converted with; `terrain tiles` warned then.
+    if crate::tiles::is_pyramid(path) {
+        return None;
+    }
+    let spaced = georeferenced || opts.spacing_m.is_some();
+    if !mosaic::is_glob(path) && matches!(Format::of(path), Ok(Format::Png)) {
+        return png::units_warning(path, opts, spaced);
+    }
+    (!spaced).then(|| {
+        format!(
+            "sketch {}: the file has no georeference, so its cells are taken as 1 m; \
+             sketch.spacing_m gives their size",
+            path.display()
+        )
+    })
+}
+
+/// The line for a relief more than [`TALL_RELIEF`] times the sketch's larger side.
+fn tall_relief(path: &Path, e: &Extent) -> Option<String> {
+    let side = ((e.width.max(1) - 1) as f64 * e.dx).max((e.height.max(1) - 1) as f64 * e.dy);
+    let relief = e.max_m - e.min_m;
+    if !(side > 0.0 && relief > TALL_RELIEF * side) {
+        return None;
+    }
+    Some(format!(
+        "sketch {}: its relief ({relief:.0} m) is {:.0} times its extent ({side:.0} m): cells in \
+         degrees or heights in feet read as metres? sketch.spacing_m gives the cells' size in \
+         metres, sketch.height_scale the heights' unit",
+        path.display(),
+        relief / side
+    ))
 }
 
 /// Parses a sketch held in memory, the format told by `name`'s extension, as [`read_grid`] would
@@ -220,6 +283,19 @@ const FORMATS: &str = ".asc/.grd (ESRI ASCII), .hgt/.hgt.zip (SRTM), .png (with 
      or a tile pyramid's folder (`terrain tiles`)";
 
 impl Atlas {
+    /// What reading this sketch found, for [`warnings`].
+    pub fn extent(&self) -> Extent {
+        Extent {
+            width: self.width(),
+            height: self.height(),
+            dx: self.dx,
+            dy: self.dy,
+            min_m: self.min_m as f64,
+            max_m: self.max_m as f64,
+            georeferenced: self.georef.is_some(),
+        }
+    }
+
     /// Reads a sketch file, choosing the reader by its extension.
     pub fn load(path: &Path, opts: &LoadOptions) -> Result<Atlas> {
         // A large sketch takes seconds to parse and fill: say so while it does.

@@ -29,7 +29,9 @@ mod xyz;
 pub use georef::{Georef, US_SURVEY_FOOT_M, Units};
 pub(crate) use geotiff::{Windows as TiffWindows, open as open_tiff};
 pub(crate) use load::{Beyond, scale_cells, scale_heights};
-pub use load::{GridHeader, LoadOptions, RawGrid, parse_grid, read_grid, read_header, warnings};
+pub use load::{
+    Extent, GridHeader, LoadOptions, RawGrid, parse_grid, read_grid, read_header, warnings,
+};
 pub use mosaic::{is_glob, list_glob};
 pub use png::parse_world_file;
 pub use pyramid::Level;

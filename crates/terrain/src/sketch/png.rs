@@ -31,36 +31,34 @@ pub fn read_file(path: &Path, opts: &LoadOptions) -> Result<RawGrid> {
     parse(path, &bytes, opts, world)
 }
 
-/// What reading the PNG at `path` with `opts` would guess about its units, as one line for the
-/// user, or `None` where the scene states its heights (or where the header alone refuses the
-/// file: reading it says why, in the one line of its error). Without `sketch.height_range_m` or `sketch.height_scale` its values are taken as
-/// metres (a 16-bit map's 0 to 65535), and the line adds the 1 m cells where neither
-/// `sketch.spacing_m` nor a world file gives the spacing (under stated heights those make a
-/// small map, not a wrong one). A height map exported as 16-bit grey often stretches its relief
-/// over the whole range, so the guess is as likely 50 km mountains on 1 m cells as terrain.
-pub fn units_warning(path: &Path, opts: &LoadOptions) -> Option<String> {
-    if opts.height_range_m.is_some() || opts.height_scale.is_some() {
-        return None;
+/// What reading the PNG at `path` with `opts` guessed about its units, as one line for the user,
+/// or `None` where the scene (or a world file: `spaced`) states them. Without
+/// `sketch.height_range_m` or `sketch.height_scale` its values are taken as metres (a 16-bit
+/// map's 0 to 65535), and without `sketch.spacing_m` or a world file its cells as 1 m; the line
+/// names what was guessed and the key that states it. A height map exported as 16-bit grey often
+/// stretches its relief over the whole range, so the guess is as likely 50 km mountains on 1 m
+/// cells as terrain. Asked after the file was read: its header is read again for the bit depth.
+pub fn units_warning(path: &Path, opts: &LoadOptions, spaced: bool) -> Option<String> {
+    let heights_given = opts.height_range_m.is_some() || opts.height_scale.is_some();
+    if heights_given {
+        return (!spaced).then(|| {
+            format!(
+                "sketch {}: its cells taken as 1 m; sketch.spacing_m or a .pgw world file \
+                 gives their size",
+                path.display()
+            )
+        });
     }
     let file = std::fs::File::open(path).ok()?;
     let decoder = png::Decoder::new(std::io::BufReader::new(file));
     let reader = decoder.read_info().ok()?;
-    let info = reader.info();
-    let grey = matches!(
-        info.color_type,
-        png::ColorType::Grayscale | png::ColorType::GrayscaleAlpha
-    );
-    if !grey || RawGrid::check_size(path, info.width as i64, info.height as i64).is_err() {
-        return None;
-    }
-    let bits = match info.bit_depth {
+    let bits = match reader.info().bit_depth {
         png::BitDepth::Sixteen => 16,
         _ => 8,
     };
     let top = (1u32 << bits) - 1;
     let values = format!("its {bits}-bit values taken as metres (0 to {top} m)");
     let heights = "sketch.height_range_m gives its heights in metres";
-    let spaced = opts.spacing_m.is_some() || world_file(path).is_some();
     Some(if spaced {
         format!("sketch {}: {values}; {heights}", path.display())
     } else {

@@ -111,6 +111,19 @@ impl MetaGeoref {
 }
 
 impl Meta {
+    /// What the conversion found of its source, for `sketch::warnings`.
+    pub fn extent(&self) -> crate::sketch::Extent {
+        crate::sketch::Extent {
+            width: self.width,
+            height: self.height,
+            dx: self.dx_m,
+            dy: self.dy_m,
+            min_m: self.min_m as f64,
+            max_m: self.max_m as f64,
+            georeferenced: self.georef.is_some(),
+        }
+    }
+
     /// Tiles of level `l` along x and y.
     pub fn tiles(&self, l: usize) -> (usize, usize) {
         let [w, h] = self.levels[l];
