@@ -1,7 +1,7 @@
 //! The default camera frames a user's sketch so that it fills the picture (docs/scene.md, “The
 //! default camera”): the sketch's share of the frame by `--positions`, its central 80 % in view,
-//! from the south and 35–60° down; `render --json`'s `camera.look_at` on the ground the view is
-//! centred on.
+//! from the south and 35–60° down; the starter scene framed anew when its heading and pitch are
+//! edited; `render --json`'s `camera.look_at` on the ground the view is centred on.
 
 mod common;
 
@@ -158,6 +158,40 @@ fn the_default_view_fills_the_frame_with_the_sketch() {
                 "{what}: eye {eye} north of the centre"
             );
         }
+    }
+}
+
+/// The README's edit: `terrain scene` writes the default view by heading and pitch, so turning
+/// it (west, and west and steeper) frames the sketch anew from the other side.
+#[test]
+fn the_starter_scene_frames_the_sketch_anew_when_turned() {
+    let dir = scratch("framing-starter");
+    let s = sketch(manifest_dir().join("tests/data/formats/utm-metres-Float32.tif"));
+    let toml = dir.join("mine.toml");
+    let (code, _, err) = terrain(&[
+        "scene",
+        s.path.to_str().unwrap(),
+        "-o",
+        toml.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let turns: [&[&str]; 2] = [
+        &["camera.heading_deg=270"],
+        &["camera.heading_deg=270", "camera.pitch_deg=-60"],
+    ];
+    for (k, sets) in turns.iter().enumerate() {
+        let what = format!("{sets:?}");
+        let (json, share) = render(&toml, &s, "128", sets, &dir.join(format!("turn-{k}")));
+        assert!(share >= SQUARE_SHARE, "{what}: the sketch fills {share:.3}");
+        assert_core_in_frame(&json, &s, &what);
+        let camera = &json["camera"];
+        let heading = camera["heading_deg"].as_f64().unwrap();
+        assert!((heading - 270.0).abs() < 1e-6, "{what}: {camera}");
+        // Looking west, from the east.
+        assert!(
+            v3(camera, "position").x > 0.5 * s.size[0],
+            "{what}: {camera}"
+        );
     }
 }
 

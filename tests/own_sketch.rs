@@ -382,7 +382,13 @@ fn the_starter_scene_renders_the_default_view() {
     {
         assert!(line.contains(" # "), "no comment: {line}");
     }
-    assert!(text.contains("map_xy = ["), "{text}");
+    // The camera as the default view makes it: framed along a heading and a pitch, its place
+    // offered commented out (tests/framing.rs turns it).
+    assert!(text.contains("\n# map_xy = ["), "{text}");
+    assert!(text.contains("\n# altitude_m = "), "{text}");
+    assert!(!text.contains("\nmap_xy = "), "{text}");
+    assert!(text.contains("\nheading_deg = 0.0 "), "{text}");
+    assert!(text.contains("\npitch_deg = -45.0 "), "{text}");
     let png = |name: &str| dir.join(name);
     let from_scene = render_json(&[
         toml.to_str().unwrap(),
@@ -407,6 +413,24 @@ fn the_starter_scene_renders_the_default_view() {
         assert!(d.abs() < 0.01, "{a} against {b}");
     }
     assert_eq!(from_scene["triangles"], by_itself["triangles"]);
+    // The place offered, uncommented, holds the camera where the framing put it.
+    let held = text
+        .replace("\n# map_xy = [", "\nmap_xy = [")
+        .replace("\n# altitude_m = ", "\naltitude_m = ");
+    let held_toml = dir.join("mine/held.toml");
+    std::fs::write(&held_toml, held).unwrap();
+    let from_held = render_json(&[
+        held_toml.to_str().unwrap(),
+        "-o",
+        png("c.png").to_str().unwrap(),
+        "--size",
+        "64",
+    ]);
+    let c = &from_held["camera"]["position"];
+    for k in 0..3 {
+        let d = c[k].as_f64().unwrap() - b[k].as_f64().unwrap();
+        assert!(d.abs() < 0.02, "{c} against {b}");
+    }
     // A scene given where a sketch is asked for is refused.
     let (code, _, err) = terrain(&["scene", toml.to_str().unwrap()]);
     assert_ne!(code, 0);
