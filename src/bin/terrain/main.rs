@@ -54,8 +54,8 @@ enum Command {
     /// Converts a sketch (a file or a glob of tiles) into a tile pyramid on disk, with bounded
     /// memory; resumable. Scenes name the pyramid's folder as their sketch.
     Tiles(tiles::Args),
-    /// Writes a starter scene for a sketch: the default camera written out, every key with a
-    /// comment, to edit.
+    /// Writes a starter scene for a sketch: the default camera by heading and pitch (framed anew
+    /// when they change), every key with a comment, to edit.
     Scene(scene::Args),
     /// Runs the CPU stage for the scene's camera; writes importance.png, mesh.png, ratio.png.
     Warp(warp::Args),

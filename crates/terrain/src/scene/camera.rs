@@ -30,7 +30,7 @@ pub struct CameraSection {
     pub altitude_m: Option<f64>,
     /// View direction: 0 north, 90 east (0 unless given; the default view: the side it looks from).
     pub heading_deg: Option<f64>,
-    /// View direction: 0 level, −90 straight down (0 unless given; the default view: −40).
+    /// View direction: 0 level, −90 straight down (0 unless given; the default view: −45).
     pub pitch_deg: Option<f64>,
     /// Vertical field of view, degrees, in (0, 180) (default 60).
     #[serde(default = "default_fov")]

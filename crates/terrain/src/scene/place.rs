@@ -1,5 +1,5 @@
 //! Where a planar scene's camera stands and looks: by world metres, by the sketch file's own
-//! coordinates or by latitude and longitude, or, with no place given, a view of the whole sketch.
+//! coordinates or by latitude and longitude, or, with no place given, a view the sketch fills.
 //!
 //! Rules:
 //! - World metres are measured from the sketch's south-west node (`sketch.origin_m` moves it), x
@@ -13,13 +13,18 @@
 //! - Aim: `look_at`, or `heading_deg` (0 north, 90 east) and `pitch_deg` (0 level, −90 down),
 //!   each 0 unless given.
 //! - Without a place, the camera frames the sketch ([`framing`]): it looks along `heading_deg`
-//!   (north) and `pitch_deg` (−35°) at the centre of the sketch's bounding box, from the least
-//!   distance at which the box's eight corners all lie inside the frame, but from beyond the
-//!   sketch's edge and above its highest ground.
+//!   (north) and `pitch_deg` (−45°) from the least distance at which the sketch's central 80 %
+//!   ([`CORE`]: its rectangle shrunk by a tenth on each side, from its lowest to its highest
+//!   surface) lies inside the frame, that part's image centred, and above its highest ground.
+//!   The rim beyond the central part may leave the frame: the sketch fills half a square frame
+//!   and three quarters of a 16:9 one (docs/decisions.md, “The default view fills the frame”).
+//! - `camera.look_at` as reported is the scene's own, or where the view's central ray meets the
+//!   surface ([`ground_ahead`]), the point a user sees at the frame's centre.
 //!
-//! Rejected alternative: a fixed multiple of the sketch's diagonal. A long or a wide sketch, or a
-//! narrow frame, then leaves most of the image sky or cuts the sketch off; the fitted distance
-//! fills the frame's width or height, whichever binds, for any shape.
+//! Rejected alternatives: a fixed multiple of the sketch's diagonal, which leaves a long or a
+//! wide sketch, or a narrow frame, mostly sky or cuts the sketch off; and the whole sketch framed
+//! from beyond its edge, which shows it as a small trapezoid over a quarter of a square frame,
+//! the plain beyond it the rest.
 
 use super::{Outside, PathKey, PathSection, Placement, Scene};
 use crate::error::{Error, Result};
@@ -27,11 +32,15 @@ use crate::sketch::Atlas;
 use glam::{DVec2, DVec3};
 use serde::Serialize;
 
-/// The default view's pitch, degrees: steep enough that a square sketch fills a square frame's
-/// height as well as its width, shallow enough that its relief reads.
-pub const DEFAULT_PITCH_DEG: f64 = -40.0;
-/// The share of the frame the framed sketch may fill: a margin so its corners are not cut.
+/// The default view's pitch, degrees: steep enough that the sketch's near and far edges, far
+/// apart on screen, leave little of a square frame to the plain beyond them (the sketch fills
+/// 0.50 of it at −45°, 0.43 at −40°), shallow enough that its relief reads.
+pub const DEFAULT_PITCH_DEG: f64 = -45.0;
+/// The share of the frame the framed part may fill: a margin so its corners are not cut.
 const FILL: f64 = 0.95;
+/// The share of the sketch's width and depth, about its centre, that the default view keeps
+/// whole in the frame; the rim beyond it may leave the frame, so the sketch fills it.
+pub const CORE: f64 = 0.8;
 /// The default path's duration, seconds.
 pub const DEFAULT_PATH_S: f64 = 10.0;
 /// Keys of the default orbit (the first and last at the same place).
@@ -236,8 +245,8 @@ fn aim_distance(atlas: &Atlas) -> f64 {
     (atlas.max_corner() - atlas.origin).length().max(1.0)
 }
 
-/// The default view: the whole sketch seen along `heading_deg` and `pitch_deg`, as near as the
-/// frame allows (`fit`), from beyond the sketch's edge and above its highest ground.
+/// The default view: the sketch seen along `heading_deg` and `pitch_deg`, as near as the frame
+/// allows with the sketch's central [`CORE`] share whole in it (`fit`), above its highest ground.
 pub fn framing(scene: &Scene, atlas: &Atlas, heading_deg: f64, pitch_deg: f64) -> (DVec3, DVec3) {
     let c = &scene.camera;
     // Level or upward views cannot frame the ground from above: they look over it instead.
@@ -248,32 +257,35 @@ pub fn framing(scene: &Scene, atlas: &Atlas, heading_deg: f64, pitch_deg: f64) -
         (atlas.min_m as f64).max(water),
         (atlas.max_m as f64).max(water),
     );
+    // The central part's box: its corners at the sketch's lowest and highest surface, so it
+    // stays in view whatever the relief under them.
+    let margin = (hi - lo) * (0.5 * (1.0 - CORE));
+    let (core_lo, core_hi) = (lo + margin, hi - margin);
     let centre = ((lo + hi) * 0.5).extend(0.5 * (z_lo + z_hi));
-    let corners: Vec<DVec3> = [lo.x, hi.x]
+    let corners: Vec<DVec3> = [core_lo.x, core_hi.x]
         .into_iter()
-        .flat_map(|x| [lo.y, hi.y].map(|y| DVec2::new(x, y)))
+        .flat_map(|x| [core_lo.y, core_hi.y].map(|y| DVec2::new(x, y)))
         .flat_map(|p| [z_lo, z_hi].map(|z| p.extend(z) - centre))
         .collect();
     let tan_y = (c.fov_y_deg.to_radians() * 0.5).tan() * FILL;
+    let h = heading_deg.to_radians();
     let frame = Frame {
         forward: direction(heading_deg, pitch),
-        right: {
-            let h = heading_deg.to_radians();
-            DVec3::new(h.cos(), -h.sin(), 0.0)
-        },
+        right: DVec3::new(h.cos(), -h.sin(), 0.0),
         tan: [tan_y * c.width as f64 / c.height as f64, tan_y],
     };
-    let h = heading_deg.to_radians();
-    let along = DVec2::new(h.sin(), h.cos());
-    let half = 0.5 * ((hi.x - lo.x) * along.x.abs() + (hi.y - lo.y) * along.y.abs());
-    // Beyond the edge: the eye's ground position behind the sketch along the heading.
-    let beyond = |eye: DVec3| eye.truncate().dot(along) <= -1.02 * half;
-    let (offset, depth) = fit(&frame, &corners, beyond);
+    let (offset, mut depth) = fit(&frame, &corners);
     let mut eye = centre + offset;
-    let target = eye + frame.forward * depth;
-    // Above the highest ground, so no ridge stands between the eye and what it frames.
-    eye.z = eye.z.max(z_hi + 0.01 * (hi - lo).length());
-    (eye, target)
+    // Above the highest ground, so the eye never stands inside a ridge it frames: backed off
+    // along the view, which keeps the pitch and keeps every framed point in the frame (each
+    // one's depth grows while its offset from the axis stays).
+    let floor = z_hi + 0.01 * (hi - lo).length();
+    if eye.z < floor {
+        let back = (floor - eye.z) / -frame.forward.z;
+        eye -= frame.forward * back;
+        depth += back;
+    }
+    (eye, eye + frame.forward * depth)
 }
 
 /// A view direction and the frame's half-extents (tangents of the half angles, the margin in).
@@ -284,12 +296,12 @@ struct Frame {
 }
 
 /// The nearest eye, relative to the points' centre, whose frame holds every point (`points`,
-/// relative to the same centre) and which `allowed` accepts. The eye is `a·right + b·up −
-/// d·forward`; for a distance d the points fit when some offset keeps each one's sideways and
-/// upward parts within the frame's tangent of its depth, which bounds a and b to intervals. The
-/// least such d is found by bisection, (a, b) centred in their intervals, so the points' image
-/// is centred in the frame. Returns the eye and the depth of the centre.
-fn fit(frame: &Frame, points: &[DVec3], allowed: impl Fn(DVec3) -> bool) -> (DVec3, f64) {
+/// relative to the same centre). The eye is `a·right + b·up − d·forward`; for a distance d the
+/// points fit when some offset keeps each one's sideways and upward parts within the frame's
+/// tangent of its depth, which bounds a and b to intervals. The least such d is found by
+/// bisection, (a, b) centred in their intervals, so the points' image is centred in the frame.
+/// Returns the eye and the depth of the centre.
+fn fit(frame: &Frame, points: &[DVec3]) -> (DVec3, f64) {
     let up = frame.right.cross(frame.forward);
     let axes = [frame.right, up];
     let place = |d: f64| -> Option<DVec3> {
@@ -310,7 +322,7 @@ fn fit(frame: &Frame, points: &[DVec3], allowed: impl Fn(DVec3) -> bool) -> (DVe
             }
             eye += *axis * (0.5 * (lo + hi));
         }
-        allowed(eye).then_some(eye)
+        Some(eye)
     };
     let extent = points.iter().map(|q| q.length()).fold(1.0, f64::max);
     let mut far = extent;
@@ -410,8 +422,15 @@ pub fn camera_report(
 }
 
 /// What a planar camera with eye `eye` looking at `target` is in the keys people place it by.
+/// Its `look_at` is the scene's own where it gives one, else the ground the view's central ray
+/// meets ([`ground_ahead`]), so it names what the view is centred on; `target` where the ray
+/// meets nothing.
 pub fn report(scene: &Scene, atlas: &Atlas, eye: DVec3, target: DVec3) -> Result<CameraReport> {
     let (heading_deg, pitch_deg) = heading_pitch(target - eye);
+    let look_at = match scene.camera.look_at {
+        Some(_) => target,
+        None => ground_ahead(scene, atlas, eye, target)?.unwrap_or(target),
+    };
     let map_xy = map_of_world(atlas, eye.truncate());
     let lat_lon = match (&atlas.georef, map_xy) {
         (Some(g), Some([x, y])) => g.to_lat_lon(x, y).ok(),
@@ -419,7 +438,7 @@ pub fn report(scene: &Scene, atlas: &Atlas, eye: DVec3, target: DVec3) -> Result
     };
     Ok(CameraReport {
         position: eye.to_array(),
-        look_at: target.to_array(),
+        look_at: look_at.to_array(),
         altitude_m: eye.z - surface_m(scene, atlas, eye.truncate())?,
         heading_deg,
         pitch_deg,
@@ -427,4 +446,20 @@ pub fn report(scene: &Scene, atlas: &Atlas, eye: DVec3, target: DVec3) -> Result
         lon_deg: lat_lon.map(|l| l[1]),
         map_xy,
     })
+}
+
+/// Where the ray from `eye` through `target` first meets the scene's surface (the sketch with
+/// its detail, the water, what lies beyond), marched as the reference marches the frame's
+/// central pixel; `None` where it meets nothing (the sky, or a void).
+pub fn ground_ahead(
+    scene: &Scene,
+    atlas: &Atlas,
+    eye: DVec3,
+    target: DVec3,
+) -> Result<Option<DVec3>> {
+    let detail = super::detail_of(scene, atlas);
+    let ground = crate::query::Ground::new(scene, atlas, &detail);
+    let c = &scene.camera;
+    let pixel = 2.0 * (c.fov_y_deg.to_radians() * 0.5).tan() / f64::from(c.height.max(1));
+    ground.ray_cast(eye, target - eye, pixel)
 }

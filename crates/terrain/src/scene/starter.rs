@@ -1,13 +1,18 @@
 //! A starter scene for a sketch (`terrain scene`): every section, every key with its value or,
-//! where it has none, commented out, each with a comment; the camera the default view written
-//! out in the keys people place a camera by; the detail the sketch chose.
+//! where it has none, commented out, each with a comment; the camera the default view; the
+//! detail the sketch chose.
 //!
 //! Rules: the comments are the first sentence of each key's meaning in docs/scene.md, read from
 //! the text compiled in, so the starter and the manual cannot disagree (tests/scene_doc.rs checks
-//! the manual against these structs); what it writes parses and renders as it is.
+//! the manual against these structs); what it writes parses and renders as it is. The camera is
+//! written as the default view is made, by `heading_deg` and `pitch_deg` without a place, so an
+//! edited heading or pitch frames the sketch anew; the place that view stands at is written
+//! beside them commented out, in the keys people place a camera by, to fix it there. A camera
+//! `--set` placed is written at its place.
 //!
-//! Rejected alternative: a hand-written template. It holds a copy of every default and of every
-//! key's description, and drifts from both as keys come and go.
+//! Rejected alternatives: a hand-written template, which holds a copy of every default and of
+//! every key's description and drifts from both as keys come and go; the default view written
+//! at its place, which a new heading turns away from the sketch.
 
 use super::{Scene, place};
 use crate::error::Result;
@@ -18,8 +23,20 @@ use std::fmt::Write;
 use std::path::Path;
 
 const MANUAL: &str = include_str!("../../../../docs/scene.md");
+
 /// The widest a key's comment grows before it is cut at a word.
 const COMMENT_CHARS: usize = 96;
+
+/// A key's line in the starter.
+#[derive(Clone)]
+enum Line {
+    /// `key = value`.
+    Set(String),
+    /// `# key = value`: a value to uncomment.
+    Offer(String),
+    /// `# key = …  (default: …)`, the manual's default.
+    Default,
+}
 
 /// The starter scene's text for `scene` (read from the sketch at `sketch_path`, as the scene
 /// file will name it) over its `atlas`.
@@ -31,8 +48,16 @@ pub fn starter(scene: &Scene, atlas: &Atlas, sketch_path: &Path) -> Result<Strin
          # Keys commented out keep their defaults; docs/scene.md documents each.\n",
         sketch_path.display()
     );
-    let path = [("path", Some(toml_str(&sketch_path.to_string_lossy())))];
+    let path = [("path", Line::Set(toml_str(&sketch_path.to_string_lossy())))];
     section_of(&mut out, "sketch", &scene.sketch, &path);
+    if !scene.camera.is_placed() {
+        let _ = writeln!(
+            out,
+            "# With no place (position, map_xy, or lat_deg and lon_deg), the camera frames the\n\
+             # sketch along heading_deg and pitch_deg, anew for each. The place commented out\n\
+             # below is where it stands now: uncomment its lines to hold the camera there."
+        );
+    }
     section_of(
         &mut out,
         "camera",
@@ -41,8 +66,11 @@ pub fn starter(scene: &Scene, atlas: &Atlas, sketch_path: &Path) -> Result<Strin
     );
     let detail = super::detail_of(scene, atlas);
     let chosen = [
-        ("octaves", Some(value(&detail.octaves))),
-        ("amplitude_m", Some(value(&round(detail.amplitude_m, 3)))),
+        ("octaves", Line::Set(value(&detail.octaves))),
+        (
+            "amplitude_m",
+            Line::Set(value(&round(detail.amplitude_m, 3))),
+        ),
     ];
     section_of(&mut out, "detail", &scene.detail, &chosen);
     section_of(&mut out, "warp", &scene.warp, &[]);
@@ -61,54 +89,63 @@ pub fn starter(scene: &Scene, atlas: &Atlas, sketch_path: &Path) -> Result<Strin
     Ok(out)
 }
 
-/// The default view in the keys a user edits: latitude and longitude on a geographic sketch,
-/// the file's own coordinates on a projected one, world metres without a georeference; then the
-/// height above the ground, heading and pitch, and the lens.
-fn camera_keys(scene: &Scene, atlas: &Atlas) -> Result<Vec<(&'static str, Option<String>)>> {
+/// The camera in the keys a user edits: its place by latitude and longitude on a geographic
+/// sketch, the file's own coordinates on a projected one, world metres without a georeference,
+/// with the height above the ground; heading and pitch; the lens. Without a place of the scene's
+/// own, the place is offered commented out and the heading and pitch are the default view's, so
+/// the framing makes the view.
+fn camera_keys(scene: &Scene, atlas: &Atlas) -> Result<Vec<(&'static str, Line)>> {
     let (eye, target) = place::pose(scene, atlas)?;
     let r = place::report(scene, atlas, eye, target)?;
     let c = &scene.camera;
+    let placed = c.is_placed();
+    let place = |v: String| if placed { Line::Set(v) } else { Line::Offer(v) };
     let mut keys = Vec::new();
     match (&atlas.georef, r.map_xy) {
         (Some(g), _) if g.units == Units::Degrees && r.lat_deg.is_some() => {
-            keys.push(("lat_deg", r.lat_deg.map(|v| value(&round(v, 9)))));
-            keys.push(("lon_deg", r.lon_deg.map(|v| value(&round(v, 9)))));
+            keys.push(("lat_deg", place(value(&round(r.lat_deg.unwrap_or(0.0), 9)))));
+            keys.push(("lon_deg", place(value(&round(r.lon_deg.unwrap_or(0.0), 9)))));
         }
         (Some(_), Some([x, y])) => {
-            keys.push(("map_xy", Some(value(&[round(x, 2), round(y, 2)]))));
+            keys.push(("map_xy", place(value(&[round(x, 2), round(y, 2)]))));
         }
-        _ => keys.push(("position", Some(value(&r.position.map(|v| round(v, 2)))))),
+        _ => keys.push(("position", place(value(&r.position.map(|v| round(v, 2)))))),
     }
     if r.map_xy.is_some() {
-        keys.push(("altitude_m", Some(value(&round(r.altitude_m, 3)))));
+        keys.push(("altitude_m", place(value(&round(r.altitude_m, 3)))));
     }
-    keys.push(("heading_deg", Some(value(&round(r.heading_deg, 3)))));
-    keys.push(("pitch_deg", Some(value(&round(r.pitch_deg, 3)))));
-    keys.push(("fov_y_deg", Some(value(&c.fov_y_deg))));
-    keys.push(("width", Some(value(&c.width))));
-    keys.push(("height", Some(value(&c.height))));
+    // Unplaced, the framing's own heading and pitch: the view as it asks for it.
+    let (heading, pitch) = if placed {
+        (r.heading_deg, r.pitch_deg)
+    } else {
+        (c.heading(), c.pitch_deg.unwrap_or(place::DEFAULT_PITCH_DEG))
+    };
+    keys.push(("heading_deg", Line::Set(value(&round(heading, 3)))));
+    keys.push(("pitch_deg", Line::Set(value(&round(pitch, 3)))));
+    keys.push(("fov_y_deg", Line::Set(value(&c.fov_y_deg))));
+    keys.push(("width", Line::Set(value(&c.width))));
+    keys.push(("height", Line::Set(value(&c.height))));
     Ok(keys)
 }
 
-/// A section whose keys are `struct`'s fields in the manual's order, `chosen` values first.
-fn section_of<T: Serialize>(
-    out: &mut String,
-    name: &str,
-    fields: &T,
-    chosen: &[(&str, Option<String>)],
-) {
+/// A section whose keys are `struct`'s fields in the manual's order, `chosen` lines first.
+fn section_of<T: Serialize>(out: &mut String, name: &str, fields: &T, chosen: &[(&str, Line)]) {
     let table = toml::Value::try_from(fields)
         .ok()
         .and_then(|v| v.as_table().cloned())
         .unwrap_or_default();
-    let keys: Vec<(&str, Option<String>)> = rows(name)
+    let keys: Vec<(&str, Line)> = rows(name)
         .map(|(key, _)| {
-            let v = chosen
+            let line = chosen
                 .iter()
                 .find(|(k, _)| *k == key)
-                .map(|(_, v)| v.clone())
-                .unwrap_or_else(|| table.get(key).map(|v| v.to_string()));
-            (key, v)
+                .map(|(_, l)| l.clone())
+                .unwrap_or_else(|| {
+                    table
+                        .get(key)
+                        .map_or(Line::Default, |v| Line::Set(v.to_string()))
+                });
+            (key, line)
         })
         .collect();
     section(out, name, &keys);
@@ -116,7 +153,7 @@ fn section_of<T: Serialize>(
 
 /// `[name]` and its keys, each with its comment; a key without a value commented out, with its
 /// default as the manual words it.
-fn section(out: &mut String, name: &str, keys: &[(&str, Option<String>)]) {
+fn section(out: &mut String, name: &str, keys: &[(&str, Line)]) {
     let _ = writeln!(out, "[{name}]");
     for (key, value) in keys {
         let (default, meaning) = rows(name)
@@ -124,8 +161,9 @@ fn section(out: &mut String, name: &str, keys: &[(&str, Option<String>)]) {
             .map(|(_, row)| row)
             .unwrap_or_default();
         let line = match value {
-            Some(v) => format!("{key} = {v}"),
-            None => format!("# {key} = …  (default: {default})"),
+            Line::Set(v) => format!("{key} = {v}"),
+            Line::Offer(v) => format!("# {key} = {v}"),
+            Line::Default => format!("# {key} = …  (default: {default})"),
         };
         let _ = writeln!(out, "{line:<27} # {}", first_sentence(&meaning));
     }
