@@ -56,7 +56,9 @@ planet-tangent-warp|5 min|the warped mode on a tangent-plane map of the planet, 
 planet-flight|4 min|the planet flight from 20,000 km to 2 m: 120 frames at 512², median and p95 frame time
 fold-census|3 min|the fold guard'"'"'s rounds against the shared warp over random cameras (examples/fold_census)
 tiles-convert|4 min|a 32,768² mosaic converted to a tile pyramid: time, peak memory, size, tiles
-stream-flight|30 min|200 frames flown over the 32k pyramid in four ways: memory, frame time, tiles, stand-ins'
+stream-flight|30 min|200 frames flown over the 32k pyramid in four ways: memory, frame time, tiles, stand-ins
+relief|1 min|the relief measure straight down (sun 315° at 45°, shadows off) on every bundled sketch and the surface fixtures
+pictures|3 min|the gallery: every bundled view, two user DEMs natural and with colour ramps, into docs/pictures/gallery/'
 
 usage() {
   sed -n '4,14p' "$0" | sed 's/^# \{0,1\}//'
@@ -749,6 +751,57 @@ EOF
     done
     echo "$label"
   done
+}
+
+# The relief measure (docs/picture.md): SKETCH seen straight down through the default framing
+# at a 20° field of view, the sun at 315° and 45°, shadows off; extra arguments follow.
+relief_r() {
+  local sketch=$1 name=$2
+  shift 2
+  terrain render "$sketch" -o "$OUT/relief-$name.png" --size 512 --positions "$OUT/relief-$name.npy" --json \
+    --set camera.pitch_deg=-90 --set camera.fov_y_deg=20 --set light.sun_azimuth_deg=315 \
+    --set light.sun_elevation_deg=45 --set render.shadows=false "$@" | jq -r '.relief_r | fx(3)'
+}
+
+table-relief() {
+  head_line relief
+  echo '| sketch | relief r, natural | with `detail.octaves = 0` |'
+  echo '|---|---|---|'
+  local s name
+  for s in gaussian hills ridges cliff; do
+    printf '[sketch]\nsynthetic = "%s"\n' "$s" >"$OUT/relief-$s.toml"
+  done
+  for s in sketches/jacksboro_fault_dem.asc "$OUT"/relief-{gaussian,hills,ridges,cliff}.toml \
+    tests/data/surface/jacksboro-utm.tif tests/data/surface/coast-4326.tif; do
+    name=$(basename "$s" | sed 's/\.[a-z]*$//')
+    echo "| $name | $(relief_r "$s" "$name") | $(relief_r "$s" "$name-0" --set detail.octaves=0) |"
+  done
+}
+
+table-pictures() {
+  head_line pictures
+  local d=docs/pictures/gallery v
+  mkdir -p "$d"
+  echo '| picture | command |'
+  echo '|---|---|'
+  for v in "${VIEWS[@]}"; do
+    terrain render "sketches/$v.toml" -o "$d/$v.jpg" --size 320 >/dev/null
+    echo "| ![$v]($d/$v.jpg) | \`terrain render sketches/$v.toml -o $d/$v.jpg --size 320\` |"
+  done
+  local dem name
+  for dem in tests/data/surface/jacksboro-utm.tif tests/data/surface/coast-4326.tif; do
+    name=$(basename "$dem" .tif)
+    terrain render "$dem" -o "$d/user-$name.jpg" --size 480x270 >/dev/null
+    echo "| ![$name]($d/user-$name.jpg) | \`terrain render $dem -o $d/user-$name.jpg --size 480x270\` |"
+    terrain render "$dem" -o "$d/user-$name-ramp.jpg" --size 480x270 --set surface.style='"ramp"' >/dev/null
+    echo "| ![$name, hypsometric ramp]($d/user-$name-ramp.jpg) | \`terrain render $dem -o $d/user-$name-ramp.jpg --size 480x270 --set surface.style='\"ramp\"'\` |"
+  done
+  terrain render sketches/jacksboro-high.toml -o "$d/jacksboro-high-viridis.jpg" --size 320 \
+    --set surface.color_ramp='"viridis"' >/dev/null
+  echo "| ![viridis]($d/jacksboro-high-viridis.jpg) | \`terrain render sketches/jacksboro-high.toml -o $d/jacksboro-high-viridis.jpg --size 320 --set surface.color_ramp='\"viridis\"'\` |"
+  terrain render tests/data/surface/jacksboro-utm.tif -o "$d/user-jacksboro-utm-gdal-ramp.jpg" --size 480x270 \
+    --set surface.color_ramp='"tests/data/surface/ramp.txt"' >/dev/null
+  echo "| ![gdaldem's example ramp]($d/user-jacksboro-utm-gdal-ramp.jpg) | \`terrain render tests/data/surface/jacksboro-utm.tif -o $d/user-jacksboro-utm-gdal-ramp.jpg --size 480x270 --set surface.color_ramp='\"tests/data/surface/ramp.txt\"'\` |"
 }
 
 # ---------------------------------------------------------------------------------------------

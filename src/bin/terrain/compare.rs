@@ -27,7 +27,7 @@ pub struct Args {
     /// each in turn, `--repeat` rounds; a setting past it is timed alone. 0: every setting alone.
     #[arg(long, value_name = "MIB", default_value_t = terrain_cli::eval::compare::rounds::KEEP_BYTES >> 20)]
     keep_mib: u64,
-    /// Frames along the camera path (the scene's `[path]`, else straight ahead); 0: none.
+    /// Frames along the camera path (the scene's `[path]`, else one orbit of the sketch); 0: none.
     #[arg(long, default_value_t = 24, value_parser = clap::value_parser!(u32).range(0..=100000))]
     path_frames: u32,
     /// Frames per second along the path.

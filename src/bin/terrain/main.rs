@@ -67,7 +67,7 @@ enum Command {
     /// Every mode over a sweep of its quality setting against the reference image; writes
     /// report.csv, report.json, summary.md and figures (error_vs_time.svg/.png, ...) to --out-dir.
     Compare(compare::Args),
-    /// Renders the scene's camera path (its `[path]`, else straight ahead) to numbered PNG
+    /// Renders the scene's camera path (its `[path]`, else one orbit of the sketch in 10 s) to numbered PNG
     /// frames, an animation (MP4 when ffmpeg is installed, else APNG) and frames.csv in --out-dir.
     Fly(fly::Args),
     /// Many snapshots from a jobs file on one device; manifest.jsonl lists each with its status.

@@ -194,7 +194,7 @@ fn albedo(local: vec3<f32>, footprint: f32) -> vec3<f32> {
     // Facing north: the ground falls toward the north.
     let north = -form.y / max(steepness, 1e-3) * smoothstep(0.0, 0.05, slope);
     let meadow = vec3<f32>(0.100, 0.175, 0.062);
-    let heath = vec3<f32>(0.190, 0.150, 0.092);
+    let heath = vec3<f32>(0.170, 0.163, 0.080);
     let forest = vec3<f32>(0.070, 0.170, 0.085);
     let soil = vec3<f32>(0.250, 0.205, 0.150);
     let scree = vec3<f32>(0.260, 0.250, 0.235);
