@@ -58,7 +58,7 @@ fold-census|3 min|the fold guard'"'"'s rounds against the shared warp over rando
 tiles-convert|4 min|a 32,768² mosaic converted to a tile pyramid: time, peak memory, size, tiles
 stream-flight|30 min|200 frames flown over the 32k pyramid in four ways: memory, frame time, tiles, stand-ins
 relief|1 min|the relief measure straight down (sun 315° at 45°, shadows off) on every bundled sketch and the surface fixtures
-pictures|3 min|the gallery: every bundled view, two user DEMs natural and with colour ramps, into docs/pictures/gallery/'
+pictures|3 min|the gallery: every bundled view, two user DEMs natural, with colour ramps and with imagery, into docs/pictures/gallery/'
 
 usage() {
   sed -n '4,14p' "$0" | sed 's/^# \{0,1\}//'
@@ -796,6 +796,9 @@ table-pictures() {
     terrain render "$dem" -o "$d/user-$name-ramp.jpg" --size 480x270 --set surface.style='"ramp"' >/dev/null
     echo "| ![$name, hypsometric ramp]($d/user-$name-ramp.jpg) | \`terrain render $dem -o $d/user-$name-ramp.jpg --size 480x270 --set surface.style='\"ramp\"'\` |"
   done
+  terrain render tests/data/surface/jacksboro-utm.tif -o "$d/user-jacksboro-utm-image.jpg" --size 480x270 \
+    --set surface.image='"tests/data/surface/ortho-4326.tif"' >/dev/null
+  echo "| ![jacksboro-utm with an image in EPSG:4326]($d/user-jacksboro-utm-image.jpg) | \`terrain render tests/data/surface/jacksboro-utm.tif -o $d/user-jacksboro-utm-image.jpg --size 480x270 --set surface.image='\"tests/data/surface/ortho-4326.tif\"'\` |"
   terrain render sketches/jacksboro-high.toml -o "$d/jacksboro-high-viridis.jpg" --size 320 \
     --set surface.color_ramp='"viridis"' >/dev/null
   echo "| ![viridis]($d/jacksboro-high-viridis.jpg) | \`terrain render sketches/jacksboro-high.toml -o $d/jacksboro-high-viridis.jpg --size 320 --set surface.color_ramp='\"viridis\"'\` |"

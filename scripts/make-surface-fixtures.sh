@@ -8,6 +8,8 @@
 # - jacksboro-utm.tif: the bundled Jacksboro DEM warped to UTM 17N (EPSG:32617), 120 m cells.
 # - ramp.txt: gdaldem's documented example ramp at the DEM's heights; jacksboro-ramp.tif:
 #   `gdaldem color-relief` of jacksboro-utm.tif with it, on the DEM's own grid.
+# - ortho-4326.tif: that image warped to EPSG:4326 (RGBA), and ortho-west.png/.pgw: its west
+#   half as a PNG with a world file, for imagery draped over jacksboro-utm.tif.
 #
 # The files are committed; run this again only to change them:
 #
@@ -70,4 +72,21 @@ cat > "$out/ramp.txt" <<'RAMP'
 nv 0 0 0 0
 RAMP
 gdaldem color-relief -q "$out/jacksboro-utm.tif" "$out/ramp.txt" "$out/jacksboro-ramp.tif"
+# An orthophoto stand-in in another coordinate system than the DEM: gdaldem's image of the DEM
+# warped to EPSG:4326, an RGBA GeoTIFF whose alpha is 0 beyond the DEM's data; and a PNG of it
+# with a world file (no coordinate system: read in the sketch's own), clipped to the DEM's west
+# half so that the procedural surface shows east of it.
+gdalwarp -q -t_srs EPSG:4326 -dstalpha -r bilinear -co COMPRESS=DEFLATE "$out/jacksboro-ramp.tif" "$out/ortho-4326.tif"
+gdal_translate -q -of PNG -srcwin 0 0 130 273 "$out/jacksboro-ramp.tif" "$out/ortho-west.png"
+gdal_translate -q -of GTiff -srcwin 0 0 130 273 "$out/jacksboro-ramp.tif" "$tmp/west.tif"
+python3 - "$tmp/west.tif" "$out/ortho-west.pgw" <<'PY'
+import subprocess, sys, json
+info = json.loads(subprocess.check_output(["gdalinfo", "-json", sys.argv[1]]))
+x0, dx, _, y0, _, dy = info["geoTransform"]
+with open(sys.argv[2], "w") as f:
+    f.write(f"{dx}\n0\n0\n{dy}\n{x0 + dx / 2}\n{y0 + dy / 2}\n")
+PY
+# The same image with no georeference at all, which cannot be placed.
+gdal_translate -q -of GTiff -co PROFILE=BASELINE -outsize 64 64 "$out/jacksboro-ramp.tif" "$out/ortho-plain.tif"
+rm -f "$out"/*.aux.xml
 gdalinfo --version > "$out/GDAL_VERSION"

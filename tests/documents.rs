@@ -197,7 +197,8 @@ fn every_command_in_the_readme_runs_as_written() {
         }
         let line = command
             .replace("cargo run --release -- ", "terrain ")
-            .replace("my_dem.tif", tif);
+            .replace("my_dem.tif", tif)
+            .replace("\"ortho.tif\"", "\"tests/data/surface/ortho-4326.tif\"");
         let words: Vec<&str> = line.split_whitespace().collect();
         assert_eq!(
             words[0], "terrain",

@@ -228,3 +228,120 @@ fn a_bad_ramp_is_one_line_naming_the_file_and_line() {
         assert!(err.contains("colour ramp") && err.contains(expect), "{err}");
     }
 }
+
+/// Per-channel r between the picture and gdaldem's image of jacksboro-utm.tif (its own grid),
+/// over the pixels `keep` accepts by their world position, gdaldem's nodata (black) left out.
+fn against_gdaldem(rgba: &[u8], world: &[f64], keep: impl Fn(f64, f64) -> bool) -> [f64; 3] {
+    let data = manifest_dir().join("tests/data/surface");
+    let (w, h, spp, relief) = read_rgb_tiff(&data.join("jacksboro-ramp.tif"));
+    let (ew, eh) = extent(&data.join("jacksboro-utm.tif"));
+    let (dx, dy) = (ew / (w - 1) as f64, eh / (h - 1) as f64);
+    let mut channels = [vec![], vec![], vec![]];
+    for (p, q) in rgba.chunks_exact(4).zip(world.chunks_exact(4)) {
+        let (i, j) = ((q[0] / dx).round(), (q[1] / dy).round());
+        if q[3] < 0.5 || i < 0.0 || j < 0.0 || i >= w as f64 || j >= h as f64 || !keep(q[0], q[1]) {
+            continue;
+        }
+        let k = ((h - 1 - j as usize) * w + i as usize) * spp;
+        if relief[k..k + 3] == [0, 0, 0] {
+            continue;
+        }
+        for c in 0..3 {
+            channels[c].push((p[c] as f64, relief[k + c] as f64));
+        }
+    }
+    assert!(channels[0].len() > 10_000, "{} pixels", channels[0].len());
+    [0, 1, 2].map(|c| pearson(&channels[c]))
+}
+
+#[test]
+fn imagery_in_another_crs_is_draped_where_it_lies() {
+    let data = manifest_dir().join("tests/data/surface");
+    let dem = data.join("jacksboro-utm.tif");
+    // gdaldem's image of the DEM, warped by GDAL to EPSG:4326: placed through latitude and
+    // longitude onto the UTM sketch, it lies where its colours' heights are.
+    let image = format!(
+        "surface.image={:?}",
+        data.join("ortho-4326.tif").to_str().unwrap()
+    );
+    let (_, rgba, world) = render_down(&dem, 40_000.0, "ortho", &["--set", &image]);
+    for (c, r) in against_gdaldem(&rgba, &world, |_, _| true)
+        .iter()
+        .enumerate()
+    {
+        assert!(
+            *r >= 0.9,
+            "channel {c}: r = {r:.3} against the draped image"
+        );
+    }
+    // A PNG with a world file (no coordinate system: the sketch's) of the same image's west
+    // part: there the same picture as the GeoTIFF's, east of it the natural surface.
+    let png = format!(
+        "surface.image={:?}",
+        data.join("ortho-west.png").to_str().unwrap()
+    );
+    let (_, west_png, _) = render_down(&dem, 40_000.0, "ortho-west", &["--set", &png]);
+    let edge = 129.0 * 120.0;
+    let differ = |keep: &dyn Fn(f64) -> bool| {
+        let (mut sum, mut n) = (0.0, 0usize);
+        for ((a, b), q) in rgba
+            .chunks_exact(4)
+            .zip(west_png.chunks_exact(4))
+            .zip(world.chunks_exact(4))
+        {
+            if q[3] > 0.5 && keep(q[0]) {
+                sum += (0..3)
+                    .map(|c| (a[c] as f64 - b[c] as f64).abs())
+                    .sum::<f64>()
+                    / 3.0;
+                n += 1;
+            }
+        }
+        assert!(n > 5_000, "{n} pixels");
+        sum / n as f64
+    };
+    let west = differ(&|x| x < edge - 2_000.0);
+    let east = differ(&|x| x > edge + 2_000.0);
+    assert!(
+        west < 3.0,
+        "the PNG's picture differs from the GeoTIFF's by {west:.2} where both cover"
+    );
+    assert!(
+        east > 10.0,
+        "east of the PNG's edge the picture is still the image's ({east:.2})"
+    );
+}
+
+#[test]
+fn an_image_that_cannot_be_placed_is_one_line() {
+    let data = manifest_dir().join("tests/data/surface");
+    let dir = scratch("picture-bad-image");
+    let out = dir.join("x.png");
+    let utm = data.join("jacksboro-utm.tif");
+    let coast = data.join("coast-4326.tif");
+    for (dem, image, expect) in [
+        (&utm, "ortho-plain.tif", "no georeference"),
+        (&coast, "ortho-4326.tif", "misses the sketch"),
+        (&utm, "coast-plain.tif", "8-bit"),
+        (&utm, "missing.tif", "surface image"),
+    ] {
+        let set = format!("surface.image={:?}", data.join(image).to_str().unwrap());
+        let (code, _, err) = terrain(&[
+            "render",
+            dem.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--size",
+            "32",
+            "--set",
+            &set,
+        ]);
+        assert_ne!(code, 0, "{image}");
+        let lines: Vec<&str> = err.lines().filter(|l| !l.starts_with("warning:")).collect();
+        assert_eq!(lines.len(), 1, "{image}: {err}");
+        assert!(
+            err.contains("surface image") && err.contains(expect),
+            "{image}: {err}"
+        );
+    }
+}

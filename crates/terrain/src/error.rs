@@ -28,6 +28,8 @@ pub enum Role {
     Report,
     /// `surface.color_ramp`: a colour ramp in gdaldem `color-relief`'s text format.
     ColorRamp,
+    /// `surface.image`: imagery draped over the ground.
+    Image,
 }
 
 impl fmt::Display for Role {
@@ -42,6 +44,7 @@ impl fmt::Display for Role {
             Role::Manifest => "manifest",
             Role::Report => "report",
             Role::ColorRamp => "colour ramp",
+            Role::Image => "surface image",
         })
     }
 }

@@ -220,6 +220,53 @@ fn albedo(local: vec3<f32>, footprint: f32) -> vec3<f32> {
     return mix(c, snow, snowy);
 }
 
+// The reflectance a map's white stands for (paper's, a little below fresh snow's): lit on level
+// ground by the sun the exposure is metered for, it lands below the tone map's shoulder, so the
+// map's colours keep their proportions instead of bleaching toward white.
+const MAP_WHITE: f32 = 0.6;
+
+// How much of the light's variation over the relief a map's colours show (1: all of it, as the
+// natural surface does): GIS maps lay their hillshade over a colour ramp or an image at part
+// opacity, so the colours still read as the map's while the relief shows through.
+const MAP_RELIEF: f32 = 0.4;
+
+// The reflectance of a map's or an image's encoded (sRGB) colour `c`.
+fn map_albedo(c: vec3<f32>) -> vec3<f32> {
+    let linear = select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
+    return MAP_WHITE * linear;
+}
+
+#ifdef IMAGE
+// The user's imagery resampled onto the sketch's grid (src/surface/image.rs): a header (width,
+// height, texel size in metres as f32 bits), then RGBA8 texels from the sketch's south-west
+// node, row 0 south; alpha is the image's coverage.
+@group(0) @binding(11) var<storage, read> drape: array<u32>;
+
+// Texel (x, y), its colour premultiplied by its coverage.
+fn drape_texel(x: i32, y: i32) -> vec4<f32> {
+    let size = vec2<i32>(i32(drape[0]), i32(drape[1]));
+    let c = clamp(vec2<i32>(x, y), vec2<i32>(0), size - 1);
+    let t = unpack4x8unorm(drape[4u + u32(c.y * size.x + c.x)]);
+    return vec4<f32>(t.rgb * t.a, t.a);
+}
+
+// The image at `local`, bilinear: its encoded colour premultiplied by its coverage (rgb), and
+// the coverage (a); nothing beyond the drape's grid.
+fn drape_at(local: vec2<f32>) -> vec4<f32> {
+    let texel = vec2<f32>(bitcast<f32>(drape[2]), bitcast<f32>(drape[3]));
+    let size = vec2<f32>(f32(drape[0]), f32(drape[1]));
+    let x = (local + frame.atlas.offset) / texel;
+    if (any(x < vec2<f32>(-0.5)) || any(x > size - 0.5)) {
+        return vec4<f32>(0.0);
+    }
+    let i = vec2<i32>(floor(x));
+    let f = x - floor(x);
+    let a = mix(drape_texel(i.x, i.y), drape_texel(i.x + 1, i.y), f.x);
+    let b = mix(drape_texel(i.x, i.y + 1), drape_texel(i.x + 1, i.y + 1), f.x);
+    return mix(a, b, f.y);
+}
+#endif
+
 #ifdef RAMP
 // The colour ramp's stops (src/surface/ramp.rs), ordered by height: the colour as the ramp file
 // encodes it (0–1) and the height in metres (w).
@@ -242,19 +289,8 @@ fn ramp_albedo(h: f32) -> vec3<f32> {
             }
         }
     }
-    let linear = select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
-    return MAP_WHITE * linear;
+    return map_albedo(c);
 }
-
-// The reflectance a map's white stands for (paper's, a little below fresh snow's): lit on level
-// ground by the sun the exposure is metered for, it lands below the tone map's shoulder, so the
-// map's colours keep their proportions instead of bleaching toward white.
-const MAP_WHITE: f32 = 0.6;
-
-// How much of the light's variation over the relief a map's colours show (1: all of it, as the
-// natural surface does): GIS maps lay their hillshade over a colour ramp at part opacity, so the
-// colours still read as the map's while the relief shows through.
-const MAP_RELIEF: f32 = 0.5;
 
 // The sketch's own height under the pixel, on the level of its footprint: the ramp colours the
 // land the user gave; the octaves below it add light, not colour.
@@ -495,14 +531,22 @@ fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32
     }
 #endif
     let light = sun_light * sun + frame.shading.sky_light * (0.5 + 0.5 * n.z);
-#ifdef RAMP
     // A map's colours carry the relief as a map's hillshade overlay does, at part strength: the
     // light on level ground, moved MAP_RELIEF of the way to this ground's own.
-    let level = sun_light * max(frame.shading.sun.z, 0.0) + frame.shading.sky_light;
-    return ramp_albedo(ramp_height(local.xy, footprint)) * mix(level, light, MAP_RELIEF);
+    let map_light = mix(sun_light * max(frame.shading.sun.z, 0.0) + frame.shading.sky_light, light, MAP_RELIEF);
+#ifdef RAMP
+    var colour = ramp_albedo(ramp_height(local.xy, footprint)) * map_light;
 #else
-    return albedo(local, footprint) * light;
+    var colour = albedo(local, footprint) * light;
 #endif
+#ifdef IMAGE
+    // The image where it covers, the surface beneath it fading in over its feathered edge.
+    let image = drape_at(local.xy);
+    if (image.a > 0.0) {
+        colour = mix(colour, map_albedo(image.rgb / image.a) * map_light, image.a);
+    }
+#endif
+    return colour;
 }
 
 // The world beyond the sketch seen along `dir` from `eye`: a plain at the sketch's mean edge

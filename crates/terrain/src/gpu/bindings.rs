@@ -137,6 +137,12 @@ impl Binding {
         Binding::storage(10, "ramp", stages).when(|k| k.contains(Key::RAMP))
     }
 
+    /// The user's imagery on the sketch's grid (`shaders/shared/shading.wgsl`,
+    /// [`crate::surface::image`]), declared wherever the ground is lit with `surface.image`.
+    pub const fn drape(stages: S) -> Binding {
+        Binding::storage(11, "drape", stages).when(|k| k.contains(Key::IMAGE))
+    }
+
     /// Whether variant `key` declares it.
     pub fn declared(&self, key: Key) -> bool {
         (self.when)(key)

@@ -177,6 +177,7 @@ pub const BINDINGS: &[Binding] = &[
     Binding::sun_seen(S::COMPUTE),
     // Declared where the shading it imports draws a ramp (never set for this pass's scenes).
     Binding::ramp(S::COMPUTE),
+    Binding::drape(S::COMPUTE),
     Binding::uniform(2, "planet", S::COMPUTE),
     Binding::storage(3, "hemisphere", S::COMPUTE),
     Binding::storage_rw(4, "vertices", S::COMPUTE),

@@ -144,6 +144,36 @@ pub fn upload_ramp(device: &Alloc, scene: &Scene, atlas: &Atlas) -> Result<Optio
     )))
 }
 
+/// The scene's imagery as the shading reads it (`drape` in `shaders/shared/shading.wgsl`): its
+/// grid's width and height, its texel size in metres (f32 bits), then its RGBA8 texels; `None`
+/// for a scene drawn without one, or a planet.
+pub fn upload_drape(device: &Alloc, scene: &Scene, atlas: &Atlas) -> Result<Option<Buffer>> {
+    if scene.planet().is_some() {
+        return Ok(None);
+    }
+    let Some(d) = scene.drape(atlas)? else {
+        return Ok(None);
+    };
+    let mut words = vec![
+        d.width as u32,
+        d.height as u32,
+        (d.texel.x as f32).to_bits(),
+        (d.texel.y as f32).to_bits(),
+    ];
+    words.extend(
+        d.rgba
+            .chunks_exact(4)
+            .map(|p| u32::from_le_bytes([p[0], p[1], p[2], p[3]])),
+    );
+    Ok(Some(device.create_buffer_init(
+        &wgpu::util::BufferInitDescriptor {
+            label: Some("surface image"),
+            contents: bytemuck::cast_slice(&words),
+            usage: wgpu::BufferUsages::STORAGE,
+        },
+    )))
+}
+
 /// A mappable buffer for one read-back, dropped before the call that made it returns; the only
 /// allocation outside the ledger, which counts what a renderer keeps.
 #[allow(clippy::disallowed_methods)]

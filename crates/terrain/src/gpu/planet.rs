@@ -25,6 +25,7 @@ pub const BINDINGS: &[Binding] = &[
     Binding::sun_seen(S::FRAGMENT),
     // Declared where the shading it imports draws a ramp (never set for this pass's scenes).
     Binding::ramp(S::FRAGMENT),
+    Binding::drape(S::FRAGMENT),
     Binding::uniform(2, "planet", S::VERTEX_FRAGMENT),
     Binding::storage(3, "hemisphere", S::VERTEX),
     Binding::storage(4, "vertices", S::VERTEX),

@@ -19,6 +19,7 @@ pub const BINDINGS: &[Binding] = &[
     Binding::work(S::COMPUTE),
     Binding::sun_seen(S::COMPUTE),
     Binding::ramp(S::COMPUTE),
+    Binding::drape(S::COMPUTE),
     Binding::storage_rw(2, "colour_out", S::COMPUTE),
     Binding::storage_rw(3, "position_out", S::COMPUTE),
 ];
@@ -31,6 +32,7 @@ pub const PLANET_BINDINGS: &[Binding] = &[
     Binding::work(S::COMPUTE),
     Binding::sun_seen(S::COMPUTE),
     Binding::ramp(S::COMPUTE),
+    Binding::drape(S::COMPUTE),
     Binding::storage_rw(2, "colour_out", S::COMPUTE),
     Binding::storage_rw(3, "position_out", S::COMPUTE),
     Binding::uniform(4, "planet", S::COMPUTE),

@@ -61,6 +61,7 @@ flags!(
     COUNT_WORK,
     SUN_MAP,
     RAMP,
+    IMAGE,
 );
 
 impl Key {
@@ -239,7 +240,7 @@ mod tests {
         assert_eq!(Key::of(&key.defs()), key);
         assert!(key.contains(Key::NOISE) && !key.contains(Key::NOISE | Key::BUMP));
         assert!(key.any(Key::NOISE | Key::BUMP) && !key.any(Key::BUMP));
-        assert_eq!(FLAGS.len(), 19);
+        assert_eq!(FLAGS.len(), 20);
     }
 
     #[test]

@@ -30,6 +30,9 @@ pub struct AtlasBinding {
     pub sun_seen: Option<wgpu::Buffer>,
     /// The colour ramp's stops, where the ground is drawn with one ([`crate::surface::ramp`]).
     pub ramp: Option<wgpu::Buffer>,
+    /// The user's imagery on the sketch's grid, where the ground is drawn with it
+    /// ([`crate::surface::image`]).
+    pub drape: Option<wgpu::Buffer>,
 }
 
 impl AtlasBinding {
@@ -47,6 +50,9 @@ impl AtlasBinding {
         }
         if let Some(ramp) = &self.ramp {
             r.push(("ramp", buffer(ramp)));
+        }
+        if let Some(drape) = &self.drape {
+            r.push(("drape", buffer(drape)));
         }
         r
     }
@@ -180,6 +186,7 @@ impl Stream {
             work: None,
             sun_seen: None,
             ramp: None,
+            drape: None,
         }
     }
 

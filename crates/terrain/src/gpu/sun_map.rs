@@ -31,6 +31,7 @@ pub const BINDINGS: &[Binding] = &[
     Binding::sun_seen(S::COMPUTE),
     // Declared where the shading it imports draws a ramp (never set for this pass's scenes).
     Binding::ramp(S::COMPUTE),
+    Binding::drape(S::COMPUTE),
     Binding::storage_rw(10, "seen_out", S::COMPUTE),
 ];
 

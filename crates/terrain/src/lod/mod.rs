@@ -100,6 +100,7 @@ pub fn shader_key(s: &Shared, mode: Mode) -> Key {
     let sun_map = s.atlas_binding.sun_seen.is_some();
     // The ground coloured by a ramp: a renderer made for one binds its stops.
     key.set(Key::RAMP, s.atlas_binding.ramp.is_some());
+    key.set(Key::IMAGE, s.atlas_binding.drape.is_some());
     match mode {
         Mode::Warped | Mode::Geomipmap | Mode::Bruteforce => {
             let pixel_normals = scene.render.pixel_normals;

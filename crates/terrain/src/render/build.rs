@@ -54,12 +54,15 @@ pub(super) fn renderer(
             work: None,
             sun_seen: sun_map.as_ref().map(|m| wgpu::Buffer::clone(&m.seen)),
             ramp: None,
+            drape: None,
         },
         SketchGpu::Streamed(s) => s.binding(),
     };
     atlas_binding.work = work.as_ref().map(|w| wgpu::Buffer::clone(&w.buffer));
     let ramp = upload_ramp(&alloc, scene, &atlas)?;
     atlas_binding.ramp = ramp.as_ref().map(|b| wgpu::Buffer::clone(b));
+    let drape = upload_drape(&alloc, scene, &atlas)?;
+    atlas_binding.drape = drape.as_ref().map(|b| wgpu::Buffer::clone(b));
     // Planets are not multisampled (nor supersampled) yet.
     let samples = if planet {
         1
@@ -103,6 +106,7 @@ pub(super) fn renderer(
         work,
         sun_map,
         _ramp: ramp,
+        _drape: drape,
         ctx,
         atlas,
         detail,

@@ -19,7 +19,7 @@ use crate::gpu::alloc::{Alloc, Buffer, Ledger};
 use crate::gpu::context::{GpuContext, Needs};
 use crate::gpu::counters::{Counters, FrameCounters, Probe};
 use crate::gpu::frame_io::{
-    FrameStats, PassTimes, Timer, uniform_buffer, upload_atlas, upload_ramp,
+    FrameStats, PassTimes, Timer, uniform_buffer, upload_atlas, upload_drape, upload_ramp,
 };
 use crate::gpu::output::{OutputPass, Targets};
 use crate::gpu::snapshot::Snapshot;
@@ -146,6 +146,8 @@ pub struct Renderer {
     sun_map: Option<SunMap>,
     /// The colour ramp's stops, where the ground is drawn with one (bound by the passes).
     _ramp: Option<Buffer>,
+    /// The user's imagery on the sketch's grid, where the ground is drawn with it.
+    _drape: Option<Buffer>,
     lod: Box<dyn Lod>,
     /// What snapshots are written with, made at the first (a host's frames need none).
     snapshots: Option<Snapshots>,

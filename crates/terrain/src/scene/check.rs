@@ -181,12 +181,15 @@ impl Scene {
         open_range("light.haze_height_m", l.haze_height_m, 0.0, 1e6)?;
         within("light.exposure_ev", l.exposure_ev, -16.0, 16.0)?;
         within("sketch.water_level_m", self.sketch.water_level_m, -1e6, 1e6)?;
-        if self.surface.style() == super::Style::Ramp && self.planet().is_some() {
-            return Err(
-                "surface.style = \"ramp\": a planet is drawn with its own surface types; \
-                 colour ramps drape planar sketches"
-                    .into(),
-            );
+        let style = self.surface.style();
+        if style != super::Style::Natural && self.planet().is_some() {
+            return Err(format!(
+                "surface.style = \"{style}\": a planet is drawn with its own surface types; \
+                 ramps and images drape planar sketches"
+            ));
+        }
+        if style == super::Style::Image && self.surface.image.is_none() {
+            return Err("surface.style = \"image\" needs surface.image, the image to drape".into());
         }
         let i = &self.importance;
         open_range("importance.error_px", i.error_px, 0.0, 1e4)?;

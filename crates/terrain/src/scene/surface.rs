@@ -1,4 +1,5 @@
-//! `[surface]`: what colours the ground: the natural surface types, or a colour ramp by height.
+//! `[surface]`: what colours the ground: the natural surface types, a colour ramp by height, or
+//! the user's imagery.
 
 use crate::surface::ColorRamp;
 use serde::{Deserialize, Serialize};
@@ -12,6 +13,8 @@ crate::names::named_enum! {
         Natural = "natural",
         /// A colour ramp by height, in gdaldem `color-relief`'s format (`surface.color_ramp`).
         Ramp = "ramp",
+        /// The user's imagery (`surface.image`) where it covers, the natural surface elsewhere.
+        Image = "image",
     }
 }
 
@@ -19,20 +22,26 @@ crate::names::named_enum! {
 #[derive(Clone, Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SurfaceSection {
-    /// `natural` or `ramp`; without it, `ramp` where `color_ramp` is given, else `natural`.
+    /// `natural`, `ramp` or `image`; without it, `image` where `image` is given, else `ramp`
+    /// where `color_ramp` is, else `natural`.
     pub style: Option<Style>,
+    /// Imagery draped over the ground: an RGB or RGBA GeoTIFF (or COG), or a PNG with a world
+    /// file, relative to the scene file, placed by its georeference.
+    pub image: Option<PathBuf>,
     /// A colour ramp file in gdaldem `color-relief`'s text format, relative to the scene file, or
     /// a built-in ramp's name (`hypsometric`, `viridis`); without it, `ramp` uses `hypsometric`.
     pub color_ramp: Option<PathBuf>,
 }
 
 impl SurfaceSection {
-    /// The style in force: the key, else `ramp` where a ramp is given, else `natural`.
+    /// The style in force: the key, else `image` where an image is given, else `ramp` where a
+    /// ramp is, else `natural`.
     pub fn style(&self) -> Style {
-        match (self.style, &self.color_ramp) {
-            (Some(s), _) => s,
-            (None, Some(_)) => Style::Ramp,
-            (None, None) => Style::Natural,
+        match (self.style, &self.image, &self.color_ramp) {
+            (Some(s), _, _) => s,
+            (None, Some(_), _) => Style::Image,
+            (None, None, Some(_)) => Style::Ramp,
+            (None, None, None) => Style::Natural,
         }
     }
 }
@@ -51,6 +60,19 @@ impl super::Scene {
         match built_in {
             Some(ramp) => Ok(Some(ramp)),
             None => ColorRamp::load(&self.resolve(path)).map(Some),
+        }
+    }
+
+    /// The user's imagery resampled onto `atlas`'s grid, with `surface.style = "image"`.
+    pub fn drape(
+        &self,
+        atlas: &crate::sketch::Atlas,
+    ) -> crate::Result<Option<crate::surface::Drape>> {
+        match (&self.surface.image, self.surface.style()) {
+            (Some(path), Style::Image) => {
+                crate::surface::drape(&self.resolve(path), atlas).map(Some)
+            }
+            _ => Ok(None),
         }
     }
 }

@@ -331,7 +331,7 @@ fn place(
 }
 
 /// The grid's georeference from the GeoTIFF tags, if it has one.
-fn georef<R: Read + Seek>(
+pub(crate) fn georef<R: Read + Seek>(
     dec: &mut Decoder<R>,
     height: usize,
 ) -> std::result::Result<Option<Georef>, String> {

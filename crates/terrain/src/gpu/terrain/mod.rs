@@ -52,6 +52,7 @@ pub const BINDINGS: &[Binding] = &[
     Binding::work(S::FRAGMENT),
     Binding::sun_seen(S::FRAGMENT),
     Binding::ramp(S::FRAGMENT),
+    Binding::drape(S::FRAGMENT),
     Binding::storage(3, "detailed", S::VERTEX).when(|k| !streamed_grid(k)),
     Binding::storage(4, "normals", S::VERTEX)
         .when(|k| !k.contains(Key::PIXEL_NORMALS) && !streamed_grid(k)),
