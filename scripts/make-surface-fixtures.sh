@@ -73,10 +73,12 @@ nv 0 0 0 0
 RAMP
 gdaldem color-relief -q "$out/jacksboro-utm.tif" "$out/ramp.txt" "$out/jacksboro-ramp.tif"
 # An orthophoto stand-in in another coordinate system than the DEM: gdaldem's image of the DEM
-# warped to EPSG:4326, an RGBA GeoTIFF whose alpha is 0 beyond the DEM's data; and a PNG of it
+# (with -alpha, its nodata transparent) warped to EPSG:4326, an RGBA GeoTIFF whose alpha is 0
+# beyond the DEM's data; and a PNG of it
 # with a world file (no coordinate system: read in the sketch's own), clipped to the DEM's west
 # half so that the procedural surface shows east of it.
-gdalwarp -q -t_srs EPSG:4326 -dstalpha -r bilinear -co COMPRESS=DEFLATE "$out/jacksboro-ramp.tif" "$out/ortho-4326.tif"
+gdaldem color-relief -q -alpha "$out/jacksboro-utm.tif" "$out/ramp.txt" "$tmp/ramp-alpha.tif"
+gdalwarp -q -t_srs EPSG:4326 -dstalpha -r bilinear -co COMPRESS=DEFLATE "$tmp/ramp-alpha.tif" "$out/ortho-4326.tif"
 gdal_translate -q -of PNG -srcwin 0 0 130 273 "$out/jacksboro-ramp.tif" "$out/ortho-west.png"
 gdal_translate -q -of GTiff -srcwin 0 0 130 273 "$out/jacksboro-ramp.tif" "$tmp/west.tif"
 python3 - "$tmp/west.tif" "$out/ortho-west.pgw" <<'PY'
