@@ -87,7 +87,7 @@ impl Detail {
 
     /// The band above the water's surface over which the octaves fade in: twice their reach,
     /// so that within it their share times their reach stays below the height above the water
-    /// ([`shore`]).
+    /// (`shore` in this module).
     pub fn shore_m(&self) -> f64 {
         2.0 * self.reach_m()
     }

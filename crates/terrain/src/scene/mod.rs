@@ -104,7 +104,7 @@ pub struct Scene {
     /// `[stream]`: the tile cache of a sketch streamed from a tile pyramid.
     #[serde(default)]
     pub stream: StreamSection,
-    /// `[surface]`: the ground's colour: natural surface types or a colour ramp.
+    /// `[surface]`: the ground's colour: natural surface types, a colour ramp or imagery.
     #[serde(default)]
     pub surface: SurfaceSection,
     /// `[path]`: the camera path `fly` and `compare` follow; without it, a default one.
