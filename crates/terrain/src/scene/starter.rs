@@ -79,6 +79,7 @@ pub fn starter(scene: &Scene, atlas: &Atlas, sketch_path: &Path) -> Result<Strin
     section_of(&mut out, "geomipmap", &scene.geomipmap, &[]);
     section_of(&mut out, "reference", &scene.reference, &[]);
     section_of(&mut out, "light", &scene.light, &[]);
+    section_of(&mut out, "surface", &scene.surface, &[]);
     section_of(&mut out, "stream", &scene.stream, &[]);
     let _ = writeln!(
         out,
