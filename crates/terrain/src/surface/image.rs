@@ -34,10 +34,8 @@ pub const FEATHER: f64 = 6.0;
 pub struct Drape {
     /// Texels per row (west to east).
     pub width: usize,
-    /// Rows (south to north).
+    /// Rows (south to north); texel (0, 0) is centred on the sketch's south-west node.
     pub height: usize,
-    /// The centre of texel (0, 0), metres from the sketch's south-west node.
-    pub origin: DVec2,
     /// Texel size in metres.
     pub texel: DVec2,
     /// RGBA8 per texel, row 0 south; alpha is the coverage (feathered at the image's edge).
@@ -164,7 +162,6 @@ fn resample(
     Ok(Drape {
         width,
         height,
-        origin: DVec2::ZERO,
         texel,
         rgba,
         covered: covered as f64 / (width * height) as f64,
