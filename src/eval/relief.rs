@@ -15,26 +15,25 @@
 //! for its procedural detail; the sketch is what the user gave and what a map reader knows.
 
 use glam::{DVec2, DVec3};
-use terrain::sketch::Atlas;
+use terrain::sketch::{Atlas, Level};
 
 /// Ground within this of the water's surface is the water's (the shaders' `ON_WATER_M`).
 const WATER_EPS_M: f64 = 0.01;
 
 /// Horn's hillshade of the atlas's level 0 under the unit vector `sun` (x east, y north, z up),
-/// row-major from the southern row, in 0…1.
-pub fn hillshade(atlas: &Atlas, sun: DVec3) -> Vec<f64> {
+/// in 0…1, on level 0's grid; `None` for a streamed sketch, whose level 0 is not in memory.
+pub fn hillshade(atlas: &Atlas, sun: DVec3) -> Option<Level> {
     let level = &atlas.levels[0];
     let (w, h) = (level.width, level.height);
-    if level.data.len() != w * h {
-        // A streamed sketch's level 0 is not in memory.
-        return Vec::new();
+    if level.data.len() != w * h || w < 2 || h < 2 {
+        return None;
     }
     let z = |i: isize, j: isize| -> f64 {
         let i = i.clamp(0, w as isize - 1) as usize;
         let j = j.clamp(0, h as isize - 1) as usize;
         level.data[j * w + i] as f64
     };
-    let mut out = Vec::with_capacity(w * h);
+    let mut data = Vec::with_capacity(w * h);
     for j in 0..h as isize {
         for i in 0..w as isize {
             // Horn: the east–west difference weighted 1-2-1 over the three rows, alike north–south.
@@ -45,22 +44,22 @@ pub fn hillshade(atlas: &Atlas, sun: DVec3) -> Vec<f64> {
                 - (z(i - 1, j - 1) + 2.0 * z(i, j - 1) + z(i + 1, j - 1)))
                 / (8.0 * atlas.dy);
             let n = DVec3::new(-dzdx, -dzdy, 1.0).normalize();
-            out.push(n.dot(sun).max(0.0));
+            data.push(n.dot(sun).max(0.0) as f32);
         }
     }
-    out
+    Some(Level {
+        width: w,
+        height: h,
+        data,
+    })
 }
 
 /// Pearson's r between the luma of each pixel of `rgba` whose world position in `world`
-/// (x, y, z, ground flag per pixel, as `render --positions` writes) lies on the sketch and the
-/// hillshade `shade` (from [`hillshade`]) there; `None` with fewer than two such pixels or no
+/// (x, y, z, ground flag per pixel, as `render --positions` writes) lies on the sketch's land and
+/// the hillshade `shade` (from [`hillshade`]) there; `None` with fewer than two such pixels or no
 /// variation in either.
-pub fn relief_r(rgba: &[u8], world: &[f64], atlas: &Atlas, shade: &[f64]) -> Option<f64> {
-    let level = &atlas.levels[0];
-    let (w, h) = (level.width, level.height);
-    if shade.len() != w * h || w < 2 || h < 2 {
-        return None;
-    }
+pub fn relief_r(rgba: &[u8], world: &[f64], atlas: &Atlas, shade: &Level) -> Option<f64> {
+    let (w, h) = (shade.width, shade.height);
     let mut pairs = Vec::new();
     for (p, q) in rgba.chunks_exact(4).zip(world.chunks_exact(4)) {
         // Sky, and the water's flat surface, of which the hillshade says nothing.
@@ -72,19 +71,9 @@ pub fn relief_r(rgba: &[u8], world: &[f64], atlas: &Atlas, shade: &[f64]) -> Opt
             continue;
         }
         let luma = 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64;
-        pairs.push((luma, bilinear(shade, w, h, uv)));
+        pairs.push((luma, shade.bilinear(uv.x, uv.y) as f64));
     }
     pearson(&pairs)
-}
-
-fn bilinear(grid: &[f64], w: usize, h: usize, uv: DVec2) -> f64 {
-    let i = (uv.x.floor() as usize).min(w.saturating_sub(2));
-    let j = (uv.y.floor() as usize).min(h.saturating_sub(2));
-    let (fx, fy) = (uv.x - i as f64, uv.y - j as f64);
-    let at = |i: usize, j: usize| grid[j.min(h - 1) * w + i.min(w - 1)];
-    let a = at(i, j) + (at(i + 1, j) - at(i, j)) * fx;
-    let b = at(i, j + 1) + (at(i + 1, j + 1) - at(i, j + 1)) * fx;
-    a + (b - a) * fy
 }
 
 /// Pearson's correlation of the pairs, `None` where it is undefined.

@@ -157,8 +157,8 @@ pub fn run(a: Args) -> Result<()> {
         let world = terrain::world_positions(&relative, &camera);
         let ground = world.chunks_exact(4).map(|q| q[3] > 0.5);
         luminance = terrain_cli::eval::metrics::terrain_luminance(&last.rgba, ground);
-        let shade = relief::hillshade(r.atlas(), scene::light_of(&scene).sun);
-        relief = relief::relief_r(&last.rgba, &world, r.atlas(), &shade);
+        relief = relief::hillshade(r.atlas(), scene::light_of(&scene).sun)
+            .and_then(|shade| relief::relief_r(&last.rgba, &world, r.atlas(), &shade));
         let shape = [last.height as usize, last.width as usize, 4];
         staged.add(p, &output::npy_f64(&shape, &world))?;
     }

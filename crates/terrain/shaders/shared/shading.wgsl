@@ -230,6 +230,14 @@ const MAP_WHITE: f32 = 0.6;
 // opacity, so the colours still read as the map's while the relief shows through.
 const MAP_RELIEF: f32 = 0.4;
 
+// The light on a map's colours at ground lit by `light` (`sun_light` the sunlight there): as a
+// map's hillshade overlay, at part strength, the light on level ground moved MAP_RELIEF of the
+// way to this ground's own.
+fn map_light(sun_light: vec3<f32>, light: vec3<f32>) -> vec3<f32> {
+    let level = sun_light * max(frame.shading.sun.z, 0.0) + frame.shading.sky_light;
+    return mix(level, light, MAP_RELIEF);
+}
+
 // The reflectance of a map's or an image's encoded (sRGB) colour `c`.
 fn map_albedo(c: vec3<f32>) -> vec3<f32> {
     let linear = select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
@@ -531,11 +539,8 @@ fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32
     }
 #endif
     let light = sun_light * sun + frame.shading.sky_light * (0.5 + 0.5 * n.z);
-    // A map's colours carry the relief as a map's hillshade overlay does, at part strength: the
-    // light on level ground, moved MAP_RELIEF of the way to this ground's own.
-    let map_light = mix(sun_light * max(frame.shading.sun.z, 0.0) + frame.shading.sky_light, light, MAP_RELIEF);
 #ifdef RAMP
-    var colour = ramp_albedo(ramp_height(local.xy, footprint)) * map_light;
+    var colour = ramp_albedo(ramp_height(local.xy, footprint)) * map_light(sun_light, light);
 #else
     var colour = albedo(local, footprint) * light;
 #endif
@@ -543,7 +548,7 @@ fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32
     // The image where it covers, the surface beneath it fading in over its feathered edge.
     let image = drape_at(local.xy);
     if (image.a > 0.0) {
-        colour = mix(colour, map_albedo(image.rgb / image.a) * map_light, image.a);
+        colour = mix(colour, map_albedo(image.rgb / image.a) * map_light(sun_light, light), image.a);
     }
 #endif
     return colour;
