@@ -267,3 +267,113 @@ fn queries_refuse_what_is_not_a_place() {
         assert_eq!(err.trim().lines().count(), 1, "{err}");
     }
 }
+
+/// 100 points evenly around the border of the sketch `scene`: each point on the edge and its
+/// outward normal.
+fn border(atlas: &terrain::sketch::Atlas) -> Vec<(DVec2, DVec2)> {
+    let (lo, hi) = (atlas.origin, atlas.max_corner());
+    let size = hi - lo;
+    let perimeter = 2.0 * (size.x + size.y);
+    (0..100)
+        .map(|k| {
+            // Offset by half a step, so no point falls on a corner.
+            let mut s = (k as f64 + 0.5) / 100.0 * perimeter;
+            for (start, along, out) in [
+                (lo, DVec2::X, -DVec2::Y),
+                (DVec2::new(hi.x, lo.y), DVec2::Y, DVec2::X),
+                (hi, -DVec2::X, DVec2::Y),
+                (DVec2::new(lo.x, hi.y), -DVec2::Y, -DVec2::X),
+            ] {
+                let length = if along.x != 0.0 { size.x } else { size.y };
+                if s <= length {
+                    return (start + along * s, out);
+                }
+                s -= length;
+            }
+            unreachable!("s lies on the perimeter")
+        })
+        .collect()
+}
+
+/// The largest step of `terrain height` across the sketch's border, 0.5 m inside against 0.5 m
+/// outside, at 100 points around it, as a share of the sketch's relief.
+fn border_step(scene_path: &Path, set: &[&str]) -> f64 {
+    let sets: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    let loaded = Scene::load_with(scene_path, &sets).unwrap();
+    let atlas = scene::load_atlas(&loaded).unwrap();
+    let relief = (atlas.max_m - atlas.min_m) as f64;
+    let height = |p: DVec2| {
+        let xy = format!("{},{}", p.x, p.y);
+        let mut args = vec![
+            "height",
+            scene_path.to_str().unwrap(),
+            "--json",
+            "--xy",
+            &xy,
+        ];
+        for s in set {
+            args.extend(["--set", s]);
+        }
+        let (code, out, err) = terrain(&args);
+        assert_eq!(code, 0, "{xy}: {err}");
+        let json: serde_json::Value = serde_json::from_str(&out).unwrap();
+        json["z"].as_f64().unwrap()
+    };
+    let worst = border(&atlas)
+        .into_iter()
+        .map(|(p, out)| (height(p + out * 0.5) - height(p - out * 0.5)).abs())
+        .fold(0.0, f64::max);
+    worst / relief
+}
+
+/// The plain beyond the sketch takes the edge's heights and fades to its level over the margin:
+/// `terrain height` has no step at the border (issue figure: ≤ 1 % of the relief, octaves off),
+/// on the slab of hills-high and on the bundled DEM, and with the octaves on too; the sea beyond
+/// a coast alike.
+#[test]
+fn the_ground_has_no_step_at_the_sketchs_border() {
+    let root = manifest_dir();
+    for (scene, set) in [
+        ("sketches/hills-high.toml", vec!["detail.octaves=0"]),
+        ("sketches/jacksboro.toml", vec!["detail.octaves=0"]),
+        ("sketches/hills-high.toml", vec![]),
+        (
+            "tests/data/surface/coast-4326.tif",
+            vec!["detail.octaves=0"],
+        ),
+    ] {
+        let step = border_step(&root.join(scene), &set);
+        eprintln!(
+            "{scene} {set:?}: largest step {:.4} % of the relief",
+            100.0 * step
+        );
+        assert!(step <= 0.01, "{scene} {set:?}: {step}");
+    }
+}
+
+/// Away from the border the margin reaches the level beyond: the plain's height past the
+/// margin, on all four sides.
+#[test]
+fn the_margin_ends_at_the_plains_level() {
+    let path = manifest_dir().join("sketches/hills-high.toml");
+    let loaded = Scene::load_with(&path, &["detail.octaves=0".to_string()]).unwrap();
+    let atlas = scene::load_atlas(&loaded).unwrap();
+    let detail = scene::detail_of(&loaded, &atlas);
+    let ground = Ground::new(&loaded, &atlas, &detail);
+    let size = atlas.max_corner() - atlas.origin;
+    let far = size.x.min(size.y) / 2.0 + 1.0;
+    let plain = (atlas.edge_mean_m as f64).max(atlas.water_m as f64);
+    for (p, out) in border(&atlas).into_iter().step_by(7) {
+        let z = ground.height_at(p + out * far, 0.0).unwrap().unwrap();
+        assert!((z - plain).abs() < 1e-3, "{p}: {z} against {plain}");
+        // Halfway into the margin the ground lies between the edge and the plain, or near them.
+        let edge = ground.height_at(p, 0.0).unwrap().unwrap();
+        let mid = ground.height_at(p + out * far / 8.0, 0.0).unwrap().unwrap();
+        let (lo, hi) = (edge.min(plain), edge.max(plain));
+        let slack = 0.2 * (atlas.max_m - atlas.min_m) as f64;
+        assert!(
+            mid >= lo - slack && mid <= hi + slack,
+            "{p}: {mid} not near {lo}…{hi}"
+        );
+    }
+}

@@ -21,23 +21,7 @@ const MAX_STEPS: u32 = 4096u;
 
 // The part of the ray inside the box of the sketch's rectangle and its heights, or t0 > t1.
 fn span(eye: vec3<f32>, dir: vec3<f32>) -> vec2<f32> {
-    let lo = vec3<f32>(sketch_lo(), frame.march.lo);
-    let hi = vec3<f32>(sketch_hi(), frame.march.hi);
-    var t0 = 0.0;
-    var t1 = 3.0e38;
-    for (var a = 0; a < 3; a++) {
-        if (abs(dir[a]) < 1e-12) {
-            if (eye[a] < lo[a] || eye[a] > hi[a]) {
-                return vec2<f32>(1.0, 0.0);
-            }
-        } else {
-            let ta = (lo[a] - eye[a]) / dir[a];
-            let tb = (hi[a] - eye[a]) / dir[a];
-            t0 = max(t0, min(ta, tb));
-            t1 = min(t1, max(ta, tb));
-        }
-    }
-    return vec2<f32>(t0, t1);
+    return box_span(eye, dir, vec3<f32>(sketch_lo(), frame.march.lo), vec3<f32>(sketch_hi(), frame.march.hi));
 }
 
 // A ray from the eye through `ndc`: what it sees (display colour, when `shade`) and where it hits
@@ -73,8 +57,8 @@ fn trace(ndc: vec2<f32>, shade: bool) -> Ray {
         t += max(above, footprint) * frame.march.step;
     }
     // A ray entering the box through a side wall already under the surface comes from beyond the
-    // sketch, under the plain or the water there: it met that first, as the mesh modes' sky pass
-    // draws it.
+    // sketch, under the margin, the plain or the water there: it met that first, as the mesh
+    // modes' sky pass draws it.
     let entered_under = hit && range.x > 0.0 && t == range.x;
     var outside = vec4<f32>(0.0);
     if ((!hit && shade) || entered_under) {

@@ -107,6 +107,7 @@
 #[cfg(test)]
 extern crate self as terrain;
 
+mod beyond;
 mod camera;
 #[cfg(test)]
 mod checks;

@@ -7,14 +7,15 @@
 //!   share `b_k = clamp(o_px − k + 1, 0, 1)`, and the water's flat surface over it: the
 //!   reference's surface (docs/design.md, Procedural detail). A footprint of 0 asks for the
 //!   finest: level 0 and every octave whole.
-//! - Beyond the sketch lies what `sketch.outside` draws there: the plain at the mean height of
-//!   the sketch's edges, the sea, or nothing (`None`).
+//! - Beyond the sketch lies what `sketch.outside` draws there: the plain or the sea, joined to
+//!   the sketch's edge by the margin ([`crate::beyond`]), or nothing (`None`).
 //! - A streamed sketch is read from its tiles at the level asked for, as a settled frame draws it.
 //! - Nothing non-finite leaves a query: a non-finite point or direction is an error.
 //!
 //! Rejected: answering from the mesh a mode drew, which changes with the camera and the mode;
 //! the terrain function is what every mode converges to and what the reference draws.
 
+use crate::beyond::{Beyond, nearest_on};
 use crate::detail::Detail;
 use crate::error::{Error, Result};
 use crate::scene::{Outside, Scene};
@@ -27,7 +28,7 @@ use glam::{DVec2, DVec3};
 pub struct Ground<'a> {
     atlas: &'a Atlas,
     detail: &'a Detail,
-    outside: Outside,
+    beyond: Beyond,
 }
 
 impl<'a> Ground<'a> {
@@ -37,7 +38,7 @@ impl<'a> Ground<'a> {
         Ground {
             atlas,
             detail,
-            outside: scene.outside(atlas),
+            beyond: Beyond::new(atlas, scene.outside(atlas)),
         }
     }
 
@@ -73,7 +74,7 @@ impl<'a> Ground<'a> {
     pub fn height_at(&self, p: DVec2, footprint_m: f64) -> Result<Option<f64>> {
         finite_point(p)?;
         if !self.inside(p) {
-            return Ok(self.beyond());
+            return self.beyond_height(p, footprint_m);
         }
         let sketch = self.sketch_at(p, footprint_m)?;
         let land = sketch + self.shore(sketch) * self.octaves_at(p, footprint_m).0;
@@ -86,8 +87,11 @@ impl<'a> Ground<'a> {
         let Some(z) = self.height_at(p, footprint_m)? else {
             return Ok(None);
         };
-        if !self.inside(p) || z <= self.atlas.water_m as f64 {
+        if z <= self.atlas.water_m as f64 {
             return Ok(Some(DVec3::Z));
+        }
+        if !self.inside(p) {
+            return self.beyond_normal(p, footprint_m);
         }
         let fade = self.shore(self.sketch_at(p, footprint_m)?);
         let g = self.sketch_gradient(p, footprint_m)? + fade * self.octaves_at(p, footprint_m).1;
@@ -120,14 +124,46 @@ impl<'a> Ground<'a> {
         p.x >= lo.x && p.y >= lo.y && p.x <= hi.x && p.y <= hi.y
     }
 
-    /// The height `sketch.outside` puts beyond the sketch.
-    fn beyond(&self) -> Option<f64> {
-        let water = self.atlas.water_m as f64;
-        match self.outside {
-            Outside::Void => None,
-            Outside::Ocean => Some(water.max(0.0)),
-            Outside::Plain => Some(water.max(self.atlas.edge_mean_m as f64)),
+    /// The surface `sketch.outside` puts at `p` beyond the sketch: the margin's ground and its
+    /// fading octaves, under the water where it lies below it.
+    fn beyond_height(&self, p: DVec2, footprint_m: f64) -> Result<Option<f64>> {
+        if self.beyond.outside == Outside::Void {
+            return Ok(None);
         }
+        let water = self.atlas.water_m as f64;
+        let (c, d) = nearest_on(self.atlas.origin, self.atlas.max_corner(), p);
+        if d >= self.beyond.margin_m {
+            return Ok(Some(self.beyond.level_m.max(water)));
+        }
+        let edge = self.sketch_at(c, footprint_m)?;
+        let slope = if d > 0.0 {
+            self.sketch_gradient(c, footprint_m)?.dot(p - c) / d
+        } else {
+            0.0
+        };
+        let ground = self.beyond.ground(edge, slope, d);
+        let octaves = self.beyond.fade(d) * self.shore(ground) * self.octaves_at(p, footprint_m).0;
+        Ok(Some((ground + octaves).max(water)))
+    }
+
+    /// The margin's normal at `p`, by central differences a sixteenth of a cell (or the
+    /// footprint) apart: the fade and the slope's continuation have no closed gradient worth its
+    /// code.
+    fn beyond_normal(&self, p: DVec2, footprint_m: f64) -> Result<Option<DVec3>> {
+        let h = (self.atlas.d_atlas() / 16.0).max(footprint_m);
+        let at =
+            |q: DVec2| -> Result<f64> { Ok(self.beyond_height(q, footprint_m)?.unwrap_or(0.0)) };
+        let dx = at(p + DVec2::X * h)? - at(p - DVec2::X * h)?;
+        let dy = at(p + DVec2::Y * h)? - at(p - DVec2::Y * h)?;
+        Ok(Some(
+            DVec3::new(-dx / (2.0 * h), -dy / (2.0 * h), 1.0).normalize(),
+        ))
+    }
+
+    /// The level beyond the margin, where the water does not cover it.
+    fn level(&self) -> Option<f64> {
+        (self.beyond.outside != Outside::Void)
+            .then(|| self.beyond.level_m.max(self.atlas.water_m as f64))
     }
 
     /// The pyramid level (fractional) a footprint reads, as the shaders' `atlas_height`.
@@ -207,21 +243,36 @@ impl<'a> Ground<'a> {
         (h, g)
     }
 
-    /// The lowest and highest the surface reaches over the sketch.
+    /// The lowest and highest the surface reaches over the sketch and its margin.
     fn bounds(&self) -> (f64, f64) {
         let reach = self.detail.reach_m();
         let water = self.atlas.water_m as f64;
+        let [lo, hi] = self.beyond.span_m;
         (
-            self.atlas.min_m as f64 - reach,
-            (self.atlas.max_m as f64 + reach).max(water),
+            lo.min(self.atlas.min_m as f64) - reach,
+            (hi + reach).max(water),
         )
     }
 
-    /// The reference's march over the box of the sketch and its heights, then a bisection.
+    /// The sketch's rectangle, grown by the margin where there is ground beyond it.
+    fn march_rect(&self) -> (DVec2, DVec2) {
+        let m = match self.beyond.outside {
+            Outside::Void => 0.0,
+            _ => self.beyond.margin_m,
+        };
+        (
+            self.atlas.origin - DVec2::splat(m),
+            self.atlas.max_corner() + DVec2::splat(m),
+        )
+    }
+
+    /// The reference's march over the box of the sketch, its margin and their heights, then a
+    /// bisection.
     fn march(&self, eye: DVec3, dir: DVec3, pixel_scale: f64) -> Result<Option<DVec3>> {
         let (z_lo, z_hi) = self.bounds();
-        let lo = self.atlas.origin.extend(z_lo);
-        let hi = self.atlas.max_corner().extend(z_hi);
+        let (rect_lo, rect_hi) = self.march_rect();
+        let lo = rect_lo.extend(z_lo);
+        let hi = rect_hi.extend(z_hi);
         let Some((t0, t1)) = slab(eye, dir, lo, hi) else {
             return Ok(None);
         };
@@ -236,7 +287,7 @@ impl<'a> Ground<'a> {
             let t_here = t.min(t1);
             let a = above(t_here)?;
             // A ray entering the box through a side wall already under the surface comes from
-            // beyond the sketch: it met the plain or the sea there first, as the reference has it.
+            // beyond the margin: it met the plain or the sea there first, as the reference has it.
             if a <= 0.0
                 && step == 0
                 && t0 > 0.0
@@ -268,14 +319,18 @@ impl<'a> Ground<'a> {
         Ok(0.5 * (lo + hi))
     }
 
-    /// Where a ray that met nothing over the sketch meets the plain or the sea beyond it.
+    /// Where a ray that met nothing over the sketch and its margin meets the plain or the sea
+    /// beyond them.
     fn beyond_hit(&self, eye: DVec3, dir: DVec3) -> Option<DVec3> {
-        let z = self.beyond()?;
+        let z = self.level()?;
         if dir.z >= 0.0 || eye.z <= z {
             return None;
         }
         let hit = eye + dir * ((z - eye.z) / dir.z);
-        (!self.inside(hit.truncate())).then_some(hit)
+        let (lo, hi) = self.march_rect();
+        let p = hit.truncate();
+        let within = p.x > lo.x && p.y > lo.y && p.x < hi.x && p.y < hi.y;
+        (!within).then_some(hit)
     }
 }
 

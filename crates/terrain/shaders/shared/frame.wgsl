@@ -45,7 +45,11 @@ struct ShadingUniforms {
     haze_per_m: f32,             // haze extinction at sea level
     haze_height_m: f32,          // haze scale height
     outside: u32,                // beyond the sketch: 0 nothing, 1 a plain, 2 the sea
-    plain_m: f32,                // the plain's height (the mean of the sketch's edges)
+    plain_m: f32,                // the level the margin fades to: the plain's height or the sea floor
+    margin_m: f32,               // the margin's width (src/beyond.rs)
+    margin_lo_m: f32,            // the lowest and highest the margin's ground reaches
+    margin_hi_m: f32,
+    pad: f32,
 }
 
 // The sketch's pyramid in the atlas buffer.

@@ -4,9 +4,7 @@
 // (SHADOWS) and the detail's (DETAIL_SHADOWS), the world beyond the sketch, exposure and the
 // tone map. Needs `frame` and the atlas.
 #import atlas
-#ifdef DETAIL_SHADOWS
 #import surface
-#endif
 
 // Ground within this of the water's surface is water (the reference's bisection lands within it).
 const ON_WATER_M: f32 = 0.01;
@@ -145,27 +143,25 @@ fn display(c_in: vec3<f32>) -> vec3<f32> {
 // surface types follow this form, not the shading normal: it is the same in every mode, whatever
 // mesh carries the surface, and band-limited to the pixel.
 fn sketch_form(local: vec2<f32>, footprint: f32) -> vec4<f32> {
-    // The plain and the sea beyond the sketch are level.
-    if (!on_sketch(local, 0.0)) {
+    // The plain and the sea beyond the margin are level.
+    if (!on_sketch(local, frame.shading.margin_m)) {
         return vec4<f32>(0.0);
     }
     let e = max(footprint, 4.0 * frame.atlas.d_atlas);
-    let uv = (local + frame.atlas.offset) * frame.atlas.inv_spacing;
-    let near = ring(uv, e);
-    return vec4<f32>(near, ring(uv, max(BROAD_M, 4.0 * e)).z);
+    let near = ring(local, e);
+    return vec4<f32>(near, ring(local, max(BROAD_M, 4.0 * e)).z);
 }
 
-// The land B metres around `uv` (level-0 texel coordinates), read on the level whose texels are
-// half of B: its gradient (xy) and how far the centre lies below the mean of the four points B
-// away, per metre of B (z).
-fn ring(uv: vec2<f32>, b: f32) -> vec3<f32> {
+// The land B metres around `local`, read on the level whose texels are half of B (the margin's
+// beyond the sketch, so the surface types run on across its edge): its gradient (xy) and how far
+// the centre lies below the mean of the four points B away, per metre of B (z).
+fn ring(local: vec2<f32>, b: f32) -> vec3<f32> {
     let l = u32(clamp(log2(b / frame.atlas.d_atlas) - 1.0, 0.0, f32(frame.atlas.levels - 1u)));
-    let du = b * frame.atlas.inv_spacing;
-    let h = atlas_bilinear(uv, l);
-    let east = atlas_bilinear(uv + vec2<f32>(du.x, 0.0), l);
-    let west = atlas_bilinear(uv - vec2<f32>(du.x, 0.0), l);
-    let north = atlas_bilinear(uv + vec2<f32>(0.0, du.y), l);
-    let south = atlas_bilinear(uv - vec2<f32>(0.0, du.y), l);
+    let h = ground_bilinear(local, l);
+    let east = ground_bilinear(local + vec2<f32>(b, 0.0), l);
+    let west = ground_bilinear(local - vec2<f32>(b, 0.0), l);
+    let north = ground_bilinear(local + vec2<f32>(0.0, b), l);
+    let south = ground_bilinear(local - vec2<f32>(0.0, b), l);
     let gradient = vec2<f32>(east - west, north - south) / (2.0 * b);
     return vec3<f32>(gradient, (0.25 * (east + west + north + south) - h) / b);
 }
@@ -303,11 +299,8 @@ fn ramp_albedo(h: f32) -> vec3<f32> {
 // The sketch's own height under the pixel, on the level of its footprint: the ramp colours the
 // land the user gave; the octaves below it add light, not colour.
 fn ramp_height(local: vec2<f32>, footprint: f32) -> f32 {
-    if (!on_sketch(local, 0.0)) {
-        return select(frame.shading.plain_m, frame.atlas.water_m, frame.shading.outside == 2u);
-    }
     let l = clamp(log2(max(footprint / frame.atlas.d_atlas, 1.0)), 0.0, f32(frame.atlas.levels - 1u));
-    return atlas_bilinear((local + frame.atlas.offset) * frame.atlas.inv_spacing, u32(l));
+    return ground_bilinear(local, u32(l));
 }
 #endif
 
@@ -315,17 +308,12 @@ fn ramp_height(local: vec2<f32>, footprint: f32) -> f32 {
 const SHADOW_STEPS: i32 = 40;
 
 // What can cast a shadow at `local`: the sketch (level `l`, or the water over it) on its
-// rectangle, the plain or the sea beyond it (whose flat ground casts none), nothing over the void.
+// rectangle, the margin and the plain or the sea beyond it, nothing over the void.
 fn shadow_caster(local: vec2<f32>, l: u32) -> f32 {
-    if (on_sketch(local, 0.0)) {
-        let ground = atlas_bilinear((local + frame.atlas.offset) * frame.atlas.inv_spacing, l);
-        return max(ground, frame.atlas.water_m);
+    if (frame.shading.outside == 0u && !on_sketch(local, 0.0)) {
+        return -1.0e30;
     }
-    switch frame.shading.outside {
-        case 1u: { return frame.shading.plain_m; }
-        case 2u: { return frame.atlas.water_m; }
-        default: { return -1.0e30; }
-    }
+    return max(ground_bilinear(local, l), frame.atlas.water_m);
 }
 
 #ifdef DETAIL_SHADOWS
@@ -395,21 +383,23 @@ const LEFT_SKETCH: f32 = 1.0e30;
 
 // How much of the sun the sketch leaves at `local`, read from level `l` and coarser.
 fn sketch_sun_visibility(local: vec2<f32>, l: u32) -> f32 {
-    if (!on_sketch(local, 0.0) && !meets_sketch(local)) {
+    if (!on_sketch(local, frame.shading.margin_m) && !meets_sketch(local)) {
         return clamp(0.5 + flat_clearance(local, l), 0.0, 1.0);
     }
     return clamp(0.5 + sketch_sun_clearance(local, l, true, false), 0.0, 1.0);
 }
 
-// Whether the sun ray from `local` beside the sketch crosses the sketch's rectangle below its
-// highest point (the slab test; the ray leaves from the ground beyond, `shadow_caster`).
+// Whether the sun ray from `local` beside the sketch crosses the sketch's rectangle or its margin
+// below the sketch's highest point (the slab test; the ray leaves from the ground beyond,
+// `shadow_caster`).
 fn meets_sketch(local: vec2<f32>) -> bool {
     let sun = frame.shading.sun;
+    let m = frame.shading.margin_m;
     var near = 0.0;
     var far = 1.0e30;
     for (var a = 0; a < 2; a++) {
-        let lo = sketch_lo()[a] - local[a];
-        let hi = sketch_hi()[a] - local[a];
+        let lo = sketch_lo()[a] - m - local[a];
+        let hi = sketch_hi()[a] + m - local[a];
         if (abs(sun[a]) < 1e-9) {
             if (lo > 0.0 || hi < 0.0) {
                 return false;
@@ -554,23 +544,94 @@ fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32
     return colour;
 }
 
-// The world beyond the sketch seen along `dir` from `eye`: a plain at the sketch's mean edge
-// height or the sea, to the horizon, lit and hazed like the terrain (and shadowed by it); w is 1
-// where it is seen, 0 for sky, for the sketch's own rectangle and with `sketch.outside = "void"`.
+// The margin's march: at most this many steps, then a bisection of the last.
+const MARGIN_STEPS: u32 = 160u;
+
+// Where the ray from `eye` along `dir` first meets the margin beyond the sketch: its distance, or
+// −1. Marched as the reference marches the sketch (steps of half the height above the ground, at
+// least the pixel's footprint and a quarter cell), over the box of the margin and its heights,
+// skipping the sketch's own rectangle, whose ground the mesh or the reference draws.
+fn margin_hit(eye: vec3<f32>, dir: vec3<f32>) -> f32 {
+    let m = frame.shading.margin_m;
+    // The octaves reach at most half the shore's band above or below the ground.
+    let reach = frame.detail.shore_m;
+    let water = frame.atlas.water_m;
+    let lo = vec3<f32>(sketch_lo() - m, min(frame.shading.margin_lo_m - reach, water));
+    let hi = vec3<f32>(sketch_hi() + m, max(frame.shading.margin_hi_m + reach, water));
+    let span = box_span(eye, dir, lo, hi);
+    let own = box_span(eye, dir, vec3<f32>(sketch_lo(), -3.0e38), vec3<f32>(sketch_hi(), 3.0e38));
+    var t = span.x;
+    var t_prev = span.x;
+    for (var i = 0u; i < MARGIN_STEPS && t_prev < span.y; i++) {
+        t = min(t, span.y);
+        if (t >= own.x && t < own.y) {
+            t = min(own.y, span.y);
+            t_prev = t;
+        }
+        let p = eye + dir * t;
+        let footprint = t * frame.camera.pixel_scale;
+        let above = p.z - beyond_surface(p.xy, footprint);
+        if (above <= 0.0) {
+            var a = t_prev;
+            var b = t;
+            for (var k = 0u; k < 12u; k++) {
+                let mid = 0.5 * (a + b);
+                let q = eye + dir * mid;
+                if (q.z - beyond_surface(q.xy, mid * frame.camera.pixel_scale) > 0.0) {
+                    a = mid;
+                } else {
+                    b = mid;
+                }
+            }
+            return 0.5 * (a + b);
+        }
+        t_prev = t;
+        t += max(0.5 * above, max(footprint, 0.25 * frame.atlas.d_atlas));
+    }
+    return -1.0;
+}
+
+// The margin's normal at `p`: central differences a footprint (at least a sixteenth of a cell)
+// apart, as the CPU's `Ground` takes it.
+fn beyond_normal(p: vec2<f32>, footprint: f32) -> vec3<f32> {
+    let h = max(footprint, frame.atlas.d_atlas / 16.0);
+    let dx = beyond_surface(p + vec2<f32>(h, 0.0), footprint) - beyond_surface(p - vec2<f32>(h, 0.0), footprint);
+    let dy = beyond_surface(p + vec2<f32>(0.0, h), footprint) - beyond_surface(p - vec2<f32>(0.0, h), footprint);
+    return normalize(vec3<f32>(-dx, -dy, 2.0 * h));
+}
+
+// The world beyond the sketch seen along `dir` from `eye`: the margin that joins the sketch's
+// edge to the plain or the sea (src/beyond.rs), then that plain or sea to the horizon, lit and
+// hazed like the terrain (and shadowed by it); w is 1 where it is seen, 0 for sky, for the
+// sketch's own rectangle and with `sketch.outside = "void"`.
 fn beyond(eye: vec3<f32>, dir: vec3<f32>) -> vec4<f32> {
-    let kind = frame.shading.outside;
-    // A plain below the water's surface is under water.
-    let level = select(max(frame.shading.plain_m, frame.atlas.water_m), frame.atlas.water_m, kind == 2u);
-    if (kind == 0u || dir.z >= 0.0 || eye.z <= level) {
+    if (frame.shading.outside == 0u) {
         return vec4<f32>(0.0);
     }
-    let t = (level - eye.z) / dir.z;
-    let p = eye + dir * t;
-    if (on_sketch(p.xy, 0.0)) {
-        return vec4<f32>(0.0);
+    var t = margin_hit(eye, dir);
+    var n = vec3<f32>(0.0, 0.0, 1.0);
+    var ground: vec3<f32>;
+    if (t > 0.0) {
+        let p = eye + dir * t;
+        let footprint = t * frame.camera.pixel_scale;
+        ground = vec3<f32>(p.xy, beyond_surface(p.xy, footprint));
+        if (!on_water(ground.z)) {
+            n = beyond_normal(p.xy, footprint);
+        }
+    } else {
+        // A plain below the water's surface is under water.
+        let level = max(frame.shading.plain_m, frame.atlas.water_m);
+        if (dir.z >= 0.0 || eye.z <= level) {
+            return vec4<f32>(0.0);
+        }
+        t = (level - eye.z) / dir.z;
+        let p = eye + dir * t;
+        if (on_sketch(p.xy, frame.shading.margin_m)) {
+            return vec4<f32>(0.0);
+        }
+        // At the water's height the shading draws water.
+        ground = vec3<f32>(p.xy, level);
     }
-    // At the water's height the shading draws water.
-    let ground = vec3<f32>(p.xy, level);
     let to_eye = eye - ground;
-    return vec4<f32>(aerial(lit(ground, vec3<f32>(0.0, 0.0, 1.0), to_eye, t), to_eye, t), 1.0);
+    return vec4<f32>(aerial(lit(ground, n, to_eye, t), to_eye, t), 1.0);
 }

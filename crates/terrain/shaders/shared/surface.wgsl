@@ -45,3 +45,85 @@ fn land_gradient(p: vec2<f32>, footprint: f32) -> vec2<f32> {
     let fade = shore(atlas_height(p, footprint));
     return sketch_gradient(p, footprint) + fade * surface_octaves(p, footprint).yz;
 }
+
+// The margin's ground at distance `d` beyond an edge point of height `edge` and outward slope
+// `slope`: the edge continued along its slope and faded to the level beyond over the margin,
+// within the span of the sketch and the level (the twin of src/beyond.rs's `Beyond::ground`).
+fn margin_ground(edge: f32, slope: f32, d: f32) -> f32 {
+    let m = frame.shading.margin_m;
+    let level = frame.shading.plain_m;
+    if (d >= m) {
+        return level;
+    }
+    let t = d / m;
+    let u = (1.0 - t) * (1.0 - t) * (1.0 - t);
+    let h = level + (edge - level) * margin_fade(d) + slope * d * u;
+    return clamp(h, frame.shading.margin_lo_m, frame.shading.margin_hi_m);
+}
+
+// The margin's fade: 1 at the sketch's edge, 0 from the margin's width on, flat at both ends.
+fn margin_fade(d: f32) -> f32 {
+    let t = clamp(d / frame.shading.margin_m, 0.0, 1.0);
+    return 1.0 - t * t * (3.0 - 2.0 * t);
+}
+
+// The ground beyond the sketch at `p`, off its rectangle (`sketch.outside` a plain or the sea):
+// the margin from the nearest edge point's height and slope at the footprint, with the octaves
+// fading alike, then the level; before the water.
+fn beyond_ground(p: vec2<f32>, footprint: f32) -> f32 {
+    let c = on_sketch_edge(p);
+    let off = p - c;
+    let d = length(off);
+    if (d >= frame.shading.margin_m) {
+        return frame.shading.plain_m;
+    }
+    let edge = atlas_height(c, footprint);
+    var slope = 0.0;
+    if (d > 0.0) {
+        slope = dot(sketch_gradient(c, footprint), off) / d;
+    }
+    let ground = margin_ground(edge, slope, d);
+    return ground + margin_fade(d) * shore(ground) * surface_octaves(p, footprint).x;
+}
+
+// The surface beyond the sketch at `p`: its ground, or the water over it.
+fn beyond_surface(p: vec2<f32>, footprint: f32) -> f32 {
+    return max(beyond_ground(p, footprint), frame.atlas.water_m);
+}
+
+// The margin's ground at `local` from the edge's bilinear height on level `l`, without the
+// edge's slope or the octaves: for rays that take many samples (the sun's shadow) and a ramp's
+// colour, which read the sketch bilinearly too.
+fn margin_bilinear(local: vec2<f32>, l: u32) -> f32 {
+    let c = on_sketch_edge(local);
+    let edge = atlas_bilinear((c + frame.atlas.offset) * frame.atlas.inv_spacing, l);
+    return margin_ground(edge, 0.0, distance(local, c));
+}
+
+// The part [t0, t1] of the ray from `eye` along `dir` inside the box `lo`…`hi`, or t0 > t1.
+fn box_span(eye: vec3<f32>, dir: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> vec2<f32> {
+    var t0 = 0.0;
+    var t1 = 3.0e38;
+    for (var a = 0; a < 3; a++) {
+        if (abs(dir[a]) < 1e-12) {
+            if (eye[a] < lo[a] || eye[a] > hi[a]) {
+                return vec2<f32>(1.0, 0.0);
+            }
+        } else {
+            let ta = (lo[a] - eye[a]) / dir[a];
+            let tb = (hi[a] - eye[a]) / dir[a];
+            t0 = max(t0, min(ta, tb));
+            t1 = min(t1, max(ta, tb));
+        }
+    }
+    return vec2<f32>(t0, t1);
+}
+
+// The ground's bilinear height at `local` on level `l`: the sketch on its rectangle, the margin
+// beyond it (the sketch's edge, clamped, over the void).
+fn ground_bilinear(local: vec2<f32>, l: u32) -> f32 {
+    if (frame.shading.outside == 0u || on_sketch(local, 0.0)) {
+        return atlas_bilinear((local + frame.atlas.offset) * frame.atlas.inv_spacing, l);
+    }
+    return margin_bilinear(local, l);
+}

@@ -129,7 +129,11 @@ fn uniform_structs_match_the_wgsl_field_by_field() {
                 haze_per_m,
                 haze_height_m,
                 outside,
-                plain_m
+                plain_m,
+                margin_m,
+                margin_lo_m,
+                margin_hi_m,
+                pad
             }),
             size_of::<ShadingUniforms>(),
         ),

@@ -75,8 +75,15 @@ pub struct ShadingUniforms {
     pub haze_height_m: f32,
     /// Beyond the sketch: 0 nothing, 1 a plain at `plain_m`, 2 the sea.
     pub outside: u32,
-    /// The plain's height: the mean of the sketch's edge heights.
+    /// The level the margin beyond the sketch fades to: the plain's height, or the sea floor
+    /// ([`crate::beyond::Beyond`]).
     pub plain_m: f32,
+    /// The margin's width, metres.
+    pub margin_m: f32,
+    /// The lowest and highest the margin's ground reaches.
+    pub margin_lo_m: f32,
+    pub margin_hi_m: f32,
+    pub pad: f32,
 }
 
 /// The sketch's pyramid in the atlas buffer.
@@ -331,6 +338,7 @@ impl CameraUniforms {
 
 impl ShadingUniforms {
     pub fn new(light: &Light, atlas: &Atlas, outside: Outside) -> ShadingUniforms {
+        let beyond = crate::beyond::Beyond::new(atlas, outside);
         ShadingUniforms {
             sun: light.sun.as_vec3().to_array(),
             daylight: light.daylight as f32,
@@ -345,7 +353,11 @@ impl ShadingUniforms {
                 Outside::Plain => 1,
                 Outside::Ocean => 2,
             },
-            plain_m: atlas.edge_mean_m,
+            plain_m: beyond.level_m as f32,
+            margin_m: beyond.margin_m as f32,
+            margin_lo_m: beyond.span_m[0] as f32,
+            margin_hi_m: beyond.span_m[1] as f32,
+            pad: 0.0,
         }
     }
 }

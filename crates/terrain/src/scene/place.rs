@@ -212,14 +212,19 @@ pub fn map_of_world(atlas: &Atlas, p: DVec2) -> Option<[f64; 2]> {
 }
 
 /// The surface under a world point: the sketch's ground or water, and beyond the sketch the
-/// plain (or the sea) `sketch.outside` draws there.
+/// margin into the plain (or the sea) `sketch.outside` draws there (its edge read as
+/// `ground_under` reads the sketch; over the void, the plain's height, for cameras placed there).
 pub fn surface_m(scene: &Scene, atlas: &Atlas, p: DVec2) -> Result<f64> {
-    let water = atlas.water_m as f64;
-    Ok(match super::ground_under(atlas, p)? {
-        Some(ground) => ground,
-        None if scene.outside(atlas) == Outside::Ocean => water.max(0.0),
-        None => water.max(atlas.edge_mean_m as f64),
-    })
+    if let Some(ground) = super::ground_under(atlas, p)? {
+        return Ok(ground);
+    }
+    let beyond = crate::beyond::Beyond::new(atlas, scene.outside(atlas));
+    if beyond.outside == Outside::Void {
+        return Ok((atlas.water_m as f64).max(atlas.edge_mean_m as f64));
+    }
+    let (edge, d) = crate::beyond::nearest_on(atlas.origin, atlas.max_corner(), p);
+    let edge = super::ground_under(atlas, edge)?.unwrap_or(beyond.level_m);
+    Ok(beyond.ground(edge, 0.0, d).max(atlas.water_m as f64))
 }
 
 /// The unit view direction of a heading (0 north, 90 east) and pitch (0 level, −90 down).
