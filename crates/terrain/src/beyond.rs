@@ -4,8 +4,9 @@
 //! Rules:
 //! - A point p off the sketch's rectangle, at distance d from its nearest point c on the edge,
 //!   lies in the *margin* while d < M. There the ground is the edge's height e = s(c) (the sketch
-//!   at c, at the caller's footprint) continued along the edge's outward slope g = ∇s(c)·(p − c)/d
-//!   and faded to the level L beyond:
+//!   at c, at the caller's footprint or d/2, the larger, so the edge's profile blurs outward
+//!   instead of streaking across the margin) continued along the edge's outward slope
+//!   g = ∇s(c)·(p − c)/d and faded to the level L beyond:
 //!   `L + (e − L)·w(d/M) + g·d·(1 − d/M)³`, with `w(t) = 1 − t²(3 − 2t)`,
 //!   clamped to the heights the sketch and L span. At d = 0 it is the sketch's height and slope;
 //!   at d = M the level's, flat: the terrain function is continuous in height and slope.

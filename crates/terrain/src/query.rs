@@ -135,9 +135,11 @@ impl<'a> Ground<'a> {
         if d >= self.beyond.margin_m {
             return Ok(Some(self.beyond.level_m.max(water)));
         }
-        let edge = self.sketch_at(c, footprint_m)?;
+        // The edge read ever more broadly outward, as the shaders read it.
+        let broad = footprint_m.max(0.5 * d);
+        let edge = self.sketch_at(c, broad)?;
         let slope = if d > 0.0 {
-            self.sketch_gradient(c, footprint_m)?.dot(p - c) / d
+            self.sketch_gradient(c, broad)?.dot(p - c) / d
         } else {
             0.0
         };

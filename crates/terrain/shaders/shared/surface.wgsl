@@ -77,10 +77,12 @@ fn beyond_ground(p: vec2<f32>, footprint: f32) -> f32 {
     if (d >= frame.shading.margin_m) {
         return frame.shading.plain_m;
     }
-    let edge = atlas_height(c, footprint);
+    // The edge read ever more broadly outward, so its profile does not streak across the margin.
+    let broad = max(footprint, 0.5 * d);
+    let edge = atlas_height(c, broad);
     var slope = 0.0;
     if (d > 0.0) {
-        slope = dot(sketch_gradient(c, footprint), off) / d;
+        slope = dot(sketch_gradient(c, broad), off) / d;
     }
     let ground = margin_ground(edge, slope, d);
     return ground + margin_fade(d) * shore(ground) * surface_octaves(p, footprint).x;
@@ -96,8 +98,10 @@ fn beyond_surface(p: vec2<f32>, footprint: f32) -> f32 {
 // colour, which read the sketch bilinearly too.
 fn margin_bilinear(local: vec2<f32>, l: u32) -> f32 {
     let c = on_sketch_edge(local);
-    let edge = atlas_bilinear((c + frame.atlas.offset) * frame.atlas.inv_spacing, l);
-    return margin_ground(edge, 0.0, distance(local, c));
+    let d = distance(local, c);
+    let broad = clamp(log2(max(0.5 * d / frame.atlas.d_atlas, 1.0)), 0.0, f32(frame.atlas.levels - 1u));
+    let edge = atlas_bilinear((c + frame.atlas.offset) * frame.atlas.inv_spacing, max(l, u32(broad)));
+    return margin_ground(edge, 0.0, d);
 }
 
 // The part [t0, t1] of the ray from `eye` along `dir` inside the box `lo`…`hi`, or t0 > t1.

@@ -171,9 +171,11 @@ crate::names::named_enum! {
     pub enum Outside ("outside") {
         /// Nothing: the sketch floats in the sky.
         Void = "void",
-        /// A plain at the mean height of the sketch's edges, to the horizon.
+        /// A plain at the mean height of the sketch's edges, to the horizon, joined to the edge
+        /// by a margin (no step at the border).
         Plain = "plain",
-        /// The sea, at 0 m, to the horizon.
+        /// The sea at `water_level_m`, to the horizon, the edge running down into it through the
+        /// margin.
         Ocean = "ocean",
     }
 }
