@@ -781,30 +781,32 @@ table-relief() {
 table-pictures() {
   head_line pictures
   local d=docs/pictures/gallery v
+  # Links relative to docs/evaluation.md, where the table goes.
+  local l=pictures/gallery
   mkdir -p "$d"
   echo '| picture | command |'
   echo '|---|---|'
   for v in "${VIEWS[@]}"; do
     terrain render "sketches/$v.toml" -o "$d/$v.jpg" --size 320 >/dev/null
-    echo "| ![$v]($d/$v.jpg) | \`terrain render sketches/$v.toml -o $d/$v.jpg --size 320\` |"
+    echo "| ![$v]($l/$v.jpg) | \`terrain render sketches/$v.toml -o $d/$v.jpg --size 320\` |"
   done
   local dem name
   for dem in tests/data/surface/jacksboro-utm.tif tests/data/surface/coast-4326.tif; do
     name=$(basename "$dem" .tif)
     terrain render "$dem" -o "$d/user-$name.jpg" --size 480x270 >/dev/null
-    echo "| ![$name]($d/user-$name.jpg) | \`terrain render $dem -o $d/user-$name.jpg --size 480x270\` |"
+    echo "| ![$name]($l/user-$name.jpg) | \`terrain render $dem -o $d/user-$name.jpg --size 480x270\` |"
     terrain render "$dem" -o "$d/user-$name-ramp.jpg" --size 480x270 --set surface.style='"ramp"' >/dev/null
-    echo "| ![$name, hypsometric ramp]($d/user-$name-ramp.jpg) | \`terrain render $dem -o $d/user-$name-ramp.jpg --size 480x270 --set surface.style='\"ramp\"'\` |"
+    echo "| ![$name, hypsometric ramp]($l/user-$name-ramp.jpg) | \`terrain render $dem -o $d/user-$name-ramp.jpg --size 480x270 --set surface.style='\"ramp\"'\` |"
   done
   terrain render tests/data/surface/jacksboro-utm.tif -o "$d/user-jacksboro-utm-image.jpg" --size 480x270 \
     --set surface.image='"tests/data/surface/ortho-4326.tif"' >/dev/null
-  echo "| ![jacksboro-utm with an image in EPSG:4326]($d/user-jacksboro-utm-image.jpg) | \`terrain render tests/data/surface/jacksboro-utm.tif -o $d/user-jacksboro-utm-image.jpg --size 480x270 --set surface.image='\"tests/data/surface/ortho-4326.tif\"'\` |"
+  echo "| ![jacksboro-utm with an image in EPSG:4326]($l/user-jacksboro-utm-image.jpg) | \`terrain render tests/data/surface/jacksboro-utm.tif -o $d/user-jacksboro-utm-image.jpg --size 480x270 --set surface.image='\"tests/data/surface/ortho-4326.tif\"'\` |"
   terrain render sketches/jacksboro-high.toml -o "$d/jacksboro-high-viridis.jpg" --size 320 \
     --set surface.color_ramp='"viridis"' >/dev/null
-  echo "| ![viridis]($d/jacksboro-high-viridis.jpg) | \`terrain render sketches/jacksboro-high.toml -o $d/jacksboro-high-viridis.jpg --size 320 --set surface.color_ramp='\"viridis\"'\` |"
+  echo "| ![viridis]($l/jacksboro-high-viridis.jpg) | \`terrain render sketches/jacksboro-high.toml -o $d/jacksboro-high-viridis.jpg --size 320 --set surface.color_ramp='\"viridis\"'\` |"
   terrain render tests/data/surface/jacksboro-utm.tif -o "$d/user-jacksboro-utm-gdal-ramp.jpg" --size 480x270 \
     --set surface.color_ramp='"tests/data/surface/ramp.txt"' >/dev/null
-  echo "| ![gdaldem's example ramp]($d/user-jacksboro-utm-gdal-ramp.jpg) | \`terrain render tests/data/surface/jacksboro-utm.tif -o $d/user-jacksboro-utm-gdal-ramp.jpg --size 480x270 --set surface.color_ramp='\"tests/data/surface/ramp.txt\"'\` |"
+  echo "| ![gdaldem's example ramp]($l/user-jacksboro-utm-gdal-ramp.jpg) | \`terrain render tests/data/surface/jacksboro-utm.tif -o $d/user-jacksboro-utm-gdal-ramp.jpg --size 480x270 --set surface.color_ramp='\"tests/data/surface/ramp.txt\"'\` |"
 }
 
 # ---------------------------------------------------------------------------------------------
