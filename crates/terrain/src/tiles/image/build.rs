@@ -5,8 +5,8 @@
 //! - Level 0 is cut band by band (one tile row and its borders), each band decoded from the
 //!   strips or tiles under its rows alone ([`crate::surface::tiff`]); level l is cut band by band
 //!   from level l−1's tiles. What is held at once is a band, the file's chunk rows under it and
-//!   one tile per encoding thread, whatever the image's height: about 12 bytes per pixel of
-//!   width (docs/decisions.md, “Image pyramids”).
+//!   one tile per encoding thread, whatever the image's height: about 2 KB per pixel of width
+//!   for a file tiled by 256 rows (docs/decisions.md, “Image pyramids”).
 //! - Resuming is the heights' (`tiles::build`): `build.json` fingerprints the source and the
 //!   kind, tiles are renamed into place, a band whose tiles are all whole is skipped, and
 //!   `pyramid.toml` is written last.
