@@ -16,6 +16,7 @@ fn bench_tiles(c: &mut Criterion) {
     let opts = BuildOptions {
         load: Default::default(),
         threads: 1,
+        ..Default::default()
     };
     build(&src, &out, &opts).expect("jacksboro converts");
     let pyramid = Pyramid::open(&out).expect("the pyramid opens");

@@ -10,6 +10,9 @@
 #   `gdaldem color-relief` of jacksboro-utm.tif with it, on the DEM's own grid.
 # - ortho-4326.tif: that image warped to EPSG:4326 (RGBA), and ortho-west.png/.pgw: its west
 #   half as a PNG with a world file, for imagery draped over jacksboro-utm.tif.
+# - ortho.jpg/.jgw: jacksboro-ramp.tif as a JPEG with a world file.
+# - ortho-fine.tif: the middle 4,096 m of jacksboro-ramp.tif at 4 m pixels (1024², bilinear),
+#   tiled 256² with DEFLATE: finer than a drape over the whole DEM can hold, for image pyramids.
 #
 # The files are committed; run this again only to change them:
 #
@@ -90,5 +93,10 @@ with open(sys.argv[2], "w") as f:
 PY
 # The same image with no georeference at all, which cannot be placed.
 gdal_translate -q -of GTiff -co PROFILE=BASELINE -outsize 64 64 "$out/jacksboro-ramp.tif" "$out/ortho-plain.tif"
+# The JPEG driver writes its world file as .wld; .jgw is the name most orthophotos come with.
+gdal_translate -q -of JPEG -co WORLDFILE=YES -co QUALITY=90 "$out/jacksboro-ramp.tif" "$out/ortho.jpg"
+mv "$out/ortho.wld" "$out/ortho.jgw"
+gdal_translate -q -projwin 207567 4056348 211663 4052252 -outsize 1024 1024 -r bilinear \
+  -co TILED=YES -co COMPRESS=DEFLATE -co PREDICTOR=2 "$out/jacksboro-ramp.tif" "$out/ortho-fine.tif"
 rm -f "$out"/*.aux.xml
 gdalinfo --version > "$out/GDAL_VERSION"

@@ -488,3 +488,286 @@ fn a_coast_has_few_isolated_shore_pixels() {
     eprintln!("coast at 512²: {pools} water and {islets} land regions under 4 pixels");
     assert!(pools <= 40 && islets <= 5, "{pools} {islets}");
 }
+
+/// The imagery at `image` draped over jacksboro-utm.tif by the library.
+fn drape_over_utm(image: &Path) -> terrain::Result<terrain::surface::Drape> {
+    let dem = manifest_dir().join("tests/data/surface/jacksboro-utm.tif");
+    let atlas = terrain::Atlas::load(&dem, &Default::default()).unwrap();
+    terrain::surface::drape(image, &atlas)
+}
+
+/// Per-channel r between two drapes of one grid over the texels both cover fully.
+fn drape_r(a: &terrain::surface::Drape, b: &terrain::surface::Drape) -> [f64; 3] {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    let both: Vec<(&[u8], &[u8])> = a
+        .rgba
+        .chunks_exact(4)
+        .zip(b.rgba.chunks_exact(4))
+        .filter(|(p, q)| p[3] == 255 && q[3] == 255)
+        .collect();
+    assert!(both.len() > 20_000, "{} texels covered by both", both.len());
+    let r = [0, 1, 2].map(|c| {
+        let pairs: Vec<(f64, f64)> = both
+            .iter()
+            .map(|(p, q)| (p[c] as f64, q[c] as f64))
+            .collect();
+        pearson(&pairs)
+    });
+    eprintln!("per-channel r over {} texels: {r:.4?}", both.len());
+    r
+}
+
+#[test]
+fn a_jpeg_with_a_world_file_drapes_as_the_geotiff_does() {
+    let data = manifest_dir().join("tests/data/surface");
+    let dem = data.join("jacksboro-utm.tif");
+    // GDAL's JPEG of gdaldem's image, placed by its .jgw in the sketch's coordinates.
+    let jpeg = data.join("ortho.jpg");
+    let set = format!("surface.image={:?}", jpeg.to_str().unwrap());
+    let (_, rgba, world) = render_down(&dem, 40_000.0, "ortho-jpeg", &["--set", &set]);
+    for (c, r) in against_gdaldem(&rgba, &world).iter().enumerate() {
+        assert!(*r >= 0.9, "channel {c}: r = {r:.3} against the draped JPEG");
+    }
+    // The drape itself against the GeoTIFF's: the same texels but for JPEG's loss.
+    let from_jpeg = drape_over_utm(&jpeg).unwrap();
+    let from_tiff = drape_over_utm(&data.join("jacksboro-ramp.tif")).unwrap();
+    for (c, r) in drape_r(&from_jpeg, &from_tiff).iter().enumerate() {
+        assert!(
+            *r >= 0.98,
+            "channel {c}: r = {r:.4} between the JPEG's and the GeoTIFF's drapes"
+        );
+    }
+    // GDAL's own name for the world file, .wld, and .jpeg: the same drape.
+    let dir = scratch("picture-jpeg-wld");
+    std::fs::copy(&jpeg, dir.join("ortho.jpeg")).unwrap();
+    std::fs::copy(data.join("ortho.jgw"), dir.join("ortho.wld")).unwrap();
+    let from_wld = drape_over_utm(&dir.join("ortho.jpeg")).unwrap();
+    assert_eq!(from_wld.rgba, from_jpeg.rgba);
+}
+
+#[test]
+fn a_bad_jpeg_is_one_line() {
+    let data = manifest_dir().join("tests/data/surface");
+    let dir = scratch("picture-bad-jpeg");
+    let bytes = std::fs::read(data.join("ortho.jpg")).unwrap();
+    let world = std::fs::read(data.join("ortho.jgw")).unwrap();
+    let cases: [(&str, Vec<u8>, bool, &str); 4] = [
+        (
+            "truncated",
+            bytes[..bytes.len() / 2].to_vec(),
+            true,
+            "truncated",
+        ),
+        (
+            "garbage",
+            b"not a JPEG at all, only words".to_vec(),
+            true,
+            "JPEG",
+        ),
+        ("unplaced", bytes.clone(), false, "no world file"),
+        (
+            "flipped",
+            bytes.iter().map(|b| b ^ 0x20).collect(),
+            true,
+            "JPEG",
+        ),
+    ];
+    let dem = data.join("jacksboro-utm.tif");
+    let out = dir.join("x.png");
+    for (name, jpeg, with_world, expect) in cases {
+        let path = dir.join(format!("{name}.jpg"));
+        std::fs::write(&path, jpeg).unwrap();
+        if with_world {
+            std::fs::write(dir.join(format!("{name}.jgw")), &world).unwrap();
+        }
+        let err = refused(
+            &dem,
+            &out,
+            &format!("surface.image={:?}", path.to_str().unwrap()),
+        );
+        let lines: Vec<&str> = err.lines().filter(|l| !l.starts_with("warning:")).collect();
+        assert_eq!(lines.len(), 1, "{name}: {err}");
+        assert!(
+            err.contains("surface image")
+                && err.contains(&format!("{name}.jpg"))
+                && err.contains(expect),
+            "{name}: {err}"
+        );
+    }
+}
+
+/// `terrain tiles SRC --out-dir DIR --json` (with `extra` arguments), which must succeed: its
+/// JSON.
+fn tiles(src: &Path, dir: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        "tiles",
+        src.to_str().unwrap(),
+        "--out-dir",
+        dir.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    args.push("--json");
+    let (code, out, err) = terrain(&args);
+    assert_eq!(code, 0, "{err}");
+    serde_json::from_str(&out).unwrap()
+}
+
+#[test]
+fn an_image_pyramid_drapes_as_the_image_it_was_made_of() {
+    let data = manifest_dir().join("tests/data/surface");
+    let dir = scratch("picture-image-pyramid");
+    // An RGBA image in strips, in EPSG:4326 over the UTM sketch: its pixels (about 110 m) are
+    // coarser than the drape's texels, so the drape reads level 0, and the window of it under
+    // the sketch gives the drape of the image read whole, texel for texel.
+    let ortho = data.join("ortho-4326.tif");
+    let pyramid = dir.join("ortho-4326");
+    let json = tiles(&ortho, &pyramid, &[]);
+    assert_eq!(json["kind"], "image", "{json}");
+    let meta = std::fs::read_to_string(pyramid.join("pyramid.toml")).unwrap();
+    assert!(
+        meta.contains("kind = \"image\"") && meta.contains("samples = \"rgba\""),
+        "{meta}"
+    );
+    let whole = drape_over_utm(&ortho).unwrap();
+    let tiled = drape_over_utm(&pyramid).unwrap();
+    assert_eq!(
+        (tiled.width, tiled.height, tiled.texel),
+        (whole.width, whole.height, whole.texel)
+    );
+    assert!(
+        tiled.rgba == whole.rgba,
+        "the pyramid's drape differs from the image's"
+    );
+    // So does the picture, through the scene.
+    let set = |p: &Path| format!("surface.image={:?}", p.to_str().unwrap());
+    let dem = data.join("jacksboro-utm.tif");
+    let (_, a, _) = render_down(&dem, 40_000.0, "pyramid", &["--set", &set(&pyramid)]);
+    let (_, b, _) = render_down(&dem, 40_000.0, "pyramid-whole", &["--set", &set(&ortho)]);
+    assert!(
+        a == b,
+        "the picture over the pyramid differs from the picture over the image"
+    );
+
+    // A tiled RGB GeoTIFF of 4 m pixels over the DEM's middle 4 km: 3.8 of them to a texel of
+    // the drape over the whole DEM (at most 2048 a side), so the drape reads level 2, whose
+    // pixels are nearest the texels; the others are removed to show that it reads no other.
+    let fine = data.join("ortho-fine.tif");
+    let pyramid = dir.join("ortho-fine");
+    let json = tiles(&fine, &pyramid, &[]);
+    assert_eq!(
+        (json["width"].as_u64(), json["levels"].as_u64()),
+        (Some(1024), Some(10))
+    );
+    let levels: Vec<_> = std::fs::read_dir(&pyramid)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .collect();
+    // Resuming: a level and pyramid.toml lost are written again, and only they.
+    std::fs::remove_dir_all(pyramid.join("L1")).unwrap();
+    std::fs::remove_file(pyramid.join("pyramid.toml")).unwrap();
+    let again = tiles(&fine, &pyramid, &[]);
+    assert_eq!(again["tiles_written"].as_u64(), Some(4), "{again}");
+    for level in levels
+        .iter()
+        .filter(|p| p.file_name().unwrap().to_str().unwrap().starts_with('L'))
+    {
+        if level.file_name().unwrap() != "L2" {
+            std::fs::remove_dir_all(level).unwrap();
+        }
+    }
+    let whole = drape_over_utm(&fine).unwrap();
+    let tiled = drape_over_utm(&pyramid).unwrap();
+    assert!(
+        (tiled.covered - whole.covered).abs() < 0.002,
+        "{} against {}",
+        tiled.covered,
+        whole.covered
+    );
+    for (c, r) in drape_r(&tiled, &whole).iter().enumerate() {
+        assert!(
+            *r >= 0.98,
+            "channel {c}: r = {r:.4} between level 2's drape and the image's"
+        );
+    }
+    // A damaged tile of that level is one line naming it.
+    let tile = pyramid.join("L2/0/0.tile");
+    let bytes = std::fs::read(&tile).unwrap();
+    std::fs::write(&tile, &bytes[..bytes.len() / 2]).unwrap();
+    let err = drape_over_utm(&pyramid).unwrap_err().to_string();
+    assert!(
+        err.starts_with("surface image")
+            && err.contains("L2/0/0.tile")
+            && err.contains("truncated"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_pyramid_in_the_other_role_is_one_line() {
+    let data = manifest_dir().join("tests/data/surface");
+    let dir = scratch("picture-pyramid-roles");
+    let dem = data.join("jacksboro-utm.tif");
+    let heights = dir.join("heights");
+    assert_eq!(tiles(&dem, &heights, &[])["kind"], "heights");
+    // 8-bit grey could be heights: so it is, unless --image says it is an image.
+    let grey = dir.join("grey.tif");
+    write_grey_utm(&grey);
+    assert_eq!(
+        tiles(&grey, &dir.join("grey-heights"), &[])["kind"],
+        "heights"
+    );
+    let image = dir.join("image");
+    assert_eq!(tiles(&grey, &image, &["--image"])["kind"], "image");
+    assert!(drape_over_utm(&image).unwrap().covered > 0.9);
+    let out = dir.join("x.png");
+    let err = refused(
+        &dem,
+        &out,
+        &format!("surface.image={:?}", heights.to_str().unwrap()),
+    );
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("surface image")
+            && err.contains("pyramid.toml")
+            && err.contains("holds heights"),
+        "{err}"
+    );
+    let (code, _, err) = terrain(&[
+        "render",
+        image.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--size",
+        "32",
+    ]);
+    assert_ne!(code, 0);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("sketch") && err.contains("pyramid.toml") && err.contains("holds an image"),
+        "{err}"
+    );
+}
+
+/// A 64² 8-bit grey GeoTIFF in UTM 17N over the Jacksboro DEM, 500 m pixels.
+fn write_grey_utm(path: &Path) {
+    use tiff::encoder::{TiffEncoder, colortype::Gray8};
+    use tiff::tags::Tag;
+    let mut enc = TiffEncoder::new(std::fs::File::create(path).unwrap()).unwrap();
+    let mut image = enc.new_image::<Gray8>(64, 64).unwrap();
+    let dir = image.encoder();
+    dir.write_tag(Tag::ModelPixelScaleTag, &[500.0f64, 500.0, 0.0][..])
+        .unwrap();
+    dir.write_tag(
+        Tag::ModelTiepointTag,
+        &[0.0f64, 0.0, 0.0, 194_000.0, 4_071_000.0, 0.0][..],
+    )
+    .unwrap();
+    // Projected (1024 = 1), pixel-is-area (1025 = 1), EPSG:32617 (3072).
+    let keys: [u16; 16] = [1, 1, 0, 3, 1024, 0, 1, 1, 1025, 0, 1, 1, 3072, 0, 1, 32617];
+    dir.write_tag(Tag::GeoKeyDirectoryTag, &keys[..]).unwrap();
+    let data: Vec<u8> = (0..64 * 64)
+        .map(|k| (((k % 64) * 4) ^ ((k / 64) * 4)) as u8)
+        .collect();
+    image.write_data(&data).unwrap();
+}

@@ -14,7 +14,11 @@ use tiff::encoder::{Compression, TiffEncoder, colortype::Gray32Float};
 use tiff::tags::Tag;
 
 fn convert_with(src: &Path, out: &Path, load: LoadOptions) -> terrain::tiles::BuildSummary {
-    let opts = BuildOptions { load, threads: 2 };
+    let opts = BuildOptions {
+        load,
+        threads: 2,
+        ..Default::default()
+    };
     build(src, out, &opts).unwrap_or_else(|e| panic!("tiles {}: {e}", src.display()))
 }
 
@@ -288,7 +292,11 @@ fn heights_in_another_unit_are_refused_after_level_0_and_again_on_a_second_run()
         height_scale: Some(1e5),
         ..LoadOptions::default()
     };
-    let opts = BuildOptions { load, threads: 2 };
+    let opts = BuildOptions {
+        load,
+        threads: 2,
+        ..Default::default()
+    };
     for run in 0..2 {
         let err = build(&src, &out, &opts).unwrap_err().to_string();
         assert!(err.contains("beyond ±1000 km"), "run {run}: {err}");

@@ -25,8 +25,9 @@ pub struct SurfaceSection {
     /// `natural`, `ramp` or `image`; without it, `image` where `image` is given, else `ramp`
     /// where `color_ramp` is, else `natural`.
     pub style: Option<Style>,
-    /// Imagery draped over the ground: an RGB or RGBA GeoTIFF (or COG), or a PNG with a world
-    /// file, relative to the scene file, placed by its georeference.
+    /// Imagery draped over the ground: an RGB, RGBA or grey GeoTIFF (or COG), a PNG or JPEG
+    /// with a world file, or an image pyramid's folder (`terrain tiles`), relative to the scene
+    /// file, placed by its georeference.
     pub image: Option<PathBuf>,
     /// A colour ramp file in gdaldem `color-relief`'s text format, relative to the scene file, or
     /// a built-in ramp's name (`hypsometric`, `viridis`); without it, `ramp` uses `hypsometric`.

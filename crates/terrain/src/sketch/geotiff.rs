@@ -235,7 +235,9 @@ fn chunk_name<R: Read + Seek>(dec: &Decoder<R>) -> &'static str {
 }
 
 /// Refuses the compressions the `tiff` crate cannot read, by name.
-fn refuse_compression<R: Read + Seek>(dec: &mut Decoder<R>) -> std::result::Result<(), String> {
+pub(crate) fn refuse_compression<R: Read + Seek>(
+    dec: &mut Decoder<R>,
+) -> std::result::Result<(), String> {
     let code: u16 = dec
         .find_tag_unsigned(Tag::Compression)
         .map_err(|e| format!("TIFF compression tag unreadable: {e}"))?
@@ -255,7 +257,7 @@ fn refuse_compression<R: Read + Seek>(dec: &mut Decoder<R>) -> std::result::Resu
     ))
 }
 
-fn gdal_nodata<R: Read + Seek>(dec: &mut Decoder<R>) -> Option<f64> {
+pub(crate) fn gdal_nodata<R: Read + Seek>(dec: &mut Decoder<R>) -> Option<f64> {
     let ptr = dec.ifd_pointer()?;
     let dir = dec.read_directory(ptr).ok()?;
     if dir.get(Tag::GdalNodata)?.count() > MAX_NODATA_CHARS {

@@ -27,7 +27,10 @@ pub(crate) mod synthetic;
 mod xyz;
 
 pub use georef::{Georef, US_SURVEY_FOOT_M, Units};
-pub(crate) use geotiff::{Windows as TiffWindows, georef as tiff_georef, open as open_tiff};
+pub(crate) use geotiff::{
+    Windows as TiffWindows, gdal_nodata, georef as tiff_georef, open as open_tiff,
+    refuse_compression,
+};
 pub(crate) use load::{Beyond, scale_cells, scale_heights};
 pub use load::{
     Extent, GridHeader, LoadOptions, RawGrid, parse_grid, read_grid, read_header, warnings,

@@ -3,7 +3,9 @@
 //! ([`image`]), resampled onto the sketch's grid.
 
 pub mod image;
+mod picture;
 pub mod ramp;
+pub(crate) mod tiff;
 
 pub use image::{Drape, drape};
 pub use ramp::{ColorRamp, Stop};

@@ -25,7 +25,7 @@
 
 mod bands;
 mod level0;
-mod resume;
+pub(super) mod resume;
 mod scratch;
 
 use super::codec::{HEADER_BYTES, TileHeader};
@@ -34,12 +34,13 @@ use crate::error::{Error, Result, Role};
 use crate::io::write_atomic;
 use crate::sketch::LoadOptions;
 use crate::sketch::mosaic;
+pub(in crate::tiles) use bands::band_rows;
 pub(super) use bands::read_rows;
 use bands::{coarser_band, write_band};
-use level0::is_tiff;
+pub(in crate::tiles) use level0::is_tiff;
 use resume::{Plan, remove_temporaries, stamp, start_or_resume, tile_is_whole};
 pub use scratch::georef_of;
-use scratch::meta_georef;
+pub(in crate::tiles) use scratch::meta_georef;
 use serde::Serialize;
 use std::os::unix::fs::FileExt;
 use std::path::Path;
@@ -52,12 +53,17 @@ pub struct BuildOptions {
     pub load: LoadOptions,
     /// Threads that encode a band's tiles (0: all cores).
     pub threads: usize,
+    /// Converts an 8-bit grey GeoTIFF as an image, not as heights (RGB and RGBA ones are
+    /// images whatever this says).
+    pub image: bool,
 }
 
 /// What a build did, for the command's report.
 #[derive(Clone, Debug, Serialize)]
 pub struct BuildSummary {
-    /// Level 0's nodes per row.
+    /// What the pyramid holds: `heights` or `image`.
+    pub kind: super::Kind,
+    /// Level 0's nodes (an image's pixels) per row.
     pub width: usize,
     /// Level 0's rows.
     pub height: usize,
@@ -78,7 +84,8 @@ pub struct BuildSummary {
 /// Converts `src` into a pyramid in `out` (created, or resumed where a run stopped).
 ///
 /// `src` is any sketch file or a quoted glob of tiles on one grid; a scene whose `sketch.path`
-/// names `out` then streams it.
+/// names `out` then streams it. A GeoTIFF of 8-bit RGB or RGBA pixels (or grey ones, with
+/// [`BuildOptions::image`]) is an image: its pyramid ([`super::image`]) is for `surface.image`.
 ///
 /// ```no_run
 /// use std::path::Path;
@@ -97,6 +104,9 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
     if super::is_pyramid(src) {
         return Err(Error::sketch(src, "is a tile pyramid already"));
     }
+    if is_image(src, opts.image) {
+        return super::image::build(src, out, opts);
+    }
     let sources = if mosaic::is_glob(src) {
         mosaic::list_glob(src)?
     } else {
@@ -104,6 +114,7 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
     };
     let plan = Plan {
         format: FORMAT.into(),
+        kind: super::Kind::Heights,
         sources: sources.iter().map(|p| stamp(p)).collect::<Result<_>>()?,
         spacing_m: opts.load.spacing_m,
         height_scale: opts.load.height_scale,
@@ -114,6 +125,7 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
         // Whole already: nothing to read or write.
         let meta = super::Pyramid::open(out)?.meta;
         return Ok(BuildSummary {
+            kind: super::Kind::Heights,
             width: meta.width,
             height: meta.height,
             levels: meta.levels.len(),
@@ -131,6 +143,7 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
     let levels = level_sizes(width, height);
     let mut meta = Meta {
         format: FORMAT.into(),
+        kind: super::Kind::Heights,
         source: src.display().to_string(),
         width,
         height,
@@ -194,6 +207,7 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
     write_atomic(&out.join(META), toml_text(&meta)?.as_bytes())?;
     let _ = std::fs::remove_dir_all(&scratch_dir);
     Ok(BuildSummary {
+        kind: super::Kind::Heights,
         width,
         height,
         levels: meta.levels.len(),
@@ -203,6 +217,15 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
         disk_bytes: folder_bytes(out),
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// Whether `src` is converted as an image: a single GeoTIFF whose pixels are 8-bit RGB or RGBA
+/// (a height map has one sample), or anything when `asked` (whose reading then says what it is
+/// not). 8-bit grey is heights unless asked: a DEM may be stored in bytes.
+fn is_image(src: &Path, asked: bool) -> bool {
+    use crate::surface::tiff::{Samples, samples_of};
+    let rgb = || matches!(samples_of(src), Some(Samples::Rgb | Samples::Rgba));
+    asked || (!mosaic::is_glob(src) && is_tiff(src) && rgb())
 }
 
 /// Refuses a sketch whose bands (a tile row and its borders, at level 0's width) would hold more
@@ -271,7 +294,7 @@ fn toml_text(meta: &Meta) -> Result<String> {
     toml::to_string(meta).map_err(|e| Error::encode("pyramid.toml", e))
 }
 
-fn folder_bytes(dir: &Path) -> u64 {
+pub(in crate::tiles) fn folder_bytes(dir: &Path) -> u64 {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return 0;
     };

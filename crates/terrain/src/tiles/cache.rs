@@ -520,6 +520,7 @@ mod tests {
         let opts = super::super::BuildOptions {
             load: Default::default(),
             threads: 1,
+            ..Default::default()
         };
         super::super::build(&src, &out, &opts).unwrap();
         Pyramid::open(&out).unwrap()

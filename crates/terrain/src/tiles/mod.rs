@@ -1,7 +1,11 @@
 //! Tile pyramids: a sketch on disk as fixed-size tiles of every mip level, for sketches larger than
 //! memory (`terrain tiles SRC --out-dir DIR` writes one; a scene's `sketch.path = "DIR"` reads it).
+//! An image larger than memory is cut the same way ([`image`]; `surface.image = "DIR"`).
 //!
 //! Rules:
+//! - `pyramid.toml` says what the pyramid holds (`kind`, [`Kind`]; one without it holds
+//!   heights): a pyramid given in the other role is refused in one line naming the role, before
+//!   any tile is read.
 //! - Level 0 is the sketch's grid in metres, nodata filled; level l is the 2×2 box average of level
 //!   l−1 with sizes halved rounding down, down to the last level whose sides are both ≥ 2: the
 //!   pyramid of [`crate::sketch::Atlas`], computed in the same f32 order, so a pyramid of a sketch
@@ -28,12 +32,16 @@ pub(crate) mod blocks;
 pub(crate) mod build;
 pub(crate) mod cache;
 mod codec;
+pub mod image;
 pub(crate) mod read;
 
 pub use blocks::{measure as measure_blocks, set_keep_figures};
 pub use build::{BuildOptions, BuildSummary, build};
 pub use cache::StreamStats;
+pub use image::ImagePyramid;
 pub use read::{Pyramid, raw_grid_within};
+
+use crate::error::{Error, Result, Role};
 
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -49,12 +57,55 @@ pub const META: &str = "pyramid.toml";
 /// `format` in `pyramid.toml`: bumped when the layout changes.
 pub(crate) const FORMAT: &str = "terrain-tiles 1";
 
+/// What a pyramid holds: `kind` in `pyramid.toml`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Kind {
+    /// A height map in metres (`sketch.path`); a `pyramid.toml` without `kind` holds heights.
+    #[default]
+    Heights,
+    /// RGBA8 imagery ([`image`], `surface.image`).
+    Image,
+}
+
+impl Kind {
+    /// What the kind is, in a message's words.
+    pub(crate) fn noun(self) -> &'static str {
+        match self {
+            Kind::Heights => "heights",
+            Kind::Image => "an image",
+        }
+    }
+}
+
+/// The `kind` of the pyramid whose `pyramid.toml` is at `path`, read before the rest of the file
+/// so that a pyramid of the other kind is named as such rather than as unknown keys. `role` is
+/// what the caller takes the folder for.
+pub(crate) fn kind_of(path: &Path, role: Role) -> Result<Kind> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(role, path, e))?;
+    let table: toml::Table =
+        toml::from_str(&text).map_err(|e| Error::decode(role, path, "a pyramid.toml", e))?;
+    match table.get("kind") {
+        None => Ok(Kind::Heights),
+        Some(v) => Kind::deserialize(v.clone()).map_err(|_| {
+            Error::file(
+                role,
+                path,
+                format!("kind = {v} is not a kind this terrain reads (heights, image)"),
+            )
+        }),
+    }
+}
+
 /// `pyramid.toml`: what the pyramid holds, in the sketch's terms.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Meta {
     /// The layout's name and version, `terrain-tiles 1`; another is refused.
     pub format: String,
+    /// [`Kind::Heights`]: written by every build, absent from pyramids made before it was.
+    #[serde(default)]
+    pub kind: Kind,
     /// What it was converted from, for `terrain info`.
     pub source: String,
     /// Level 0's nodes per row (west to east).

@@ -15,7 +15,7 @@
 
 pub use super::build::georef_of as georef;
 use super::codec::decode_tile;
-use super::{FORMAT, META, Meta, level_sizes, tile_path};
+use super::{FORMAT, Kind, META, Meta, level_sizes, tile_path};
 use crate::error::{Error, Result, Role};
 use crate::sketch::{LoadOptions, RawGrid, max_cells};
 use std::path::{Path, PathBuf};
@@ -45,6 +45,17 @@ impl Pyramid {
     /// Reads and checks `DIR/pyramid.toml`.
     pub fn open(dir: &Path) -> Result<Pyramid> {
         let path = dir.join(META);
+        let kind = super::kind_of(&path, Role::Sketch)?;
+        if kind != Kind::Heights {
+            return Err(Error::sketch(
+                &path,
+                format!(
+                    "the pyramid holds {} (kind = \"image\"), not heights: give it as \
+                     surface.image, and sketch.path a height map",
+                    kind.noun()
+                ),
+            ));
+        }
         let text = std::fs::read_to_string(&path).map_err(|e| Error::io(Role::Sketch, &path, e))?;
         let meta: Meta = toml::from_str(&text)
             .map_err(|e| Error::decode(Role::Sketch, &path, "a pyramid.toml", e))?;

@@ -73,7 +73,7 @@ pub(in crate::tiles) fn read_rows(
 }
 
 /// The rows a band of tile row `ty` holds, clamped to a level of `h` rows.
-pub(super) fn band_rows(ty: usize, h: usize) -> (usize, usize) {
+pub(in crate::tiles) fn band_rows(ty: usize, h: usize) -> (usize, usize) {
     let r0 = (ty * TILE).saturating_sub(BORDER);
     let r1 = ((ty + 1) * TILE + BORDER).min(h);
     (r0, r1)
