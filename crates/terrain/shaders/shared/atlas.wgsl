@@ -263,3 +263,50 @@ fn sketch_gradient(local: vec2<f32>, footprint: f32) -> vec2<f32> {
     }
     return g * frame.atlas.inv_spacing;
 }
+
+// The bicubic's height (x) and gradient per level-0 texel (yz) on level `l` from one set of 16
+// loads: for rays that need both at every step (the margin beyond the sketch).
+fn height_gradient_in(t: Texels, uv: vec2<f32>, l: u32) -> vec3<f32> {
+    let x = level_coords(uv, l);
+    let i = floor(x);
+    let f = x - i;
+    let wx = catmull_rom(f.x);
+    let wy = catmull_rom(f.y);
+    let dx = catmull_rom_d(f.x);
+    let dy = catmull_rom_d(f.y);
+    let ix = i32(i.x);
+    let iy = i32(i.y);
+    var h = vec3<f32>(0.0);
+    for (var r = 0; r < 4; r++) {
+        let v = vec4<f32>(
+            load(t, ix - 1, iy - 1 + r),
+            load(t, ix, iy - 1 + r),
+            load(t, ix + 1, iy - 1 + r),
+            load(t, ix + 2, iy - 1 + r),
+        );
+        h += vec3<f32>(wy[r] * dot(wx, v), wy[r] * dot(dx, v) / f32(1u << l), dy[r] * dot(wx, v) / f32(1u << l));
+    }
+    return h;
+}
+
+fn atlas_level_height_gradient(uv: vec2<f32>, l: u32) -> vec3<f32> {
+    let r = resolve(uv, l);
+    let h = height_gradient_in(r.texels, uv, r.level);
+    if (r.fade >= 1.0) {
+        return h;
+    }
+    return mix(height_gradient_in(r.coarser_texels, uv, r.coarser), h, r.fade);
+}
+
+// `atlas_height` and `sketch_gradient` at once (x: metres; yz: metres per metre).
+fn atlas_height_gradient(local: vec2<f32>, footprint: f32) -> vec3<f32> {
+    let uv = (local + frame.atlas.offset) * frame.atlas.inv_spacing;
+    let lod = clamp(log2(max(footprint, 1e-6) / frame.atlas.d_atlas), 0.0, f32(frame.atlas.levels - 1u));
+    let l0 = u32(lod);
+    let t = lod - f32(l0);
+    var h = atlas_level_height_gradient(uv, l0);
+    if (t > 0.0 && l0 + 1u < frame.atlas.levels) {
+        h = mix(h, atlas_level_height_gradient(uv, l0 + 1u), t);
+    }
+    return vec3<f32>(h.x, h.yz * frame.atlas.inv_spacing);
+}

@@ -544,12 +544,14 @@ fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32
     return colour;
 }
 
-// The margin's march: at most this many steps, then a bisection of the last.
+// The margin's march: at most this many steps, then a bisection of the last in MARGIN_HALVINGS.
 const MARGIN_STEPS: u32 = 160u;
+const MARGIN_HALVINGS: u32 = 5u;
 
 // Where the ray from `eye` along `dir` first meets the margin beyond the sketch: its distance, or
-// −1. Marched as the reference marches the sketch (steps of half the height above the ground, at
-// least the pixel's footprint and a quarter cell), over the box of the margin and its heights,
+// −1. Marched as the reference marches the sketch, in longer steps over the smooth margin (0.9 of
+// the height above the ground, at least the pixel's footprint and a quarter cell; a step that
+// passes under it is bisected), over the box of the margin and its heights,
 // skipping the sketch's own rectangle, whose ground the mesh or the reference draws.
 fn margin_hit(eye: vec3<f32>, dir: vec3<f32>) -> f32 {
     let m = frame.shading.margin_m;
@@ -574,7 +576,7 @@ fn margin_hit(eye: vec3<f32>, dir: vec3<f32>) -> f32 {
         if (above <= 0.0) {
             var a = t_prev;
             var b = t;
-            for (var k = 0u; k < 12u; k++) {
+            for (var k = 0u; k < MARGIN_HALVINGS; k++) {
                 let mid = 0.5 * (a + b);
                 let q = eye + dir * mid;
                 if (q.z - beyond_surface(q.xy, mid * frame.camera.pixel_scale) > 0.0) {
@@ -586,18 +588,19 @@ fn margin_hit(eye: vec3<f32>, dir: vec3<f32>) -> f32 {
             return 0.5 * (a + b);
         }
         t_prev = t;
-        t += max(0.5 * above, max(footprint, 0.25 * frame.atlas.d_atlas));
+        t += max(0.9 * above, max(footprint, 0.25 * frame.atlas.d_atlas));
     }
     return -1.0;
 }
 
-// The margin's normal at `p`: central differences a footprint (at least a sixteenth of a cell)
-// apart, as the CPU's `Ground` takes it.
-fn beyond_normal(p: vec2<f32>, footprint: f32) -> vec3<f32> {
+// The margin's normal at `p`, whose surface lies at `z`: forward differences a footprint (at
+// least a sixteenth of a cell) apart. The margin is smooth at that scale, and two samples are
+// half the central differences' cost.
+fn beyond_normal(p: vec2<f32>, z: f32, footprint: f32) -> vec3<f32> {
     let h = max(footprint, frame.atlas.d_atlas / 16.0);
-    let dx = beyond_surface(p + vec2<f32>(h, 0.0), footprint) - beyond_surface(p - vec2<f32>(h, 0.0), footprint);
-    let dy = beyond_surface(p + vec2<f32>(0.0, h), footprint) - beyond_surface(p - vec2<f32>(0.0, h), footprint);
-    return normalize(vec3<f32>(-dx, -dy, 2.0 * h));
+    let dx = beyond_surface(p + vec2<f32>(h, 0.0), footprint) - z;
+    let dy = beyond_surface(p + vec2<f32>(0.0, h), footprint) - z;
+    return normalize(vec3<f32>(-dx, -dy, h));
 }
 
 // The world beyond the sketch seen along `dir` from `eye`: the margin that joins the sketch's
@@ -616,7 +619,7 @@ fn beyond(eye: vec3<f32>, dir: vec3<f32>) -> vec4<f32> {
         let footprint = t * frame.camera.pixel_scale;
         ground = vec3<f32>(p.xy, beyond_surface(p.xy, footprint));
         if (!on_water(ground.z)) {
-            n = beyond_normal(p.xy, footprint);
+            n = beyond_normal(p.xy, ground.z, footprint);
         }
     } else {
         // A plain below the water's surface is under water.

@@ -79,12 +79,12 @@ fn beyond_ground(p: vec2<f32>, footprint: f32) -> f32 {
     }
     // The edge read ever more broadly outward, so its profile does not streak across the margin.
     let broad = max(footprint, 0.5 * d);
-    let edge = atlas_height(c, broad);
+    let edge = atlas_height_gradient(c, broad);
     var slope = 0.0;
     if (d > 0.0) {
-        slope = dot(sketch_gradient(c, broad), off) / d;
+        slope = dot(edge.yz, off) / d;
     }
-    let ground = margin_ground(edge, slope, d);
+    let ground = margin_ground(edge.x, slope, d);
     return ground + margin_fade(d) * shore(ground) * surface_octaves(p, footprint).x;
 }
 
@@ -99,8 +99,16 @@ fn beyond_surface(p: vec2<f32>, footprint: f32) -> f32 {
 fn margin_bilinear(local: vec2<f32>, l: u32) -> f32 {
     let c = on_sketch_edge(local);
     let d = distance(local, c);
-    let broad = clamp(log2(max(0.5 * d / frame.atlas.d_atlas, 1.0)), 0.0, f32(frame.atlas.levels - 1u));
-    let edge = atlas_bilinear((c + frame.atlas.offset) * frame.atlas.inv_spacing, max(l, u32(broad)));
+    // The edge read ever more broadly outward, as `beyond_ground` reads it, linear between levels
+    // so no level's end draws a line along the margin.
+    let top = f32(frame.atlas.levels - 1u);
+    let broad = clamp(log2(max(0.5 * d / frame.atlas.d_atlas, 1.0)), f32(l), top);
+    let l0 = u32(broad);
+    let uv = (c + frame.atlas.offset) * frame.atlas.inv_spacing;
+    var edge = atlas_bilinear(uv, l0);
+    if (broad > f32(l0) && l0 + 1u < frame.atlas.levels) {
+        edge = mix(edge, atlas_bilinear(uv, l0 + 1u), broad - f32(l0));
+    }
     return margin_ground(edge, 0.0, d);
 }
 
