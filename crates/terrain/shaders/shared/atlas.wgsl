@@ -215,57 +215,16 @@ fn catmull_rom_d(f: f32) -> vec4<f32> {
     return vec4<f32>(-1.5 * f2 + 2.0 * f - 0.5, 4.5 * f2 - 5.0 * f, -4.5 * f2 + 4.0 * f + 0.5, 1.5 * f2 - f);
 }
 
-fn gradient_in(t: Texels, uv: vec2<f32>, l: u32) -> vec2<f32> {
-    let x = level_coords(uv, l);
-    let i = floor(x);
-    let f = x - i;
-    let wx = catmull_rom(f.x);
-    let wy = catmull_rom(f.y);
-    let dx = catmull_rom_d(f.x);
-    let dy = catmull_rom_d(f.y);
-    let ix = i32(i.x);
-    let iy = i32(i.y);
-    var g = vec2<f32>(0.0);
-    for (var r = 0; r < 4; r++) {
-        let v = vec4<f32>(
-            load(t, ix - 1, iy - 1 + r),
-            load(t, ix, iy - 1 + r),
-            load(t, ix + 1, iy - 1 + r),
-            load(t, ix + 2, iy - 1 + r),
-        );
-        g += vec2<f32>(wy[r] * dot(dx, v), dy[r] * dot(wx, v));
-    }
-    return g / f32(1u << l);
-}
-
-// The bicubic's gradient on level `l` at level-0 texel coordinates `uv`, per level-0 texel.
-fn atlas_level_gradient(uv: vec2<f32>, l: u32) -> vec2<f32> {
-    let r = resolve(uv, l);
-    let g = gradient_in(r.texels, uv, r.level);
-    if (r.fade >= 1.0) {
-        return g;
-    }
-    return mix(gradient_in(r.coarser_texels, uv, r.coarser), g, r.fade);
-}
-
 // The sketch's gradient at `local` for a footprint of `footprint` metres: the derivative of the
 // height `atlas_height` gives there (the bicubic on the footprint's pyramid level, linear
 // between two), in metres per metre. Analytic rather than central differences: 32 loads where
 // the four heights take 128.
 fn sketch_gradient(local: vec2<f32>, footprint: f32) -> vec2<f32> {
-    let uv = (local + frame.atlas.offset) * frame.atlas.inv_spacing;
-    let lod = clamp(log2(max(footprint, 1e-6) / frame.atlas.d_atlas), 0.0, f32(frame.atlas.levels - 1u));
-    let l0 = u32(lod);
-    let t = lod - f32(l0);
-    var g = atlas_level_gradient(uv, l0);
-    if (t > 0.0 && l0 + 1u < frame.atlas.levels) {
-        g = mix(g, atlas_level_gradient(uv, l0 + 1u), t);
-    }
-    return g * frame.atlas.inv_spacing;
+    return atlas_height_gradient(local, footprint).yz;
 }
 
-// The bicubic's height (x) and gradient per level-0 texel (yz) on level `l` from one set of 16
-// loads: for rays that need both at every step (the margin beyond the sketch).
+// The bicubic's height (x) and gradient per level-0 texel (yz) on level `l`, from one set of 16
+// loads: the gradient alone costs the same, and rays beyond the sketch need both at every step.
 fn height_gradient_in(t: Texels, uv: vec2<f32>, l: u32) -> vec3<f32> {
     let x = level_coords(uv, l);
     let i = floor(x);
@@ -284,9 +243,9 @@ fn height_gradient_in(t: Texels, uv: vec2<f32>, l: u32) -> vec3<f32> {
             load(t, ix + 1, iy - 1 + r),
             load(t, ix + 2, iy - 1 + r),
         );
-        h += vec3<f32>(wy[r] * dot(wx, v), wy[r] * dot(dx, v) / f32(1u << l), dy[r] * dot(wx, v) / f32(1u << l));
+        h += vec3<f32>(wy[r] * dot(wx, v), wy[r] * dot(dx, v), dy[r] * dot(wx, v));
     }
-    return h;
+    return vec3<f32>(h.x, h.yz / f32(1u << l));
 }
 
 fn atlas_level_height_gradient(uv: vec2<f32>, l: u32) -> vec3<f32> {
