@@ -88,7 +88,8 @@ pub fn encode_tile(heights: &[f32], side: usize, min_m: f32, max_m: f32, nodata:
     out
 }
 
-fn compress(bytes: &[u8]) -> Vec<u8> {
+/// `bytes` as one zstd frame with its checksum, at the pyramids' level.
+pub(super) fn compress(bytes: &[u8]) -> Vec<u8> {
     let mut c = zstd::bulk::Compressor::new(LEVEL).expect("zstd accepts its default level");
     c.include_checksum(true)
         .expect("zstd accepts the checksum flag");

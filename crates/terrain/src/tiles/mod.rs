@@ -177,18 +177,28 @@ impl Meta {
 
     /// Tiles of level `l` along x and y.
     pub fn tiles(&self, l: usize) -> (usize, usize) {
-        let [w, h] = self.levels[l];
-        (w.div_ceil(self.tile), h.div_ceil(self.tile))
+        tiles_of(self.levels[l], self.tile)
     }
     /// Tiles in the whole pyramid.
     pub fn tile_count(&self) -> usize {
-        (0..self.levels.len())
-            .map(|l| {
-                let (x, y) = self.tiles(l);
-                x * y
-            })
-            .sum()
+        tile_count(&self.levels, self.tile)
     }
+}
+
+/// Tiles of `tile`² nodes along x and y over a level of `[w, h]` nodes (heights or pixels).
+fn tiles_of([w, h]: [usize; 2], tile: usize) -> (usize, usize) {
+    (w.div_ceil(tile), h.div_ceil(tile))
+}
+
+/// Tiles over every level of a pyramid.
+fn tile_count(levels: &[[usize; 2]], tile: usize) -> usize {
+    levels
+        .iter()
+        .map(|&l| {
+            let (x, y) = tiles_of(l, tile);
+            x * y
+        })
+        .sum()
 }
 
 /// Node counts of every level of a `width` × `height` grid (the atlas's rule).

@@ -28,6 +28,7 @@ mod build;
 
 pub(crate) use build::build;
 
+use super::codec::compress;
 use super::{FORMAT, Kind, META, MetaGeoref, level_sizes, tile_path};
 use crate::error::{Error, Result, Role};
 use crate::sketch::Georef;
@@ -37,8 +38,6 @@ use std::path::{Path, PathBuf};
 const MAGIC: &[u8; 4] = b"TTI1";
 /// Bytes before the zstd frame.
 pub(crate) const HEADER_BYTES: usize = 12;
-/// zstd's level: its default, as the heights'.
-const LEVEL: i32 = 3;
 
 /// `pyramid.toml` of an image pyramid.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -69,17 +68,11 @@ pub struct ImageMeta {
 impl ImageMeta {
     /// Tiles of level `l` along x and y.
     pub fn tiles(&self, l: usize) -> (usize, usize) {
-        let [w, h] = self.levels[l];
-        (w.div_ceil(self.tile), h.div_ceil(self.tile))
+        super::tiles_of(self.levels[l], self.tile)
     }
     /// Tiles in the whole pyramid.
     pub fn tile_count(&self) -> usize {
-        (0..self.levels.len())
-            .map(|l| {
-                let (x, y) = self.tiles(l);
-                x * y
-            })
-            .sum()
+        super::tile_count(&self.levels, self.tile)
     }
 }
 
@@ -210,14 +203,6 @@ fn predicted(rgba: &[u8], side: usize) -> Vec<u8> {
         }
     }
     out
-}
-
-fn compress(bytes: &[u8]) -> Vec<u8> {
-    let mut c = zstd::bulk::Compressor::new(LEVEL).expect("zstd accepts its default level");
-    c.include_checksum(true)
-        .expect("zstd accepts the checksum flag");
-    c.compress(bytes)
-        .expect("zstd compresses into a grown buffer")
 }
 
 /// A tile's side and payload length from its first [`HEADER_BYTES`].
