@@ -16,6 +16,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 use terrain::Camera;
+use terrain::readback::Readback;
 use terrain::{Description, Targets, Terrain};
 use winit::application::ApplicationHandler;
 use winit::event::WindowEvent;
@@ -134,7 +135,7 @@ impl App {
         self.frame += 1;
         if last {
             if let (Some(path), Some((w, h, rgba))) = (&self.o.screenshot, shot) {
-                terrain_cli::app::output::write_image(path, w, h, &rgba)?;
+                write_png(path, w, h, &rgba)?;
             }
             event_loop.exit();
         } else {
@@ -189,7 +190,7 @@ impl Gpu {
         let terrain = Terrain::new(&device, &queue, targets, description)?;
         // The mast stands where the camera looks, a third of the way there, on the ground.
         let look = start.eye + start.forward * 2000.0;
-        let ground = terrain.height_at(look.x, look.y)?.unwrap_or(0.0);
+        let ground = terrain.ground().height_at(look.truncate(), 0.0)?.unwrap_or(0.0);
         let foot = glam::DVec3::new(look.x, look.y, ground);
         let mast = Mast::new(&device, format);
         let depth = depth_view(&device, config.width, config.height);
@@ -251,20 +252,31 @@ impl Gpu {
         self.draw_into(&mut encoder, &frame.texture, &camera)?;
         // The screenshot: the surface's texture where it allows copies, else the same frame drawn
         // again into a texture that does.
+        let copy;
         let readback = if shot {
-            match Readback::record(&self.device, &mut encoder, &frame.texture) {
-                Some(r) => Some(r),
-                None => {
-                    let copy = self.offscreen(&frame.texture);
+            let copyable = frame
+                .texture
+                .usage()
+                .contains(wgpu::TextureUsages::COPY_SRC);
+            let source = match copyable {
+                true => &frame.texture,
+                false => {
+                    copy = self.offscreen(&frame.texture);
                     self.draw_into(&mut encoder, &copy, &camera)?;
-                    Readback::record(&self.device, &mut encoder, &copy)
+                    &copy
                 }
-            }
+            };
+            let readback = Readback::new(&self.device, source)?;
+            readback.record(&mut encoder, source)?;
+            Some((source.width(), source.height(), readback))
         } else {
             None
         };
         self.queue.submit([encoder.finish()]);
-        let image = readback.map(|r| r.read(&self.device)).transpose()?;
+        let image = match readback {
+            Some((w, h, r)) => Some((w, h, r.read_rgba(&self.device)?)),
+            None => None,
+        };
         self.queue.present(frame);
         Ok(image)
     }
@@ -454,75 +466,16 @@ impl Mast {
     }
 }
 
-/// A copy of the surface's texture for the screenshot, where the surface allows copies.
-struct Readback {
-    buffer: wgpu::Buffer,
-    width: u32,
-    height: u32,
-    row: u32,
-    bgra: bool,
-}
-
-impl Readback {
-    fn record(
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        texture: &wgpu::Texture,
-    ) -> Option<Readback> {
-        if !texture.usage().contains(wgpu::TextureUsages::COPY_SRC) {
-            // The caller draws the frame into a copyable texture instead.
-            return None;
-        }
-        let (width, height) = (texture.width(), texture.height());
-        let row = (width * 4).div_ceil(256) * 256;
-        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("screenshot"),
-            size: (row * height) as u64,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        encoder.copy_texture_to_buffer(
-            texture.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row),
-                    rows_per_image: None,
-                },
-            },
-            texture.size(),
-        );
-        let bgra = matches!(
-            texture.format(),
-            wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
-        );
-        Some(Readback {
-            buffer,
-            width,
-            height,
-            row,
-            bgra,
-        })
-    }
-
-    fn read(self, device: &wgpu::Device) -> anyhow::Result<(u32, u32, Vec<u8>)> {
-        self.buffer
-            .slice(..)
-            .map_async(wgpu::MapMode::Read, |r| r.expect("screenshot mapped"));
-        device.poll(wgpu::PollType::wait_indefinitely())?;
-        let bytes = self.buffer.slice(..).get_mapped_range()?;
-        let mut rgba = Vec::with_capacity((self.width * self.height * 4) as usize);
-        for y in 0..self.height as usize {
-            for px in bytes[y * self.row as usize..][..self.width as usize * 4].chunks_exact(4) {
-                let (r, b) = if self.bgra {
-                    (px[2], px[0])
-                } else {
-                    (px[0], px[2])
-                };
-                rgba.extend([r, px[1], b, 255]);
-            }
-        }
-        Ok((self.width, self.height, rgba))
-    }
+/// `rgba` written as an opaque 8-bit RGBA PNG at `path`.
+fn write_png(path: &std::path::Path, width: u32, height: u32, rgba: &[u8]) -> anyhow::Result<()> {
+    let opaque: Vec<u8> = rgba
+        .chunks_exact(4)
+        .flat_map(|p| [p[0], p[1], p[2], 255])
+        .collect();
+    let file = std::io::BufWriter::new(std::fs::File::create(path)?);
+    let mut encoder = png::Encoder::new(file, width, height);
+    encoder.set_color(png::ColorType::Rgba);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.write_header()?.write_image_data(&opaque)?;
+    Ok(())
 }

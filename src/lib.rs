@@ -8,3 +8,9 @@
 
 pub mod app;
 pub mod eval;
+
+/// docs/embedding.md's host, compiled with the doctests so that the page cannot drift from the
+/// API it describes.
+#[cfg(doctest)]
+#[doc = include_str!("../docs/embedding.md")]
+pub struct Embedding;

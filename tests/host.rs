@@ -1,15 +1,13 @@
 //! The host API: a test opens its own device, creates its own colour and depth textures, and
 //! draws a bundled scene into them through `terrain::Terrain`; the bytes equal `terrain
-//! render`'s. Then a host object of its own, drawn after the terrain with the terrain's
-//! view-projection and depth, shows only where the terrain does not hide it.
+//! render`'s. A host's own geometry around the terrain, picking and size errors are tested as an
+//! application outside the workspace meets them, in `tests/host-app`.
 
 // The test is the host: it creates its own textures and buffers, outside the library's ledger.
 #![allow(clippy::disallowed_methods)]
 
 mod common;
 use common::*;
-use glam::DVec3;
-use terrain::Ground;
 use terrain::scene::{self, Scene};
 use terrain::{Description, Targets, Terrain, clear};
 
@@ -54,35 +52,7 @@ fn target(device: &wgpu::Device, format: wgpu::TextureFormat) -> wgpu::Texture {
 
 /// RGBA8 of `texture`, rows top first.
 fn read(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::Texture) -> Vec<u8> {
-    let row = (SIZE * 4).div_ceil(256) * 256;
-    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-        label: None,
-        size: (row * SIZE) as u64,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    encoder.copy_texture_to_buffer(
-        texture.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row),
-                rows_per_image: None,
-            },
-        },
-        texture.size(),
-    );
-    queue.submit([encoder.finish()]);
-    buffer
-        .slice(..)
-        .map_async(wgpu::MapMode::Read, |r| r.unwrap());
-    device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
-    let bytes = buffer.slice(..).get_mapped_range().unwrap();
-    (0..SIZE as usize)
-        .flat_map(|y| bytes[y * row as usize..][..SIZE as usize * 4].to_vec())
-        .collect()
+    terrain::readback::read_texture(device, queue, texture).unwrap()
 }
 
 fn jacksboro() -> Scene {
@@ -116,198 +86,6 @@ fn a_host_texture_holds_the_bytes_terrain_render_writes() {
     );
     // And the read-back helper gives the same.
     assert_eq!(terrain.render_to_image(&camera).unwrap(), drawn);
-}
-
-/// A host's wall standing across the valley, beyond the near ridges: red, flat.
-const WALL: &str = r#"
-@group(0) @binding(0) var<uniform> view_proj: mat4x4<f32>;
-@vertex
-fn vs(@location(0) p: vec3<f32>) -> @builtin(position) vec4<f32> {
-    return view_proj * vec4<f32>(p, 1.0);
-}
-@fragment
-fn fs() -> @location(0) vec4<f32> {
-    return vec4<f32>(1.0, 0.0, 0.0, 1.0);
-}
-"#;
-
-#[test]
-fn the_terrains_depth_hides_a_host_object_where_the_terrain_is_nearer() {
-    let scene = jacksboro();
-    let description = Description::new(scene.clone()).unwrap();
-    let (device, queue) = host_device(&description);
-    let camera = description.camera(SIZE, SIZE).unwrap();
-    let mut terrain = Terrain::new(&device, &queue, TARGETS, description).unwrap();
-    let colour = target(&device, TARGETS.colour);
-    let depth = target(&device, TARGETS.depth);
-
-    // The wall: y = 12 km, x 5–25 km, from 0 to 3 km up, relative to the frame's origin.
-    let origin = Terrain::frame_origin(&camera);
-    let corner = |x: f64, z: f64| (DVec3::new(x, 12_000.0, z) - origin).as_vec3().to_array();
-    let quad: [[f32; 3]; 6] = [
-        corner(5e3, 0.0),
-        corner(25e3, 0.0),
-        corner(25e3, 3e3),
-        corner(5e3, 0.0),
-        corner(25e3, 3e3),
-        corner(5e3, 3e3),
-    ];
-    let vertices = wgpu::util::DeviceExt::create_buffer_init(
-        &device,
-        &wgpu::util::BufferInitDescriptor {
-            label: Some("wall"),
-            contents: bytemuck::cast_slice(&quad),
-            usage: wgpu::BufferUsages::VERTEX,
-        },
-    );
-    let matrix = Terrain::view_proj(&camera).to_cols_array();
-    let uniform = wgpu::util::DeviceExt::create_buffer_init(
-        &device,
-        &wgpu::util::BufferInitDescriptor {
-            label: Some("view_proj"),
-            contents: bytemuck::cast_slice(&matrix),
-            usage: wgpu::BufferUsages::UNIFORM,
-        },
-    );
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("wall"),
-        source: wgpu::ShaderSource::Wgsl(WALL.into()),
-    });
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("wall"),
-        layout: None,
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs"),
-            compilation_options: Default::default(),
-            buffers: &[Some(wgpu::VertexBufferLayout {
-                array_stride: 12,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &wgpu::vertex_attr_array![0 => Float32x3],
-            })],
-        },
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs"),
-            compilation_options: Default::default(),
-            targets: &[Some(TARGETS.colour.into())],
-        }),
-        primitive: Default::default(),
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: TARGETS.depth,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        multiview_mask: None,
-        cache: None,
-    });
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[wgpu::BindGroupEntry {
-            binding: 0,
-            resource: uniform.as_entire_binding(),
-        }],
-    });
-
-    terrain.prepare(&camera).unwrap();
-    let mut encoder = device.create_command_encoder(&Default::default());
-    let (cv, dv) = (
-        colour.create_view(&Default::default()),
-        depth.create_view(&Default::default()),
-    );
-    clear(&mut encoder, &cv, &dv);
-    terrain.record(&mut encoder, &cv, &dv).unwrap();
-    {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("host geometry"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &cv,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &dv,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.set_vertex_buffer(0, vertices.slice(..));
-        pass.draw(0..6, 0..1);
-    }
-    queue.submit([encoder.finish()]);
-    let image = read(&device, &queue, &colour);
-
-    // Each pixel's ray: where the terrain (the reference's surface) and the wall lie along it.
-    let atlas = scene::load_atlas(&scene).unwrap();
-    let detail = scene::detail_of(&scene, &atlas);
-    let ground = Ground::new(&scene, &atlas, &detail);
-    let (mut hidden, mut shown, mut wrong) = (0, 0, Vec::new());
-    for y in 0..SIZE {
-        for x in 0..SIZE {
-            let ndc = [
-                (x as f64 + 0.5) / SIZE as f64 * 2.0 - 1.0,
-                1.0 - (y as f64 + 0.5) / SIZE as f64 * 2.0,
-            ];
-            let dir = (camera.forward
-                + camera.right * ndc[0] * camera.tan_half_x()
-                + camera.up * ndc[1] * camera.tan_half_y())
-            .normalize();
-            if dir.y <= 0.0 {
-                continue;
-            }
-            let t_wall = (12_000.0 - camera.eye.y) / dir.y;
-            let at = camera.eye + dir * t_wall;
-            if !(5e3..=25e3).contains(&at.x) || !(0.0..=3e3).contains(&at.z) {
-                continue;
-            }
-            let hit = ground.ray_cast(camera.eye, dir, 0.0).unwrap();
-            let t_ground = hit.map_or(f64::INFINITY, |h| h.distance(camera.eye));
-            let px = &image[((y * SIZE + x) * 4) as usize..][..4];
-            let red = px[0] == 255 && px[1] == 0 && px[2] == 0;
-            if t_ground < 0.95 * t_wall {
-                hidden += 1;
-                if red {
-                    wrong.push(format!(
-                        "({x}, {y}) red, the terrain {t_ground:.0} m, the wall {t_wall:.0} m"
-                    ));
-                }
-            } else if t_ground > 1.05 * t_wall {
-                shown += 1;
-                if !red {
-                    wrong.push(format!(
-                        "({x}, {y}) not red: {px:?}, the wall {t_wall:.0} m in front"
-                    ));
-                }
-            }
-        }
-    }
-    assert!(
-        hidden > 100 && shown > 100,
-        "hidden {hidden}, shown {shown}: move the wall"
-    );
-    assert!(
-        wrong.len() <= (hidden + shown) / 100,
-        "{} of {}:\n{}",
-        wrong.len(),
-        hidden + shown,
-        wrong.join("\n")
-    );
 }
 
 /// A planet through the same API: the clipmaps' frame in the host's texture is `terrain render`'s.

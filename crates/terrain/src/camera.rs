@@ -148,6 +148,42 @@ impl Camera {
         0.5 * self.height as f64 / self.tan_half_y()
     }
 
+    /// The direction from the eye through `pixel`, scaled to 1 along `forward`. `pixel` is in
+    /// pixels from the image's top-left corner, x right and y down; pixel (i, j)'s centre is
+    /// (i + ½, j + ½). With `ndc = (2·x/width − 1, 1 − 2·y/height)` it is
+    /// `forward + ndc.x·tan(fov_x/2)·right + ndc.y·tan(fov_y/2)·up`.
+    pub fn pixel_ray(&self, pixel: DVec2) -> DVec3 {
+        let ndc_x = 2.0 * pixel.x / self.width as f64 - 1.0;
+        let ndc_y = 1.0 - 2.0 * pixel.y / self.height as f64;
+        self.forward
+            + self.right * (ndc_x * self.tan_half_x())
+            + self.up * (ndc_y * self.tan_half_y())
+    }
+
+    /// The point seen at `pixel` (as [`Camera::pixel_ray`] places it) at reversed-Z `depth`, the
+    /// depth the terrain writes: `depth = near / w` with `w` the distance along `forward`, so the
+    /// point is `eye + (near / depth)·pixel_ray(pixel)`, in the camera's world metres (a
+    /// planet camera's: its tangent frame). `None` for depth 0 (sky: reversed-Z's infinitely
+    /// far plane) or anything but a depth in (0, 1].
+    ///
+    /// ```
+    /// use glam::{DVec2, DVec3};
+    /// use terrain::Camera;
+    ///
+    /// let cam = Camera::new(DVec3::new(0.0, 0.0, 100.0), DVec3::new(0.0, 1000.0, 0.0), 60.0, 640, 480, 5000.0)?;
+    /// let centre = DVec2::new(320.0, 240.0);
+    /// let p = cam.unproject(centre, cam.near / 500.0).unwrap();
+    /// assert!((p - (cam.eye + cam.forward * 500.0)).length() < 1e-9);
+    /// assert_eq!(cam.unproject(centre, 0.0), None);
+    /// # Ok::<(), terrain::Error>(())
+    /// ```
+    pub fn unproject(&self, pixel: DVec2, depth: f64) -> Option<DVec3> {
+        if !(depth > 0.0 && depth <= 1.0 && pixel.is_finite()) {
+            return None;
+        }
+        Some(self.eye + self.pixel_ray(pixel) * (self.near / depth))
+    }
+
     /// The four side planes (through the eye) and the far plane, inward normals.
     pub fn planes(&self) -> [Plane; 5] {
         let (tx, ty) = (self.tan_half_x(), self.tan_half_y());

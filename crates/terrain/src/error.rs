@@ -98,6 +98,17 @@ pub enum Error {
     /// A camera that cannot be built (NaN, eye at its own target, zero-size image).
     #[error("camera: {0}")]
     Camera(String),
+    /// A host's view that does not fit the prepared frame: another size than the prepared
+    /// camera's image, or another sample count than the terrain's targets.
+    #[error("target: the {view} view is {got}, the prepared frame is {expected}")]
+    Target {
+        /// Which view: "colour" or "depth".
+        view: &'static str,
+        /// What the prepared frame needs, e.g. "640×360, 1 sample".
+        expected: String,
+        /// What the view is.
+        got: String,
+    },
     /// A limit of the adapter below what a scene needs; `limit` is wgpu's name for it.
     #[error(
         "GPU: {what} needs {needed}{unit} of `{limit}`, the adapter allows {allowed}{unit}{advice}"

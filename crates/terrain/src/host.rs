@@ -37,7 +37,7 @@ use crate::render::{Renderer, needs};
 use crate::scene::{self, Mode, Scene};
 use crate::sketch::Atlas;
 use crate::stage::StageTimes;
-use glam::{DVec2, DVec3, Mat4};
+use glam::{DVec3, Mat4, UVec2};
 
 /// What a terrain is made from: a scene (sketch, detail, light, mode and its settings) with its
 /// sketch read.
@@ -221,18 +221,41 @@ impl Terrain {
     }
 
     /// Records the prepared frame into `encoder`, writing it into `colour` and `depth` (views of
-    /// textures of this terrain's [`Targets`], the size of the prepared camera's image).
+    /// textures of this terrain's [`Targets`], the size of the prepared camera's image; another
+    /// size or sample count is an [`Error::Target`](crate::Error::Target)). Each pixel is
+    /// depth-tested `GreaterEqual` against what the host drew before, so host geometry nearer
+    /// than the terrain stays.
     pub fn record(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         colour: &wgpu::TextureView,
         depth: &wgpu::TextureView,
     ) -> Result<()> {
+        self.check("colour", colour)?;
+        self.check("depth", depth)?;
         self.renderer.host_record(encoder)?;
         self.output
             .record(encoder, &self.output_group, colour, depth);
         self.recorded = true;
         Ok(())
+    }
+
+    /// An error where `view` is not of the prepared frame's size or the targets' sample count.
+    fn check(&self, name: &'static str, view: &wgpu::TextureView) -> Result<()> {
+        let texture = view.texture();
+        let got = (texture.width(), texture.height(), texture.sample_count());
+        let expected = (self.size.0, self.size.1, self.targets.samples);
+        if got == expected {
+            return Ok(());
+        }
+        let say = |(w, h, n): (u32, u32, u32)| {
+            format!("{w}×{h}, {n} sample{}", if n == 1 { "" } else { "s" })
+        };
+        Err(crate::Error::Target {
+            view: name,
+            expected: say(expected),
+            got: say(got),
+        })
     }
 
     /// The point the frame's positions are relative to, world metres: host geometry is drawn
@@ -248,12 +271,18 @@ impl Terrain {
         crate::gpu::uniforms::view_proj(camera, origin).as_mat4()
     }
 
-    /// The terrain's height at world point (x, y), as the reference draws it (the finest detail):
-    /// for standing things on the ground. `None` where nothing is drawn.
-    pub fn height_at(&self, x: f64, y: f64) -> Result<Option<f64>> {
-        let atlas = self.renderer.atlas();
-        let ground = Ground::new(&self.scene, atlas, &self.renderer.detail);
-        ground.height_at(DVec2::new(x, y), 0.0)
+    /// The ground this terrain draws, with its own sketch and detail (as resolved for its
+    /// mode): heights, normals and ray casts as the reference draws them, for standing things
+    /// on the ground and for picking.
+    pub fn ground(&self) -> Ground<'_> {
+        Ground::new(&self.scene, self.renderer.atlas(), &self.renderer.detail)
+    }
+
+    /// The world point a host read at `pixel` of the depth view this terrain drew into:
+    /// [`Camera::unproject`] at the pixel's centre (`pixel + ½`). `None` where the depth is 0
+    /// (sky). Host geometry drawn there is picked alike.
+    pub fn pick(camera: &Camera, pixel: UVec2, depth: f32) -> Option<DVec3> {
+        camera.unproject(pixel.as_dvec2() + 0.5, depth as f64)
     }
 
     /// Draws `camera`'s frame into textures of its own and reads the colour back: rows top
@@ -269,7 +298,7 @@ impl Terrain {
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         self.renderer.host_record(&mut encoder)?;
         self.recorded = true;
-        snapshot.record(&mut encoder, &self.output, &self.output_group);
+        snapshot.record(&mut encoder, &self.output, &self.output_group)?;
         self.ctx.queue.submit([encoder.finish()]);
         snapshot.read(&self.ctx)
     }

@@ -123,12 +123,17 @@ mod names;
 pub mod planet;
 pub mod progress;
 mod query;
+pub mod readback;
 mod render;
 pub mod scene;
 pub mod sketch;
 pub mod stage;
 pub mod surface;
 pub mod tiles;
+
+// The versions of wgpu and glam the API's types are of, for a host to name them by.
+pub use glam;
+pub use wgpu;
 
 pub use camera::{Camera, Geo};
 pub use detail::Detail;

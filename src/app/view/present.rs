@@ -11,7 +11,6 @@
 
 mod cpu;
 mod overlay;
-mod readback;
 mod surface;
 
 pub(super) use cpu::CpuPath;

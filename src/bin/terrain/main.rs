@@ -82,11 +82,12 @@ enum Command {
 const USAGE: i32 = 2;
 
 fn main() {
-    // Mesa's EGL probes for a Wayland display whenever an adapter is requested; where
-    // XDG_RUNTIME_DIR is unset (a container, a CI job, ssh) libwayland then prints an error line
-    // about a display nobody asked for, breaking the one-line-error rule. Pointing it at the
-    // temporary folder makes the probe fail quietly instead; a real Wayland session always sets it.
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none()
+    // Mesa's Vulkan device-select layer connects to a Wayland display whenever an adapter is
+    // requested; where XDG_RUNTIME_DIR is unset or empty (a container, a CI job, ssh) libwayland
+    // then prints an error line about a display nobody asked for, breaking the one-line-error
+    // rule. Pointing it at the temporary folder makes the probe fail quietly instead; a real
+    // Wayland session always sets it.
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none_or(|v| v.is_empty())
         && std::env::var_os("WAYLAND_DISPLAY").is_none()
     {
         // SAFETY: the first statement of main, before any thread exists.

@@ -4,7 +4,8 @@
 use super::alloc::{Alloc, Buffer, Tracked};
 use super::context::GpuContext;
 use super::uniforms::FrameUniforms;
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::readback::Readback;
 use crate::scene::Scene;
 use crate::sketch::Atlas;
 use serde::de::{Deserializer, MapAccess, Visitor};
@@ -280,59 +281,6 @@ impl Timer {
     }
 }
 
-/// The colour target copied to a mappable buffer, rows padded to the copy alignment.
-pub struct ColourReadback {
-    buffer: Buffer,
-    width: u32,
-    height: u32,
-}
-
-impl ColourReadback {
-    pub fn new(device: &Alloc, width: u32, height: u32) -> ColourReadback {
-        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: padded_row(width) as u64 * height as u64,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        ColourReadback {
-            buffer,
-            width,
-            height,
-        }
-    }
-
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, colour: &wgpu::Texture) {
-        encoder.copy_texture_to_buffer(
-            colour.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &self.buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(padded_row(self.width)),
-                    rows_per_image: None,
-                },
-            },
-            wgpu::Extent3d {
-                width: self.width,
-                height: self.height,
-                depth_or_array_layers: 1,
-            },
-        );
-    }
-
-    /// RGBA8 rows, top first, without the padding.
-    pub fn read(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
-        let padded = padded_row(self.width) as usize;
-        let row = self.width as usize * 4;
-        read_buffer(ctx, &self.buffer, |bytes| {
-            (0..self.height as usize)
-                .flat_map(|y| bytes[y * padded..y * padded + row].iter().copied())
-                .collect()
-        })
-    }
-}
-
 /// Each pixel's ground position from its view depth (clip w, metres: its f32 bits in an
 /// Rgba8Unorm copy, low byte first, as `raster.wgsl` writes them): the pixel centre at
 /// reversed-Z depth `near / w`, computed and unprojected in f64 with `view_proj` (metres from its
@@ -344,59 +292,41 @@ pub fn positions_from_depth(
     near: f64,
 ) -> Result<Vec<[f32; 4]>> {
     let (width, height) = (depth.width(), depth.height());
-    let padded = padded_row(width);
-    let staging = staging(ctx, "depth readback", padded as u64 * height as u64);
+    let alloc = Alloc {
+        device: &ctx.device,
+        ledger: &Default::default(),
+    };
+    let readback = Readback::counted(&alloc, width, height, depth.format())?;
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    encoder.copy_texture_to_buffer(
-        depth.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &staging,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded),
-                rows_per_image: None,
-            },
-        },
-        wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        },
-    );
+    readback.record(&mut encoder, depth)?;
     ctx.queue.submit([encoder.finish()]);
+    let texels = readback.read(&ctx.device)?;
     let inverse = view_proj.inverse();
-    read_buffer(ctx, &staging, |bytes| {
-        let mut out = Vec::with_capacity((width * height) as usize);
-        for y in 0..height as usize {
-            let row = &bytes[y * padded as usize..][..width as usize * 4];
-            for (x, b) in row.chunks_exact(4).enumerate() {
-                let w = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-                // Sky, and anything but a finite depth in front of the eye.
-                if !(w > 0.0 && w.is_finite()) {
-                    out.push([0.0; 4]);
-                    continue;
-                }
-                let ndc = glam::DVec4::new(
-                    (x as f64 + 0.5) / width as f64 * 2.0 - 1.0,
-                    1.0 - (y as f64 + 0.5) / height as f64 * 2.0,
-                    near / w as f64,
-                    1.0,
-                );
-                let p = inverse * ndc;
-                out.push([
-                    (p.x / p.w) as f32,
-                    (p.y / p.w) as f32,
-                    (p.z / p.w) as f32,
-                    1.0,
-                ]);
+    let mut out = Vec::with_capacity((width * height) as usize);
+    for (y, row) in texels.chunks_exact(width as usize * 4).enumerate() {
+        for (x, b) in row.chunks_exact(4).enumerate() {
+            let w = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+            // Sky, and anything but a finite depth in front of the eye.
+            if !(w > 0.0 && w.is_finite()) {
+                out.push([0.0; 4]);
+                continue;
             }
+            let ndc = glam::DVec4::new(
+                (x as f64 + 0.5) / width as f64 * 2.0 - 1.0,
+                1.0 - (y as f64 + 0.5) / height as f64 * 2.0,
+                near / w as f64,
+                1.0,
+            );
+            let p = inverse * ndc;
+            out.push([
+                (p.x / p.w) as f32,
+                (p.y / p.w) as f32,
+                (p.z / p.w) as f32,
+                1.0,
+            ]);
         }
-        out
-    })
-}
-
-fn padded_row(width: u32) -> u32 {
-    (width * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT
+    }
+    Ok(out)
 }
 
 /// A storage buffer of vec4 f32 copied back (tests, and the baseline's δ computation).
@@ -419,23 +349,7 @@ pub(crate) fn read_buffer<T>(
     buffer: &wgpu::Buffer,
     f: impl FnOnce(&[u8]) -> T,
 ) -> Result<T> {
-    let slice = buffer.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    ctx.wait()?;
-    rx.recv()
-        .map_err(|e| Error::device("readback callback never ran", e))?
-        .map_err(|e| Error::device("readback failed", e))?;
-    let out = {
-        let view = slice
-            .get_mapped_range()
-            .map_err(|e| Error::device("readback mapping", e))?;
-        f(&view)
-    };
-    buffer.unmap();
-    Ok(out)
+    crate::readback::read_buffer(&ctx.device, buffer, f)
 }
 
 #[cfg(test)]

@@ -3,9 +3,10 @@
 //!
 //! Rules: the frame is drawn into the renderer's own targets first, as for a snapshot, then one
 //! full-screen triangle writes each pixel's colour and its reversed-Z depth (from the view
-//! distance the frame kept, or the reference's hit position) into the host's views. The host's
-//! geometry, drawn with [`crate::host::Terrain::view_proj`], is then depth-tested against the
-//! terrain, before or after it. Rejected: building every pass's pipelines for the host's formats
+//! distance the frame kept, or the reference's hit position) into the host's views, depth-tested
+//! `GreaterEqual` (reversed-Z) against what the host drew there before: the host's geometry,
+//! drawn with [`crate::host::Terrain::view_proj`], hides the terrain where it is nearer and is
+//! hidden where it is farther, drawn before the terrain or after it. Rejected: building every pass's pipelines for the host's formats
 //! and sample count, a variant of each per host, where this one pass costs a full-screen
 //! triangle.
 
@@ -109,7 +110,7 @@ impl OutputPass {
             depth_stencil: Some(wgpu::DepthStencilState {
                 format: targets.depth,
                 depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Always),
+                depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
                 stencil: Default::default(),
                 bias: Default::default(),
             }),

@@ -9,15 +9,15 @@
 
 use super::alloc::{Alloc, Texture};
 use super::context::GpuContext;
-use super::frame_io::ColourReadback;
 use super::output::{OutputPass, Targets};
 use crate::error::{Error, Result};
+use crate::readback::Readback;
 
 /// The textures a snapshot is drawn into, and the read-back of its colour.
 pub struct Snapshot {
     colour: Texture,
     depth: Texture,
-    readback: ColourReadback,
+    readback: Readback,
     size: (u32, u32),
 }
 
@@ -48,7 +48,7 @@ impl Snapshot {
         Ok(Snapshot {
             colour: texture(targets.colour, "snapshot colour"),
             depth: texture(targets.depth, "snapshot depth"),
-            readback: ColourReadback::new(device, width, height),
+            readback: Readback::counted(device, width, height, targets.colour)?,
             size: (width, height),
         })
     }
@@ -65,16 +65,16 @@ impl Snapshot {
         encoder: &mut wgpu::CommandEncoder,
         output: &OutputPass,
         group: &wgpu::BindGroup,
-    ) {
+    ) -> Result<()> {
         let view = |t: &Texture| t.create_view(&Default::default());
         let (colour, depth) = (view(&self.colour), view(&self.depth));
         crate::host::clear(encoder, &colour, &depth);
         output.record(encoder, group, &colour, &depth);
-        self.readback.record(encoder, &self.colour);
+        self.readback.record(encoder, &self.colour)
     }
 
     /// The colour of the submitted snapshot: four bytes a pixel, rows top first.
     pub fn read(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
-        self.readback.read(ctx)
+        self.readback.read(&ctx.device)
     }
 }

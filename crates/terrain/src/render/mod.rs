@@ -406,7 +406,7 @@ impl Renderer {
             }
         };
         s.pass.prepare(&ctx.queue, camera);
-        s.textures.record(&mut encoder, &s.pass, &s.group);
+        s.textures.record(&mut encoder, &s.pass, &s.group)?;
         self.snapshots = Some(s);
         if let Some(t) = timer {
             t.resolve(&mut encoder, ran);

@@ -5,13 +5,13 @@
 //! (drawn offscreen in the surface's format and copied onto it where the surface allows no copies).
 
 use super::overlay::Composite;
-use super::readback::Readback;
 use super::{Drawn, Want};
 use crate::app::hud::{self, Figures, Status};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 use terrain::Camera;
 use terrain::alloc::{Alloc, Ledger, Texture};
+use terrain::readback::Readback;
 use terrain::scene::{Mode, Scene};
 use terrain::sketch::Atlas;
 use terrain::{Description, Targets, Terrain};
@@ -218,7 +218,15 @@ impl SurfacePath {
             self.composite
                 .copy(&self.device, &mut encoder, &view, &surface);
         }
-        let readback = shot.then(|| Readback::record(&alloc, &mut encoder, target));
+        // A screenshot is the pixels presented, never a second rendering of the frame.
+        let readback = match shot {
+            true => {
+                let r = Readback::new(&self.device, target)?;
+                r.record(&mut encoder, target)?;
+                Some(r)
+            }
+            false => None,
+        };
         let submitted = Instant::now();
         self.queue.submit([encoder.finish()]);
         let times = self.gpu_ms.clone();
@@ -227,7 +235,9 @@ impl SurfacePath {
                 t.push(submitted.elapsed().as_secs_f64() * 1e3);
             }
         });
-        let rgba = readback.map(|r| r.read(&self.device)).transpose()?;
+        let rgba = readback
+            .map(|r| opaque(r.read_rgba(&self.device)))
+            .transpose()?;
         self.queue.present(frame);
         self.poll()?;
         Ok(Drawn {
@@ -274,4 +284,11 @@ fn depth_texture(alloc: &Alloc, width: u32, height: u32) -> Texture {
         usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
         view_formats: &[],
     })
+}
+
+/// A read-back's RGBA made opaque: a surface's alpha is the compositor's, not the picture's.
+fn opaque(rgba: terrain::Result<Vec<u8>>) -> terrain::Result<Vec<u8>> {
+    let mut rgba = rgba?;
+    rgba.chunks_exact_mut(4).for_each(|px| px[3] = 255);
+    Ok(rgba)
 }
