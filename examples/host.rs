@@ -190,7 +190,10 @@ impl Gpu {
         let terrain = Terrain::new(&device, &queue, targets, description)?;
         // The mast stands where the camera looks, a third of the way there, on the ground.
         let look = start.eye + start.forward * 2000.0;
-        let ground = terrain.ground().height_at(look.truncate(), 0.0)?.unwrap_or(0.0);
+        let ground = terrain
+            .ground()
+            .height_at(look.truncate(), 0.0)?
+            .unwrap_or(0.0);
         let foot = glam::DVec3::new(look.x, look.y, ground);
         let mast = Mast::new(&device, format);
         let depth = depth_view(&device, config.width, config.height);

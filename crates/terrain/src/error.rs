@@ -188,6 +188,15 @@ pub enum Error {
         /// What the preprocessor could not expand.
         reason: String,
     },
+    /// Something this build of the library leaves out: a cargo feature turned off (zstd, which
+    /// is C, for a WebAssembly build).
+    #[error("{what} needs the terrain library's `{feature}` feature, which this build leaves out")]
+    Feature {
+        /// What was asked for, e.g. "a tile pyramid's tile".
+        what: &'static str,
+        /// The cargo feature that brings it.
+        feature: &'static str,
+    },
     /// A library call its own callers should never make (a defect of the program, not of input).
     #[error("internal: {0}")]
     Internal(&'static str),

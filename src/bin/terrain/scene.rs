@@ -19,6 +19,9 @@ pub struct Args {
     set: Vec<String>,
 }
 
+/// The scene manual, whose key descriptions the starter's comments are.
+const MANUAL: &str = include_str!("../../../docs/scene.md");
+
 pub fn run(a: Args) -> Result<()> {
     if let Some(out) = &a.output
         && out
@@ -38,7 +41,7 @@ pub fn run(a: Args) -> Result<()> {
         Some(out) => relative_to(&a.sketch, out.parent().unwrap_or(Path::new(""))),
         None => a.sketch.clone(),
     };
-    let text = scene::starter(&scene, &atlas, &named)?;
+    let text = scene::starter(&scene, &atlas, &named, MANUAL)?;
     match &a.output {
         Some(out) => {
             write_atomic(out, text.as_bytes())?;

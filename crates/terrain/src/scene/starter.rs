@@ -3,7 +3,8 @@
 //! detail the sketch chose.
 //!
 //! Rules: the comments are the first sentence of each key's meaning in docs/scene.md, read from
-//! the text compiled in, so the starter and the manual cannot disagree (tests/scene_doc.rs checks
+//! the manual's text the caller gives (the `terrain` binary compiles it in), so the starter and
+//! the manual cannot disagree (tests/scene_doc.rs checks
 //! the manual against these structs); what it writes parses and renders as it is. The camera is
 //! written as the default view is made, by `heading_deg` and `pitch_deg` without a place, so an
 //! edited heading or pitch frames the sketch anew; the place that view stands at is written
@@ -22,8 +23,6 @@ use serde::Serialize;
 use std::fmt::Write;
 use std::path::Path;
 
-const MANUAL: &str = include_str!("../../../../docs/scene.md");
-
 /// The widest a key's comment grows before it is cut at a word.
 const COMMENT_CHARS: usize = 96;
 
@@ -39,8 +38,8 @@ enum Line {
 }
 
 /// The starter scene's text for `scene` (read from the sketch at `sketch_path`, as the scene
-/// file will name it) over its `atlas`.
-pub fn starter(scene: &Scene, atlas: &Atlas, sketch_path: &Path) -> Result<String> {
+/// file will name it) over its `atlas`, each key's comment from `manual`, docs/scene.md's text.
+pub fn starter(scene: &Scene, atlas: &Atlas, sketch_path: &Path, manual: &str) -> Result<String> {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -49,7 +48,7 @@ pub fn starter(scene: &Scene, atlas: &Atlas, sketch_path: &Path) -> Result<Strin
         sketch_path.display()
     );
     let path = [("path", Line::Set(toml_str(&sketch_path.to_string_lossy())))];
-    section_of(&mut out, "sketch", &scene.sketch, &path);
+    section_of(&mut out, manual, "sketch", &scene.sketch, &path);
     if !scene.camera.is_placed() {
         let _ = writeln!(
             out,
@@ -60,6 +59,7 @@ pub fn starter(scene: &Scene, atlas: &Atlas, sketch_path: &Path) -> Result<Strin
     }
     section_of(
         &mut out,
+        manual,
         "camera",
         &scene.camera,
         &camera_keys(scene, atlas)?,
@@ -72,15 +72,15 @@ pub fn starter(scene: &Scene, atlas: &Atlas, sketch_path: &Path) -> Result<Strin
             Line::Set(value(&round(detail.amplitude_m, 3))),
         ),
     ];
-    section_of(&mut out, "detail", &scene.detail, &chosen);
-    section_of(&mut out, "warp", &scene.warp, &[]);
-    section_of(&mut out, "importance", &scene.importance, &[]);
-    section_of(&mut out, "render", &scene.render, &[]);
-    section_of(&mut out, "geomipmap", &scene.geomipmap, &[]);
-    section_of(&mut out, "reference", &scene.reference, &[]);
-    section_of(&mut out, "light", &scene.light, &[]);
-    section_of(&mut out, "surface", &scene.surface, &[]);
-    section_of(&mut out, "stream", &scene.stream, &[]);
+    section_of(&mut out, manual, "detail", &scene.detail, &chosen);
+    section_of(&mut out, manual, "warp", &scene.warp, &[]);
+    section_of(&mut out, manual, "importance", &scene.importance, &[]);
+    section_of(&mut out, manual, "render", &scene.render, &[]);
+    section_of(&mut out, manual, "geomipmap", &scene.geomipmap, &[]);
+    section_of(&mut out, manual, "reference", &scene.reference, &[]);
+    section_of(&mut out, manual, "light", &scene.light, &[]);
+    section_of(&mut out, manual, "surface", &scene.surface, &[]);
+    section_of(&mut out, manual, "stream", &scene.stream, &[]);
     let _ = writeln!(
         out,
         "# [path]                    # a camera path for `fly` and `compare` (docs/scene.md, [path])\n\
@@ -130,12 +130,18 @@ fn camera_keys(scene: &Scene, atlas: &Atlas) -> Result<Vec<(&'static str, Line)>
 }
 
 /// A section whose keys are `struct`'s fields in the manual's order, `chosen` lines first.
-fn section_of<T: Serialize>(out: &mut String, name: &str, fields: &T, chosen: &[(&str, Line)]) {
+fn section_of<T: Serialize>(
+    out: &mut String,
+    manual: &str,
+    name: &str,
+    fields: &T,
+    chosen: &[(&str, Line)],
+) {
     let table = toml::Value::try_from(fields)
         .ok()
         .and_then(|v| v.as_table().cloned())
         .unwrap_or_default();
-    let keys: Vec<(&str, Line)> = rows(name)
+    let keys: Vec<(&str, Line)> = rows(manual, name)
         .map(|(key, _)| {
             let line = chosen
                 .iter()
@@ -149,15 +155,15 @@ fn section_of<T: Serialize>(out: &mut String, name: &str, fields: &T, chosen: &[
             (key, line)
         })
         .collect();
-    section(out, name, &keys);
+    section(out, manual, name, &keys);
 }
 
 /// `[name]` and its keys, each with its comment; a key without a value commented out, with its
 /// default as the manual words it.
-fn section(out: &mut String, name: &str, keys: &[(&str, Line)]) {
+fn section(out: &mut String, manual: &str, name: &str, keys: &[(&str, Line)]) {
     let _ = writeln!(out, "[{name}]");
     for (key, value) in keys {
-        let (default, meaning) = rows(name)
+        let (default, meaning) = rows(manual, name)
             .find(|(k, _)| k == key)
             .map(|(_, row)| row)
             .unwrap_or_default();
@@ -172,9 +178,9 @@ fn section(out: &mut String, name: &str, keys: &[(&str, Line)]) {
 }
 
 /// The manual's table rows of `[section]`: each key with its default and meaning columns.
-fn rows(section: &str) -> impl Iterator<Item = (&'static str, (String, String))> {
+fn rows<'m>(manual: &'m str, section: &str) -> impl Iterator<Item = (&'m str, (String, String))> {
     let head = format!("### [{section}]");
-    MANUAL
+    manual
         .split_once(&head)
         .map(|(_, rest)| rest.split("\n### ").next().unwrap_or(""))
         .unwrap_or("")

@@ -320,6 +320,26 @@ impl Atlas {
         })
     }
 
+    /// Reads a sketch held in memory (a browser's fetch, an archive's entry), the format told by
+    /// `name`'s extension, as [`Atlas::load`] reads the file: no file system is touched but for
+    /// a VRT's sources and a PNG's world file beside `name`.
+    ///
+    /// ```
+    /// use terrain::sketch::{Atlas, LoadOptions};
+    ///
+    /// let grid = b"ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 30\n1 2 3\n4 5 6\n";
+    /// let atlas = Atlas::from_bytes("hills.asc".as_ref(), grid, &LoadOptions::default())?;
+    /// assert_eq!((atlas.width(), atlas.height(), atlas.dx), (3, 2, 30.0));
+    /// # Ok::<(), terrain::Error>(())
+    /// ```
+    pub fn from_bytes(name: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Atlas> {
+        let raw = parse_grid(name, bytes, opts)?;
+        Atlas::from_raw(raw, opts).map_err(|e| match e {
+            Error::Value { reason, .. } => Error::sketch(name, reason),
+            e => e,
+        })
+    }
+
     /// The atlas of a grid a reader (or a program) made: fills nodata, applies the scene's
     /// overrides and builds the pyramid.
     pub fn from_raw(mut raw: RawGrid, opts: &LoadOptions) -> Result<Atlas> {

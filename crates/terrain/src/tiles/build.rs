@@ -29,17 +29,16 @@ pub(super) mod resume;
 mod scratch;
 
 use super::codec::{HEADER_BYTES, TileHeader};
+use super::read::read_rows;
 use super::{BORDER, FORMAT, META, Meta, SIDE, TILE, level_sizes, tile_path};
 use crate::error::{Error, Result, Role};
 use crate::io::write_atomic;
 use crate::sketch::LoadOptions;
 use crate::sketch::mosaic;
 pub(in crate::tiles) use bands::band_rows;
-pub(super) use bands::read_rows;
 use bands::{coarser_band, write_band};
 pub(in crate::tiles) use level0::is_tiff;
 use resume::{Plan, remove_temporaries, stamp, start_or_resume, tile_is_whole};
-pub use scratch::georef_of;
 pub(in crate::tiles) use scratch::meta_georef;
 use serde::Serialize;
 use std::os::unix::fs::FileExt;

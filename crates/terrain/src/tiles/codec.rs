@@ -59,7 +59,13 @@ impl TileHeader {
 }
 
 /// Encodes `side`² heights (row-major, row 0 south) with the interior statistics given.
-pub fn encode_tile(heights: &[f32], side: usize, min_m: f32, max_m: f32, nodata: u32) -> Vec<u8> {
+pub fn encode_tile(
+    heights: &[f32],
+    side: usize,
+    min_m: f32,
+    max_m: f32,
+    nodata: u32,
+) -> Result<Vec<u8>> {
     debug_assert_eq!(heights.len(), side * side);
     let n = heights.len();
     let mut planes = vec![0u8; 4 * n];
@@ -76,7 +82,7 @@ pub fn encode_tile(heights: &[f32], side: usize, min_m: f32, max_m: f32, nodata:
             row[i] = row[i].wrapping_sub(row[i - 1]);
         }
     }
-    let frame = compress(&planes);
+    let frame = compress(&planes)?;
     let mut out = Vec::with_capacity(HEADER_BYTES + frame.len());
     out.extend_from_slice(MAGIC);
     out.extend_from_slice(&(side as u32).to_le_bytes());
@@ -85,17 +91,45 @@ pub fn encode_tile(heights: &[f32], side: usize, min_m: f32, max_m: f32, nodata:
     out.extend_from_slice(&nodata.to_le_bytes());
     out.extend_from_slice(&(frame.len() as u32).to_le_bytes());
     out.extend_from_slice(&frame);
-    out
+    Ok(out)
 }
 
 /// `bytes` as one zstd frame with its checksum, at the pyramids' level.
-pub(super) fn compress(bytes: &[u8]) -> Vec<u8> {
+#[cfg(feature = "zstd")]
+pub(super) fn compress(bytes: &[u8]) -> Result<Vec<u8>> {
     let mut c = zstd::bulk::Compressor::new(LEVEL).expect("zstd accepts its default level");
     c.include_checksum(true)
         .expect("zstd accepts the checksum flag");
-    c.compress(bytes)
-        .expect("zstd compresses into a grown buffer")
+    Ok(c.compress(bytes)
+        .expect("zstd compresses into a grown buffer"))
 }
+
+/// The `capacity` bytes of one zstd frame, or why not.
+#[cfg(feature = "zstd")]
+pub(super) fn decompress(
+    frame: &[u8],
+    capacity: usize,
+) -> Result<std::result::Result<Vec<u8>, String>> {
+    Ok(zstd::bulk::decompress(frame, capacity).map_err(|e| e.to_string()))
+}
+
+/// Without zstd (a WebAssembly build: zstd is C) a pyramid's tiles can be neither written nor
+/// read.
+#[cfg(not(feature = "zstd"))]
+pub(super) fn compress(_: &[u8]) -> Result<Vec<u8>> {
+    Err(NO_ZSTD)
+}
+
+#[cfg(not(feature = "zstd"))]
+pub(super) fn decompress(_: &[u8], _: usize) -> Result<std::result::Result<Vec<u8>, String>> {
+    Err(NO_ZSTD)
+}
+
+#[cfg(not(feature = "zstd"))]
+const NO_ZSTD: Error = Error::Feature {
+    what: "a tile pyramid's tiles",
+    feature: "zstd",
+};
 
 /// Decodes a whole tile file: its header and `side`² finite heights.
 pub fn decode_tile(path: &Path, bytes: &[u8]) -> Result<(TileHeader, Vec<f32>)> {
@@ -111,8 +145,8 @@ pub fn decode_tile(path: &Path, bytes: &[u8]) -> Result<(TileHeader, Vec<f32>)> 
     }
     let side = header.side;
     let n = side * side;
-    let mut planes = zstd::bulk::decompress(frame, 4 * n)
-        .map_err(|e| bad(format!("cannot be decompressed: {e}")))?;
+    let mut planes =
+        decompress(frame, 4 * n)?.map_err(|e| bad(format!("cannot be decompressed: {e}")))?;
     if planes.len() != 4 * n {
         return Err(bad(format!(
             "holds {} bytes of heights; a {side}² tile holds {}",
@@ -156,7 +190,7 @@ mod tests {
     #[test]
     fn a_tile_round_trips_bit_for_bit() {
         let h = tile(260);
-        let bytes = encode_tile(&h, 260, -3.0, 250.0, 7);
+        let bytes = encode_tile(&h, 260, -3.0, 250.0, 7).unwrap();
         let (header, back) = decode_tile(Path::new("t"), &bytes).unwrap();
         assert_eq!(header.side, 260);
         assert_eq!(header.nodata, 7);
@@ -166,7 +200,7 @@ mod tests {
 
     #[test]
     fn damaged_tiles_are_refused_in_one_line() {
-        let bytes = encode_tile(&tile(16), 16, 0.0, 1.0, 0);
+        let bytes = encode_tile(&tile(16), 16, 0.0, 1.0, 0).unwrap();
         let cut = decode_tile(Path::new("L0/0/0.tile"), &bytes[..bytes.len() - 3]).unwrap_err();
         assert!(cut.to_string().contains("truncated"), "{cut}");
         let mut flipped = bytes.clone();
@@ -197,9 +231,9 @@ mod tests {
                 let window: Vec<f32> = (0..side * side)
                     .map(|k| level.data[(y0 + k / side) * level.width + x0 + k % side])
                     .collect();
-                predicted += encode_tile(&window, side, 0.0, 1.0, 0).len() - HEADER_BYTES;
+                predicted += encode_tile(&window, side, 0.0, 1.0, 0).unwrap().len() - HEADER_BYTES;
                 let bytes: Vec<u8> = window.iter().flat_map(|h| h.to_le_bytes()).collect();
-                plain += compress(&bytes).len();
+                plain += compress(&bytes).unwrap().len();
             }
         }
         let raw = level.width / side * (level.height / side) * side * side * 4;

@@ -29,6 +29,8 @@
 //!   the predicted byte planes 4.12× (`cargo test --release --lib tiles -- --nocapture`).
 
 pub(crate) mod blocks;
+// The builders write zstd tiles and read their sources in place (Unix positional reads).
+#[cfg(feature = "zstd")]
 pub(crate) mod build;
 pub(crate) mod cache;
 mod codec;
@@ -36,6 +38,7 @@ pub mod image;
 pub(crate) mod read;
 
 pub use blocks::{measure as measure_blocks, set_keep_figures};
+#[cfg(feature = "zstd")]
 pub use build::{BuildOptions, BuildSummary, build};
 pub use cache::StreamStats;
 pub use image::ImagePyramid;
@@ -155,9 +158,21 @@ pub struct MetaGeoref {
 }
 
 impl MetaGeoref {
-    /// The georeference this spells.
+    /// The georeference this spells: the inverse of the builder's `meta_georef`.
     pub fn georef(&self) -> crate::sketch::Georef {
-        build::georef_of(self)
+        use crate::sketch::georef::{Georef, Units};
+        Georef {
+            west: self.west,
+            south: self.south,
+            cell_x: self.cell_x,
+            cell_y: self.cell_y,
+            units: match self.units.as_str() {
+                "degrees" => Units::Degrees,
+                "unknown" => Units::Unknown,
+                s => s.parse().map_or(Units::Unknown, Units::Linear),
+            },
+            epsg: self.epsg,
+        }
     }
 }
 

@@ -13,7 +13,6 @@
 //! - Every tile is checked as it is read: its header, length, checksum and side; a missing tile is
 //!   an error naming it.
 
-pub use super::build::georef_of as georef;
 use super::codec::decode_tile;
 use super::{FORMAT, Kind, META, Meta, level_sizes, tile_path};
 use crate::error::{Error, Result, Role};
@@ -111,7 +110,7 @@ impl Pyramid {
     /// Level `l` whole, from its tiles' interiors.
     pub fn level(&self, l: usize) -> Result<crate::sketch::Level> {
         let [width, height] = self.meta.levels[l];
-        let data = super::build::read_rows(&self.dir, &self.meta, l, 0, height)?;
+        let data = read_rows(&self.dir, &self.meta, l, 0, height)?;
         Ok(crate::sketch::Level {
             width,
             height,
@@ -238,7 +237,7 @@ pub fn raw_grid_within(dir: &Path, cells: usize) -> Result<RawGrid> {
         );
     }
     let georef = m.georef.as_ref().map(|g| {
-        let g = georef(g);
+        let g = g.georef();
         let shift = (scale - 1.0) * 0.5;
         crate::sketch::georef::Georef {
             west: g.west + shift * g.cell_x,
@@ -332,7 +331,7 @@ pub fn streamed_atlas(dir: &Path, opts: &LoadOptions) -> Result<crate::sketch::A
         edge_mean_m: m.edge_mean_m,
         water_m: 0.0,
         levels,
-        georef: m.georef.as_ref().map(georef),
+        georef: m.georef.as_ref().map(super::MetaGeoref::georef),
         resident_from: first,
         pyramid: Some(pyramid),
         relief_m,
@@ -358,4 +357,30 @@ fn window_relief(pyramid: &Pyramid) -> Result<[f64; 2]> {
         relief_m: None,
     };
     Ok(probe.finest_relief())
+}
+
+/// Rows `r0..r1` of level `l`, whole width, from the interiors of its tiles.
+pub(in crate::tiles) fn read_rows(
+    out: &Path,
+    meta: &Meta,
+    l: usize,
+    r0: usize,
+    r1: usize,
+) -> Result<Vec<f32>> {
+    let [w, _] = meta.levels[l];
+    let (tiles_x, _) = meta.tiles(l);
+    let (t, b, side) = (meta.tile, meta.border, meta.tile + 2 * meta.border);
+    let mut rows = vec![0f32; w * (r1 - r0)];
+    for ty in r0 / t..=(r1 - 1) / t {
+        for tx in 0..tiles_x {
+            let heights = read_tile_file(&tile_path(out, l, tx, ty), side)?;
+            let (lo, hi) = (r0.max(ty * t), r1.min(ty * t + t));
+            let cols = t.min(w - tx * t);
+            for r in lo..hi {
+                let src = &heights[(r - ty * t + b) * side + b..][..cols];
+                rows[(r - r0) * w + tx * t..][..cols].copy_from_slice(src);
+            }
+        }
+    }
+    Ok(rows)
 }

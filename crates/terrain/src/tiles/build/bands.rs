@@ -46,32 +46,6 @@ pub(super) fn coarser_band(
     Ok((r0, band))
 }
 
-/// Rows `r0..r1` of level `l`, whole width, from the interiors of its tiles.
-pub(in crate::tiles) fn read_rows(
-    out: &Path,
-    meta: &Meta,
-    l: usize,
-    r0: usize,
-    r1: usize,
-) -> Result<Vec<f32>> {
-    let [w, _] = meta.levels[l];
-    let (tiles_x, _) = meta.tiles(l);
-    let (t, b, side) = (meta.tile, meta.border, meta.tile + 2 * meta.border);
-    let mut rows = vec![0f32; w * (r1 - r0)];
-    for ty in r0 / t..=(r1 - 1) / t {
-        for tx in 0..tiles_x {
-            let heights = crate::tiles::read::read_tile_file(&tile_path(out, l, tx, ty), side)?;
-            let (lo, hi) = (r0.max(ty * t), r1.min(ty * t + t));
-            let cols = t.min(w - tx * t);
-            for r in lo..hi {
-                let src = &heights[(r - ty * t + b) * side + b..][..cols];
-                rows[(r - r0) * w + tx * t..][..cols].copy_from_slice(src);
-            }
-        }
-    }
-    Ok(rows)
-}
-
 /// The rows a band of tile row `ty` holds, clamped to a level of `h` rows.
 pub(in crate::tiles) fn band_rows(ty: usize, h: usize) -> (usize, usize) {
     let r0 = (ty * TILE).saturating_sub(BORDER);
@@ -135,7 +109,7 @@ pub(super) fn write_band(
                                 }
                             }
                         }
-                        let bytes = encode_tile(&tile, SIDE, lo, hi, nodata);
+                        let bytes = encode_tile(&tile, SIDE, lo, hi, nodata)?;
                         write_quietly(&tile_path(out, l, tx, ty), &bytes)?;
                     }
                     Ok(())

@@ -147,7 +147,7 @@ pub(super) fn place(
             s.width,
             s.height,
             vec![(0, 0)],
-            s.georef.as_ref().map(georef_of),
+            s.georef.as_ref().map(MetaGeoref::georef),
             (s.dx, s.dy),
         )
     } else {
@@ -156,7 +156,7 @@ pub(super) fn place(
             .zip(scratch)
             .map(|(path, s)| TileExtent {
                 path,
-                georef: s.georef.as_ref().map(georef_of),
+                georef: s.georef.as_ref().map(MetaGeoref::georef),
                 width: s.width,
                 height: s.height,
             })
@@ -252,21 +252,5 @@ pub(in crate::tiles) fn meta_georef(g: Georef) -> MetaGeoref {
         cell_x: g.cell_x,
         cell_y: g.cell_y,
         epsg: g.epsg,
-    }
-}
-
-/// The inverse of `meta_georef`.
-pub fn georef_of(m: &MetaGeoref) -> Georef {
-    Georef {
-        west: m.west,
-        south: m.south,
-        cell_x: m.cell_x,
-        cell_y: m.cell_y,
-        units: match m.units.as_str() {
-            "degrees" => Units::Degrees,
-            "unknown" => Units::Unknown,
-            s => s.parse().map_or(Units::Unknown, Units::Linear),
-        },
-        epsg: m.epsg,
     }
 }

@@ -213,7 +213,7 @@ fn write_band(
                                 tile[(j * SIDE + i) * 4..][..4].copy_from_slice(src);
                             }
                         }
-                        write_quietly(&tile_path(out, l, tx, ty), &encode_tile(&tile, SIDE))?;
+                        write_quietly(&tile_path(out, l, tx, ty), &encode_tile(&tile, SIDE)?)?;
                     }
                     Ok(())
                 })

@@ -24,11 +24,13 @@
 //! channel, each differenced: on textured imagery both compress less than the Sub filter
 //! (figures in docs/decisions.md, “Image pyramids”).
 
+#[cfg(feature = "zstd")]
 mod build;
 
+#[cfg(feature = "zstd")]
 pub(crate) use build::build;
 
-use super::codec::compress;
+use super::codec::{compress, decompress};
 use super::{FORMAT, Kind, META, MetaGeoref, level_sizes, tile_path};
 use crate::error::{Error, Result, Role};
 use crate::sketch::Georef;
@@ -181,15 +183,15 @@ impl ImagePyramid {
 }
 
 /// Encodes `side`² RGBA8 pixels (row-major, row 0 south).
-pub(crate) fn encode_tile(rgba: &[u8], side: usize) -> Vec<u8> {
+pub(crate) fn encode_tile(rgba: &[u8], side: usize) -> Result<Vec<u8>> {
     debug_assert_eq!(rgba.len(), 4 * side * side);
-    let frame = compress(&predicted(rgba, side));
+    let frame = compress(&predicted(rgba, side))?;
     let mut out = Vec::with_capacity(HEADER_BYTES + frame.len());
     out.extend_from_slice(MAGIC);
     out.extend_from_slice(&(side as u32).to_le_bytes());
     out.extend_from_slice(&(frame.len() as u32).to_le_bytes());
     out.extend_from_slice(&frame);
-    out
+    Ok(out)
 }
 
 /// Each byte less the same channel's byte of the pixel west of it (wrapping), row by row: PNG's
@@ -239,8 +241,8 @@ pub(crate) fn decode_tile(path: &Path, bytes: &[u8]) -> Result<(usize, Vec<u8>)>
         )));
     }
     let n = side * side;
-    let mut rgba = zstd::bulk::decompress(frame, 4 * n)
-        .map_err(|e| bad(format!("cannot be decompressed: {e}")))?;
+    let mut rgba =
+        decompress(frame, 4 * n)?.map_err(|e| bad(format!("cannot be decompressed: {e}")))?;
     if rgba.len() != 4 * n {
         return Err(bad(format!(
             "holds {} bytes of pixels; a {side}² tile holds {}",
@@ -306,7 +308,7 @@ mod tests {
     #[test]
     fn an_image_tile_round_trips_and_damage_is_one_line() {
         let rgba = tile(260);
-        let bytes = encode_tile(&rgba, 260);
+        let bytes = encode_tile(&rgba, 260).unwrap();
         let (side, back) = decode_tile(Path::new("t"), &bytes).unwrap();
         assert_eq!((side, &back), (260, &rgba));
         let cut = decode_tile(Path::new("L0/0/0.tile"), &bytes[..bytes.len() - 5]).unwrap_err();
@@ -321,7 +323,7 @@ mod tests {
             "{err}"
         );
         // A height tile where an image tile belongs says what it is not.
-        let heights = crate::tiles::codec::encode_tile(&[0.0; 16], 4, 0.0, 0.0, 0);
+        let heights = crate::tiles::codec::encode_tile(&[0.0; 16], 4, 0.0, 0.0, 0).unwrap();
         let err = decode_tile(Path::new("x"), &heights).unwrap_err();
         assert!(err.to_string().contains("TTI1"), "{err}");
     }
@@ -344,8 +346,8 @@ mod tests {
                             .flat_map(|r| &rgba[((y0 + r) * w + x0) * 4..][..side * 4])
                             .copied()
                             .collect();
-                        predicted += encode_tile(&window, side).len() - HEADER_BYTES;
-                        plain += compress(&window).len();
+                        predicted += encode_tile(&window, side).unwrap().len() - HEADER_BYTES;
+                        plain += compress(&window).unwrap().len();
                         raw += window.len();
                     }
                 }
