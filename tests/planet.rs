@@ -175,7 +175,7 @@ fn the_reference_marches_the_same_planet() {
 fn world_hits(r: &Renderer, camera: &terrain::Camera) -> Vec<Option<glam::DVec3>> {
     let geo = camera.geo.expect("a planet camera");
     let t = terrain::planet::Tangent::at(geo.lat, geo.lon);
-    let radius = 6_371_000.0;
+    let radius = terrain::planet::EARTH_RADIUS_M;
     r.read_positions(camera)
         .expect("positions")
         .iter()
@@ -197,7 +197,7 @@ fn moving_the_camera_a_metre_moves_the_picture_as_the_geometry_predicts() {
     let s = planet_scene(46.5, 9.8, 2.0, -35.0, size);
     let mut moved = s.clone();
     // One metre north.
-    moved.camera.lat_deg = Some(46.5 + (1.0f64 / 6_371_000.0).to_degrees());
+    moved.camera.lat_deg = Some(46.5 + (1.0f64 / terrain::planet::EARTH_RADIUS_M).to_degrees());
     let shot = |scene: &Scene| {
         let mut r = Renderer::new(scene, Mode::Clipmaps, View::Shaded).expect("renderer");
         let camera = terrain::scene::camera_of(scene, &r.atlas).expect("camera");
@@ -212,7 +212,7 @@ fn moving_the_camera_a_metre_moves_the_picture_as_the_geometry_predicts() {
         let geo = c.geo.unwrap();
         let t = terrain::planet::Tangent::at(geo.lat, geo.lon);
         (
-            t.up * 6_371_000.0 + t.world(c.eye),
+            t.up * terrain::planet::EARTH_RADIUS_M + t.world(c.eye),
             t.world(c.forward),
             t.world(c.right),
             t.world(c.up),
@@ -286,7 +286,7 @@ fn a_global_geotiff_is_a_planet_and_a_regional_one_is_refused() {
     let s = global("tests/data/planet/global-64x32.tif");
     let atlas = terrain::scene::load_atlas(&s).expect("a global sketch");
     let planet = Planet {
-        radius: 6_371_000.0,
+        radius: terrain::planet::EARTH_RADIUS_M,
         sketch: &atlas,
     };
     for (i, j) in [(0usize, 0usize), (10, 5), (40, 20), (63, 31)] {

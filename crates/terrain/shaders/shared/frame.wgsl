@@ -1,5 +1,6 @@
 // The per-frame uniform block, shared by every pass. Its Rust twin is `gpu::FrameUniforms`.
 // Positions are metres relative to the frame origin (the camera's ground point), f32.
+#import constants
 
 struct Octave {
     lattice: vec2<i32>,   // whole lattice cell of the frame origin (f64 split on the CPU)
@@ -68,7 +69,7 @@ struct AtlasUniforms {
 
 // The procedural octaves.
 struct DetailUniforms {
-    octave: array<Octave, 24>,
+    octave: array<Octave, MAX_OCTAVES>,
     octaves: u32,
     bias: f32,
     shore_m: f32,                // the band above the water over which the octaves fade in

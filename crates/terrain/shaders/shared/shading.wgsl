@@ -5,6 +5,7 @@
 // tone map. Needs `frame` and the atlas.
 #import atlas
 #import surface
+#import constants
 
 // Ground within this of the water's surface is water (the reference's bisection lands within it).
 const ON_WATER_M: f32 = 0.01;
@@ -13,15 +14,8 @@ const ON_WATER_M: f32 = 0.01;
 fn on_water(z: f32) -> bool {
     return z <= frame.atlas.water_m + ON_WATER_M;
 }
-// The atmosphere, twins of src/light.rs's constants of the same names.
-const RAYLEIGH: vec3<f32> = vec3<f32>(5.8e-6, 13.5e-6, 33.1e-6);
-const RAYLEIGH_SCALE_M: f32 = 8000.0;
-const HAZE_ALBEDO: f32 = 0.9;
-const MIE_G: f32 = 0.76;
-const MULTIPLE: f32 = 1.0;
-const STEPS: i32 = 12;
-const TOP_M: f32 = 60000.0;
-const FAR_M: f32 = 400000.0;
+// The atmosphere's constants (RAYLEIGH, RAYLEIGH_SCALE_M, HAZE_ALBEDO, MIE_G, MULTIPLE, STEPS,
+// TOP_M, FAR_M) are src/light.rs's, through `#import constants`.
 
 fn density(z: f32, scale: f32) -> f32 {
     return exp(-z / scale);

@@ -6,6 +6,7 @@
 
 #import atlas
 #import shading
+#import constants
 #ifdef NOISE
 #import noise
 #endif
@@ -47,7 +48,7 @@ struct Planet {
     pad0: u32,
     pad1: u32,
     pad2: u32,
-    octave: array<SphereOctave, 24>,
+    octave: array<SphereOctave, MAX_OCTAVES>,
 }
 
 // The change of latitude (x) and longitude (y) from the nadir to the hemisphere point `v`

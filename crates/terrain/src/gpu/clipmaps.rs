@@ -8,6 +8,7 @@ use super::bindings::{Binding, bind_group, buffer, layout};
 use super::compute_pipeline;
 use super::shaders::Key;
 use super::stream::AtlasBinding;
+use super::uniforms::MAX_OCTAVES;
 use crate::camera::Geo;
 use crate::detail::Detail;
 use crate::error::Result;
@@ -70,7 +71,7 @@ pub struct PlanetUniforms {
     pub pad0: u32,
     pub pad1: u32,
     pub pad2: u32,
-    pub octave: [SphereOctaveUniforms; 24],
+    pub octave: [SphereOctaveUniforms; MAX_OCTAVES],
 }
 
 impl PlanetUniforms {
@@ -99,7 +100,7 @@ impl PlanetUniforms {
         let w = planet.sketch.width() as f64;
         let whole = texel.floor();
         let origin = IVec2::new(whole.x.rem_euclid(w) as i32, whole.y as i32);
-        let mut octave = [SphereOctaveUniforms::default(); 24];
+        let mut octave = [SphereOctaveUniforms::default(); MAX_OCTAVES];
         let anchor = t.up * planet.radius;
         for (k, o) in (1..=detail.octaves).zip(octave.iter_mut()) {
             let s = SphereOctave::split(

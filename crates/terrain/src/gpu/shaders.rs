@@ -1,5 +1,6 @@
 //! The shader import step: each pass's WGSL file with its `#import name` lines replaced by
-//! `shaders/shared/name.wgsl`, and `#ifdef FLAG` / `#else` / `#endif` blocks kept or dropped by the
+//! `shaders/shared/name.wgsl` (or, for `#import constants`, the constants WGSL shares with Rust,
+//! written from the Rust values), and `#ifdef FLAG` / `#else` / `#endif` blocks kept or dropped by the
 //! variant's flags. That is all the preprocessing there is. A variant's flags are one [`Key`],
 //! derived per scene and mode in one place (`lod::shader_key`).
 //!
@@ -9,6 +10,31 @@
 //! ships the noise code to the driver; dropping the text is what "no noise code" means.
 
 use crate::error::{Error, Result};
+use std::sync::LazyLock;
+
+/// `#import constants`: the values the WGSL shares with the CPU, written from the Rust
+/// constants, so that the two sides cannot drift apart.
+static CONSTANTS: LazyLock<String> = LazyLock::new(|| {
+    use crate::light;
+    let f = |v: f64| format!("{:?}", v as f32);
+    let [r, g, b] = light::RAYLEIGH.map(f);
+    [
+        "// Written by src/gpu/shaders.rs from the Rust constants of the same names.".into(),
+        format!("const MAX_OCTAVES: u32 = {}u;", crate::scene::MAX_OCTAVES),
+        format!("const RAYLEIGH: vec3<f32> = vec3<f32>({r}, {g}, {b});"),
+        format!(
+            "const RAYLEIGH_SCALE_M: f32 = {};",
+            f(light::RAYLEIGH_SCALE_M)
+        ),
+        format!("const HAZE_ALBEDO: f32 = {};", f(light::HAZE_ALBEDO)),
+        format!("const MIE_G: f32 = {};", f(light::MIE_G)),
+        format!("const MULTIPLE: f32 = {};", f(light::MULTIPLE)),
+        format!("const STEPS: i32 = {};", light::STEPS),
+        format!("const TOP_M: f32 = {};", f(light::TOP_M)),
+        format!("const FAR_M: f32 = {};", f(light::FAR_M)),
+    ]
+    .join("\n")
+});
 
 const SHARED: [(&str, &str); 9] = [
     ("frame", include_str!("../../shaders/shared/frame.wgsl")),
@@ -198,11 +224,15 @@ fn expand<'a>(
                 continue;
             }
             let name = name.trim();
-            let (key, text) = SHARED
-                .iter()
-                .find(|(n, _)| *n == name)
-                .ok_or_else(|| bad(k, &format!("unknown import `{name}`")))?;
-            if !imported.contains(key) {
+            let (key, text): (&'a str, &'a str) = match name {
+                "constants" => ("constants", CONSTANTS.as_str()),
+                _ => SHARED
+                    .iter()
+                    .find(|(n, _)| *n == name)
+                    .copied()
+                    .ok_or_else(|| bad(k, &format!("unknown import `{name}`")))?,
+            };
+            if !imported.contains(&key) {
                 imported.push(key);
                 expand(name, text, flags, imported, out)?;
             }
@@ -231,6 +261,48 @@ mod tests {
         assert!(with.contains("fn gradient_noise") && with.contains("octave_local("));
         assert!(!without.contains("fn gradient_noise") && !without.contains("octave_local("));
         assert_eq!(with.matches("struct Frame").count(), 1);
+    }
+
+    /// `#import constants` holds the Rust values, as naga reads them back.
+    #[test]
+    fn the_shared_constants_are_the_rust_values() {
+        use naga::{Expression, Literal};
+        let module = naga::front::wgsl::parse_str(&CONSTANTS).unwrap();
+        let literal = |e: naga::Handle<Expression>| match module.global_expressions[e] {
+            Expression::Literal(Literal::F32(v)) => v as f64,
+            Expression::Literal(Literal::U32(v)) => v as f64,
+            Expression::Literal(Literal::I32(v)) => v as f64,
+            ref other => panic!("{other:?}"),
+        };
+        let values = |name: &str| -> Vec<f64> {
+            let (_, c) = module
+                .constants
+                .iter()
+                .find(|(_, c)| c.name.as_deref() == Some(name))
+                .unwrap_or_else(|| panic!("{name} missing"));
+            match &module.global_expressions[c.init] {
+                Expression::Compose { components, .. } => {
+                    components.iter().map(|&e| literal(e)).collect()
+                }
+                _ => vec![literal(c.init)],
+            }
+        };
+        use crate::light;
+        let f32s = |v: &[f64]| v.iter().map(|&x| x as f32 as f64).collect::<Vec<_>>();
+        assert_eq!(values("MAX_OCTAVES"), [crate::scene::MAX_OCTAVES as f64]);
+        assert_eq!(values("RAYLEIGH"), f32s(&light::RAYLEIGH));
+        assert_eq!(values("STEPS"), [light::STEPS as f64]);
+        for (name, v) in [
+            ("RAYLEIGH_SCALE_M", light::RAYLEIGH_SCALE_M),
+            ("HAZE_ALBEDO", light::HAZE_ALBEDO),
+            ("MIE_G", light::MIE_G),
+            ("MULTIPLE", light::MULTIPLE),
+            ("TOP_M", light::TOP_M),
+            ("FAR_M", light::FAR_M),
+        ] {
+            assert_eq!(values(name), f32s(&[v]), "{name}");
+        }
+        assert_eq!(module.constants.len(), 9, "a constant without its check");
     }
 
     #[test]

@@ -10,7 +10,8 @@ use crate::stage::sketch_map::SketchMap;
 use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DVec2, DVec4};
 
-pub const MAX_OCTAVES: usize = 24;
+/// The octaves the uniform block holds: the scene's limit (`#import constants` gives the WGSL it).
+pub const MAX_OCTAVES: usize = crate::scene::MAX_OCTAVES as usize;
 /// Pyramid levels the GPU sees (a 32768² atlas has 15).
 pub const MAX_LEVELS: usize = 16;
 

@@ -40,8 +40,9 @@ use glam::Vec2;
 use glam::{DVec2, DVec3, Vec4};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
-/// The Earth's mean radius, metres: `planet.radius_m`'s default.
-pub const EARTH_RADIUS_M: f64 = 6_371_000.0;
+/// The Earth's mean radius, metres: `planet.radius_m`'s default, the one the sketch's degrees
+/// are converted with.
+pub use crate::sketch::EARTH_RADIUS_M;
 
 /// A planet: its radius and its global sketch.
 pub struct Planet<'a> {

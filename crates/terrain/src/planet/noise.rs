@@ -157,7 +157,7 @@ mod tests {
     /// value at the Earth's radius.
     #[test]
     fn the_split_path_agrees_with_the_exact_one_at_the_earths_radius() {
-        let r = 6_371_000.0;
+        let r = crate::sketch::EARTH_RADIUS_M;
         let anchor = DVec3::new(0.3, -0.5, 0.8).normalize() * r;
         for k in [1u32, 8, 16, 20] {
             let scale = lattice_scale(19_546.0, k);

@@ -207,7 +207,7 @@ mod tests {
     /// only the coarse ones.
     #[test]
     fn the_visible_levels_follow_the_horizon_and_the_pixel() {
-        let r = 6_371_000.0;
+        let r = crate::sketch::EARTH_RADIUS_M;
         let px = 60f64.to_radians() / 512.0;
         let ground = visible_span(r, 2.0 + 500.0, 9000.0, 2.0, px);
         let orbit = visible_span(r, 2e7, 9000.0, 2e7, px);
