@@ -41,7 +41,7 @@ impl log::Log for Capture {
 fn jacksboro_pyramid(name: &str) -> PathBuf {
     let asc = common::manifest_dir().join("sketches/jacksboro_fault_dem.asc");
     let pyr = scratch(name).join("pyr");
-    terrain::tiles::build(&asc, &pyr, &Default::default()).unwrap();
+    terrain::sketch::tiles::build(&asc, &pyr, &Default::default()).unwrap();
     pyr
 }
 
@@ -130,9 +130,9 @@ fn geomipmap_keeps_its_block_figures_only_when_asked() {
     let scene = tight_scene(&pyr);
     Renderer::new(&scene, Mode::Geomipmap, View::Shaded).unwrap();
     assert_eq!(kept_figures(&pyr), Vec::<String>::new());
-    terrain::tiles::set_keep_figures(true);
+    terrain::sketch::tiles::set_keep_figures(true);
     Renderer::new(&scene, Mode::Geomipmap, View::Shaded).unwrap();
-    terrain::tiles::set_keep_figures(false);
+    terrain::sketch::tiles::set_keep_figures(false);
     let block = scene.geomipmap.block;
     assert_eq!(kept_figures(&pyr), vec![format!("geomipmap-{block}.bin")]);
 }

@@ -6,8 +6,8 @@ mod common;
 
 use common::{psnr, scratch, terrain};
 use std::path::{Path, PathBuf};
+use terrain::sketch::tiles::{BORDER, BuildOptions, Pyramid, SIDE, TILE, build};
 use terrain::sketch::{Atlas, LoadOptions};
-use terrain::tiles::{BORDER, BuildOptions, Pyramid, SIDE, TILE, build};
 
 /// Heights with detail at every scale and no symmetry, so a misplaced node shows.
 fn height(i: usize, j: usize) -> f32 {
@@ -46,7 +46,7 @@ fn write_asc(
     std::fs::write(path, text).unwrap();
 }
 
-fn convert(src: &Path, out: &Path) -> terrain::tiles::BuildSummary {
+fn convert(src: &Path, out: &Path) -> terrain::sketch::tiles::BuildSummary {
     build(src, out, &BuildOptions::default())
         .unwrap_or_else(|e| panic!("tiles {}: {e}", src.display()))
 }
@@ -146,7 +146,7 @@ fn a_coarser_level_stands_in_for_a_pyramid_beyond_the_cell_limit() {
     let out = dir.join("pyramid");
     convert(&src, &out);
     let atlas = Atlas::load(&src, &LoadOptions::default()).unwrap();
-    let g = terrain::tiles::raw_grid_within(&out, 150 * 150).unwrap();
+    let g = terrain::sketch::tiles::raw_grid_within(&out, 150 * 150).unwrap();
     assert_eq!((g.width, g.height), (150, 150));
     assert_eq!((g.dx, g.dy), (60.0, 60.0));
     assert!(
@@ -556,7 +556,7 @@ fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path, water: f64)
     use terrain::View;
     use terrain::scene::Mode;
     // Kept in the folder, as the binary asks (the library alone writes no file).
-    terrain::tiles::set_keep_figures(true);
+    terrain::sketch::tiles::set_keep_figures(true);
     // k = 0: over a pyramid the grid is the sketch at its own spacing; the sketch in memory bakes
     // the same grid. 4 MiB of pages: the first frame stands in.
     let mut streamed = jacksboro_scene(pyr, "[geomipmap]\nk = 0\n[stream]\ngpu_mb = 4");
@@ -603,7 +603,7 @@ fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path, water: f64)
     // Other water is another grid: the kept figures are not taken for it.
     let mut lower = streamed.clone();
     lower.sketch.water_level_m = water - 100.0;
-    let fresh = terrain::tiles::measure_blocks(
+    let fresh = terrain::sketch::tiles::measure_blocks(
         &Pyramid::open(pyr).unwrap(),
         a.cells,
         a.per_side,

@@ -8,12 +8,12 @@ mod common;
 
 use common::{manifest_dir, scratch};
 use std::path::{Path, PathBuf};
+use terrain::sketch::tiles::{BuildOptions, build};
 use terrain::sketch::{Atlas, LoadOptions};
-use terrain::tiles::{BuildOptions, build};
 use tiff::encoder::{Compression, TiffEncoder, colortype::Gray32Float};
 use tiff::tags::Tag;
 
-fn convert_with(src: &Path, out: &Path, load: LoadOptions) -> terrain::tiles::BuildSummary {
+fn convert_with(src: &Path, out: &Path, load: LoadOptions) -> terrain::sketch::tiles::BuildSummary {
     let opts = BuildOptions {
         load,
         threads: 2,
@@ -200,8 +200,8 @@ fn a_single_file_with_holes_converts_as_the_mosaic_of_its_heights_and_a_vrt_over
     convert_with(&dir.join("parts/*.tif"), &mosaic, LoadOptions::default());
     let (a, b) = (tiles(&single), tiles(&mosaic));
     let (p, q) = (
-        terrain::tiles::Pyramid::open(&single).unwrap().meta,
-        terrain::tiles::Pyramid::open(&mosaic).unwrap().meta,
+        terrain::sketch::tiles::Pyramid::open(&single).unwrap().meta,
+        terrain::sketch::tiles::Pyramid::open(&mosaic).unwrap().meta,
     );
     assert_eq!(a.len(), p.tile_count());
     assert!(a == b, "the single file's tiles equal the mosaic's");
@@ -301,6 +301,6 @@ fn heights_in_another_unit_are_refused_after_level_0_and_again_on_a_second_run()
         let err = build(&src, &out, &opts).unwrap_err().to_string();
         assert!(err.contains("beyond ±1000 km"), "run {run}: {err}");
         assert!(!err.contains('\n'), "{err}");
-        assert!(!terrain::tiles::is_pyramid(&out));
+        assert!(!terrain::sketch::tiles::is_pyramid(&out));
     }
 }

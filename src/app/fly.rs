@@ -31,7 +31,7 @@ use terrain::Renderer;
 use terrain::View;
 use terrain::pass;
 use terrain::scene::{Mode, Scene};
-use terrain::tiles::StreamStats;
+use terrain::sketch::tiles::StreamStats;
 use terrain::{Error, Result, Role};
 
 pub struct Options {

@@ -11,7 +11,7 @@
 //!
 //! The modules follow a frame, in the order data flows through it: [`scene`] (the terrain's
 //! description, and building a camera, the detail and the sketch from it) → [`sketch`] (the
-//! height map read into its [`Atlas`]; [`tiles`] for pyramids larger than memory) → [`stage`]
+//! height map read into its [`Atlas`]; [`sketch::tiles`] for pyramids larger than memory) → [`stage`]
 //! (the CPU stage: sketch map → importance → warp → Φ, measured by its quality) → the GPU passes
 //! (warp & zoom, mesh split, normals, terrain, reference, output; named in [`pass`]) driven by
 //! one [`Renderer`] through a level-of-detail scheme ([`Mode`]: [`Warped`], [`Baselines`],
@@ -136,7 +136,6 @@ pub mod scene;
 pub mod sketch;
 pub mod stage;
 pub mod surface;
-pub mod tiles;
 
 // The versions of wgpu and glam the API's types are of, for a host to name them by.
 pub use glam;

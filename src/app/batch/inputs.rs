@@ -143,7 +143,7 @@ fn stamps(path: &Path) -> Vec<Stamp> {
             Err(_) => vec![stamp(path)],
         };
     }
-    let pyramid = path.join(terrain::tiles::META);
+    let pyramid = path.join(terrain::sketch::tiles::META);
     if path.is_dir() && pyramid.is_file() {
         return vec![stamp(&pyramid)];
     }

@@ -96,7 +96,7 @@ impl GeorefReport {
 }
 
 pub fn run(a: Args) -> Result<()> {
-    if terrain::tiles::is_pyramid(&a.file) {
+    if terrain::sketch::tiles::is_pyramid(&a.file) {
         return pyramid(a);
     }
     let opts = LoadOptions {
@@ -162,7 +162,7 @@ fn header(a: Args, h: terrain::sketch::GridHeader, opts: &LoadOptions) -> Result
 
 /// A tile pyramid, from its `pyramid.toml` alone (a 32k² pyramid is not read to describe it).
 fn pyramid(a: Args) -> Result<()> {
-    let p = terrain::tiles::Pyramid::open(&a.file)?;
+    let p = terrain::sketch::tiles::Pyramid::open(&a.file)?;
     let m = &p.meta;
     crate::warn(&terrain::sketch::warnings(
         &a.file,

@@ -113,7 +113,7 @@ fn main() {
     notes::install();
     terrain::progress::set_reporter(Box::new(terrain_cli::app::progress::Bars));
     // GeoMipMap's block figures over a pyramid are kept in its folder for the next command.
-    terrain::tiles::set_keep_figures(true);
+    terrain::sketch::tiles::set_keep_figures(true);
     let result = match cli.command {
         Command::Info(a) => info::run(a),
         Command::Tiles(a) => tiles::run(a),

@@ -5,7 +5,7 @@
 use anyhow::Result;
 use std::path::PathBuf;
 use terrain::sketch::LoadOptions;
-use terrain::tiles::{BuildOptions, Kind, build};
+use terrain::sketch::tiles::{BuildOptions, Kind, build};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -47,7 +47,7 @@ pub fn run(a: Args) -> Result<()> {
     let heights = s.kind == Kind::Heights;
     if heights {
         // Said once the source was read whole, from what the pyramid recorded of it.
-        let meta = terrain::tiles::Pyramid::open(&a.out_dir)?.meta;
+        let meta = terrain::sketch::tiles::Pyramid::open(&a.out_dir)?.meta;
         let extent = meta.extent();
         crate::warn(&terrain::sketch::warnings(&a.src, &opts.load, &extent));
     }

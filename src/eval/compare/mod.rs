@@ -116,7 +116,7 @@ pub fn default_modes(scene: &Scene) -> Vec<Mode> {
 /// Whether `scene`'s sketch is a tile pyramid, streamed through the tile cache.
 fn streamed(scene: &Scene) -> bool {
     let path = scene.sketch.path.as_ref();
-    path.is_some_and(|p| terrain::tiles::is_pyramid(&scene.resolve(p)))
+    path.is_some_and(|p| terrain::sketch::tiles::is_pyramid(&scene.resolve(p)))
 }
 
 /// Refuses modes that cannot draw `scene`, in one line, before any work.

@@ -79,7 +79,7 @@ impl GpuContext {
             trace: wgpu::Trace::Off,
         }))
         .map_err(|e| Error::device(format!("{name}: cannot open the device"), e))?;
-        use super::terrain::{COLOUR, DEPTH, DEPTH_COPY};
+        use super::formats::{COLOUR, DEPTH, DEPTH_COPY};
         let x4 = [COLOUR, DEPTH, DEPTH_COPY].iter().all(|&f| {
             adapter
                 .get_texture_format_features(f)
@@ -141,7 +141,7 @@ impl GpuContext {
     /// Whether the mesh modes shade deferred (`render.deferred` asks; `gpu::terrain`'s
     /// `Deferred`): single-sampled frames, on an adapter that draws the G-buffer's targets at once.
     pub fn deferred(&self, asked: bool, samples: u32) -> bool {
-        let targets = super::terrain::GBUFFER.len() as u32;
+        let targets = super::formats::GBUFFER.len() as u32;
         asked
             && samples == 1
             && self.limits.max_color_attachments >= targets

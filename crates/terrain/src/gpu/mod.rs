@@ -19,6 +19,7 @@ pub mod bindings;
 pub mod clipmaps;
 pub mod context;
 pub mod counters;
+pub mod formats;
 pub mod frame_io;
 pub mod mesh_split;
 pub mod normals;

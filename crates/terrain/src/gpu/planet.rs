@@ -7,11 +7,12 @@
 
 use super::alloc::{Alloc, Buffer};
 use super::bindings::{Binding, bind_group, buffer, layout};
+use super::formats::{COLOUR, DEPTH_COPY};
 use super::shader_module;
 use super::shaders::Key;
 use super::stream::AtlasBinding;
+use super::terrain::RasterPipeline;
 use super::terrain::targets::{Sizing, Targets, make};
-use super::terrain::{COLOUR, DEPTH_COPY, RasterPipeline};
 use crate::error::Result;
 use crate::planet::rings::{Rings, Span};
 use wgpu::ShaderStages as S;

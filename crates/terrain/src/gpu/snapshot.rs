@@ -68,7 +68,7 @@ impl Snapshot {
     ) -> Result<()> {
         let view = |t: &Texture| t.create_view(&Default::default());
         let (colour, depth) = (view(&self.colour), view(&self.depth));
-        crate::host::clear(encoder, &colour, &depth);
+        super::output::clear(encoder, &colour, &depth);
         output.record(encoder, group, &colour, &depth);
         self.readback.record(encoder, &self.colour)
     }

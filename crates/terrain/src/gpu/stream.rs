@@ -1,7 +1,7 @@
 //! A streamed sketch on the GPU: the tile cache's pool of pages and its page table in one
 //! read-only storage buffer (the atlas binding every planar pass already has), and the marks the
 //! shaders leave per page-table entry (`wanted`, cleared before each frame and read back after
-//! it). The policy — what to load, keep and evict — is [`crate::tiles::cache`]'s; this moves the
+//! it). The policy — what to load, keep and evict — is [`crate::sketch::tiles::cache`]'s; this moves the
 //! bytes.
 //!
 //! Rules: the buffer's size is fixed when the renderer is made, from `stream.gpu_mb` and the
@@ -14,8 +14,8 @@ use super::bindings::buffer;
 use super::context::GpuContext;
 use super::uniforms::{AtlasUniforms, MAX_LEVELS};
 use crate::error::{Error, Result};
-use crate::tiles::Pyramid;
-use crate::tiles::cache::{Budget, StreamStats, TileCache};
+use crate::sketch::tiles::Pyramid;
+use crate::sketch::tiles::cache::{Budget, StreamStats, TileCache};
 
 /// The sketch's atlas as a pass binds it: the heights and, for a streamed pyramid, the marks
 /// (`atlas` and `wanted` in `shaders/shared/atlas.wgsl`, [`super::bindings::Binding::atlas`]);
@@ -114,7 +114,7 @@ impl Stream {
     ) -> Result<Stream> {
         let side = pyramid.side() as u64;
         let page_bytes = side * side * 4;
-        let layout = crate::tiles::cache::Layout::new(pyramid);
+        let layout = crate::sketch::tiles::cache::Layout::new(pyramid);
         if layout.first.len() > MAX_LEVELS {
             return Err(Error::sketch(
                 &pyramid.dir,

@@ -9,7 +9,7 @@
 //!
 //! Over a tile pyramid nothing is baked. The grid is the sketch at its own spacing (k = 0, no
 //! octave in it), each block's δ and height range come from level 0's tiles
-//! ([`crate::tiles::blocks`]), and the GRID_STREAMED vertex shader evaluates each vertex it draws
+//! ([`crate::sketch::tiles::blocks`]), and the GRID_STREAMED vertex shader evaluates each vertex it draws
 //! as the bake would, reading the sketch through the tile cache (which the reads mark), so GPU
 //! memory is the tile pool plus this frame's blocks and indices.
 //! Rejected: baking blocks on demand into a cache of pages. The README's view of the 32,768²
@@ -180,12 +180,12 @@ pub struct Baselines {
 const INDICES_PER_BLOCK: usize = 16;
 
 /// The grid and its blocks over a tile pyramid: the sketch at its own spacing (k = 0), δ and
-/// height ranges measured on its tiles ([`crate::tiles::blocks`]) with the vertices on the water
+/// height ranges measured on its tiles ([`crate::sketch::tiles::blocks`]) with the vertices on the water
 /// where the sketch dips below it, as the bake's. What the bake would put in the grid beyond the
 /// sketch (octaves, with k > 0 or a negative bias) is refused, since δ would not see it.
 fn streamed_grid(
     s: &Shared,
-    pyramid: &crate::tiles::Pyramid,
+    pyramid: &crate::sketch::tiles::Pyramid,
     cells: usize,
 ) -> Result<(Grid, Blocks)> {
     let (scene, atlas) = (s.scene, s.atlas);
@@ -206,7 +206,8 @@ fn streamed_grid(
         .check_vertex_marks(s.ctx, "render.mode", "GeoMipMap", "use warped mode")?;
     let grid = grid_of(atlas, 0, cells);
     let per_side = grid.blocks_per_side();
-    let stats = crate::tiles::blocks::block_stats_of(pyramid, cells, per_side, atlas.water_m)?;
+    let stats =
+        crate::sketch::tiles::blocks::block_stats_of(pyramid, cells, per_side, atlas.water_m)?;
     let blocks = Blocks::from_stats(per_side, cells, grid.spacing, stats.delta, stats.z_range);
     Ok((grid, blocks))
 }

@@ -31,8 +31,8 @@ use crate::lod::{CpuTimes, Lod, Shared};
 use crate::scene;
 use crate::scene::{Mode, Scene};
 use crate::sketch::Atlas;
+use crate::sketch::tiles::cache::StreamStats;
 use crate::stage::StageTimes;
-use crate::tiles::cache::StreamStats;
 use std::time::Instant;
 
 /// One rendered frame: RGBA8 sRGB pixels, rows top first.

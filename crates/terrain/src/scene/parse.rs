@@ -169,17 +169,20 @@ pub fn is_sketch_path(path: &Path) -> bool {
     let toml = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    !toml || path.is_dir() || path.file_name() == Some(std::ffi::OsStr::new(crate::tiles::META))
+    !toml
+        || path.is_dir()
+        || path.file_name() == Some(std::ffi::OsStr::new(crate::sketch::tiles::META))
 }
 
 /// The TOML a SCENE argument stands for and the folder its relative paths resolve against: a
 /// scene file's own text and folder, or for a sketch, a scene with every default naming it.
 pub fn scene_text(path: &Path) -> Result<(String, PathBuf)> {
     if is_sketch_path(path) {
-        let sketch = match path.file_name() == Some(std::ffi::OsStr::new(crate::tiles::META)) {
-            true => path.parent().unwrap_or(Path::new(".")),
-            false => path,
-        };
+        let sketch =
+            match path.file_name() == Some(std::ffi::OsStr::new(crate::sketch::tiles::META)) {
+                true => path.parent().unwrap_or(Path::new(".")),
+                false => path,
+            };
         let quoted = toml::Value::String(sketch.to_string_lossy().into_owned());
         return Ok((format!("[sketch]\npath = {quoted}\n"), PathBuf::new()));
     }

@@ -13,7 +13,7 @@
 //!   band are decoded, and the rows decoded for the next band are kept: a file of any size is
 //!   read decoding each chunk once and holding about one chunk row, which must lie within the
 //!   cell limit. A cloud-optimised GeoTIFF's
-//!   overviews are never read (`crate::tiles` averages every coarser level from level 0).
+//!   overviews are never read (`crate::sketch::tiles` averages every coarser level from level 0).
 //! - Lossy or unsupported compressions (JPEG, LERC, WebP, JPEG XL, LZMA, CCITT) are refused by
 //!   name before any data is read, with the command that rewrites the file.
 //! - `GDAL_NODATA` (the one ASCII tag read) is read only when its entry claims at most

@@ -6,111 +6,13 @@
 //! printed.
 
 use super::georef::Georef;
+pub use super::grid::{Extent, LoadOptions, RawGrid, limit_cells, max_cells};
 use super::{
-    Atlas, Level, MAX_HEIGHT_M, asc, build_pyramid, fill, geotiff, hgt, max_cells, mosaic, png,
-    synthetic, xyz,
+    Atlas, Level, MAX_HEIGHT_M, asc, build_pyramid, fill, geotiff, hgt, mosaic, png, synthetic, xyz,
 };
 use crate::error::{Error, Result};
 use glam::DVec2;
 use std::path::Path;
-
-/// What a file does not say about itself, from the scene.
-#[derive(Clone, Debug, Default)]
-pub struct LoadOptions {
-    /// Cell size in metres, overriding the file's (`sketch.spacing_m`).
-    pub spacing_m: Option<f64>,
-    /// World position of the south-west node, metres (`sketch.origin_m`; default the origin).
-    pub origin_m: Option<DVec2>,
-    /// Multiplies every height (`sketch.height_scale`; default 1).
-    pub height_scale: Option<f64>,
-    /// For 8/16-bit images: the heights that pixel values 0 and the maximum stand for.
-    pub height_range_m: Option<[f64; 2]>,
-    /// A streamed tile pyramid: bytes of its coarse levels to hold in memory (`stream.cpu_mb`).
-    pub stream_cpu_bytes: Option<u64>,
-}
-
-/// A grid as a format reader produces it, before filling and the pyramid.
-#[derive(Clone, Debug)]
-pub struct RawGrid {
-    /// Nodes per row.
-    pub width: usize,
-    /// Rows.
-    pub height: usize,
-    /// Node spacing along x (east), metres.
-    pub dx: f64,
-    /// Node spacing along y (north), metres.
-    pub dy: f64,
-    /// Row-major, row 0 south. Non-finite values are nodata.
-    pub data: Vec<f32>,
-    /// Where the nodes lie in the file's coordinate system, when the file says (mosaics need it).
-    pub georef: Option<Georef>,
-}
-
-impl RawGrid {
-    /// A grid placed by its georeference when it has one; without, its cells are 1 m until the
-    /// scene's `sketch.spacing_m` says otherwise.
-    pub fn new(width: usize, height: usize, data: Vec<f32>, georef: Option<Georef>) -> RawGrid {
-        match georef {
-            Some(g) => RawGrid::georeferenced(width, height, data, g),
-            None => RawGrid {
-                width,
-                height,
-                dx: 1.0,
-                dy: 1.0,
-                data,
-                georef: None,
-            },
-        }
-    }
-
-    /// A grid whose spacing follows from its georeference.
-    pub fn georeferenced(width: usize, height: usize, data: Vec<f32>, georef: Georef) -> RawGrid {
-        let georef = georef.resolved(width, height);
-        let (dx, dy) = georef.spacing_m(width, height);
-        RawGrid {
-            width,
-            height,
-            dx,
-            dy,
-            data,
-            georef: Some(georef),
-        }
-    }
-
-    /// Checks the size against the limits before a reader allocates.
-    pub fn check_size(path: &Path, width: i64, height: i64) -> Result<(usize, usize)> {
-        if width < 2 || height < 2 {
-            RawGrid::check_size_unlimited(path, width, height)?;
-        }
-        let cells = (width as u128) * (height as u128);
-        let limit = max_cells();
-        if cells > limit as u128 {
-            return Err(Error::sketch(
-                path,
-                format!("grid is {width}×{height}, more than the {limit} cells supported"),
-            ));
-        }
-        Ok((width as usize, height as usize))
-    }
-
-    /// Checks that a grid has at least 2×2 nodes and at most 2^31 along a side, whatever the cell
-    /// limit: for grids that are streamed rather than allocated (`terrain tiles`).
-    pub fn check_size_unlimited(path: &Path, width: i64, height: i64) -> Result<(usize, usize)> {
-        if width < 2 || height < 2 {
-            return Err(Error::sketch(
-                path,
-                format!("grid is {width}×{height}; a sketch needs at least 2×2 cells"),
-            ));
-        }
-        if width.max(height) > i32::MAX as i64 {
-            return Err(Error::sketch(
-                path,
-                format!("grid is {width}×{height}; a side longer than 2^31 nodes is no sketch's"),
-            ));
-        }
-        Ok((width as usize, height as usize))
-    }
-}
 
 /// Reads a sketch file, or a glob of tiles, as the grid its format holds: the scene's overrides,
 /// the nodata fill and the pyramid come after ([`Atlas::from_raw`]).
@@ -166,8 +68,8 @@ impl Format {
 
 /// `depth`: how many mosaics enclose this file (a VRT may name VRTs).
 fn read_at_depth(path: &Path, opts: &LoadOptions, depth: usize) -> Result<RawGrid> {
-    if crate::tiles::is_pyramid(path) {
-        return crate::tiles::read::raw_grid(path, opts);
+    if crate::sketch::tiles::is_pyramid(path) {
+        return crate::sketch::tiles::read::raw_grid(path, opts);
     }
     if mosaic::is_glob(path) {
         return mosaic::read_glob(path, |tile| read_at_depth(tile, opts, depth + 1));
@@ -182,28 +84,6 @@ fn read_at_depth(path: &Path, opts: &LoadOptions, depth: usize) -> Result<RawGri
         Format::Vrt => mosaic::read_vrt(path, depth, |src, d| read_at_depth(src, opts, d)),
         Format::Xyz => xyz::read(path),
     }
-}
-
-/// What a read found of a sketch, for [`warnings`]: its nodes, their spacing in metres (after
-/// `sketch.spacing_m`), its height range (after `sketch.height_scale`) and whether its file
-/// placed it. [`Atlas::extent`] gives it for a sketch in memory; a tile pyramid's `pyramid.toml`
-/// holds the same figures.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Extent {
-    /// Nodes along x (east).
-    pub width: usize,
-    /// Nodes along y (north).
-    pub height: usize,
-    /// Node spacing along x, metres.
-    pub dx: f64,
-    /// Node spacing along y, metres.
-    pub dy: f64,
-    /// The lowest height, metres (0 with `max_m` where the heights were not read).
-    pub min_m: f64,
-    /// The highest height, metres.
-    pub max_m: f64,
-    /// Whether the file (or its world file) gave the cells' size and place.
-    pub georeferenced: bool,
 }
 
 /// A relief more than this many times the sketch's horizontal extent is no landscape's (the
@@ -226,7 +106,7 @@ pub fn warnings(path: &Path, opts: &LoadOptions, extent: &Extent) -> Vec<String>
 /// The line for the units a read guessed, if it guessed any.
 fn guessed_units(path: &Path, opts: &LoadOptions, georeferenced: bool) -> Option<String> {
     // A pyramid records the spacing it was converted with; `terrain tiles` warned then.
-    if crate::tiles::is_pyramid(path) {
+    if crate::sketch::tiles::is_pyramid(path) {
         return None;
     }
     let spaced = georeferenced || opts.spacing_m.is_some();
@@ -310,8 +190,8 @@ impl Atlas {
     }
 
     fn load_quietly(path: &Path, opts: &LoadOptions) -> Result<Atlas> {
-        if crate::tiles::is_pyramid(path) {
-            return crate::tiles::read::streamed_atlas(path, opts);
+        if crate::sketch::tiles::is_pyramid(path) {
+            return super::streamed::streamed_atlas(path, opts);
         }
         let raw = read_grid(path, opts)?;
         Atlas::from_raw(raw, opts).map_err(|e| match e {
@@ -430,7 +310,7 @@ impl Beyond {
 }
 
 /// [`scale_heights`] cell by cell, without its refusal: each height scaled, those beyond
-/// ±1000 km made nodata and counted, so a grid read in bands ([`crate::tiles`]) scales each band
+/// ±1000 km made nodata and counted, so a grid read in bands ([`crate::sketch::tiles`]) scales each band
 /// as the whole grid would and checks the sum at the end.
 pub(crate) fn scale_cells(data: &mut [f32], opts: &LoadOptions) -> Result<Beyond> {
     let scale = opts.height_scale.unwrap_or(1.0);

@@ -18,59 +18,39 @@ pub(crate) mod cubic;
 pub(crate) mod fill;
 pub(crate) mod georef;
 mod geotiff;
+mod grid;
 mod hgt;
 mod load;
 pub(crate) mod mosaic;
 mod png;
 mod pyramid;
+mod streamed;
 pub(crate) mod synthetic;
+pub mod tiles;
 mod xyz;
 
 pub use georef::{Georef, US_SURVEY_FOOT_M, Units};
-pub(crate) use geotiff::{
-    Windows as TiffWindows, gdal_nodata, georef as tiff_georef, open as open_tiff,
-    refuse_compression,
-};
-pub(crate) use load::{Beyond, scale_cells, scale_heights};
+pub(crate) use geotiff::{gdal_nodata, georef as tiff_georef, refuse_compression};
 pub use load::{
-    Extent, GridHeader, LoadOptions, RawGrid, parse_grid, read_grid, read_header, warnings,
+    Extent, GridHeader, LoadOptions, RawGrid, limit_cells, max_cells, parse_grid, read_grid,
+    read_header, warnings,
 };
 pub use mosaic::{is_glob, list_glob};
 pub use png::parse_world_file;
 pub use pyramid::Level;
 pub(crate) use pyramid::build_pyramid;
-pub(crate) use pyramid::{bilinear_blend, bilinear_cell};
 
 use crate::error::Result;
 use glam::DVec2;
 
 /// Mean Earth radius (IUGG), for converting geographic cells to metres at their mid latitude.
 pub const EARTH_RADIUS_M: f64 = 6_371_008.8;
-/// Larger grids are refused rather than allocated: 2^28 cells is 1 GiB of f32 before the pyramid.
-pub(crate) const MAX_CELLS: usize = 1 << 28;
-
 /// Heights beyond ±1000 km (after `sketch.height_scale`) are no terrain's (the Earth's relief
 /// spans 20 km), and squared or summed in f32 downstream they would overflow. Up to 1 % of a
 /// sketch's cells beyond it are taken as nodata and filled (a Float64 file damaged into 1e180 m, a
 /// float DEM whose −3.4e38 nodata its header does not declare; GDAL reads them as values); more
 /// are heights in another unit, and the sketch is refused with a hint to set the scale.
 pub(crate) const MAX_HEIGHT_M: f64 = 1.0e6;
-
-/// The cell limit in force: [`MAX_CELLS`] unless [`limit_cells`] lowered it.
-static CELL_LIMIT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(MAX_CELLS);
-
-/// Lowers the largest grid any reader allocates, for the whole process: for a fuzz harness or a
-/// service that must bound its memory below the default (values above `MAX_CELLS`, 2^28, are
-/// clamped).
-pub fn limit_cells(cells: usize) {
-    CELL_LIMIT.store(cells.min(MAX_CELLS), std::sync::atomic::Ordering::Relaxed);
-}
-
-/// The largest grid a reader allocates now (cells): [`limit_cells`]'s, or 2^28; a larger file is
-/// read only by `tiles::build`, band by band.
-pub fn max_cells() -> usize {
-    CELL_LIMIT.load(std::sync::atomic::Ordering::Relaxed)
-}
 
 /// The side of the window a level not in memory is measured on for
 /// [`Atlas::level_curvature`]: 512², whose stride (2) visits as many texels as on a level held
@@ -107,7 +87,7 @@ pub struct Atlas {
     /// reads the finest of those. 0 for a sketch read whole.
     pub resident_from: usize,
     /// The tile pyramid the sketch streams from, when it is one.
-    pub pyramid: Option<crate::tiles::Pyramid>,
+    pub pyramid: Option<crate::sketch::tiles::Pyramid>,
     /// [`Atlas::finest_relief`] measured when the finest levels were read, for a streamed sketch.
     pub relief_m: Option<[f64; 2]>,
 }

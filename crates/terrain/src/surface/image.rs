@@ -24,8 +24,8 @@
 
 use super::picture::{self, Picture, Source};
 use crate::error::{Error, Result, Role};
+use crate::sketch::tiles::ImagePyramid;
 use crate::sketch::{Atlas, Georef, Units};
-use crate::tiles::ImagePyramid;
 use glam::DVec2;
 use std::path::Path;
 

@@ -17,8 +17,8 @@
 //! it does `png` for sketches, and stays within what builds for wasm32.
 
 use crate::error::{Error, Result, Role};
+use crate::sketch::tiles::ImagePyramid;
 use crate::sketch::{Georef, Units};
-use crate::tiles::ImagePyramid;
 use std::path::{Path, PathBuf};
 
 /// World files are six numbers; a larger file is not one.
@@ -46,7 +46,7 @@ pub(super) enum Source {
 /// Opens what `path` names.
 pub(super) fn open(path: &Path) -> Result<Source> {
     if path.is_dir() {
-        if !crate::tiles::is_pyramid(path) {
+        if !crate::sketch::tiles::is_pyramid(path) {
             return Err(Error::file(
                 Role::Image,
                 path,

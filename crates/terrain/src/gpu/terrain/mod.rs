@@ -22,11 +22,7 @@ pub(super) mod targets;
 pub(crate) use raster::RasterPipeline;
 use raster::render_pass;
 
-pub const COLOUR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
-/// Each pixel's depth as four bytes, kept for recovering ground positions (depth textures cannot
-/// be copied, nor float targets rendered, on every adapter).
-pub const DEPTH_COPY: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
-pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+pub use super::formats::{COLOUR, DEPTH, DEPTH_COPY, GBUFFER};
 
 /// The sky's depth test in forward frames (and the planet pass's). The sky lies at depth 0, where
 /// reversed-Z clears the depth, and is drawn after the ground, so that it passes only where no
@@ -96,11 +92,6 @@ pub struct TerrainPass {
     /// G-buffer `ground` writes and `screen` shades the picture from.
     targets: targets::Targets,
 }
-
-/// The G-buffer's targets: the f32s of the shader's `Surface` as bits, four to a target. Integer
-/// targets keep the bits exactly, so deferred shading sees what forward interpolates; float ones
-/// are not renderable on every adapter either (llvmpipe's GL path).
-pub const GBUFFER: [wgpu::TextureFormat; 4] = [wgpu::TextureFormat::Rgba32Uint; 4];
 
 /// Deferred shading, for single-sampled frames: the mesh writes each pixel's surface (position,
 /// normal, split octave, spacing, the air in front of it) to [`GBUFFER`], and one full-screen

@@ -14,12 +14,12 @@
 use super::{ImageMeta, ImagePyramid, encode_tile, tile_is_whole};
 use crate::error::{Error, Result, Role};
 use crate::io::write_atomic;
-use crate::surface::tiff::{ImageTiff, Samples};
-use crate::tiles::build::resume::{
+use crate::sketch::tiles::build::resume::{
     Plan, remove_temporaries, stamp, start_or_resume, write_quietly,
 };
-use crate::tiles::build::{BuildOptions, BuildSummary, band_rows, folder_bytes};
-use crate::tiles::{BORDER, FORMAT, Kind, META, SIDE, TILE, level_sizes, tile_path};
+use crate::sketch::tiles::build::{BuildOptions, BuildSummary, band_rows, folder_bytes};
+use crate::sketch::tiles::{BORDER, FORMAT, Kind, META, SIDE, TILE, level_sizes, tile_path};
+use crate::surface::tiff::{ImageTiff, Samples};
 use std::path::Path;
 use std::time::Instant;
 
@@ -34,7 +34,7 @@ pub(crate) fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<Build
                 .into(),
         ));
     }
-    if crate::sketch::is_glob(src) || !crate::tiles::build::is_tiff(src) {
+    if crate::sketch::is_glob(src) || !crate::sketch::tiles::build::is_tiff(src) {
         return Err(bad(
             "an image pyramid is made from a GeoTIFF; make one with `gdal_translate -of GTiff \
              -co TILED=YES -co COMPRESS=DEFLATE IN OUT.tif`"
@@ -49,11 +49,11 @@ pub(crate) fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<Build
     };
     let (width, height) = (tiff.width, tiff.height);
     let band_pixels = width * (TILE + 2 * BORDER);
-    if band_pixels > crate::sketch::max_cells() {
+    if band_pixels > crate::sketch::load::max_cells() {
         return Err(bad(format!(
             "a band of {width}×{} pixels is more than the {} held at once",
             TILE + 2 * BORDER,
-            crate::sketch::max_cells()
+            crate::sketch::load::max_cells()
         )));
     }
     let plan = Plan {
@@ -96,7 +96,7 @@ pub(crate) fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<Build
         tile: TILE,
         border: BORDER,
         levels: level_sizes(width, height),
-        georef: crate::tiles::build::meta_georef(georef),
+        georef: crate::sketch::tiles::build::meta_georef(georef),
     };
     remove_temporaries(out);
     let threads = match opts.threads {

@@ -3,8 +3,8 @@
 //!
 //! Rules:
 //! - A scene whose `sketch.path` names a pyramid folder gets a streamed atlas
-//!   ([`streamed_atlas`]): the pyramid's true geometry, its coarse levels in memory within
-//!   `stream.cpu_mb`, the finer ones left to the tile cache ([`super::cache`]).
+//!   (`sketch::streamed`) over a [`Pyramid`]: the pyramid's true geometry, its coarse levels in
+//!   memory within `stream.cpu_mb`, the finer ones left to the tile cache ([`super::cache`]).
 //! - A pyramid inside a mosaic is read as a grid ([`raw_grid`]): level 0 when it fits the cell
 //!   limit ([`crate::sketch::max_cells`]); otherwise the finest level that fits stands in, with its
 //!   spacing, and a note on stderr says which. The stand-in's nodes lie where that level's
@@ -16,7 +16,8 @@
 use super::codec::decode_tile;
 use super::{FORMAT, Kind, META, Meta, level_sizes, tile_path};
 use crate::error::{Error, Result, Role};
-use crate::sketch::{LoadOptions, RawGrid, max_cells};
+use crate::sketch::grid::{LoadOptions, RawGrid, max_cells};
+use crate::sketch::pyramid::{Level, bilinear_blend, bilinear_cell};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
@@ -108,10 +109,10 @@ impl Pyramid {
     }
 
     /// Level `l` whole, from its tiles' interiors.
-    pub fn level(&self, l: usize) -> Result<crate::sketch::Level> {
+    pub fn level(&self, l: usize) -> Result<Level> {
         let [width, height] = self.meta.levels[l];
         let data = read_rows(&self.dir, &self.meta, l, 0, height)?;
-        Ok(crate::sketch::Level {
+        Ok(Level {
             width,
             height,
             data,
@@ -120,11 +121,11 @@ impl Pyramid {
 
     /// Level `l`'s central window of at most `side`² nodes, as a level of its own: what a
     /// measurement of a level too large for memory reads (the relief, the curvature).
-    pub fn central_window(&self, l: usize, side: usize) -> Result<crate::sketch::Level> {
+    pub fn central_window(&self, l: usize, side: usize) -> Result<Level> {
         let [w, h] = self.meta.levels[l];
         let (ww, wh) = (w.min(side), h.min(side));
         let data = self.window(l, (w - ww) / 2, (h - wh) / 2, ww, wh)?;
-        Ok(crate::sketch::Level {
+        Ok(Level {
             width: ww,
             height: wh,
             data,
@@ -156,12 +157,12 @@ impl Pyramid {
     pub fn bilinear(&self, l: usize, x: f64, y: f64) -> Result<f32> {
         let [w, h] = self.meta.levels[l];
         let (t, b, side) = (self.meta.tile, self.meta.border, self.side());
-        let ((i, j), f) = crate::sketch::bilinear_cell(x, y, w, h);
+        let ((i, j), f) = bilinear_cell(x, y, w, h);
         let (tx, ty) = (i / t, j / t);
         let heights = self.recent_tile(l, tx, ty)?;
         let at = |i: usize, j: usize| heights[(j - ty * t + b) * side + i - tx * t + b];
         let z = [[at(i, j), at(i + 1, j)], [at(i, j + 1), at(i + 1, j + 1)]];
-        Ok(crate::sketch::bilinear_blend(z, f))
+        Ok(bilinear_blend(z, f))
     }
 
     /// Node (i, j) of level `l` (inside the level), from the recent tiles.
@@ -257,110 +258,8 @@ pub fn raw_grid_within(dir: &Path, cells: usize) -> Result<RawGrid> {
     })
 }
 
-/// Bytes of the coarse levels a streamed sketch holds in memory by default (`stream.cpu_mb`).
-pub const DEFAULT_CPU_BYTES: u64 = 256 << 20;
-/// The side of the level-0 window a streamed sketch's relief is measured on.
-const RELIEF_WINDOW: usize = 1024;
-
-/// A pyramid as a streamed sketch: its true geometry (level 0's spacing and sizes, every level),
-/// with the levels from the finest whose pyramid fits `cpu_bytes` held in memory and the finer
-/// ones left to the tile cache (empty here). The relief that sets the detail's default amplitude
-/// is measured on level 0's central window of at most 1024² nodes, read from its tiles: the
-/// finest bands are what it measures, and they are not in memory.
-pub fn streamed_atlas(dir: &Path, opts: &LoadOptions) -> Result<crate::sketch::Atlas> {
-    let pyramid = Pyramid::open(dir)?;
-    let m = &pyramid.meta;
-    let meta_path = dir.join(META);
-    let scaled = opts.height_scale.is_some_and(|s| s != 1.0);
-    if scaled || opts.height_range_m.is_some() {
-        return Err(Error::value(
-            if scaled {
-                "sketch.height_scale"
-            } else {
-                "sketch.height_range_m"
-            },
-            format!(
-                "{}: a tile pyramid's heights are metres; scale them when converting (`terrain tiles --height-scale`)",
-                meta_path.display()
-            ),
-        ));
-    }
-    if opts.spacing_m.is_some_and(|s| s != m.dx_m || s != m.dy_m) {
-        return Err(Error::value(
-            "sketch.spacing_m",
-            format!(
-                "{}: a tile pyramid keeps its spacing ({} × {} m); give it when converting (`terrain tiles --spacing-m`)",
-                meta_path.display(),
-                m.dx_m,
-                m.dy_m
-            ),
-        ));
-    }
-    let budget = opts.stream_cpu_bytes.unwrap_or(DEFAULT_CPU_BYTES);
-    let bytes_from = |l: usize| -> u64 {
-        m.levels[l..]
-            .iter()
-            .map(|[w, h]| (*w as u64) * (*h as u64) * 4)
-            .sum()
-    };
-    let first = (0..m.levels.len())
-        .find(|&l| bytes_from(l) <= budget && m.levels[l][0] * m.levels[l][1] <= max_cells())
-        .unwrap_or(m.levels.len() - 1);
-    let held = crate::sketch::build_pyramid(pyramid.level(first)?);
-    let mut levels: Vec<crate::sketch::Level> = m.levels[..first]
-        .iter()
-        .map(|&[width, height]| crate::sketch::Level {
-            width,
-            height,
-            data: Vec::new(),
-        })
-        .collect();
-    levels.extend(held);
-    let relief_m = if first == 0 {
-        None
-    } else {
-        Some(window_relief(&pyramid)?)
-    };
-    Ok(crate::sketch::Atlas {
-        dx: m.dx_m,
-        dy: m.dy_m,
-        origin: opts.origin_m.unwrap_or(glam::DVec2::ZERO),
-        nodata: m.nodata as usize,
-        min_m: m.min_m,
-        max_m: m.max_m,
-        edge_mean_m: m.edge_mean_m,
-        water_m: 0.0,
-        levels,
-        georef: m.georef.as_ref().map(super::MetaGeoref::georef),
-        resident_from: first,
-        pyramid: Some(pyramid),
-        relief_m,
-    })
-}
-
-/// [`crate::sketch::Atlas::finest_relief`] of level 0's central window.
-fn window_relief(pyramid: &Pyramid) -> Result<[f64; 2]> {
-    let base = pyramid.central_window(0, RELIEF_WINDOW)?;
-    let probe = crate::sketch::Atlas {
-        dx: pyramid.meta.dx_m,
-        dy: pyramid.meta.dy_m,
-        origin: glam::DVec2::ZERO,
-        nodata: 0,
-        min_m: pyramid.meta.min_m,
-        max_m: pyramid.meta.max_m,
-        edge_mean_m: pyramid.meta.edge_mean_m,
-        water_m: 0.0,
-        levels: crate::sketch::build_pyramid(base),
-        georef: None,
-        resident_from: 0,
-        pyramid: None,
-        relief_m: None,
-    };
-    Ok(probe.finest_relief())
-}
-
 /// Rows `r0..r1` of level `l`, whole width, from the interiors of its tiles.
-pub(in crate::tiles) fn read_rows(
+pub(in crate::sketch::tiles) fn read_rows(
     out: &Path,
     meta: &Meta,
     l: usize,

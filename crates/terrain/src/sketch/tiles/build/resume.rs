@@ -13,7 +13,7 @@ use std::path::Path;
 
 /// Removes the temporary files (`.NAME.PID.tmp`) a killed build left half written under `dir`,
 /// so a resumed build leaves the folder as a fresh one would.
-pub(in crate::tiles) fn remove_temporaries(dir: &Path) {
+pub(in crate::sketch::tiles) fn remove_temporaries(dir: &Path) {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return;
     };
@@ -31,25 +31,25 @@ pub(in crate::tiles) fn remove_temporaries(dir: &Path) {
 
 /// `build.json`: what a pyramid folder is being built from.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(in crate::tiles) struct Plan {
-    pub(in crate::tiles) format: String,
+pub(in crate::sketch::tiles) struct Plan {
+    pub(in crate::sketch::tiles) format: String,
     /// Heights or an image: the same source converted as the other is another pyramid.
     #[serde(default)]
-    pub(in crate::tiles) kind: crate::tiles::Kind,
-    pub(in crate::tiles) sources: Vec<SourceStamp>,
-    pub(in crate::tiles) spacing_m: Option<f64>,
-    pub(in crate::tiles) height_scale: Option<f64>,
-    pub(in crate::tiles) height_range_m: Option<[f64; 2]>,
+    pub(in crate::sketch::tiles) kind: crate::sketch::tiles::Kind,
+    pub(in crate::sketch::tiles) sources: Vec<SourceStamp>,
+    pub(in crate::sketch::tiles) spacing_m: Option<f64>,
+    pub(in crate::sketch::tiles) height_scale: Option<f64>,
+    pub(in crate::sketch::tiles) height_range_m: Option<[f64; 2]>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(in crate::tiles) struct SourceStamp {
+pub(in crate::sketch::tiles) struct SourceStamp {
     path: String,
     bytes: u64,
     mtime_ns: u128,
 }
 
-pub(in crate::tiles) fn stamp(path: &Path) -> Result<SourceStamp> {
+pub(in crate::sketch::tiles) fn stamp(path: &Path) -> Result<SourceStamp> {
     let m = std::fs::metadata(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
     let mtime_ns = m
         .modified()
@@ -67,7 +67,7 @@ pub(in crate::tiles) fn stamp(path: &Path) -> Result<SourceStamp> {
 }
 
 /// Creates `out` with its `build.json`, or checks that the one there is this build's.
-pub(in crate::tiles) fn start_or_resume(out: &Path, plan: &Plan) -> Result<()> {
+pub(in crate::sketch::tiles) fn start_or_resume(out: &Path, plan: &Plan) -> Result<()> {
     let recorded = out.join("build.json");
     match std::fs::read(&recorded) {
         Ok(bytes) => {
@@ -102,7 +102,7 @@ pub(in crate::tiles) fn start_or_resume(out: &Path, plan: &Plan) -> Result<()> {
 
 /// Whether a tile file is there and as long as its header says (a run killed mid-write leaves
 /// only temporary names, but a disk that lost power may keep a short file).
-pub(in crate::tiles) fn tile_is_whole(path: &Path) -> bool {
+pub(in crate::sketch::tiles) fn tile_is_whole(path: &Path) -> bool {
     let Ok(file) = std::fs::File::open(path) else {
         return false;
     };
@@ -116,7 +116,7 @@ pub(in crate::tiles) fn tile_is_whole(path: &Path) -> bool {
 
 /// Writes under a temporary name and renames; no fsync (tiles are many, and a killed process
 /// loses nothing the kernel holds; a power loss is what [`tile_is_whole`] checks for).
-pub(in crate::tiles) fn write_quietly(path: &Path, bytes: &[u8]) -> Result<()> {
+pub(in crate::sketch::tiles) fn write_quietly(path: &Path, bytes: &[u8]) -> Result<()> {
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(Role::OutputFolder, dir, e))?;
     }

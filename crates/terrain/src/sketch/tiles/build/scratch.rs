@@ -7,10 +7,10 @@
 use super::resume::write_quietly;
 use crate::error::{Error, Result, Role};
 use crate::sketch::georef::{Georef, Units};
+use crate::sketch::load::{Beyond, LoadOptions, RawGrid, read_grid, scale_cells, scale_heights};
 use crate::sketch::mosaic::{self, TileExtent};
-use crate::sketch::{Beyond, LoadOptions, RawGrid, read_grid, scale_cells, scale_heights};
-use crate::tiles::MetaGeoref;
-use crate::tiles::TILE;
+use crate::sketch::tiles::MetaGeoref;
+use crate::sketch::tiles::TILE;
 use serde::{Deserialize, Serialize};
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
@@ -66,7 +66,7 @@ pub(super) fn copy_source(
         e => e,
     };
     let s = if super::is_tiff(path) {
-        let mut tiff = crate::sketch::open_tiff(path)?;
+        let mut tiff = crate::sketch::geotiff::open(path)?;
         let (w, h) = (tiff.width, tiff.height);
         let mut beyond = Beyond::default();
         let mut failed = None;
@@ -240,7 +240,7 @@ fn write_pieces(
         })
 }
 
-pub(in crate::tiles) fn meta_georef(g: Georef) -> MetaGeoref {
+pub(in crate::sketch::tiles) fn meta_georef(g: Georef) -> MetaGeoref {
     MetaGeoref {
         units: match g.units {
             Units::Degrees => "degrees".into(),

@@ -22,15 +22,16 @@
 
 use super::scratch::{Placed, Scratch, copy_source, copy_sources, place, spacing};
 use crate::error::{Error, Result, Role};
+use crate::sketch::geotiff::{Windows as TiffWindows, open as open_tiff};
+use crate::sketch::load::{Beyond, LoadOptions, RawGrid, scale_cells};
 use crate::sketch::mosaic::{self, VrtSource};
-use crate::sketch::{Beyond, LoadOptions, RawGrid, TiffWindows, open_tiff, scale_cells};
 use std::fs::File;
 use std::io::BufReader;
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 
 /// Whether `path` names a GeoTIFF (by its extension, as the readers tell formats).
-pub(in crate::tiles) fn is_tiff(path: &Path) -> bool {
+pub(in crate::sketch::tiles) fn is_tiff(path: &Path) -> bool {
     has_extension(path, &["tif", "tiff"])
 }
 

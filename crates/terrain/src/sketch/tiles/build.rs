@@ -33,13 +33,13 @@ use super::read::read_rows;
 use super::{BORDER, FORMAT, META, Meta, SIDE, TILE, level_sizes, tile_path};
 use crate::error::{Error, Result, Role};
 use crate::io::write_atomic;
-use crate::sketch::LoadOptions;
+use crate::sketch::load::LoadOptions;
 use crate::sketch::mosaic;
-pub(in crate::tiles) use bands::band_rows;
+pub(in crate::sketch::tiles) use bands::band_rows;
 use bands::{coarser_band, write_band};
-pub(in crate::tiles) use level0::is_tiff;
+pub(in crate::sketch::tiles) use level0::is_tiff;
 use resume::{Plan, remove_temporaries, stamp, start_or_resume, tile_is_whole};
-pub(in crate::tiles) use scratch::meta_georef;
+pub(in crate::sketch::tiles) use scratch::meta_georef;
 use serde::Serialize;
 use std::os::unix::fs::FileExt;
 use std::path::Path;
@@ -80,32 +80,9 @@ pub struct BuildSummary {
     pub seconds: f64,
 }
 
-/// Converts `src` into a pyramid in `out` (created, or resumed where a run stopped).
-///
-/// `src` is any sketch file or a quoted glob of tiles on one grid; a scene whose `sketch.path`
-/// names `out` then streams it. A GeoTIFF of 8-bit RGB or RGBA pixels (or grey ones, with
-/// [`BuildOptions::image`]) is an image: its pyramid ([`super::image`]) is for `surface.image`.
-///
-/// ```no_run
-/// use std::path::Path;
-/// use terrain::tiles::{self, BuildOptions};
-///
-/// let summary = tiles::build(
-///     Path::new("dem/*.hgt"),
-///     Path::new("dem-pyramid"),
-///     &BuildOptions { threads: 0, ..Default::default() },
-/// )?;
-/// println!("{} levels, {} tiles", summary.levels, summary.tiles);
-/// # Ok::<(), terrain::Error>(())
-/// ```
-pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary> {
+/// Converts the height map `src` into a pyramid in `out`: [`super::build`] for heights.
+pub(super) fn heights(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary> {
     let start = Instant::now();
-    if super::is_pyramid(src) {
-        return Err(Error::sketch(src, "is a tile pyramid already"));
-    }
-    if is_image(src, opts.image) {
-        return super::image::build(src, out, opts);
-    }
     let sources = if mosaic::is_glob(src) {
         mosaic::list_glob(src)?
     } else {
@@ -221,7 +198,7 @@ pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary
 /// Whether `src` is converted as an image: a single GeoTIFF whose pixels are 8-bit RGB or RGBA
 /// (a height map has one sample), or anything when `asked` (whose reading then says what it is
 /// not). 8-bit grey is heights unless asked: a DEM may be stored in bytes.
-fn is_image(src: &Path, asked: bool) -> bool {
+pub(super) fn is_image(src: &Path, asked: bool) -> bool {
     use crate::surface::tiff::{Samples, samples_of};
     let rgb = || matches!(samples_of(src), Some(Samples::Rgb | Samples::Rgba));
     asked || (!mosaic::is_glob(src) && is_tiff(src) && rgb())
@@ -231,7 +208,7 @@ fn is_image(src: &Path, asked: bool) -> bool {
 /// than the cell limit at once: the limit bounds what is held, not the sketch.
 fn check_band(src: &Path, width: usize) -> Result<()> {
     let cells = width * (TILE + 2 * BORDER);
-    let limit = crate::sketch::max_cells();
+    let limit = crate::sketch::load::max_cells();
     if cells > limit {
         return Err(Error::sketch(
             src,
@@ -293,7 +270,7 @@ fn toml_text(meta: &Meta) -> Result<String> {
     toml::to_string(meta).map_err(|e| Error::encode("pyramid.toml", e))
 }
 
-pub(in crate::tiles) fn folder_bytes(dir: &Path) -> u64 {
+pub(in crate::sketch::tiles) fn folder_bytes(dir: &Path) -> u64 {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return 0;
     };

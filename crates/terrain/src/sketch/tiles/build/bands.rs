@@ -7,8 +7,8 @@
 use super::resume::write_quietly;
 use crate::error::{Error, Result, Role};
 use crate::sketch::fill;
-use crate::tiles::codec::encode_tile;
-use crate::tiles::{BORDER, Meta, SIDE, TILE, tile_path};
+use crate::sketch::tiles::codec::encode_tile;
+use crate::sketch::tiles::{BORDER, Meta, SIDE, TILE, tile_path};
 use std::path::Path;
 
 /// Level l's rows of band `ty`, each the box average of two rows of level l−1, read tile by tile
@@ -29,7 +29,8 @@ pub(super) fn coarser_band(
     let (f0, f1) = (2 * r0, 2 * r1);
     for fty in f0 / t..=(f1 - 1) / t {
         for ftx in 0..tiles_x {
-            let fine = crate::tiles::read::read_tile_file(&tile_path(out, l - 1, ftx, fty), side)?;
+            let fine =
+                crate::sketch::tiles::read::read_tile_file(&tile_path(out, l - 1, ftx, fty), side)?;
             let at = |x: usize, y: usize| fine[(y - fty * t + b) * side + x - ftx * t + b];
             let (y0, y1) = (f0.max(fty * t) / 2, f1.min(fty * t + t) / 2);
             let (x0, x1) = (ftx * t / 2, ((ftx * t + t) / 2).min(w).min(fw / 2));
@@ -47,7 +48,7 @@ pub(super) fn coarser_band(
 }
 
 /// The rows a band of tile row `ty` holds, clamped to a level of `h` rows.
-pub(in crate::tiles) fn band_rows(ty: usize, h: usize) -> (usize, usize) {
+pub(in crate::sketch::tiles) fn band_rows(ty: usize, h: usize) -> (usize, usize) {
     let r0 = (ty * TILE).saturating_sub(BORDER);
     let r1 = ((ty + 1) * TILE + BORDER).min(h);
     (r0, r1)

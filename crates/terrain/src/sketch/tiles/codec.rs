@@ -1,5 +1,5 @@
 //! A tile's bytes: the header and the zstd frame of its predicted byte planes (the rules are in
-//! the module doc of [`crate::tiles`]).
+//! the module doc of [`crate::sketch::tiles`]).
 
 use crate::error::{Error, Result, Role};
 use std::path::Path;

@@ -3,7 +3,7 @@
 //! drapes it, reading one level's tiles under the sketch).
 //!
 //! Rules:
-//! - The layout is the height pyramid's ([`crate::tiles`]): level 0 is the image's pixels, row 0
+//! - The layout is the height pyramid's ([`crate::sketch::tiles`]): level 0 is the image's pixels, row 0
 //!   south; level l halves level l−1 rounding down, down to the last level whose sides are both
 //!   ≥ 2; tiles of [`TILE`](super::TILE)² pixels with a border of [`BORDER`](super::BORDER) on
 //!   every side, clamped to the
@@ -33,7 +33,7 @@ pub(crate) use build::build;
 use super::codec::{compress, decompress};
 use super::{FORMAT, Kind, META, MetaGeoref, level_sizes, tile_path};
 use crate::error::{Error, Result, Role};
-use crate::sketch::Georef;
+use crate::sketch::georef::Georef;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -323,7 +323,7 @@ mod tests {
             "{err}"
         );
         // A height tile where an image tile belongs says what it is not.
-        let heights = crate::tiles::codec::encode_tile(&[0.0; 16], 4, 0.0, 0.0, 0).unwrap();
+        let heights = crate::sketch::tiles::codec::encode_tile(&[0.0; 16], 4, 0.0, 0.0, 0).unwrap();
         let err = decode_tile(Path::new("x"), &heights).unwrap_err();
         assert!(err.to_string().contains("TTI1"), "{err}");
     }
