@@ -55,6 +55,89 @@ fn depth_of(w: f32) -> f32 {
     return clamp(output.near / w, 0.0, 1.0);
 }
 
+// What a pixel shows: 0 no ground of the sketch (sky, or the world beyond it), 1 land, 2 water.
+// The frame's colour alpha is 0 on water (`water_alpha` in shading.wgsl), 1 elsewhere.
+fn class_at(q: vec2<i32>) -> u32 {
+    if (any(q < vec2<i32>(0)) || q.x >= i32(output.width) || q.y >= i32(output.height)) {
+        return 0u;
+    }
+    let p = vec2<u32>(q);
+#ifdef FROM_BUFFERS
+    let i = p.y * output.width + p.x;
+    let ground = position_in[i].w > 0.5;
+    let alpha = colour_in[i].a;
+#else
+    let ground = depth_of(view_w_at(p)) > 0.0;
+    let alpha = textureLoad(colour_in, p, 0).a;
+#endif
+    return select(0u, select(1u, 2u, alpha < 0.5), ground);
+}
+
+fn colour_at(q: vec2<i32>) -> vec3<f32> {
+    let p = vec2<u32>(q);
+#ifdef FROM_BUFFERS
+    return colour_in[p.y * output.width + p.x].rgb;
+#else
+    return textureLoad(colour_in, p, 0).rgb;
+#endif
+}
+
+const SIDES: array<vec2<i32>, 4> = array<vec2<i32>, 4>(
+    vec2<i32>(1, 0), vec2<i32>(-1, 0), vec2<i32>(0, 1), vec2<i32>(0, -1)
+);
+
+// Whether the land or water at `p` is a speck: a region of fewer than SPECK_PX pixels (sides
+// touching), which the map reader sees as noise at the shore, not as a pool or an islet. Found
+// by filling from `p` until SPECK_PX pixels are found or the region ends.
+const SPECK_PX: u32 = 4u;
+fn is_speck(p: vec2<i32>, kind: u32) -> bool {
+    var found: array<vec2<i32>, 4>;
+    found[0] = p;
+    var n = 1u;
+    for (var i = 0u; i < n && n < SPECK_PX; i++) {
+        for (var s = 0u; s < 4u && n < SPECK_PX; s++) {
+            let q = found[i] + SIDES[s];
+            var seen = false;
+            for (var j = 0u; j < n; j++) {
+                seen = seen || all(found[j] == q);
+            }
+            if (!seen && class_at(q) == kind) {
+                found[n] = q;
+                n++;
+            }
+        }
+    }
+    return n < SPECK_PX;
+}
+
+// The colour at `p`, a speck of land or water taking the colour of the region around it.
+fn cleaned(p: vec2<i32>, colour: vec3<f32>) -> vec3<f32> {
+    let kind = class_at(p);
+    if (kind == 0u || !is_speck(p, kind)) {
+        return colour;
+    }
+    var sum = vec3<f32>(0.0);
+    var count = 0.0;
+    for (var s = 0u; s < 4u; s++) {
+        let q = p + SIDES[s];
+        let c = class_at(q);
+        if (c != 0u && c != kind) {
+            sum += colour_at(q);
+            count += 1.0;
+        }
+    }
+    return select(colour, sum / max(count, 1.0), count > 0.0);
+}
+
+#ifdef FROM_BUFFERS
+#else
+// The view distance the frame kept at `p` (`depth_bytes` in raster.wgsl).
+fn view_w_at(p: vec2<u32>) -> f32 {
+    let b = vec4<u32>(round(textureLoad(depth_in, p, 0) * 255.0));
+    return bitcast<f32>(b.x | (b.y << 8u) | (b.z << 16u) | (b.w << 24u));
+}
+#endif
+
 @fragment
 fn fs(in: VsOut) -> FsOut {
     let p = vec2<u32>(in.position.xy);
@@ -71,10 +154,9 @@ fn fs(in: VsOut) -> FsOut {
     }
 #else
     colour = textureLoad(colour_in, p, 0).rgb;
-    let b = vec4<u32>(round(textureLoad(depth_in, p, 0) * 255.0));
-    let bits = b.x | (b.y << 8u) | (b.z << 16u) | (b.w << 24u);
-    out.depth = depth_of(bitcast<f32>(bits));
+    out.depth = depth_of(view_w_at(p));
 #endif
+    colour = cleaned(vec2<i32>(p), colour);
     if (output.encode_srgb == 1u) {
         colour = srgb(colour);
     }

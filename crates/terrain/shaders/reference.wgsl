@@ -103,6 +103,12 @@ fn trace(ndc: vec2<f32>, shade: bool) -> Ray {
     return ray;
 }
 
+// The colour's alpha at a pixel whose centre's ray met `hit` (w = 1 on ground): the mesh modes'
+// water flag (`water_alpha`), for the output pass.
+fn ground_alpha(hit: vec4<f32>) -> f32 {
+    return select(1.0, water_alpha(hit.z), hit.w > 0.5);
+}
+
 fn ndc_of(pixel: vec2<f32>) -> vec2<f32> {
     let size = vec2<f32>(frame.camera.image);
     return vec2<f32>(pixel.x / size.x * 2.0 - 1.0, 1.0 - pixel.y / size.y * 2.0);
@@ -134,11 +140,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var i = 0; i < 4; i++) {
         sum += trace(ndc_of(vec2<f32>(id.xy) + SAMPLES[i]), true).colour;
     }
-    colour_out[k] = vec4<f32>(0.25 * sum, 1.0);
+    colour_out[k] = vec4<f32>(0.25 * sum, ground_alpha(position_out[k]));
 #else
     let centre = trace(ndc_of(vec2<f32>(id.xy) + 0.5), true);
     position_out[k] = centre.hit;
-    colour_out[k] = vec4<f32>(centre.colour, 1.0);
+    colour_out[k] = vec4<f32>(centre.colour, ground_alpha(centre.hit));
 #endif
     add_work();
 }

@@ -438,7 +438,9 @@ fn shade(in: Surface) -> FragOut {
     let t = clamp(log2(v / frame.mesh.importance_max) / 12.0 + 1.0, 0.0, 1.0);
     colour = mix(vec3<f32>(0.27, 0.0, 0.33), vec3<f32>(0.99, 0.9, 0.14), t);
 #endif
-    return frag_out(colour * in.through + in.inscatter, in.view_w);
+    var out = frag_out(colour * in.through + in.inscatter, in.view_w);
+    out.colour.a = water_alpha(in.local.z);
+    return out;
 }
 
 #ifdef DEFERRED

@@ -14,6 +14,17 @@ const ON_WATER_M: f32 = 0.01;
 fn on_water(z: f32) -> bool {
     return z <= frame.atlas.water_m + ON_WATER_M;
 }
+
+// The frame colour's alpha at ground of height `z`: 0 where the shaded picture shows water, 1
+// elsewhere, for the output pass, which gives specks of water or land (regions under 4 pixels)
+// the colour of the region around them. A ramp colours the bed, so no ground is water then.
+fn water_alpha(z: f32) -> f32 {
+#ifdef RAMP
+    return 1.0;
+#else
+    return select(1.0, 0.0, on_water(z) && frame.camera.view == VIEW_SHADED);
+#endif
+}
 // The atmosphere's constants (RAYLEIGH, RAYLEIGH_SCALE_M, HAZE_ALBEDO, MIE_G, MULTIPLE, STEPS,
 // TOP_M, FAR_M) are src/light.rs's, through `#import constants`.
 

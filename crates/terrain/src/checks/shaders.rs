@@ -38,11 +38,7 @@ fn every_pass_validates_in_every_variant() {
             compose(name, &own).unwrap(),
             "{name}: a flag outside {own:?} changes its source"
         );
-        let masks: Vec<u32> = match own.len() <= EXHAUSTIVE {
-            true => (0..(1u32 << own.len())).collect(),
-            false => covering_triples(own.len()),
-        };
-        for mask in masks {
+        for mask in variants(own.len()) {
             let flags: Vec<&str> = own
                 .iter()
                 .enumerate()
@@ -58,6 +54,15 @@ fn every_pass_validates_in_every_variant() {
 
 /// Passes testing this many flags or fewer are validated in all their variants.
 const EXHAUSTIVE: usize = 9;
+
+/// The variants of a pass testing `n` flags that the checks compose, as masks of those flags:
+/// all of them up to [`EXHAUSTIVE`] flags, covering triples beyond.
+pub(super) fn variants(n: usize) -> Vec<u32> {
+    match n <= EXHAUSTIVE {
+        true => (0..(1u32 << n)).collect(),
+        false => covering_triples(n),
+    }
+}
 
 /// Masks of `n` flags in which every three flags take each of their eight combinations of values
 /// at least once, and every flag is set alone and unset alone: greedy, each mask the one of 64

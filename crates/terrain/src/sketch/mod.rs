@@ -43,8 +43,10 @@ pub(crate) use pyramid::build_pyramid;
 use crate::error::Result;
 use glam::DVec2;
 
-/// Mean Earth radius (IUGG), for converting geographic cells to metres at their mid latitude.
-pub const EARTH_RADIUS_M: f64 = 6_371_008.8;
+/// The Earth's mean radius, metres, for converting geographic cells to metres at their mid
+/// latitude and as a planet's default radius: 6371 km, the IUGG mean (6,371,008.8 m) rounded to
+/// a value f32 holds exactly, as the planet's uniforms hold it (1.4 ppm apart).
+pub const EARTH_RADIUS_M: f64 = 6_371_000.0;
 /// Heights beyond ±1000 km (after `sketch.height_scale`) are no terrain's (the Earth's relief
 /// spans 20 km), and squared or summed in f32 downstream they would overflow. Up to 1 % of a
 /// sketch's cells beyond it are taken as nodata and filled (a Float64 file damaged into 1e180 m, a
