@@ -78,7 +78,7 @@ fn covering_triples(n: usize) -> Vec<u32> {
         (m >> i & 1 | (m >> j & 1) << 1 | (m >> k & 1) << 2) as usize
     };
     let mut missing: Vec<[bool; 8]> = vec![[true; 8]; triples.len()];
-    let mut cover = |m: u32, missing: &mut Vec<[bool; 8]>| {
+    let cover = |m: u32, missing: &mut Vec<[bool; 8]>| {
         for (t, seen) in triples.iter().zip(missing.iter_mut()) {
             seen[value(m, *t)] = false;
         }
