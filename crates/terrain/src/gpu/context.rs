@@ -23,7 +23,15 @@ pub struct GpuContext {
     pub msaa: u32,
     /// A software rasterizer (llvmpipe, lavapipe, WARP): no hardware to multisample for free.
     pub software: bool,
+    /// The first error wgpu raised outside any call that returns one (an allocation out of
+    /// memory, a lost device), on a device this context opened: [`GpuContext::wait`] returns it
+    /// (shared by the context's clones).
+    /// wgpu's own handler panics; a host's device keeps the host's handler (empty then).
+    raised: Raised,
 }
+
+/// The first uncaptured error of a device, as text (wgpu's errors are not `Clone`).
+type Raised = std::sync::Arc<std::sync::Mutex<Option<String>>>;
 
 /// What the renderer needs of a device, checked before anything is created.
 pub struct Needs {
@@ -86,6 +94,13 @@ impl GpuContext {
                 .flags
                 .sample_count_supported(4)
         });
+        let raised = Raised::default();
+        let first = raised.clone();
+        device.on_uncaptured_error(std::sync::Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut first) = first.lock() {
+                first.get_or_insert_with(|| e.to_string());
+            }
+        }));
         Ok(GpuContext {
             device,
             queue,
@@ -94,6 +109,7 @@ impl GpuContext {
             software: info.device_type == wgpu::DeviceType::Cpu,
             msaa: if x4 { 4 } else { 1 },
             adapter: info,
+            raised,
         })
     }
 
@@ -119,6 +135,7 @@ impl GpuContext {
             software,
             msaa: if software { 1 } else { 4 },
             adapter: info,
+            raised: Raised::default(),
         })
     }
 
@@ -153,12 +170,24 @@ impl GpuContext {
         format!("{} ({:?})", self.adapter.name, self.adapter.backend)
     }
 
-    /// Blocks until the queue is idle.
+    /// Blocks until the queue is idle; the first error the device raised since it was opened
+    /// (out of memory, a lost device), if any, as [`Error::Device`].
     pub fn wait(&self) -> Result<()> {
         self.device
             .poll(wgpu::PollType::wait_indefinitely())
             .map(|_| ())
-            .map_err(|e| Error::device("device lost while waiting", e))
+            .map_err(|e| Error::device("device lost while waiting", e))?;
+        self.raised()
+    }
+
+    /// The first error the device raised outside a call that returns one since the last
+    /// asked, if any: returned once, so that a batch's next item on the same device starts clean.
+    pub fn raised(&self) -> Result<()> {
+        let first = self.raised.lock().ok().and_then(|mut f| f.take());
+        match first {
+            Some(e) => Err(Error::device("the device refused", Refused(e))),
+            None => Ok(()),
+        }
     }
 }
 
@@ -184,4 +213,53 @@ fn check(name: &str, limits: &wgpu::Limits, needs: &Needs) -> Result<()> {
         });
     }
     Ok(())
+}
+
+/// An uncaptured wgpu error kept as its text, as the source of an [`Error::Device`]: on one
+/// line, its kind and its innermost cause (wgpu's validation errors go on over several).
+#[derive(Debug)]
+struct Refused(String);
+
+impl std::fmt::Display for Refused {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        // "Validation Error", then where and why, innermost last: the kind and the cause.
+        let lines: Vec<&str> = self
+            .0
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .collect();
+        match lines.as_slice() {
+            [] => f.write_str("an error without a message"),
+            [only] => f.write_str(only),
+            [kind, .., cause] => write!(f, "{kind}: {cause}"),
+        }
+    }
+}
+
+impl std::error::Error for Refused {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An allocation the device refuses (here a buffer over its limit; out of memory alike) is
+    /// an error from `wait`, once, in one line, where wgpu's own handler panics.
+    #[test]
+    #[allow(clippy::disallowed_methods)]
+    fn a_refused_allocation_is_one_error_not_a_panic() {
+        let ctx = GpuContext::new(&Needs { storage_bytes: 0 }).unwrap();
+        let _too_big = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("too big"),
+            size: (ctx.limits.max_buffer_size + 4) & !3,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let err = ctx.wait().unwrap_err().to_string();
+        assert!(
+            err.starts_with("GPU: the device refused: Validation Error: ") && !err.contains('\n'),
+            "{err}"
+        );
+        assert!(ctx.wait().is_ok(), "the error is returned once");
+    }
 }

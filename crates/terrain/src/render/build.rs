@@ -96,6 +96,8 @@ pub(super) fn renderer(
     let deferred = shared.deferred;
     let shader_key = crate::lod::shader_key(&shared, mode);
     let outside = scene.outside(&atlas);
+    // An allocation the device refused (out of memory) is an error here, not a panic.
+    ctx.raised()?;
     Ok(Renderer {
         snapshots: None,
         samples,
