@@ -349,7 +349,10 @@ pub(crate) fn read_buffer<T>(
     buffer: &wgpu::Buffer,
     f: impl FnOnce(&[u8]) -> T,
 ) -> Result<T> {
-    crate::readback::read_buffer(&ctx.device, buffer, f)
+    let out = crate::readback::read_buffer(&ctx.device, buffer, f)?;
+    // What the frame read back is no frame where the device refused part of it.
+    ctx.raised()?;
+    Ok(out)
 }
 
 #[cfg(test)]

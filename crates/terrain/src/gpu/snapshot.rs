@@ -75,6 +75,9 @@ impl Snapshot {
 
     /// The colour of the submitted snapshot: four bytes a pixel, rows top first.
     pub fn read(&self, ctx: &GpuContext) -> Result<Vec<u8>> {
-        self.readback.read(&ctx.device)
+        let rgba = self.readback.read(&ctx.device)?;
+        // No picture where the device refused part of the frame (a target out of memory).
+        ctx.raised()?;
+        Ok(rgba)
     }
 }
