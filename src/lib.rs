@@ -1,6 +1,8 @@
 //! The tools around the `terrain` library: the jobs users run ([`app`]: fly, batch, the window,
-//! camera paths, outputs, progress bars) and the evaluation ([`eval`]: image metrics, `compare`,
-//! its charts). The `terrain` binary (`src/bin/terrain/`) is their command line.
+//! camera paths) and the evaluation ([`eval`]: image metrics, `compare`), over what both use:
+//! the files they write ([`output`]), their charts and text ([`plot`]), progress bars
+//! ([`progress`]) and order statistics ([`stats`]). The `terrain` binary (`src/bin/terrain/`) is their command line.
+//! Modules lower in that list do not use the ones above them: the jobs do not use the evaluation.
 //!
 //! Rules: everything here is built on the library's public API; nothing here is needed to embed
 //! a terrain. Rejected: these modules inside the library, where every host would compile clap,
@@ -8,6 +10,10 @@
 
 pub mod app;
 pub mod eval;
+pub mod output;
+pub mod plot;
+pub mod progress;
+pub mod stats;
 
 /// docs/embedding.md's host, compiled with the doctests so that the page cannot drift from the
 /// API it describes.

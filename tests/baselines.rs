@@ -79,13 +79,8 @@ fn no_cracks_between_blocks_any_levels_apart() {
             let n = holes(&frame.rgba, 160);
             if n > 0 {
                 let out = scratch(&format!("cracks-{sketch}-{what}-{d}"));
-                terrain_cli::app::output::write_image(
-                    &out.join("coverage.png"),
-                    160,
-                    160,
-                    &frame.rgba,
-                )
-                .unwrap();
+                terrain_cli::output::write_image(&out.join("coverage.png"), 160, 160, &frame.rgba)
+                    .unwrap();
             }
             assert_eq!(
                 n, 0,

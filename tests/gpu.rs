@@ -68,13 +68,8 @@ fn snapshots_match_their_references() {
         let reference = dir.join(format!("{name}.png"));
         if update {
             std::fs::create_dir_all(&dir).unwrap();
-            terrain_cli::app::output::write_image(
-                &reference,
-                frame.width,
-                frame.height,
-                &frame.rgba,
-            )
-            .unwrap();
+            terrain_cli::output::write_image(&reference, frame.width, frame.height, &frame.rgba)
+                .unwrap();
             continue;
         }
         let (w, h, expected) = read_png(&reference).unwrap_or_else(|| {
@@ -88,8 +83,8 @@ fn snapshots_match_their_references() {
         eprintln!("{name}: {db:.1} dB");
         if db < 40.0 {
             let actual = out.join(format!("{name}.png"));
-            terrain_cli::app::output::write_image(&actual, w, h, &frame.rgba).unwrap();
-            terrain_cli::app::output::write_image(
+            terrain_cli::output::write_image(&actual, w, h, &frame.rgba).unwrap();
+            terrain_cli::output::write_image(
                 &out.join(format!("{name}-diff.png")),
                 w,
                 h,

@@ -20,10 +20,10 @@
 //! the renderer (docs/decisions.md, “PNG encoding off the render loop”).
 
 use crate::app::animation;
-use crate::app::output::{Fixed, write_atomic, write_image};
 use crate::app::path::Flight;
-use crate::app::progress::Progress;
-use crate::eval::percentile;
+use crate::output::{Fixed, write_atomic, write_image};
+use crate::progress::Progress;
+use crate::stats::percentile;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use terrain::PassTimes;
@@ -340,7 +340,7 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) 
     let rows: Vec<CsvRow> = records.iter().map(CsvRow::of).collect();
     write_atomic(
         &out_dir.join("frames.csv"),
-        &crate::app::output::csv_bytes(&rows),
+        &crate::output::csv_bytes(&rows),
     )?;
     let files: Vec<PathBuf> = records.iter().map(|r| out_dir.join(&r.file)).collect();
     let (mp4, mp4_note) = if !mp4 {

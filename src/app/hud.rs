@@ -8,7 +8,7 @@
 //! same place.
 
 use crate::app::flycam::FlyCamera;
-use crate::eval::plot::{Rgb, draw_on_rgba, font};
+use crate::plot::{Rgb, draw_on_rgba, font};
 use terrain::Frame;
 use terrain::View;
 use terrain::scene::Mode;
@@ -78,7 +78,7 @@ pub fn lines(f: &Figures, s: &Status) -> Vec<String> {
     vec![
         format!(
             "{} · {} · {}×{} · {:.1} fps {}",
-            crate::eval::compare::figures::display(s.mode.name()),
+            s.mode.display(),
             s.view.name(),
             f.width,
             f.height,

@@ -6,7 +6,7 @@
 //! Ratio colours: < 1/4 blue, [1/4, 1/2) cyan, [1/2, 1) green, [1, 2] yellow-green, (2, 4] orange,
 //! > 4 red; cells out of view grey.
 
-use crate::app::output::{Staged, add_image};
+use crate::output::{Staged, add_image};
 use glam::DVec2;
 use std::path::Path;
 use terrain::Result;

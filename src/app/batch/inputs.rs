@@ -13,7 +13,7 @@
 //!   inputs; one of other inputs, or one without a record, is refused, never replaced.
 
 use super::jobs::{Jobs, Overrides};
-use crate::app::output::write_atomic;
+use crate::output::write_atomic;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use terrain::scene::{Mode, Scene};

@@ -26,8 +26,8 @@
 //! Rejected alternative: one process per snapshot (a shell loop over `terrain render`). Every
 //! launch opens the device and compiles the pipelines again; `batch` measures what that costs.
 
-use crate::app::output::{write_atomic, write_image};
-use crate::app::progress::Progress;
+use crate::output::{write_atomic, write_image};
+use crate::progress::Progress;
 use terrain::Camera;
 use terrain::Renderer;
 use terrain::View;

@@ -3,7 +3,7 @@
 
 use super::App;
 use crate::app::flycam::{PathRecorder, scene_with_path};
-use crate::app::output::{write_atomic, write_image};
+use crate::output::{write_atomic, write_image};
 use std::path::{Path, PathBuf};
 use terrain::{Error, Result, Role};
 

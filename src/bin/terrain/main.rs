@@ -111,7 +111,7 @@ fn main() {
     };
     // The library prints nothing: its notes and progress are shown here.
     notes::install();
-    terrain::progress::set_reporter(Box::new(terrain_cli::app::progress::Bars));
+    terrain::progress::set_reporter(Box::new(terrain_cli::progress::Bars));
     // GeoMipMap's block figures over a pyramid are kept in its folder for the next command.
     terrain::sketch::tiles::set_keep_figures(true);
     let result = match cli.command {

@@ -11,9 +11,9 @@ use terrain::scene::CameraReport;
 use terrain::scene::{Mode, Scene};
 use terrain::{Error, Role};
 use terrain::{Frame, Renderer, WorkPerPx};
-use terrain_cli::app::output::{self, ImageFormat, Staged};
-use terrain_cli::app::progress::Spinner;
 use terrain_cli::eval::relief;
+use terrain_cli::output::{self, ImageFormat, Staged};
+use terrain_cli::progress::Spinner;
 
 #[derive(clap::Args)]
 pub struct Args {

@@ -4,7 +4,7 @@ use anyhow::Result;
 use std::path::{Path, PathBuf};
 use terrain::scene;
 use terrain::{Error, Role};
-use terrain_cli::app::output::write_atomic;
+use terrain_cli::output::write_atomic;
 
 #[derive(clap::Args)]
 pub struct Args {

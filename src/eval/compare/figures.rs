@@ -2,9 +2,9 @@
 //! density-ratio histogram, the error along the camera path, and the image strip.
 
 use super::report::{PSNR_CAP_DB, Row, TARGET_PSNR_DB, TARGET_SSE_PX};
-use crate::app::output::write_image;
-use crate::eval::plot::chart::{Axis, Figure, Panel, Scale, Series, Style};
-use crate::eval::plot::{Rgb, draw_on_rgba, font};
+use crate::output::write_image;
+use crate::plot::chart::{Axis, Figure, Panel, Scale, Series, Style};
+use crate::plot::{Rgb, draw_on_rgba, font};
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::Path;
 use terrain::Result;
@@ -43,13 +43,11 @@ fn lines_per_mode(rows: &[Row], point: &dyn Fn(&Row) -> Option<(f64, f64)>) -> V
         .collect()
 }
 
-/// A mode's name in figure legends, as the papers write it.
+/// A mode's name in figure legends, as the papers write it ([`Mode::display`]).
 pub fn display(mode: &str) -> &str {
     match Mode::parse(mode) {
-        Some(Mode::Geomipmap) => "GeoMipMap",
-        Some(Mode::Bruteforce) => "brute force",
-        Some(Mode::Clipmaps) => "spherical clipmaps",
-        _ => mode,
+        Some(m) => m.display(),
+        None => mode,
     }
 }
 

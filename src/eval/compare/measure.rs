@@ -3,7 +3,8 @@
 use super::report::Row;
 use super::sweep::Setting;
 use super::{MAX_REFERENCE_HALVINGS, Options, REFERENCE_CONVERGED_DB};
-use crate::eval::{metrics, percentile};
+use crate::eval::metrics;
+use crate::stats::percentile;
 use terrain::Camera;
 use terrain::GpuContext;
 use terrain::PassTimes;

@@ -37,9 +37,9 @@ pub mod summary;
 pub mod sweep;
 pub mod temporal;
 
-use crate::app::output::{write_atomic, write_image};
 use crate::app::path::Flight;
-use crate::app::progress::Progress;
+use crate::output::{write_atomic, write_image};
+use crate::progress::Progress;
 use measure::{measure_lod, renderer};
 use path::{Out, path_series};
 use report::{DetailUsed, RatioReport, ReferenceFigures, Replot, Report, Row, Skipped};
@@ -344,7 +344,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     };
     write_outputs(out_dir, &rows, &summary, &title)?;
     write_image(&out_dir.join("reference.png"), w, h, &truth0.rgba)?;
-    crate::app::output::write_npy_f64(
+    crate::output::write_npy_f64(
         &out_dir.join("reference_positions.npy"),
         &[h as usize, w as usize, 4],
         &terrain::world_positions(&truth0.positions, &camera),

@@ -6,10 +6,10 @@ use super::report::{self, PathMode, PathReport, Stats};
 use super::sweep::Setting;
 use super::temporal::{self, LodChange};
 use super::{Options, figures};
-use crate::app::output::{Fixed, write_atomic};
 use crate::app::path::{Flight, world_eye};
-use crate::app::progress::Progress;
 use crate::eval::metrics::{self, ScreenError};
+use crate::output::{Fixed, write_atomic};
+use crate::progress::Progress;
 use std::path::Path;
 use terrain::Camera;
 use terrain::GpuContext;
@@ -108,10 +108,7 @@ pub(super) fn path_series(
         }
         progress.advance(1.0, &format!("path frame {}/{}", f + 1, cameras.len()));
     }
-    write_atomic(
-        &out_dir.join("path.csv"),
-        &crate::app::output::csv_bytes(&csv),
-    )?;
+    write_atomic(&out_dir.join("path.csv"), &crate::output::csv_bytes(&csv))?;
     figures::path_error(&series, &format!("Along the camera path: {title}"))
         .write(&out_dir.join("path_error"))?;
     let per_mode = modes

@@ -7,7 +7,7 @@
 //! "error at equal frame time" is each mode's best error among its rows no slower than the
 //! common budget, the slowest of the modes' fastest rows (so every mode has a row within it).
 
-use crate::app::output::Fixed;
+use crate::output::Fixed;
 use serde::{Deserialize, Serialize};
 use terrain::PassTimes;
 use terrain::stage::quality::Bin;
@@ -171,7 +171,7 @@ impl Row {
 /// `report.csv`: a header of [`CSV_COLUMNS`], then one line per row.
 pub fn csv(rows: &[Row]) -> String {
     let rows: Vec<CsvRow> = rows.iter().map(Row::csv_row).collect();
-    String::from_utf8(crate::app::output::csv_bytes(&rows)).expect("CSV of UTF-8 cells")
+    String::from_utf8(crate::output::csv_bytes(&rows)).expect("CSV of UTF-8 cells")
 }
 
 /// Whether each row is on the front: no other row is at least as fast and at least as good in

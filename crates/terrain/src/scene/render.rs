@@ -138,6 +138,18 @@ impl Mode {
     pub fn is_mesh(self) -> bool {
         matches!(self, Mode::Warped | Mode::Geomipmap | Mode::Bruteforce)
     }
+
+    /// The mode's name as the papers write it, for legends and the window's figures
+    /// ("GeoMipMap", "brute force"); [`Named::name`](crate::Named::name) is the key's value.
+    pub fn display(self) -> &'static str {
+        match self {
+            Mode::Warped => "warped",
+            Mode::Geomipmap => "GeoMipMap",
+            Mode::Bruteforce => "brute force",
+            Mode::Reference => "reference",
+            Mode::Clipmaps => "spherical clipmaps",
+        }
+    }
 }
 
 /// `[render]`: the level-of-detail mode and the picture's options.

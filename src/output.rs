@@ -14,7 +14,7 @@
 //! which NumPy reads but never writes, so files would differ from `numpy.save`'s and from what
 //! scripts that read the header text expect (the tests among them).
 
-use crate::app::progress::Progress;
+use crate::progress::Progress;
 use std::io::Write;
 use std::path::Path;
 pub use terrain::io::{Staged, create_folder, create_parent, write_atomic};

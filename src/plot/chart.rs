@@ -11,7 +11,7 @@
 
 use super::axis::{Frame, range};
 use super::{Rgb, draw_on_rgba, drawing_error, font, fonts};
-use crate::app::output::{write_atomic, write_image};
+use crate::output::{write_atomic, write_image};
 use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;

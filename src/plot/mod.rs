@@ -30,7 +30,7 @@ use plotters::style::{FontStyle, IntoFont, RGBColor, TextStyle, register_font};
 use std::sync::OnceLock;
 use terrain::{Error, Result};
 
-static DEJAVU_SANS: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
+static DEJAVU_SANS: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 /// The family every text is set in; the bundled font is registered under it.
 pub const FAMILY: &str = "sans-serif";
