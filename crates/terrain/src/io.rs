@@ -1,7 +1,7 @@
 //! Writing files atomically: into a temporary file beside the target, then renamed over it, so a
 //! reader never sees half a file and a crash leaves the old one (or none), never a torn one. The
 //! library writes through here (a tile pyramid's files, GeoMipMap's block figures when asked);
-//! the program's outputs too (`app::output`).
+//! the program's outputs too (`terrain_cli::output`).
 //!
 //! Rules:
 //! - Every writer creates the file's folder first.

@@ -4,7 +4,7 @@
 //! Rules:
 //! - The library reports and never shows: without a reporter ([`set_reporter`]) every report is
 //!   dropped, so a program that installs none sees nothing on its terminal. The `terrain` binary
-//!   installs one that draws indicatif bars and spinners (`app::progress`).
+//!   installs one that draws indicatif bars and spinners (`terrain_cli::progress`).
 //! - One reporter for the process, installed once, like `log`'s logger: the work that reports
 //!   runs deep under calls that take a scene (a renderer's GeoMipMap over a pyramid, a scene's
 //!   sketch), and each [`Task`] is its own handle, so work on several threads never mixes.
