@@ -104,12 +104,27 @@ pub(super) fn compress(bytes: &[u8]) -> Result<Vec<u8>> {
         .expect("zstd compresses into a grown buffer"))
 }
 
-/// The `capacity` bytes of one zstd frame, or why not.
-#[cfg(feature = "zstd")]
-pub(super) fn decompress(
+/// The `4·side²` bytes of `what` (heights, pixels) one tile's zstd frame holds, or why not in
+/// the words of the tile's error; the outer error is a build without zstd.
+pub(super) fn decompress_tile(
     frame: &[u8],
-    capacity: usize,
+    side: usize,
+    what: &str,
 ) -> Result<std::result::Result<Vec<u8>, String>> {
+    let n = 4 * side * side;
+    Ok(match decompress(frame, n)? {
+        Err(e) => Err(format!("cannot be decompressed: {e}")),
+        Ok(bytes) if bytes.len() != n => Err(format!(
+            "holds {} bytes of {what}; a {side}² tile holds {n}",
+            bytes.len()
+        )),
+        Ok(bytes) => Ok(bytes),
+    })
+}
+
+/// The at most `capacity` bytes of one zstd frame, or why not.
+#[cfg(feature = "zstd")]
+fn decompress(frame: &[u8], capacity: usize) -> Result<std::result::Result<Vec<u8>, String>> {
     Ok(zstd::bulk::decompress(frame, capacity).map_err(|e| e.to_string()))
 }
 
@@ -121,7 +136,7 @@ pub(super) fn compress(_: &[u8]) -> Result<Vec<u8>> {
 }
 
 #[cfg(not(feature = "zstd"))]
-pub(super) fn decompress(_: &[u8], _: usize) -> Result<std::result::Result<Vec<u8>, String>> {
+fn decompress(_: &[u8], _: usize) -> Result<std::result::Result<Vec<u8>, String>> {
     Err(NO_ZSTD)
 }
 
@@ -145,15 +160,7 @@ pub fn decode_tile(path: &Path, bytes: &[u8]) -> Result<(TileHeader, Vec<f32>)> 
     }
     let side = header.side;
     let n = side * side;
-    let mut planes =
-        decompress(frame, 4 * n)?.map_err(|e| bad(format!("cannot be decompressed: {e}")))?;
-    if planes.len() != 4 * n {
-        return Err(bad(format!(
-            "holds {} bytes of heights; a {side}² tile holds {}",
-            planes.len(),
-            4 * n
-        )));
-    }
+    let mut planes = decompress_tile(frame, side, "heights")?.map_err(bad)?;
     for row in planes.chunks_exact_mut(side) {
         for i in 1..side {
             row[i] = row[i].wrapping_add(row[i - 1]);

@@ -30,7 +30,7 @@ mod build;
 #[cfg(feature = "zstd")]
 pub(crate) use build::build;
 
-use super::codec::{compress, decompress};
+use super::codec::{compress, decompress_tile};
 use super::{FORMAT, Kind, META, MetaGeoref, level_sizes, tile_path};
 use crate::error::{Error, Result, Role};
 use crate::sketch::georef::Georef;
@@ -240,16 +240,7 @@ pub(crate) fn decode_tile(path: &Path, bytes: &[u8]) -> Result<(usize, Vec<u8>)>
             frame.len()
         )));
     }
-    let n = side * side;
-    let mut rgba =
-        decompress(frame, 4 * n)?.map_err(|e| bad(format!("cannot be decompressed: {e}")))?;
-    if rgba.len() != 4 * n {
-        return Err(bad(format!(
-            "holds {} bytes of pixels; a {side}² tile holds {}",
-            rgba.len(),
-            4 * n
-        )));
-    }
+    let mut rgba = decompress_tile(frame, side, "pixels")?.map_err(bad)?;
     for row in rgba.chunks_exact_mut(side * 4) {
         for i in 4..side * 4 {
             row[i] = row[i].wrapping_add(row[i - 4]);
