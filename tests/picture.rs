@@ -462,11 +462,8 @@ fn a_coast_has_few_isolated_shore_pixels() {
     ]);
     assert_eq!(code, 0, "{err}");
     let (_, _, rgba) = read_png(&png).unwrap();
-    let on: Vec<bool> = read_npy(&npy)
-        .1
-        .chunks_exact(4)
-        .map(|p| p[3] == 1.0)
-        .collect();
+    let positions = read_npy(&npy).1;
+    let on: Vec<bool> = positions.chunks_exact(4).map(|p| p[3] == 1.0).collect();
     let blue: Vec<i32> = rgba
         .chunks_exact(4)
         .map(|p| p[2] as i32 - p[0] as i32)
@@ -479,7 +476,7 @@ fn a_coast_has_few_isolated_shore_pixels() {
         between * 200 < ground,
         "{between} of {ground} pixels between water and land"
     );
-    let heights: Vec<f64> = read_npy(&npy).1.chunks_exact(4).map(|p| p[2]).collect();
+    let heights: Vec<f64> = positions.chunks_exact(4).map(|p| p[2]).collect();
     let water: Vec<bool> = (0..blue.len())
         .map(|k| blue[k] >= 85 && heights[k] < 20.0)
         .collect();
