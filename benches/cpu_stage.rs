@@ -9,9 +9,9 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
-use terrain::scene;
-use terrain::scene::{Scene, WarpMethod};
-use terrain::stage::CpuStage;
+use terrain_engine::scene;
+use terrain_engine::scene::{Scene, WarpMethod};
+use terrain_engine::stage::CpuStage;
 
 fn sketches() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("sketches")

@@ -13,12 +13,12 @@
 
 use glam::DVec3;
 use std::path::PathBuf;
-use terrain::Camera;
-use terrain::scene::{self, Scene, WarpMethod};
-use terrain::stage::CpuStage;
-use terrain::stage::pair_unfolded;
-use terrain::stage::quality;
 use terrain_cli::app::path::Flight;
+use terrain_engine::Camera;
+use terrain_engine::scene::{self, Scene, WarpMethod};
+use terrain_engine::stage::CpuStage;
+use terrain_engine::stage::pair_unfolded;
+use terrain_engine::stage::quality;
 
 /// Thresholds tried, in folded pairs of 127; the last is the rounds alone.
 const THRESHOLDS: [usize; 7] = [8, 12, 16, 24, 32, 64, usize::MAX];
@@ -97,7 +97,7 @@ fn main() -> anyhow::Result<()> {
 /// A camera over the sketch from `seed` (xorshift), or the scene's error if it cannot be made.
 fn random_camera(
     scene: &Scene,
-    atlas: &terrain::sketch::Atlas,
+    atlas: &terrain_engine::sketch::Atlas,
     seed: &mut u64,
 ) -> anyhow::Result<Camera> {
     let mut rnd = || {

@@ -28,7 +28,7 @@ fn main() {
     let only = value("--target");
     let random = args.iter().any(|a| a == "--random");
     let threads: usize = value("--threads").map_or(2, |v| v.parse().expect("--threads N"));
-    terrain::sketch::limit_cells(1 << 22);
+    terrain_engine::sketch::limit_cells(1 << 22);
     harness::quiet_panics();
     let crash_dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/fuzz/crashes");
     let targets: Vec<_> = harness::targets()

@@ -5,11 +5,11 @@
 
 use anyhow::Context;
 use std::path::PathBuf;
-use terrain::Baselines;
-use terrain::View;
-use terrain::scene::Mode;
-use terrain::scene::Scene;
-use terrain::{Frame, Renderer};
+use terrain_engine::Baselines;
+use terrain_engine::View;
+use terrain_engine::scene::Mode;
+use terrain_engine::scene::Scene;
+use terrain_engine::{Frame, Renderer};
 
 const FRAMES: usize = 10;
 
@@ -44,7 +44,7 @@ fn main() -> anyhow::Result<()> {
     );
     println!("|---|---|---|---|---|---|");
     let mut warped = Renderer::new(&scene, Mode::Warped, View::Shaded)?;
-    let camera = terrain::scene::camera_of(&scene, &warped.atlas)?;
+    let camera = terrain_engine::scene::camera_of(&scene, &warped.atlas)?;
     warped.render(&camera)?;
     let frames: Vec<Frame> = (0..FRAMES)
         .map(|_| warped.render(&camera))

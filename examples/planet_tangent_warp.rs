@@ -19,13 +19,13 @@
 use anyhow::Context;
 use glam::DVec2;
 use std::path::PathBuf;
-use terrain::Renderer;
-use terrain::View;
-use terrain::planet::Planet;
-use terrain::scene::{Mode, Scene};
-use terrain::sketch::{Atlas, LoadOptions, RawGrid};
-use terrain::{GpuContext, Needs};
 use terrain_cli::eval::metrics::{ScreenError, screen_space_error};
+use terrain_engine::Renderer;
+use terrain_engine::View;
+use terrain_engine::planet::Planet;
+use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::sketch::{Atlas, LoadOptions, RawGrid};
+use terrain_engine::{GpuContext, Needs};
 
 /// Nodes a side of the tangent-plane sketch map.
 const NODES: usize = 1025;
@@ -41,14 +41,14 @@ fn main() -> anyhow::Result<()> {
     let mut scene = Scene::load(&path).with_context(|| path.display().to_string())?;
     (scene.camera.width, scene.camera.height) = (size, size);
     let planet_section = scene.planet().context("not a planet scene")?;
-    let atlas = terrain::scene::load_atlas(&scene)?;
-    let camera = terrain::scene::camera_of(&scene, &atlas)?;
+    let atlas = terrain_engine::scene::load_atlas(&scene)?;
+    let camera = terrain_engine::scene::camera_of(&scene, &atlas)?;
     let geo = camera.geo.context("a planet camera")?;
 
     let ctx = GpuContext::new(&Needs {
         storage_bytes: 1 << 27,
     })?;
-    let positions = |mode: Mode, scene: &Scene, atlas: &Atlas, cam: &terrain::Camera| {
+    let positions = |mode: Mode, scene: &Scene, atlas: &Atlas, cam: &terrain_engine::Camera| {
         let mut r = Renderer::with_context(ctx.clone(), scene, atlas.clone(), mode, View::Shaded)?;
         let frame = r.render(cam)?;
         anyhow::Ok((r.read_positions(cam)?, frame.gpu.triangles))
@@ -83,7 +83,7 @@ fn main() -> anyhow::Result<()> {
         let e = screen_space_error(&got, &truth, size as usize, WINDOW);
         row("clipmaps", format!("{phi} × {m}"), &e, triangles);
     }
-    let detail = terrain::scene::detail_of(&scene, &atlas);
+    let detail = terrain_engine::scene::detail_of(&scene, &atlas);
     let spacing = 2.0 * half / (NODES - 1) as f64;
     let started = std::time::Instant::now();
     let tangent = tangent_plane_map(&planet, &detail, geo, half, atlas.water_m as f64);
@@ -130,8 +130,8 @@ fn main() -> anyhow::Result<()> {
 /// own.
 fn tangent_plane_map(
     planet: &Planet,
-    detail: &terrain::Detail,
-    geo: terrain::Geo,
+    detail: &terrain_engine::Detail,
+    geo: terrain_engine::Geo,
     half: f64,
     water_m: f64,
 ) -> anyhow::Result<Atlas> {
@@ -143,7 +143,7 @@ fn tangent_plane_map(
             let p = DVec2::new(-half + i as f64 * step, -half + j as f64 * step);
             let (rho, bearing) = (p.length(), p.x.atan2(p.y));
             let ground = |theta: f64| {
-                let (la, lo, _) = terrain::planet::travel(lat, lon, bearing, theta);
+                let (la, lo, _) = terrain_engine::planet::travel(lat, lon, bearing, theta);
                 planet
                     .ground(detail, la, lo, step)
                     .expect("an in-memory sketch")

@@ -11,7 +11,7 @@
 //! - A panic is a crash: its input is written to `target/fuzz/crashes/` and counted. An error
 //!   whose message spans more than one line, or is empty, is counted as a bad message: a user
 //!   must see exactly one line.
-//! - Grids are limited to 2²² cells while fuzzing ([`terrain::sketch::limit_cells`]), so a
+//! - Grids are limited to 2²² cells while fuzzing ([`terrain_engine::sketch::limit_cells`]), so a
 //!   mutated size field costs milliseconds, not a gigabyte; the limit itself is tested apart
 //!   (`tests/formats.rs`, a 2³¹-cell header under a memory limit).
 //!
@@ -25,7 +25,7 @@
 use std::panic::AssertUnwindSafe;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
-use terrain::sketch::{LoadOptions, parse_grid, parse_world_file};
+use terrain_engine::sketch::{LoadOptions, parse_grid, parse_world_file};
 
 /// One fuzz target: a name, its seeds and the function that runs one input.
 pub struct Target {
@@ -154,7 +154,7 @@ pub fn targets() -> Vec<Target> {
             text: true,
             run: |b| match std::str::from_utf8(b) {
                 Ok(t) => outcome(
-                    terrain::scene::Scene::parse(t, root_dir().join("sketches"))
+                    terrain_engine::scene::Scene::parse(t, root_dir().join("sketches"))
                         .map_err(|f| f.into_error(Path::new("fuzz.toml"))),
                 ),
                 Err(_) => Outcome::Refused("not UTF-8".into()),

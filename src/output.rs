@@ -1,5 +1,5 @@
 //! The program's outputs: images by extension, CSV rows, `.npy`, each written atomically and
-//! several together through [`terrain::io`] (re-exported here).
+//! several together through [`terrain_engine::io`] (re-exported here).
 //!
 //! Rules:
 //! - Every writer creates the output's folder first: `-o out/x.png` on a fresh clone, where `out/`
@@ -17,8 +17,8 @@
 use crate::progress::Progress;
 use std::io::Write;
 use std::path::Path;
-pub use terrain::io::{Staged, create_folder, create_parent, write_atomic};
-use terrain::{Error, Result, Role};
+pub use terrain_engine::io::{Staged, create_folder, create_parent, write_atomic};
+use terrain_engine::{Error, Result, Role};
 
 /// Images above this many pixels show their encoding's progress.
 const PROGRESS_PIXELS: u64 = 8 << 20;

@@ -7,7 +7,7 @@
 //! stay short. Items of unequal cost advance the bar by their `work`, so the estimate (indicatif's,
 //! from the rate of work done) weighs a 1024² setting of `compare` above a 256² one.
 //! `TERRAIN_QUIET` silences both (the tests set it). [`Bars`] shows the library's progress
-//! ([`terrain::progress`]) the same way; the binary installs it.
+//! ([`terrain_engine::progress`]) the same way; the binary installs it.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::{IsTerminal, Write};
@@ -170,8 +170,8 @@ impl Spinner {
 /// The library's progress as bars (work with a total) and spinners (one long step).
 pub struct Bars;
 
-impl terrain::progress::Progress for Bars {
-    fn start(&self, what: &str, total: Option<f64>) -> Box<dyn terrain::progress::Task> {
+impl terrain_engine::progress::Progress for Bars {
+    fn start(&self, what: &str, total: Option<f64>) -> Box<dyn terrain_engine::progress::Task> {
         match total {
             Some(total) => Box::new(Progress::new(what, total)),
             None => Box::new(Spinner::new(what)),
@@ -179,7 +179,7 @@ impl terrain::progress::Progress for Bars {
     }
 }
 
-impl terrain::progress::Task for Progress {
+impl terrain_engine::progress::Task for Progress {
     fn advance(&mut self, work: f64, item: &str) {
         Progress::advance(self, work, item);
     }
@@ -189,7 +189,7 @@ impl terrain::progress::Task for Progress {
     }
 }
 
-impl terrain::progress::Task for Spinner {
+impl terrain_engine::progress::Task for Spinner {
     fn finish(self: Box<Self>) {
         Spinner::finish(*self);
     }

@@ -3,11 +3,11 @@
 
 mod common;
 use common::*;
-use terrain::Baselines;
-use terrain::Renderer;
-use terrain::View;
-use terrain::scene::Mode;
-use terrain::scene::Scene;
+use terrain_engine::Baselines;
+use terrain_engine::Renderer;
+use terrain_engine::View;
+use terrain_engine::scene::Mode;
+use terrain_engine::scene::Scene;
 
 /// Background pixels below the first terrain pixel of their column in a coverage image (terrain
 /// white, sky black). Over a height field seen from above it, every ray below one that hits the
@@ -57,7 +57,7 @@ fn no_cracks_between_blocks_any_levels_apart() {
         );
         let s = scene(&toml, manifest_dir());
         let mut r = Renderer::new(&s, Mode::Geomipmap, View::Coverage).unwrap();
-        let cam = terrain::scene::camera_of(&s, &r.atlas).unwrap();
+        let cam = terrain_engine::scene::camera_of(&s, &r.atlas).unwrap();
         let chosen = r.render(&cam).unwrap();
         assert_eq!(
             holes(&chosen.rgba, 160),
@@ -114,7 +114,7 @@ fn geomipmap_at_half_a_pixel_matches_brute_force_with_far_fewer_triangles() {
     for name in ["jacksboro", "gaussian", "hills"] {
         let s = bundled(name);
         let mut lod = Renderer::new(&s, Mode::Geomipmap, View::Shaded).unwrap();
-        let cam = terrain::scene::camera_of(&s, &lod.atlas).unwrap();
+        let cam = terrain_engine::scene::camera_of(&s, &lod.atlas).unwrap();
         let a = lod.render(&cam).unwrap();
         drop(lod);
         let mut brute = Renderer::new(&s, Mode::Bruteforce, View::Shaded).unwrap();

@@ -4,7 +4,7 @@
 
 mod common;
 use common::*;
-use terrain::scene::Scene;
+use terrain_engine::scene::Scene;
 
 fn jacksboro(size: u32, quad_px: f64) -> Scene {
     let mut s = Scene::load(&manifest_dir().join("sketches/jacksboro.toml")).unwrap();

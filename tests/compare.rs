@@ -4,9 +4,9 @@
 
 mod common;
 use common::*;
-use terrain::scene::Mode;
 use terrain_cli::eval::compare::report::{CSV_COLUMNS, Row};
 use terrain_cli::eval::compare::sweep::{Setting, at_geomipmap_budgets, default_sweep};
+use terrain_engine::scene::Mode;
 
 fn sketch(name: &str) -> String {
     manifest_dir()
@@ -50,12 +50,12 @@ fn compare_reports_every_setting_with_every_column_filled() {
     assert!(stdout.contains("frame time to 30 dB"), "{stdout}");
 
     let mut scene =
-        terrain::scene::Scene::load(&manifest_dir().join("sketches/gaussian.toml")).unwrap();
+        terrain_engine::scene::Scene::load(&manifest_dir().join("sketches/gaussian.toml")).unwrap();
     (scene.camera.width, scene.camera.height) = (64, 64);
     // As the run had it: the sweep's warped rows depend on the mesh the view asks for.
     scene.warp.hold = false;
-    let atlas = terrain::scene::load_atlas(&scene).unwrap();
-    let camera = terrain::scene::camera_of(&scene, &atlas).unwrap();
+    let atlas = terrain_engine::scene::load_atlas(&scene).unwrap();
+    let camera = terrain_engine::scene::camera_of(&scene, &atlas).unwrap();
     let modes = [Mode::Warped, Mode::Geomipmap, Mode::Bruteforce];
     let sweep = default_sweep(&modes, &scene, &atlas, &camera).unwrap();
     let report: serde_json::Value =
@@ -303,11 +303,12 @@ fn scene_settings_are_in_the_default_sweep() {
     // The strip and the path show each mode at the scene's setting; with the bundled scenes'
     // defaults those are rows of the sweep, so the strip's images are the report's.
     for name in ["jacksboro", "gaussian", "hills-high"] {
-        let scene =
-            terrain::scene::Scene::load(&manifest_dir().join(format!("sketches/{name}.toml")))
-                .unwrap();
-        let atlas = terrain::scene::load_atlas(&scene).unwrap();
-        let camera = terrain::scene::camera_of(&scene, &atlas).unwrap();
+        let scene = terrain_engine::scene::Scene::load(
+            &manifest_dir().join(format!("sketches/{name}.toml")),
+        )
+        .unwrap();
+        let atlas = terrain_engine::scene::load_atlas(&scene).unwrap();
+        let camera = terrain_engine::scene::camera_of(&scene, &atlas).unwrap();
         let modes = [Mode::Warped, Mode::Geomipmap, Mode::Bruteforce];
         let sweep = default_sweep(&modes, &scene, &atlas, &camera).unwrap();
         for m in [Mode::Warped, Mode::Geomipmap, Mode::Bruteforce] {
@@ -387,12 +388,13 @@ fn compare_sweeps_a_planets_clipmaps() {
 #[test]
 fn the_warped_sweep_spans_the_budgets_where_geomipmap_competes() {
     let mut scene =
-        terrain::scene::Scene::load(&manifest_dir().join("sketches/jacksboro.toml")).unwrap();
-    let atlas = terrain::scene::load_atlas(&scene).unwrap();
+        terrain_engine::scene::Scene::load(&manifest_dir().join("sketches/jacksboro.toml"))
+            .unwrap();
+    let atlas = terrain_engine::scene::load_atlas(&scene).unwrap();
     let mut fixed_rows = Vec::new();
     for size in [128u32, 512] {
         (scene.camera.width, scene.camera.height) = (size, size);
-        let camera = terrain::scene::camera_of(&scene, &atlas).unwrap();
+        let camera = terrain_engine::scene::camera_of(&scene, &atlas).unwrap();
         let sweep = default_sweep(&[Mode::Warped], &scene, &atlas, &camera).unwrap();
         let own = Setting::of_scene(Mode::Warped, &scene, &atlas).unwrap();
         assert_eq!(sweep.last(), Some(&own), "{sweep:?}");
@@ -410,7 +412,7 @@ fn the_warped_sweep_spans_the_budgets_where_geomipmap_competes() {
         // Every rung of the ladder within 8 triangles a pixel, less at most one: the rung the
         // scene's own setting draws.
         let pixels = (size * size) as f64;
-        let ladder: Vec<u32> = terrain::stage::Budget::new(16, 1024)
+        let ladder: Vec<u32> = terrain_engine::stage::Budget::new(16, 1024)
             .rungs()
             .iter()
             .copied()

@@ -3,8 +3,8 @@
 mod common;
 use common::*;
 use glam::DVec2;
-use terrain::scene::WarpMethod;
-use terrain::stage::Warp;
+use terrain_engine::scene::WarpMethod;
+use terrain_engine::stage::Warp;
 
 fn synthetic(name: &str, size: usize, position: [f64; 3], look_at: [f64; 3]) -> String {
     format!(
@@ -18,7 +18,7 @@ fn ground(name: &str, x: f64, y: f64) -> f64 {
         &synthetic(name, 257, [0.0, 0.0, 1e4], [1.0, 1.0, 0.0]),
         manifest_dir(),
     );
-    let a = terrain::scene::load_atlas(&s).unwrap();
+    let a = terrain_engine::scene::load_atlas(&s).unwrap();
     a.sample_texel(x / a.dx, y / a.dy, 0.0) as f64
 }
 
@@ -113,7 +113,7 @@ fn camera_outside_the_sketch() {
     // reaches past the atlas only by the few texels of slack a region larger than the atlas has.
     let m = &r.stage.sketch_map;
     // The camera looks north-east, so the region is turned (`stage::Turn`).
-    assert_ne!(m.turn, terrain::stage::Turn::None);
+    assert_ne!(m.turn, terrain_engine::stage::Turn::None);
     let centre = m.world(DVec2::splat(0.5 * m.extent()));
     let atlas_centre = 0.5 * (r.atlas.origin + r.atlas.max_corner());
     assert!(
@@ -283,7 +283,7 @@ fn importance_spanning_twelve_orders_of_magnitude() {
         );
         for s in 0..n - 1 {
             assert!(
-                terrain::stage::pair_unfolded(phi, n, s),
+                terrain_engine::stage::pair_unfolded(phi, n, s),
                 "{what}: fold at column {s}"
             );
         }

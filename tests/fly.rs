@@ -130,13 +130,13 @@ fn a_flight_of_many_files_says_so_before_it_starts() {
 /// that changes along the way.
 #[test]
 fn frames_drawn_with_the_next_ones_stage_overlapped_equal_frames_drawn_one_at_a_time() {
-    use terrain::scene::{Mode, Scene};
-    use terrain::{Renderer, View};
+    use terrain_engine::scene::{Mode, Scene};
+    use terrain_engine::{Renderer, View};
     let mut scene = Scene::load(&manifest_dir().join("sketches/jacksboro.toml")).unwrap();
     (scene.camera.width, scene.camera.height) = (64, 48);
     for mode in [Mode::Warped, Mode::Geomipmap] {
         let mut r = Renderer::new(&scene, mode, View::Shaded).unwrap();
-        let base = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
+        let base = terrain_engine::scene::camera_of(&scene, &r.atlas).unwrap();
         let cameras: Vec<_> = (0..5)
             .map(|k| {
                 let mut c = base.clone();

@@ -7,8 +7,8 @@ mod common;
 
 use serde_json::Value;
 use std::path::PathBuf;
-use terrain::sketch::{LoadOptions, RawGrid, read_grid};
-use terrain::sketch::{US_SURVEY_FOOT_M, Units};
+use terrain_engine::sketch::{LoadOptions, RawGrid, read_grid};
+use terrain_engine::sketch::{US_SURVEY_FOOT_M, Units};
 
 fn dir() -> PathBuf {
     common::manifest_dir().join("tests/data/formats")

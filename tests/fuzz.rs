@@ -7,7 +7,7 @@ mod harness;
 
 #[test]
 fn every_target_survives_a_short_mutation_pass() {
-    terrain::sketch::limit_cells(1 << 22);
+    terrain_engine::sketch::limit_cells(1 << 22);
     harness::quiet_panics();
     let crash_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/fuzz/ci-crashes");
     let mut failures = Vec::new();

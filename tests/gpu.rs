@@ -14,11 +14,11 @@
 
 mod common;
 use common::*;
-use terrain::Renderer;
-use terrain::View;
-use terrain::Warped;
-use terrain::scene::Scene;
-use terrain::scene::{Mode, Msaa};
+use terrain_engine::Renderer;
+use terrain_engine::View;
+use terrain_engine::Warped;
+use terrain_engine::scene::Scene;
+use terrain_engine::scene::{Mode, Msaa};
 
 fn bundled(name: &str, size: u32, mesh: u32) -> Scene {
     let path = manifest_dir().join("sketches").join(format!("{name}.toml"));
@@ -34,9 +34,9 @@ fn warped(r: &Renderer) -> &Warped {
     r.lod::<Warped>().expect("warped mode")
 }
 
-fn render(scene: &Scene, view: View) -> (Renderer, terrain::Frame) {
+fn render(scene: &Scene, view: View) -> (Renderer, terrain_engine::Frame) {
     let mut r = Renderer::new(scene, Mode::Warped, view).expect("renderer");
-    let camera = terrain::scene::camera_of(scene, &r.atlas).unwrap();
+    let camera = terrain_engine::scene::camera_of(scene, &r.atlas).unwrap();
     let frame = r.render(&camera).expect("frame");
     (r, frame)
 }
@@ -44,7 +44,7 @@ fn render(scene: &Scene, view: View) -> (Renderer, terrain::Frame) {
 /// A shaded frame of `s` in `mode` from its own camera: its pixels (RGBA).
 fn shot(s: &Scene, mode: Mode) -> Vec<u8> {
     let mut r = Renderer::new(s, mode, View::Shaded).unwrap();
-    let camera = terrain::scene::camera_of(s, &r.atlas).unwrap();
+    let camera = terrain_engine::scene::camera_of(s, &r.atlas).unwrap();
     r.render(&camera).unwrap().rgba
 }
 
@@ -52,9 +52,9 @@ fn shot(s: &Scene, mode: Mode) -> Vec<u8> {
 /// sky, f64, row-major), and the renderer that drew it.
 fn render_with_positions(scene: &Scene, mode: Mode) -> (Renderer, Vec<u8>, Vec<f64>) {
     let mut r = Renderer::new(scene, mode, View::Shaded).expect("renderer");
-    let camera = terrain::scene::camera_of(scene, &r.atlas).unwrap();
+    let camera = terrain_engine::scene::camera_of(scene, &r.atlas).unwrap();
     let frame = r.render(&camera).expect("frame");
-    let world = terrain::world_positions(&r.read_positions(&camera).unwrap(), &camera);
+    let world = terrain_engine::world_positions(&r.read_positions(&camera).unwrap(), &camera);
     (r, frame.rgba, world)
 }
 
@@ -120,7 +120,7 @@ fn a_scene_moved_4000_km_renders_the_same() {
 fn two_renders_are_identical() {
     let scene = bundled("gaussian", 128, 256);
     let (mut r, a) = render(&scene, View::Shaded);
-    let camera = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
+    let camera = terrain_engine::scene::camera_of(&scene, &r.atlas).unwrap();
     let b = r.render(&camera).unwrap();
     assert!(a.rgba == b.rgba, "PSNR {:.1} dB", psnr(&a.rgba, &b.rgba));
 }
@@ -203,7 +203,7 @@ fn deferred_shading_draws_what_forward_draws() {
             scene.render.msaa = Msaa::Off;
             let mut r = Renderer::new(&scene, mode, view).expect("renderer");
             assert_eq!(r.deferred, deferred, "{name}: shaded deferred as asked");
-            let camera = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
+            let camera = terrain_engine::scene::camera_of(&scene, &r.atlas).unwrap();
             let rgba = r.render(&camera).expect("frame").rgba;
             (rgba, r.read_positions(&camera).unwrap())
         };
@@ -385,7 +385,7 @@ fn a_low_sun_behind_a_cliff_shadows_the_plain_at_its_foot() {
 fn the_world_beyond_the_sketch_is_drawn_alike_and_counted_as_sky() {
     let corner = |mode: Mode, outside: &str| {
         let mut s = bundled("hills-high", 64, 64);
-        s.sketch.outside = Some(terrain::scene::Outside::parse(outside).unwrap());
+        s.sketch.outside = Some(terrain_engine::scene::Outside::parse(outside).unwrap());
         let (_, rgba, world) = render_with_positions(&s, mode);
         // The top-left pixel lies beyond the sketch in this view.
         assert_eq!(
@@ -419,9 +419,9 @@ fn the_world_beyond_the_sketch_is_drawn_alike_and_counted_as_sky() {
 fn multisampling_smooths_edges_toward_the_supersampled_reference_and_keeps_positions() {
     let shot = |mode: Mode, msaa: &str| {
         let mut s = bundled("jacksboro", 128, 256);
-        s.render.msaa = terrain::scene::Msaa::parse(msaa).unwrap();
+        s.render.msaa = terrain_engine::scene::Msaa::parse(msaa).unwrap();
         let mut r = Renderer::new(&s, mode, View::Shaded).unwrap();
-        let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
+        let camera = terrain_engine::scene::camera_of(&s, &r.atlas).unwrap();
         let frame = r.render(&camera).unwrap();
         let positions = r.read_positions(&camera).unwrap();
         (r.samples, frame.rgba, positions)
@@ -543,7 +543,7 @@ fn the_detail_shadows_itself_alike_in_mesh_and_reference() {
     );
 }
 
-/// The sky the terrain pass draws is its CPU twin's (`terrain::light`): the single-scattering
+/// The sky the terrain pass draws is its CPU twin's (`terrain_engine::light`): the single-scattering
 /// integral along the pixel's ray, exposed and tone-mapped, within 2 of 255 levels once sRGB
 /// encoded, for a high sun, a low one and one below the horizon.
 #[test]
@@ -566,12 +566,12 @@ fn the_sky_matches_its_cpu_twin() {
         );
         let s = Scene::parse(&text, manifest_dir()).unwrap();
         let mut r = Renderer::new(&s, Mode::Warped, View::Shaded).unwrap();
-        let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
+        let camera = terrain_engine::scene::camera_of(&s, &r.atlas).unwrap();
         let frame = r.render(&camera).unwrap();
         // The centre pixel looks along the camera's axis, 45° up to the north.
         let k = (16 * 33 + 16) * 4;
         let gpu = &frame.rgba[k..k + 3];
-        let light = terrain::scene::light_of(&s);
+        let light = terrain_engine::scene::light_of(&s);
         let dir = glam::DVec3::new(0.0, 1.0, 1.0).normalize();
         let srgb = |c: f64| {
             let c = c.clamp(0.0, 1.0);
@@ -702,7 +702,7 @@ fn the_mesh_ends_at_the_sketchs_edge() {
     ] {
         let reference = shot(&s, Mode::Reference);
         let (r, _) = render(&s, View::Shaded);
-        let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
+        let camera = terrain_engine::scene::camera_of(&s, &r.atlas).unwrap();
         let along_axes = r.uniforms(&camera).mesh.phi_s[1] == 0.0;
         assert_eq!(
             along_axes,
@@ -744,7 +744,7 @@ fn water_floods_the_ground_below_its_level_alike_in_mesh_and_reference() {
     let s = Scene::parse(text, manifest_dir()).unwrap();
     let (r, mesh_rgba, mesh_pos) = render_with_positions(&s, Mode::Warped);
     // The vertices of this frame's mesh (the buffer is sized for the largest).
-    let camera = terrain::scene::camera_of(&s, &r.atlas).unwrap();
+    let camera = terrain_engine::scene::camera_of(&s, &r.atlas).unwrap();
     let mesh = r.uniforms(&camera).mesh.mesh as usize;
     let lowest = warped(&r).read_detailed(&r.ctx).unwrap()[..mesh * mesh]
         .iter()
@@ -794,7 +794,7 @@ fn water_floods_the_ground_below_its_level_alike_in_mesh_and_reference() {
 fn a_held_warp_keeps_almost_every_cells_diagonal() {
     let mut scene = bundled("jacksboro", 128, 512);
     let mut r = Renderer::new(&scene, Mode::Warped, View::Shaded).expect("renderer");
-    let first = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
+    let first = terrain_engine::scene::camera_of(&scene, &r.atlas).unwrap();
     r.render(&first).expect("frame");
     let before = warped(&r).read_indices(&r.ctx).unwrap();
     let m = warped(&r).stage.mesh as usize;
@@ -807,7 +807,7 @@ fn a_held_warp_keeps_almost_every_cells_diagonal() {
     let (eye, target) = (scene.camera.eye(), scene.camera.target());
     let step = (target - eye).normalize() * 10.0;
     scene.camera.aim(eye + step, target + step);
-    let second = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
+    let second = terrain_engine::scene::camera_of(&scene, &r.atlas).unwrap();
     r.render(&second).expect("frame");
     assert!(warped(&r).stage.held, "the warp is held");
     assert_eq!(warped(&r).stage.mesh as usize, m);

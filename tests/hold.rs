@@ -5,13 +5,13 @@
 mod common;
 use common::*;
 use glam::DVec3;
-use terrain::Camera;
-use terrain::Renderer;
-use terrain::View;
-use terrain::scene::{self, Mode, Scene};
-use terrain::stage::CpuStage;
 use terrain_cli::app::path::Flight;
 use terrain_cli::eval::compare::temporal;
+use terrain_engine::Camera;
+use terrain_engine::Renderer;
+use terrain_engine::View;
+use terrain_engine::scene::{self, Mode, Scene};
+use terrain_engine::stage::CpuStage;
 
 fn jacksboro() -> Scene {
     let mut s = Scene::load(&manifest_dir().join("sketches/jacksboro.toml")).unwrap();
@@ -35,7 +35,7 @@ fn moved(scene: &Scene, by: DVec3, turn_deg: f64) -> Scene {
 }
 
 struct Stage {
-    atlas: terrain::sketch::Atlas,
+    atlas: terrain_engine::sketch::Atlas,
     stage: CpuStage,
 }
 

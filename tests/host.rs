@@ -1,5 +1,5 @@
 //! The host API: a test opens its own device, creates its own colour and depth textures, and
-//! draws a bundled scene into them through `terrain::Terrain`; the bytes equal `terrain
+//! draws a bundled scene into them through `terrain::Terrain`, the front door; the bytes equal `terrain
 //! render`'s. A host's own geometry around the terrain, picking and size errors are tested as an
 //! application outside the workspace meets them, in `tests/host-app`.
 
@@ -8,8 +8,9 @@
 
 mod common;
 use common::*;
-use terrain::scene::{self, Scene};
+use terrain::scene::Scene;
 use terrain::{Description, Targets, Terrain, clear};
+use terrain_engine::scene;
 
 const SIZE: u32 = 96;
 const TARGETS: Targets = Targets {
@@ -136,8 +137,9 @@ fn a_streamed_pyramid_settles_through_the_host_api_on_terrain_renders_image() {
 /// a fresh terrain's.
 #[test]
 fn a_new_size_remakes_the_targets_alone() {
+    use terrain::View;
     use terrain::scene::{Mode, Msaa};
-    use terrain::{Renderer, View};
+    use terrain_engine::Renderer;
     let planet = Scene::load(&manifest_dir().join("sketches/planet-10km.toml")).unwrap();
     let mut cases = vec![(planet, Mode::Clipmaps)];
     for msaa in [Msaa::Off, Msaa::X4] {

@@ -150,7 +150,7 @@ fn uniform_importance_gives_the_budget_ratio_everywhere() {
     // Φ is the identity; k·I·d0 = (n−1)/n, so every cell's ratio is n/(n−1).
     let mut ratios = Vec::new();
     let st = &r.stage;
-    terrain::stage::quality::measure(
+    terrain_engine::stage::quality::measure(
         &st.warp.phi,
         st.sketch_map.n,
         st.sketch_map.spacing,
@@ -225,7 +225,7 @@ fn a_view_looking_east_warps_as_well_as_looking_north() {
 /// against 0.91. Looking north-west is looking north-east mirrored, and gives the same figures.
 #[test]
 fn a_view_looking_north_east_warps_nearly_as_well_as_looking_north() {
-    use terrain::stage::Turn;
+    use terrain_engine::stage::Turn;
     let view = |position: &str, look_at: &str, diagonal: bool| {
         run(&scene(
             &format!(

@@ -637,11 +637,12 @@ fn the_bundled_jobs_file_and_flight_load() {
         (items[0].name.as_str(), items[201].name.as_str()),
         ("valley-north", "random-199")
     );
-    let scene = terrain::scene::Scene::load(&manifest_dir().join("sketches/jacksboro-flight.toml"))
-        .unwrap();
+    let scene =
+        terrain_engine::scene::Scene::load(&manifest_dir().join("sketches/jacksboro-flight.toml"))
+            .unwrap();
     let path = terrain_cli::app::path::CameraPath::of_scene(
         &scene,
-        &terrain::scene::load_atlas(&scene).unwrap(),
+        &terrain_engine::scene::load_atlas(&scene).unwrap(),
     )
     .unwrap();
     assert!(

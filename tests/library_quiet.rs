@@ -9,9 +9,9 @@ mod common;
 use common::scratch;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-use terrain::Renderer;
-use terrain::View;
-use terrain::scene::Mode;
+use terrain_engine::Renderer;
+use terrain_engine::View;
+use terrain_engine::scene::Mode;
 
 /// Every record of `terrain`'s targets: level, target and text.
 struct Capture(Mutex<Vec<(log::Level, String, String)>>);
@@ -41,13 +41,13 @@ impl log::Log for Capture {
 fn jacksboro_pyramid(name: &str) -> PathBuf {
     let asc = common::manifest_dir().join("sketches/jacksboro_fault_dem.asc");
     let pyr = scratch(name).join("pyr");
-    terrain::sketch::tiles::build(&asc, &pyr, &Default::default()).unwrap();
+    terrain_engine::sketch::tiles::build(&asc, &pyr, &Default::default()).unwrap();
     pyr
 }
 
 /// The bundled Jacksboro scene at 128² over the pyramid `pyr`, GeoMipMap's frame limited to 8
 /// blocks (so its first frame notes the ones it leaves out).
-fn tight_scene(pyr: &Path) -> terrain::scene::Scene {
+fn tight_scene(pyr: &Path) -> terrain_engine::scene::Scene {
     let dir = common::manifest_dir().join("sketches");
     let text = std::fs::read_to_string(dir.join("jacksboro.toml"))
         .unwrap()
@@ -107,14 +107,14 @@ fn render_with_a_note() {
     let pyr = jacksboro_pyramid("library-quiet-note");
     let scene = tight_scene(&pyr);
     let mut r = Renderer::new(&scene, Mode::Geomipmap, View::Shaded).unwrap();
-    let camera = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
+    let camera = terrain_engine::scene::camera_of(&scene, &r.atlas).unwrap();
     let frame = r.render(&camera).unwrap();
     assert_eq!(frame.blocks, Some(8));
     let notes = CAPTURE.0.lock().unwrap();
     assert!(
         notes.iter().any(|(level, target, text)| {
             *level == log::Level::Info
-                && target.starts_with("terrain::")
+                && target.starts_with("terrain_engine::")
                 && text.starts_with("GeoMipMap sees ")
                 && text.contains("so the farthest")
         }),
@@ -130,9 +130,9 @@ fn geomipmap_keeps_its_block_figures_only_when_asked() {
     let scene = tight_scene(&pyr);
     Renderer::new(&scene, Mode::Geomipmap, View::Shaded).unwrap();
     assert_eq!(kept_figures(&pyr), Vec::<String>::new());
-    terrain::sketch::tiles::set_keep_figures(true);
+    terrain_engine::sketch::tiles::set_keep_figures(true);
     Renderer::new(&scene, Mode::Geomipmap, View::Shaded).unwrap();
-    terrain::sketch::tiles::set_keep_figures(false);
+    terrain_engine::sketch::tiles::set_keep_figures(false);
     let block = scene.geomipmap.block;
     assert_eq!(kept_figures(&pyr), vec![format!("geomipmap-{block}.bin")]);
 }

@@ -3,7 +3,7 @@
 //! tests in `src/detail.rs`).
 
 use glam::DVec2;
-use terrain::Detail;
+use terrain_engine::Detail;
 
 fn detail() -> Detail {
     Detail {

@@ -297,7 +297,7 @@ fn a_camera_by_latitude_and_longitude_stands_where_gdal_puts_it() {
 
 /// The sketch's height at world `p`, bilinear between its four nodes, from the grid as read.
 fn bilinear_ground(sketch: &Path, p: [f64; 2]) -> f64 {
-    let atlas = terrain::sketch::Atlas::load(sketch, &Default::default()).unwrap();
+    let atlas = terrain_engine::sketch::Atlas::load(sketch, &Default::default()).unwrap();
     let level = &atlas.levels[0];
     let (u, v) = (p[0] / atlas.dx, p[1] / atlas.dy);
     let (i, j) = (u.floor() as usize, v.floor() as usize);

@@ -90,9 +90,9 @@ fn the_relief_reads_on_the_bundled_dem() {
     // and shade are the other way round, turns negative.
     use terrain_cli::eval::relief;
     let text = format!("[sketch]\npath = {:?}\n", dem.to_str().unwrap());
-    let scene = terrain::Scene::parse(&text, ".".into()).unwrap();
-    let atlas = terrain::scene::load_atlas(&scene).unwrap();
-    let sun = |az: f64| terrain::Light::new(az, 45.0, 100.0, 1200.0, 0.0).sun;
+    let scene = terrain_engine::Scene::parse(&text, ".".into()).unwrap();
+    let atlas = terrain_engine::scene::load_atlas(&scene).unwrap();
+    let sun = |az: f64| terrain_engine::Light::new(az, 45.0, 100.0, 1200.0, 0.0).sun;
     let same = relief::relief_r(
         &rgba,
         &world,
@@ -490,14 +490,14 @@ fn a_coast_has_few_isolated_shore_pixels() {
 }
 
 /// The imagery at `image` draped over jacksboro-utm.tif by the library.
-fn drape_over_utm(image: &Path) -> terrain::Result<terrain::surface::Drape> {
+fn drape_over_utm(image: &Path) -> terrain_engine::Result<terrain_engine::surface::Drape> {
     let dem = manifest_dir().join("tests/data/surface/jacksboro-utm.tif");
-    let atlas = terrain::Atlas::load(&dem, &Default::default()).unwrap();
-    terrain::surface::drape(image, &atlas)
+    let atlas = terrain_engine::Atlas::load(&dem, &Default::default()).unwrap();
+    terrain_engine::surface::drape(image, &atlas)
 }
 
 /// Per-channel r between two drapes of one grid over the texels both cover fully.
-fn drape_r(a: &terrain::surface::Drape, b: &terrain::surface::Drape) -> [f64; 3] {
+fn drape_r(a: &terrain_engine::surface::Drape, b: &terrain_engine::surface::Drape) -> [f64; 3] {
     assert_eq!((a.width, a.height), (b.width, b.height));
     let both: Vec<(&[u8], &[u8])> = a
         .rgba

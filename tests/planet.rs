@@ -2,10 +2,10 @@
 
 mod common;
 use common::*;
-use terrain::Renderer;
-use terrain::View;
-use terrain::planet::Planet;
-use terrain::scene::{Mode, Scene};
+use terrain_engine::Renderer;
+use terrain_engine::View;
+use terrain_engine::planet::Planet;
+use terrain_engine::scene::{Mode, Scene};
 
 fn planet_scene(lat: f64, lon: f64, altitude: f64, pitch: f64, size: u32) -> Scene {
     scene(
@@ -18,14 +18,14 @@ fn planet_scene(lat: f64, lon: f64, altitude: f64, pitch: f64, size: u32) -> Sce
     )
 }
 
-fn render(s: &Scene) -> (Renderer, terrain::Frame) {
+fn render(s: &Scene) -> (Renderer, terrain_engine::Frame) {
     let mut r = Renderer::new(s, Mode::Clipmaps, View::Shaded).expect("renderer");
-    let camera = terrain::scene::camera_of(s, &r.atlas).expect("camera");
+    let camera = terrain_engine::scene::camera_of(s, &r.atlas).expect("camera");
     let frame = r.render(&camera).expect("frame");
     (r, frame)
 }
 
-fn pixels(frame: &terrain::Frame) -> impl Iterator<Item = [u8; 3]> + '_ {
+fn pixels(frame: &terrain_engine::Frame) -> impl Iterator<Item = [u8; 3]> + '_ {
     frame.rgba.chunks(4).map(|p| [p[0], p[1], p[2]])
 }
 
@@ -35,7 +35,7 @@ fn pixels(frame: &terrain::Frame) -> impl Iterator<Item = [u8; 3]> + '_ {
 #[test]
 fn planet_views_from_orbit_10_km_and_2_m() {
     let orbit = render(&planet_scene(30.0, 10.0, 2e7, -90.0, 96)).1;
-    let at = |f: &terrain::Frame, x: u32, y: u32| {
+    let at = |f: &terrain_engine::Frame, x: u32, y: u32| {
         let i = ((y * f.width + x) * 4) as usize;
         [f.rgba[i], f.rgba[i + 1], f.rgba[i + 2]]
     };
@@ -81,7 +81,7 @@ fn the_rings_leave_no_crack_anywhere() {
         let mut s = planet_scene(lat, lon, altitude, pitch, 64);
         s.camera.fov_y_deg = 90.0;
         let mut r = Renderer::new(&s, Mode::Clipmaps, View::Coverage).expect("renderer");
-        let camera = terrain::scene::camera_of(&s, &r.atlas).expect("camera");
+        let camera = terrain_engine::scene::camera_of(&s, &r.atlas).expect("camera");
         let f = r.render(&camera).expect("frame");
         let holes = pixels(&f).filter(|p| p[0] < 128).count();
         assert_eq!(
@@ -92,7 +92,7 @@ fn the_rings_leave_no_crack_anywhere() {
     let mut up = planet_scene(30.0, 10.0, 2.0, 90.0, 64);
     up.camera.fov_y_deg = 90.0;
     let mut r = Renderer::new(&up, Mode::Clipmaps, View::Coverage).expect("renderer");
-    let camera = terrain::scene::camera_of(&up, &r.atlas).expect("camera");
+    let camera = terrain_engine::scene::camera_of(&up, &r.atlas).expect("camera");
     let f = r.render(&camera).expect("frame");
     assert_eq!(
         pixels(&f).filter(|p| p[0] > 128).count(),
@@ -107,7 +107,7 @@ fn the_rings_leave_no_crack_anywhere() {
 fn a_still_camera_renders_the_same_bytes() {
     let s = planet_scene(46.5, 9.8, 2.0, -10.0, 64);
     let (mut r, a) = render(&s);
-    let camera = terrain::scene::camera_of(&s, &r.atlas).expect("camera");
+    let camera = terrain_engine::scene::camera_of(&s, &r.atlas).expect("camera");
     let b = r.render(&camera).expect("frame");
     let c = render(&s).1;
     assert!(a.rgba == b.rgba && a.rgba == c.rgba);
@@ -154,7 +154,7 @@ fn the_reference_marches_the_same_planet() {
     for (altitude, pitch, at_least) in [(2e7, -90.0, 38.0), (10_000.0, -20.0, 25.0)] {
         let s = planet_scene(30.0, 10.0, altitude, pitch, 64);
         let (r, mesh) = render(&s);
-        let camera = terrain::scene::camera_of(&s, &r.atlas).expect("camera");
+        let camera = terrain_engine::scene::camera_of(&s, &r.atlas).expect("camera");
         drop(r);
         let mut reference = Renderer::new(&s, Mode::Reference, View::Shaded).expect("reference");
         let image = reference.render(&camera).expect("frame");
@@ -172,10 +172,10 @@ fn the_reference_marches_the_same_planet() {
 }
 
 /// World positions (f64, metres from the planet's centre) of a planet frame's ground pixels.
-fn world_hits(r: &Renderer, camera: &terrain::Camera) -> Vec<Option<glam::DVec3>> {
+fn world_hits(r: &Renderer, camera: &terrain_engine::Camera) -> Vec<Option<glam::DVec3>> {
     let geo = camera.geo.expect("a planet camera");
-    let t = terrain::planet::Tangent::at(geo.lat, geo.lon);
-    let radius = terrain::planet::EARTH_RADIUS_M;
+    let t = terrain_engine::planet::Tangent::at(geo.lat, geo.lon);
+    let radius = terrain_engine::planet::EARTH_RADIUS_M;
     r.read_positions(camera)
         .expect("positions")
         .iter()
@@ -197,10 +197,11 @@ fn moving_the_camera_a_metre_moves_the_picture_as_the_geometry_predicts() {
     let s = planet_scene(46.5, 9.8, 2.0, -35.0, size);
     let mut moved = s.clone();
     // One metre north.
-    moved.camera.lat_deg = Some(46.5 + (1.0f64 / terrain::planet::EARTH_RADIUS_M).to_degrees());
+    moved.camera.lat_deg =
+        Some(46.5 + (1.0f64 / terrain_engine::planet::EARTH_RADIUS_M).to_degrees());
     let shot = |scene: &Scene| {
         let mut r = Renderer::new(scene, Mode::Clipmaps, View::Shaded).expect("renderer");
-        let camera = terrain::scene::camera_of(scene, &r.atlas).expect("camera");
+        let camera = terrain_engine::scene::camera_of(scene, &r.atlas).expect("camera");
         r.render(&camera).expect("frame");
         let hits = world_hits(&r, &camera);
         (camera, hits)
@@ -208,11 +209,11 @@ fn moving_the_camera_a_metre_moves_the_picture_as_the_geometry_predicts() {
     let (a, hits_a) = shot(&s);
     let (b, hits_b) = shot(&moved);
     // The moved camera's eye and directions in world axes, to project into.
-    let frame_of = |c: &terrain::Camera| {
+    let frame_of = |c: &terrain_engine::Camera| {
         let geo = c.geo.unwrap();
-        let t = terrain::planet::Tangent::at(geo.lat, geo.lon);
+        let t = terrain_engine::planet::Tangent::at(geo.lat, geo.lon);
         (
-            t.up * terrain::planet::EARTH_RADIUS_M + t.world(c.eye),
+            t.up * terrain_engine::planet::EARTH_RADIUS_M + t.world(c.eye),
             t.world(c.forward),
             t.world(c.right),
             t.world(c.up),
@@ -284,9 +285,9 @@ fn a_global_geotiff_is_a_planet_and_a_regional_one_is_refused() {
         )
     };
     let s = global("tests/data/planet/global-64x32.tif");
-    let atlas = terrain::scene::load_atlas(&s).expect("a global sketch");
+    let atlas = terrain_engine::scene::load_atlas(&s).expect("a global sketch");
     let planet = Planet {
-        radius: terrain::planet::EARTH_RADIUS_M,
+        radius: terrain_engine::planet::EARTH_RADIUS_M,
         sketch: &atlas,
     };
     for (i, j) in [(0usize, 0usize), (10, 5), (40, 20), (63, 31)] {
@@ -303,7 +304,7 @@ fn a_global_geotiff_is_a_planet_and_a_regional_one_is_refused() {
         "the disc's centre is dark"
     );
     let regional = global("tests/data/formats/bigendian-lzw-pred1-Float32.tif");
-    let err = terrain::scene::load_atlas(&regional)
+    let err = terrain_engine::scene::load_atlas(&regional)
         .expect_err("refused")
         .to_string();
     assert!(err.contains("global") && !err.contains('\n'), "{err}");
@@ -321,8 +322,8 @@ fn held_rings_are_seen_from_where_the_camera_moved() {
     b.camera.heading_deg = Some(70.0);
     let mut r = Renderer::new(&a, Mode::Clipmaps, View::Shaded).expect("renderer");
     let (ca, cb) = (
-        terrain::scene::camera_of(&a, &r.atlas).expect("camera"),
-        terrain::scene::camera_of(&b, &r.atlas).expect("camera"),
+        terrain_engine::scene::camera_of(&a, &r.atlas).expect("camera"),
+        terrain_engine::scene::camera_of(&b, &r.atlas).expect("camera"),
     );
     let first = r.render(&ca).expect("frame");
     assert_eq!(r.render_held(&ca).expect("held").rgba, first.rgba);
@@ -348,10 +349,10 @@ fn held_rings_are_seen_from_where_the_camera_moved() {
 fn depth_resolves_a_hundred_thousandth_from_a_metre_to_20000_km() {
     for (altitude, pitch) in [(1.0, 0.0), (1.0, 5.0), (2e7, -90.0)] {
         let s = planet_scene(46.5, 9.8, altitude, pitch, 64);
-        let atlas = terrain::scene::load_atlas(&s).expect("atlas");
-        let camera = terrain::scene::camera_of(&s, &atlas).expect("camera");
-        let origin = terrain::Terrain::frame_origin(&camera);
-        let vp = terrain::Terrain::view_proj(&camera);
+        let atlas = terrain_engine::scene::load_atlas(&s).expect("atlas");
+        let camera = terrain_engine::scene::camera_of(&s, &atlas).expect("camera");
+        let origin = terrain_engine::Terrain::frame_origin(&camera);
+        let vp = terrain_engine::Terrain::view_proj(&camera);
         let eye = (camera.eye - origin).as_vec3();
         let depth = |d: f64| {
             let p = eye + (camera.forward * d).as_vec3();

@@ -1,5 +1,5 @@
 //! Height queries against the drawn ground: the reference mode's hit positions (`render
-//! --positions`) lie on the surface `terrain::query` and `terrain height` describe, at each
+//! --positions`) lie on the surface `terrain_engine::query` and `terrain height` describe, at each
 //! pixel's footprint, on the bundled DEM (with and without octaves), a streamed tile pyramid of it,
 //! and a planet.
 
@@ -7,8 +7,8 @@ mod common;
 use common::*;
 use glam::{DVec2, DVec3};
 use std::path::Path;
-use terrain::scene::{self, Scene};
-use terrain::{Ground, PlanetGround};
+use terrain_engine::scene::{self, Scene};
+use terrain_engine::{Ground, PlanetGround};
 
 /// The reference's ground pixels of `scene` at `size`²: (world point, footprint) each, sampled
 /// evenly down to at most 1,000, and the eye.
@@ -120,12 +120,12 @@ fn heights_equal_the_references_ground_on_a_planet() {
         c.lat_deg.unwrap().to_radians(),
         c.lon_deg.unwrap().to_radians(),
     );
-    let tangent = terrain::planet::Tangent::at(lat, lon);
-    let nadir = terrain::planet::unit(lat, lon) * radius;
+    let tangent = terrain_engine::planet::Tangent::at(lat, lon);
+    let nadir = terrain_engine::planet::unit(lat, lon) * radius;
     let mut worst: f64 = 0.0;
     for (local, footprint) in pixels {
         let world = nadir + tangent.world(local);
-        let (plat, plon) = terrain::planet::lat_lon(world);
+        let (plat, plon) = terrain_engine::planet::lat_lon(world);
         let z = ground
             .height_at(plat.to_degrees(), plon.to_degrees(), footprint)
             .unwrap();
@@ -270,7 +270,7 @@ fn queries_refuse_what_is_not_a_place() {
 
 /// 100 points evenly around the border of the sketch `scene`: each point on the edge and its
 /// outward normal.
-fn border(atlas: &terrain::sketch::Atlas) -> Vec<(DVec2, DVec2)> {
+fn border(atlas: &terrain_engine::sketch::Atlas) -> Vec<(DVec2, DVec2)> {
     let (lo, hi) = (atlas.origin, atlas.max_corner());
     let size = hi - lo;
     let perimeter = 2.0 * (size.x + size.y);

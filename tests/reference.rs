@@ -4,11 +4,11 @@
 mod common;
 use common::*;
 use glam::{DVec2, DVec4};
-use terrain::Reference;
-use terrain::Renderer;
-use terrain::View;
-use terrain::scene::Mode;
-use terrain::scene::Scene;
+use terrain_engine::Reference;
+use terrain_engine::Renderer;
+use terrain_engine::View;
+use terrain_engine::scene::Mode;
+use terrain_engine::scene::Scene;
 
 fn bundled(name: &str, extra: &[&str]) -> Scene {
     let path = manifest_dir().join("sketches").join(format!("{name}.toml"));
@@ -26,7 +26,7 @@ fn reference_converges_below_the_differences_it_measures() {
     for name in ["gaussian", "hills"] {
         let scene = bundled(name, &[]);
         let mut r = Renderer::new(&scene, Mode::Reference, View::Shaded).unwrap();
-        let camera = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
+        let camera = terrain_engine::scene::camera_of(&scene, &r.atlas).unwrap();
         let reference = r.render(&camera).unwrap();
         r.lod_mut::<Reference>().unwrap().step *= 0.5;
         let finer = r.render(&camera).unwrap();
@@ -62,11 +62,11 @@ fn reference_converges_below_the_differences_it_measures() {
 fn reference_positions_project_to_their_pixels_and_sky_has_none() {
     let scene = bundled("jacksboro", &[]);
     let mut r = Renderer::new(&scene, Mode::Reference, View::Shaded).unwrap();
-    let camera = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
+    let camera = terrain_engine::scene::camera_of(&scene, &r.atlas).unwrap();
     r.render(&camera).unwrap();
     let positions = r.read_positions(&camera).unwrap();
     // Positions are relative to the frame origin, which is the eye over a flat sketch.
-    let vp = terrain::Terrain::view_proj(&camera).as_dmat4();
+    let vp = terrain_engine::Terrain::view_proj(&camera).as_dmat4();
     let (w, h) = (camera.width as usize, camera.height as usize);
     let (mut hits, mut sky, mut worst) = (0, 0, 0.0f64);
     for (k, p) in positions.iter().enumerate() {
@@ -93,7 +93,7 @@ fn meshes_stay_within_pixels_of_the_reference() {
     for name in ["gaussian", "hills"] {
         let scene = bundled(name, &["geomipmap.tau=0.5"]);
         let mut reference = Renderer::new(&scene, Mode::Reference, View::Shaded).unwrap();
-        let camera = terrain::scene::camera_of(&scene, &reference.atlas).unwrap();
+        let camera = terrain_engine::scene::camera_of(&scene, &reference.atlas).unwrap();
         let truth_image = reference.render(&camera).unwrap().rgba;
         let truth = reference.read_positions(&camera).unwrap();
         let mut warped = Renderer::new(&scene, Mode::Warped, View::Shaded).unwrap();
@@ -146,7 +146,7 @@ fn mesh_positions_hold_from_20_km_up() {
         &["warp.budget=false", "warp.mesh=256", "geomipmap.tau=0.25"],
     );
     let mut reference = Renderer::new(&scene, Mode::Reference, View::Shaded).unwrap();
-    let camera = terrain::scene::camera_of(&scene, &reference.atlas).unwrap();
+    let camera = terrain_engine::scene::camera_of(&scene, &reference.atlas).unwrap();
     reference.render(&camera).unwrap();
     let truth = reference.read_positions(&camera).unwrap();
     let footprint = camera.eye.z * 2.0 * camera.tan_half_y() / camera.height as f64;
@@ -185,7 +185,7 @@ fn a_mesh_finer_than_the_pixels_draws_no_octave_the_reference_does_not() {
             &["warp.budget=false", &format!("warp.mesh={mesh}")],
         );
         let mut reference = Renderer::new(&scene, Mode::Reference, View::Shaded).unwrap();
-        let camera = terrain::scene::camera_of(&scene, &reference.atlas).unwrap();
+        let camera = terrain_engine::scene::camera_of(&scene, &reference.atlas).unwrap();
         let truth = reference.render(&camera).unwrap().rgba;
         let mut r = Renderer::new(&scene, Mode::Warped, View::Shaded).unwrap();
         let image = r.render(&camera).unwrap().rgba;

@@ -6,8 +6,8 @@ mod common;
 use common::manifest_dir;
 use serde_aux::serde_introspection::serde_introspect;
 use std::collections::{BTreeMap, BTreeSet};
-use terrain::scene::*;
 use terrain_cli::app::batch::{JobsFile, RandomSection};
+use terrain_engine::scene::*;
 
 /// The documented keys of each table, by its dotted name, with their default cells.
 fn documented() -> BTreeMap<String, BTreeMap<String, String>> {
@@ -193,8 +193,8 @@ fn unset_detail_follows_the_sketch_and_set_detail_is_kept() {
             manifest_dir().join("sketches"),
         )
         .unwrap();
-        let atlas = terrain::scene::load_atlas(&scene).unwrap();
-        terrain::scene::detail_of(&scene, &atlas)
+        let atlas = terrain_engine::scene::load_atlas(&scene).unwrap();
+        terrain_engine::scene::detail_of(&scene, &atlas)
     };
     let dem = load("path = \"jacksboro_fault_dem.asc\"", "");
     let hills = load("synthetic = \"hills\"", "");

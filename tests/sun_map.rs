@@ -4,9 +4,9 @@
 
 mod common;
 use common::*;
-use terrain::scene::{Mode, Scene};
-use terrain::{Renderer, View, Work};
 use terrain_cli::eval::metrics::psnr;
+use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::{Renderer, View, Work};
 
 /// `sketches/NAME.toml` at 128², with the map on or off.
 fn scene(name: &str, sun_map: bool) -> Scene {
@@ -18,9 +18,9 @@ fn scene(name: &str, sun_map: bool) -> Scene {
 
 /// The frame of `scene`'s camera, and what its shading evaluated.
 fn draw(scene: &Scene, mode: Mode) -> (Vec<u8>, Work) {
-    let atlas = terrain::scene::load_atlas(scene).unwrap();
-    let ctx = terrain::GpuContext::new(&terrain::needs(scene, mode, &atlas)).unwrap();
-    let camera = terrain::scene::camera_of(scene, &atlas).unwrap();
+    let atlas = terrain_engine::scene::load_atlas(scene).unwrap();
+    let ctx = terrain_engine::GpuContext::new(&terrain_engine::needs(scene, mode, &atlas)).unwrap();
+    let camera = terrain_engine::scene::camera_of(scene, &atlas).unwrap();
     let mut r = Renderer::counting_work(ctx, scene, atlas, mode, View::Shaded).unwrap();
     let frame = r.render_settled(&camera).unwrap();
     (frame.rgba, frame.work.unwrap())
@@ -32,7 +32,7 @@ fn draw(scene: &Scene, mode: Mode) -> (Vec<u8>, Work) {
 #[test]
 fn the_map_draws_the_marched_shadow_for_fewer_steps() {
     let void = |mut s: Scene| {
-        s.sketch.outside = Some(terrain::scene::Outside::Void);
+        s.sketch.outside = Some(terrain_engine::scene::Outside::Void);
         s
     };
     for name in ["jacksboro", "hills-high", "gaussian-high"] {
@@ -66,7 +66,7 @@ fn a_new_sun_remakes_the_map() {
     let mut second = first.clone();
     low_sun(&mut second);
     let mut r = Renderer::new(&first, Mode::Warped, View::Shaded).unwrap();
-    let camera = terrain::scene::camera_of(&first, r.atlas()).unwrap();
+    let camera = terrain_engine::scene::camera_of(&first, r.atlas()).unwrap();
     let before = r.render_settled(&camera).unwrap().rgba;
     r.relight(&second);
     let relit = r.render_settled(&camera).unwrap().rgba;

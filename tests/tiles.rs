@@ -6,8 +6,8 @@ mod common;
 
 use common::{psnr, scratch, terrain};
 use std::path::{Path, PathBuf};
-use terrain::sketch::tiles::{BORDER, BuildOptions, Pyramid, SIDE, TILE, build};
-use terrain::sketch::{Atlas, LoadOptions};
+use terrain_engine::sketch::tiles::{BORDER, BuildOptions, Pyramid, SIDE, TILE, build};
+use terrain_engine::sketch::{Atlas, LoadOptions};
 
 /// Heights with detail at every scale and no symmetry, so a misplaced node shows.
 fn height(i: usize, j: usize) -> f32 {
@@ -46,7 +46,7 @@ fn write_asc(
     std::fs::write(path, text).unwrap();
 }
 
-fn convert(src: &Path, out: &Path) -> terrain::sketch::tiles::BuildSummary {
+fn convert(src: &Path, out: &Path) -> terrain_engine::sketch::tiles::BuildSummary {
     build(src, out, &BuildOptions::default())
         .unwrap_or_else(|e| panic!("tiles {}: {e}", src.display()))
 }
@@ -146,7 +146,7 @@ fn a_coarser_level_stands_in_for_a_pyramid_beyond_the_cell_limit() {
     let out = dir.join("pyramid");
     convert(&src, &out);
     let atlas = Atlas::load(&src, &LoadOptions::default()).unwrap();
-    let g = terrain::sketch::tiles::raw_grid_within(&out, 150 * 150).unwrap();
+    let g = terrain_engine::sketch::tiles::raw_grid_within(&out, 150 * 150).unwrap();
     assert_eq!((g.width, g.height), (150, 150));
     assert_eq!((g.dx, g.dy), (60.0, 60.0));
     assert!(
@@ -368,16 +368,16 @@ fn jacksboro_text(sketch: &Path, extra: &str) -> String {
 }
 
 /// The bundled Jacksboro scene at 128², reading `sketch` (a path), with `extra` appended.
-fn jacksboro_scene(sketch: &Path, extra: &str) -> terrain::scene::Scene {
+fn jacksboro_scene(sketch: &Path, extra: &str) -> terrain_engine::scene::Scene {
     let dir = common::manifest_dir().join("sketches");
     common::scene(&jacksboro_text(sketch, extra), dir)
 }
 
 #[test]
 fn a_streamed_pyramid_renders_as_the_sketch_in_memory_once_its_tiles_are_resident() {
-    use terrain::Renderer;
-    use terrain::View;
-    use terrain::scene::Mode;
+    use terrain_engine::Renderer;
+    use terrain_engine::View;
+    use terrain_engine::scene::Mode;
     let (_, asc, pyr) = jacksboro_pyramid("tiles-streamed");
     // 4 MiB: 15 pages for the pyramid's 11 tiles, of which the top three levels are pinned, so
     // the first frame stands in with them.
@@ -385,7 +385,7 @@ fn a_streamed_pyramid_renders_as_the_sketch_in_memory_once_its_tiles_are_residen
     let whole = jacksboro_scene(&asc, "");
     for mode in [Mode::Warped, Mode::Reference] {
         let mut m = Renderer::new(&whole, mode, View::Shaded).unwrap();
-        let camera = terrain::scene::camera_of(&whole, &m.atlas).unwrap();
+        let camera = terrain_engine::scene::camera_of(&whole, &m.atlas).unwrap();
         let expected = m.render(&camera).unwrap();
         assert!(expected.stream.is_none());
         let mut s = Renderer::new(&streamed, mode, View::Shaded).unwrap();
@@ -463,9 +463,9 @@ fn jacksboro_crop(dir: &Path) -> PathBuf {
 /// its defaults leave finer (`scene::default_bias`).
 #[test]
 fn a_pyramid_draws_its_sketchs_picture_by_default_in_every_mode_that_streams() {
-    use terrain::Renderer;
-    use terrain::View;
-    use terrain::scene::Mode;
+    use terrain_engine::Renderer;
+    use terrain_engine::View;
+    use terrain_engine::scene::Mode;
     let dir = scratch("tiles-defaults");
     let asc = jacksboro_crop(&dir);
     let pyr = dir.join("pyr");
@@ -491,10 +491,10 @@ fn a_pyramid_draws_its_sketchs_picture_by_default_in_every_mode_that_streams() {
             _ => &whole,
         };
         let mut m = Renderer::new(whole, mode, View::Shaded).unwrap();
-        let camera = terrain::scene::camera_of(whole, &m.atlas).unwrap();
+        let camera = terrain_engine::scene::camera_of(whole, &m.atlas).unwrap();
         let expected = m.render(&camera).unwrap();
         let mut s = Renderer::new(&streamed, mode, View::Shaded).unwrap();
-        let camera = terrain::scene::camera_of(&streamed, &s.atlas).unwrap();
+        let camera = terrain_engine::scene::camera_of(&streamed, &s.atlas).unwrap();
         let got = s.render_settled(&camera).unwrap();
         assert!(got.stream.is_some(), "{mode}: the pyramid streams");
         assert_eq!(
@@ -551,12 +551,12 @@ fn streamed_geomipmap_measures_the_baked_grids_blocks_and_renders_as_it_once_res
 /// GeoMipMap over `pyr`, converted from `sketch`, against GeoMipMap over `sketch` in memory, with
 /// the water at `water` metres.
 fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path, water: f64) {
-    use terrain::Baselines;
-    use terrain::Renderer;
-    use terrain::View;
-    use terrain::scene::Mode;
+    use terrain_engine::Baselines;
+    use terrain_engine::Renderer;
+    use terrain_engine::View;
+    use terrain_engine::scene::Mode;
     // Kept in the folder, as the binary asks (the library alone writes no file).
-    terrain::sketch::tiles::set_keep_figures(true);
+    terrain_engine::sketch::tiles::set_keep_figures(true);
     // k = 0: over a pyramid the grid is the sketch at its own spacing; the sketch in memory bakes
     // the same grid. 4 MiB of pages: the first frame stands in.
     let mut streamed = jacksboro_scene(pyr, "[geomipmap]\nk = 0\n[stream]\ngpu_mb = 4");
@@ -564,7 +564,7 @@ fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path, water: f64)
     streamed.sketch.water_level_m = water;
     whole.sketch.water_level_m = water;
     let mut m = Renderer::new(&whole, Mode::Geomipmap, View::Shaded).unwrap();
-    let camera = terrain::scene::camera_of(&whole, &m.atlas).unwrap();
+    let camera = terrain_engine::scene::camera_of(&whole, &m.atlas).unwrap();
     let expected = m.render(&camera).unwrap();
     let mut s = Renderer::new(&streamed, Mode::Geomipmap, View::Shaded).unwrap();
 
@@ -595,7 +595,7 @@ fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path, water: f64)
     // Kept beside the tiles, and read back by the next renderer.
     let kept = pyr.join(format!("geomipmap-{}.bin", a.cells + 1));
     assert!(kept.exists(), "{name}");
-    let delta_of = |scene: &terrain::scene::Scene| {
+    let delta_of = |scene: &terrain_engine::scene::Scene| {
         let r = Renderer::new(scene, Mode::Geomipmap, View::Shaded).unwrap();
         r.lod::<Baselines>().unwrap().blocks.delta.clone()
     };
@@ -603,7 +603,7 @@ fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path, water: f64)
     // Other water is another grid: the kept figures are not taken for it.
     let mut lower = streamed.clone();
     lower.sketch.water_level_m = water - 100.0;
-    let fresh = terrain::sketch::tiles::measure_blocks(
+    let fresh = terrain_engine::sketch::tiles::measure_blocks(
         &Pyramid::open(pyr).unwrap(),
         a.cells,
         a.per_side,
@@ -647,7 +647,7 @@ fn streamed_geomipmap_matches(name: &str, sketch: &Path, pyr: &Path, water: f64)
 #[test]
 fn a_streamed_sketchs_ground_is_level_0s_so_a_camera_under_a_peak_is_refused() {
     use glam::{DVec2, DVec3};
-    use terrain::scene::{camera_of, ground_under, load_atlas};
+    use terrain_engine::scene::{camera_of, ground_under, load_atlas};
     let (_, asc, pyr) = jacksboro_pyramid("tiles-ground");
     // cpu_mb = 0: main memory holds the top level alone, 2 × 2 nodes.
     let streamed_scene = jacksboro_scene(&pyr, "[stream]\ncpu_mb = 0");
@@ -713,7 +713,7 @@ fn a_streamed_sketchs_ground_is_level_0s_so_a_camera_under_a_peak_is_refused() {
 /// the window). A level whose tile is damaged is NaN, which the term skips, and nothing panics.
 #[test]
 fn a_streamed_sketch_measures_the_curvature_of_levels_not_in_memory() {
-    use terrain::scene::load_atlas;
+    use terrain_engine::scene::load_atlas;
     let (_, asc, pyr) = jacksboro_pyramid("tiles-curvature");
     let streamed = load_atlas(&jacksboro_scene(&pyr, "[stream]\ncpu_mb = 0")).unwrap();
     let whole = load_atlas(&jacksboro_scene(&asc, "")).unwrap();
@@ -747,15 +747,15 @@ fn a_streamed_sketch_measures_the_curvature_of_levels_not_in_memory() {
 
 #[test]
 fn a_streamed_snapshot_settles_on_the_whole_sketchs_image_and_a_damaged_tile_fails_it() {
-    use terrain::Renderer;
-    use terrain::View;
-    use terrain::scene::Mode;
+    use terrain_engine::Renderer;
+    use terrain_engine::View;
+    use terrain_engine::scene::Mode;
     let (_, asc, pyr) = jacksboro_pyramid("tiles-settled");
     // Fades of 8 frames, as by default: a settled snapshot places its tiles without them.
     let streamed = jacksboro_scene(&pyr, "[stream]\ngpu_mb = 4");
     let whole = jacksboro_scene(&asc, "");
     let mut m = Renderer::new(&whole, Mode::Warped, View::Shaded).unwrap();
-    let camera = terrain::scene::camera_of(&whole, &m.atlas).unwrap();
+    let camera = terrain_engine::scene::camera_of(&whole, &m.atlas).unwrap();
     let expected = m.render(&camera).unwrap();
     let mut s = Renderer::new(&streamed, Mode::Warped, View::Shaded).unwrap();
     let first = s.render(&camera).unwrap();
@@ -823,7 +823,7 @@ fn fly_settle_waits_for_every_frames_tiles_and_without_it_the_first_frame_stands
 
 #[test]
 fn compare_over_a_pyramid_sweeps_warped_and_geomipmap_and_refuses_brute_force_before_any_work() {
-    use terrain::scene::Mode;
+    use terrain_engine::scene::Mode;
     let (dir, _, pyr) = jacksboro_pyramid("tiles-compare");
     let scene = jacksboro_scene(&pyr, "");
     assert_eq!(
@@ -861,9 +861,9 @@ fn compare_over_a_pyramid_sweeps_warped_and_geomipmap_and_refuses_brute_force_be
 /// first frame, with 4 MiB of pages, stands in.
 #[test]
 fn a_streamed_planet_draws_as_its_sketch_in_memory_once_resident() {
-    use terrain::Renderer;
-    use terrain::View;
-    use terrain::scene::Mode;
+    use terrain_engine::Renderer;
+    use terrain_engine::View;
+    use terrain_engine::scene::Mode;
     let dir = scratch("tiles-planet");
     let tif = common::manifest_dir().join("tests/data/planet/global-1024x512.tif");
     let pyr = dir.join("pyr");
@@ -879,16 +879,16 @@ fn a_streamed_planet_draws_as_its_sketch_in_memory_once_resident() {
     let streamed = common::scene(&text(&pyr, "[stream]\ngpu_mb = 4"), dir.clone());
     // A regional pyramid is no planet: refused in one line, as the file it came from is.
     let (_, _, regional) = jacksboro_pyramid("tiles-planet-regional");
-    let e = terrain::scene::load_atlas(&common::scene(&text(&regional, ""), dir.clone()))
+    let e = terrain_engine::scene::load_atlas(&common::scene(&text(&regional, ""), dir.clone()))
         .expect_err("a regional pyramid is refused")
         .to_string();
     assert!(e.contains("global") && !e.contains('\n'), "{e}");
     for mode in [Mode::Clipmaps, Mode::Reference] {
         let mut m = Renderer::new(&whole, mode, View::Shaded).unwrap();
-        let camera = terrain::scene::camera_of(&whole, &m.atlas).unwrap();
+        let camera = terrain_engine::scene::camera_of(&whole, &m.atlas).unwrap();
         let expected = m.render(&camera).unwrap();
         let mut s = Renderer::new(&streamed, mode, View::Shaded).unwrap();
-        let placed = terrain::scene::camera_of(&streamed, &s.atlas).unwrap();
+        let placed = terrain_engine::scene::camera_of(&streamed, &s.atlas).unwrap();
         assert!(
             (placed.eye - camera.eye).length() < 1e-6,
             "{mode}: the camera stands on other ground: {} vs {}",

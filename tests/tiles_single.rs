@@ -8,12 +8,16 @@ mod common;
 
 use common::{manifest_dir, scratch};
 use std::path::{Path, PathBuf};
-use terrain::sketch::tiles::{BuildOptions, build};
-use terrain::sketch::{Atlas, LoadOptions};
+use terrain_engine::sketch::tiles::{BuildOptions, build};
+use terrain_engine::sketch::{Atlas, LoadOptions};
 use tiff::encoder::{Compression, TiffEncoder, colortype::Gray32Float};
 use tiff::tags::Tag;
 
-fn convert_with(src: &Path, out: &Path, load: LoadOptions) -> terrain::sketch::tiles::BuildSummary {
+fn convert_with(
+    src: &Path,
+    out: &Path,
+    load: LoadOptions,
+) -> terrain_engine::sketch::tiles::BuildSummary {
     let opts = BuildOptions {
         load,
         threads: 2,
@@ -200,8 +204,12 @@ fn a_single_file_with_holes_converts_as_the_mosaic_of_its_heights_and_a_vrt_over
     convert_with(&dir.join("parts/*.tif"), &mosaic, LoadOptions::default());
     let (a, b) = (tiles(&single), tiles(&mosaic));
     let (p, q) = (
-        terrain::sketch::tiles::Pyramid::open(&single).unwrap().meta,
-        terrain::sketch::tiles::Pyramid::open(&mosaic).unwrap().meta,
+        terrain_engine::sketch::tiles::Pyramid::open(&single)
+            .unwrap()
+            .meta,
+        terrain_engine::sketch::tiles::Pyramid::open(&mosaic)
+            .unwrap()
+            .meta,
     );
     assert_eq!(a.len(), p.tile_count());
     assert!(a == b, "the single file's tiles equal the mosaic's");
@@ -254,7 +262,7 @@ fn a_huge_geotiffs_header_is_read_without_its_cells() {
     // GDAL writes the header and its tags first: cut the cells off.
     let cut = dir.join("cut.tif");
     std::fs::write(&cut, &bytes[..4096]).unwrap();
-    let header = terrain::sketch::read_header(&cut, &LoadOptions::default())
+    let header = terrain_engine::sketch::read_header(&cut, &LoadOptions::default())
         .unwrap()
         .expect("a GeoTIFF's header");
     let atlas = Atlas::load(&src, &LoadOptions::default()).unwrap();
@@ -301,6 +309,6 @@ fn heights_in_another_unit_are_refused_after_level_0_and_again_on_a_second_run()
         let err = build(&src, &out, &opts).unwrap_err().to_string();
         assert!(err.contains("beyond ±1000 km"), "run {run}: {err}");
         assert!(!err.contains('\n'), "{err}");
-        assert!(!terrain::sketch::tiles::is_pyramid(&out));
+        assert!(!terrain_engine::sketch::tiles::is_pyramid(&out));
     }
 }

@@ -384,7 +384,7 @@ fn view_keys_switch_mode_record_the_path_and_quit() {
     // R … R wrote the scene with the path flown into --out-dir: north (W, the camera looks
     // north), at speed.
     let flown = dir.join("views/gaussian-flown.toml");
-    let recorded = terrain::scene::Scene::load(&flown).expect("the recorded scene loads");
+    let recorded = terrain_engine::scene::Scene::load(&flown).expect("the recorded scene loads");
     let path = recorded.path.expect("a [path]");
     let (first, last) = (
         path.keys[0].position.expect("a planar key"),
@@ -466,7 +466,7 @@ fn view_flies_over_a_planet_and_records_a_planet_path() {
     );
 
     let flown = dir.join("views/planet-flown.toml");
-    let recorded = terrain::scene::Scene::load(&flown).expect("the recorded scene loads");
+    let recorded = terrain_engine::scene::Scene::load(&flown).expect("the recorded scene loads");
     let path = recorded.path.clone().expect("a [path]");
     let (first, last) = (&path.keys[0], &path.keys[path.keys.len() - 1]);
     assert!(path.duration_s.is_some_and(|d| d > 1.0), "{path:?}");

@@ -5,8 +5,8 @@
 
 mod common;
 use common::*;
-use terrain::scene::{Mode, Scene};
-use terrain::{Renderer, View, Work};
+use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::{Renderer, View, Work};
 
 /// `sketches/jacksboro.toml` at `size`², with `edit` applied.
 fn jacksboro(size: u32, edit: impl FnOnce(&mut Scene)) -> Scene {
@@ -20,7 +20,7 @@ fn jacksboro(size: u32, edit: impl FnOnce(&mut Scene)) -> Scene {
 /// the plain image, the counted one, and the count.
 fn both(scene: &Scene, mode: Mode) -> (Vec<u8>, Vec<u8>, Work) {
     let mut plain = Renderer::new(scene, mode, View::Shaded).unwrap();
-    let camera = terrain::scene::camera_of(scene, plain.atlas()).unwrap();
+    let camera = terrain_engine::scene::camera_of(scene, plain.atlas()).unwrap();
     let expected = plain.render_settled(&camera).unwrap();
     assert!(expected.work.is_none(), "a plain renderer counts nothing");
     let ctx = plain.ctx().clone();
@@ -72,7 +72,7 @@ fn work_left_out_of_a_scene_is_not_counted() {
 
 #[test]
 fn the_reference_counts_one_invocation_per_pixel_and_far_more_work() {
-    let scene = jacksboro(48, |s| s.render.msaa = terrain::scene::Msaa::Off);
+    let scene = jacksboro(48, |s| s.render.msaa = terrain_engine::scene::Msaa::Off);
     let (plain, counted, reference) = both(&scene, Mode::Reference);
     assert!(
         plain == counted,

@@ -14,7 +14,7 @@ use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use terrain::{Error, Result, Role};
+use terrain_engine::{Error, Result, Role};
 
 pub struct Apng {
     writer: Option<png::Writer<BufWriter<File>>>,

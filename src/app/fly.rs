@@ -26,13 +26,13 @@ use crate::progress::Progress;
 use crate::stats::percentile;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
-use terrain::PassTimes;
-use terrain::Renderer;
-use terrain::View;
-use terrain::pass;
-use terrain::scene::{Mode, Scene};
-use terrain::sketch::tiles::StreamStats;
-use terrain::{Error, Result, Role};
+use terrain_engine::PassTimes;
+use terrain_engine::Renderer;
+use terrain_engine::View;
+use terrain_engine::pass;
+use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::sketch::tiles::StreamStats;
+use terrain_engine::{Error, Result, Role};
 
 pub struct Options {
     pub mode: Mode,
@@ -151,7 +151,7 @@ pub struct Outcome {
     /// Why the frame count differs from `fps` frames a second of travel, when it does.
     pub frames_note: Option<String>,
     pub elapsed_s: f64,
-    /// GPU memory the renderer held at the end, bytes (as allocated: [`terrain::alloc`]).
+    /// GPU memory the renderer held at the end, bytes (as allocated: [`terrain_engine::alloc`]).
     pub gpu_memory_bytes: u64,
     /// A streamed sketch: tiles loaded per frame (mean and most), and frames that showed a
     /// stand-in level somewhere.
@@ -300,7 +300,7 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) 
     let mut last = std::time::Instant::now();
     let count = cameras.len();
     // Each frame written and recorded as it is read back; whether to go on.
-    let mut take = |k: usize, frame: terrain::Frame| -> Result<bool> {
+    let mut take = |k: usize, frame: terrain_engine::Frame| -> Result<bool> {
         let (camera, t) = (&cameras[k], times[k]);
         let file = format!("frame-{k:05}.png");
         if !writer.write(out_dir.join(&file), frame.rgba) {

@@ -18,10 +18,10 @@
 
 use glam::DVec3;
 use std::path::Path;
-use terrain::Camera;
-use terrain::scene::{PathKey, PathSection, Scene};
-use terrain::sketch::Atlas;
-use terrain::{Error, Result, Role};
+use terrain_engine::Camera;
+use terrain_engine::scene::{PathKey, PathSection, Scene};
+use terrain_engine::sketch::Atlas;
+use terrain_engine::{Error, Result, Role};
 
 /// Metres kept between the eye and the highest the terrain can reach under it.
 pub const CLEARANCE_M: f64 = 2.0;
@@ -165,7 +165,8 @@ impl PlanetFlyCamera {
         if along > 0.0 {
             let arc = (speed * dt * along / norm / self.radius).min(Self::MAX_ARC_PER_S * dt);
             let bearing = self.yaw + right.atan2(ahead);
-            let (lat, lon, track) = terrain::planet::travel(self.lat, self.lon, bearing, arc);
+            let (lat, lon, track) =
+                terrain_engine::planet::travel(self.lat, self.lon, bearing, arc);
             (self.lat, self.lon) = (lat, lon);
             self.yaw = (self.yaw + track - bearing).rem_euclid(std::f64::consts::TAU);
         }
@@ -190,7 +191,7 @@ impl PlanetFlyCamera {
     /// Where the eye is, metres from the planet's centre (the altitude counted from the sphere):
     /// for measuring the distance flown.
     pub fn world(&self) -> DVec3 {
-        terrain::planet::unit(self.lat, self.lon) * (self.radius + self.altitude)
+        terrain_engine::planet::unit(self.lat, self.lon) * (self.radius + self.altitude)
     }
 
     /// The camera `scene`'s camera becomes with these keys, at `width` × `height`.
@@ -203,7 +204,7 @@ impl PlanetFlyCamera {
         c.heading_deg = Some(self.yaw.to_degrees());
         c.pitch_deg = Some(self.pitch.to_degrees());
         (c.width, c.height) = (width, height);
-        terrain::scene::camera_of(&s, atlas)
+        terrain_engine::scene::camera_of(&s, atlas)
     }
 }
 
@@ -367,7 +368,7 @@ mod tests {
             &path,
         )
         .unwrap();
-        let scene = terrain::scene::Scene::parse(
+        let scene = terrain_engine::scene::Scene::parse(
             &format!(
                 "{text}\n[camera]\nposition = [0.0, 0.0, 900.0]\nlook_at = [10.0, 10.0, 0.0]\n"
             ),
@@ -384,7 +385,7 @@ mod tests {
             altitude: 1000.0,
             yaw: 0.0,
             pitch: -0.2,
-            radius: terrain::planet::EARTH_RADIUS_M,
+            radius: terrain_engine::planet::EARTH_RADIUS_M,
         }
     }
 
@@ -393,7 +394,7 @@ mod tests {
     /// planet's `[path]` (its keys, the time flown) that a planet flight takes.
     #[test]
     fn a_planet_camera_flies_great_circles_and_records_a_planet_path() {
-        let r = terrain::planet::EARTH_RADIUS_M;
+        let r = terrain_engine::planet::EARTH_RADIUS_M;
         let mut c = planet_cam();
         let ahead = Motion {
             forward: 1.0,
@@ -438,7 +439,7 @@ mod tests {
             &path,
         )
         .unwrap();
-        let scene = terrain::scene::Scene::parse(
+        let scene = terrain_engine::scene::Scene::parse(
             &format!("{text}\n[camera]\nlat_deg = 0.0\nlon_deg = 0.0\naltitude_m = 1000.0\n"),
             std::path::PathBuf::new(),
         )

@@ -9,10 +9,10 @@
 
 use crate::app::flycam::FlyCamera;
 use crate::plot::{Rgb, draw_on_rgba, font};
-use terrain::Frame;
-use terrain::View;
-use terrain::scene::Mode;
-use terrain::stage::StageTimes;
+use terrain_engine::Frame;
+use terrain_engine::View;
+use terrain_engine::scene::Mode;
+use terrain_engine::stage::StageTimes;
 
 /// What the window knows beside the frame.
 pub struct Status {

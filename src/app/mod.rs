@@ -3,7 +3,7 @@
 //! [`flycam`], its figures drawn by [`hud`]), the CPU stage's figures of `terrain warp`
 //! ([`stage_figures`]). What they share with the evaluation is beside them: [`crate::output`]
 //! (atomic files, written together) and [`crate::progress`] (which also shows the library's,
-//! [`terrain::progress`]).
+//! [`terrain_engine::progress`]).
 
 pub mod animation;
 pub mod batch;

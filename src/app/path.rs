@@ -14,11 +14,11 @@
 //! parameterisation loops past closely spaced keys.
 
 use glam::{DVec2, DVec3};
-use terrain::Camera;
-use terrain::scene::{self as place, ground_under};
-use terrain::scene::{PathKey, PathSection, Scene};
-use terrain::sketch::Atlas;
-use terrain::{Error, Result};
+use terrain_engine::Camera;
+use terrain_engine::scene::{self as place, ground_under};
+use terrain_engine::scene::{PathKey, PathSection, Scene};
+use terrain_engine::sketch::Atlas;
+use terrain_engine::{Error, Result};
 
 /// Arc-length samples per segment.
 const SAMPLES: usize = 512;
@@ -209,7 +209,7 @@ impl CameraPath {
         }
         let mut base = scene.clone();
         base.camera.aim(eye, eye + self.direction(s) * 100.0);
-        terrain::scene::camera_of(&base, atlas)
+        terrain_engine::scene::camera_of(&base, atlas)
     }
 }
 
@@ -273,8 +273,8 @@ impl Flight {
 pub fn world_eye(camera: &Camera, radius: Option<f64>) -> DVec3 {
     match (camera.geo, radius) {
         (Some(g), Some(r)) => {
-            terrain::planet::unit(g.lat, g.lon) * r
-                + terrain::planet::Tangent::at(g.lat, g.lon).world(camera.eye)
+            terrain_engine::planet::unit(g.lat, g.lon) * r
+                + terrain_engine::planet::Tangent::at(g.lat, g.lon).world(camera.eye)
         }
         _ => camera.eye,
     }
@@ -320,7 +320,7 @@ impl PlanetFlight {
         let altitude = c.altitude_m.unwrap_or(1.0);
         let angle = altitude.clamp(10.0, 0.1 * radius) / radius;
         let (lat2, lon2, track) =
-            terrain::planet::travel(lat, lon, c.heading().to_radians(), angle);
+            terrain_engine::planet::travel(lat, lon, c.heading().to_radians(), angle);
         let key = |lat: f64, lon: f64, heading: f64| PathKey {
             position: None,
             look_at: None,
@@ -366,14 +366,17 @@ impl PlanetFlight {
         let (la, oa, ha, da, pa) = get(a);
         let (lb, ob, hb, db, pb) = get(b);
         // The great circle between the two nadirs.
-        let (ua, ub) = (terrain::planet::unit(la, oa), terrain::planet::unit(lb, ob));
+        let (ua, ub) = (
+            terrain_engine::planet::unit(la, oa),
+            terrain_engine::planet::unit(lb, ob),
+        );
         let angle = ua.angle_between(ub);
         let dir = if angle < 1e-12 {
             ua
         } else {
             (ua * ((1.0 - w) * angle).sin() + ub * (w * angle).sin()) / angle.sin()
         };
-        let (lat, lon) = terrain::planet::lat_lon(dir);
+        let (lat, lon) = terrain_engine::planet::lat_lon(dir);
         let altitude = (ha.ln() + (hb.ln() - ha.ln()) * w).exp();
         let turn = (db - da + 540.0).rem_euclid(360.0) - 180.0;
         [
@@ -395,7 +398,7 @@ impl PlanetFlight {
         c.altitude_m = Some(altitude);
         c.heading_deg = Some(heading);
         c.pitch_deg = Some(pitch);
-        terrain::scene::camera_of(&s, atlas)
+        terrain_engine::scene::camera_of(&s, atlas)
     }
 }
 

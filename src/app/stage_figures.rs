@@ -9,9 +9,9 @@
 use crate::output::{Staged, add_image};
 use glam::DVec2;
 use std::path::Path;
-use terrain::Result;
-use terrain::sketch::Atlas;
-use terrain::stage::CpuStage;
+use terrain_engine::Result;
+use terrain_engine::sketch::Atlas;
+use terrain_engine::stage::CpuStage;
 use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Stroke, Transform};
 
 const SIZE: u32 = 768;

@@ -10,17 +10,18 @@ pub mod relief;
 /// the counting variant made on `ctx` for this and dropped after (its frame settled, as a
 /// measured one is): `render --json`'s and `compare --work`'s figures.
 pub fn counted_work(
-    ctx: &terrain::GpuContext,
-    scene: &terrain::Scene,
-    atlas: &terrain::sketch::Atlas,
-    mode: terrain::Mode,
-    view: terrain::View,
-    camera: &terrain::Camera,
-) -> terrain::Result<terrain::Work> {
-    let mut r = terrain::Renderer::counting_work(ctx.clone(), scene, atlas.clone(), mode, view)?;
+    ctx: &terrain_engine::GpuContext,
+    scene: &terrain_engine::Scene,
+    atlas: &terrain_engine::sketch::Atlas,
+    mode: terrain_engine::Mode,
+    view: terrain_engine::View,
+    camera: &terrain_engine::Camera,
+) -> terrain_engine::Result<terrain_engine::Work> {
+    let mut r =
+        terrain_engine::Renderer::counting_work(ctx.clone(), scene, atlas.clone(), mode, view)?;
     r.render_settled(camera)?
         .work
-        .ok_or(terrain::Error::Internal(
+        .ok_or(terrain_engine::Error::Internal(
             "a counting renderer's frame carries its work",
         ))
 }

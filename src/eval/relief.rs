@@ -15,7 +15,7 @@
 //! for its procedural detail; the sketch is what the user gave and what a map reader knows.
 
 use glam::{DVec2, DVec3};
-use terrain::sketch::{Atlas, Level};
+use terrain_engine::sketch::{Atlas, Level};
 
 /// Ground within this of the water's surface is the water's (the shaders' `ON_WATER_M`).
 const WATER_EPS_M: f64 = 0.01;

@@ -18,7 +18,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::iter::once;
 use std::path::Path;
-use terrain::{Error, Result};
+use terrain_engine::{Error, Result};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Scale {

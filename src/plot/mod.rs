@@ -28,7 +28,7 @@ use plotters::prelude::{
 };
 use plotters::style::{FontStyle, IntoFont, RGBColor, TextStyle, register_font};
 use std::sync::OnceLock;
-use terrain::{Error, Result};
+use terrain_engine::{Error, Result};
 
 static DEJAVU_SANS: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 

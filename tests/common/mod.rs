@@ -2,13 +2,13 @@
 #![allow(dead_code)]
 
 use std::path::PathBuf;
-use terrain::Camera;
-use terrain::scene;
-use terrain::scene::Scene;
-use terrain::sketch::Atlas;
-use terrain::stage::CpuStage;
-use terrain::stage::pair_unfolded;
-use terrain::stage::quality::{self, Quality};
+use terrain_engine::Camera;
+use terrain_engine::scene;
+use terrain_engine::scene::Scene;
+use terrain_engine::sketch::Atlas;
+use terrain_engine::stage::CpuStage;
+use terrain_engine::stage::pair_unfolded;
+use terrain_engine::stage::quality::{self, Quality};
 
 pub fn manifest_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -16,8 +16,8 @@ use super::jobs::{Jobs, Overrides};
 use crate::output::write_atomic;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-use terrain::scene::{Mode, Scene};
-use terrain::{Error, Result, Role};
+use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::{Error, Result, Role};
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Inputs {
@@ -137,13 +137,13 @@ impl Inputs {
 }
 
 fn stamps(path: &Path) -> Vec<Stamp> {
-    if terrain::sketch::is_glob(path) {
-        return match terrain::sketch::list_glob(path) {
+    if terrain_engine::sketch::is_glob(path) {
+        return match terrain_engine::sketch::list_glob(path) {
             Ok(files) => files.iter().map(|f| stamp(f)).collect(),
             Err(_) => vec![stamp(path)],
         };
     }
-    let pyramid = path.join(terrain::sketch::tiles::META);
+    let pyramid = path.join(terrain_engine::sketch::tiles::META);
     if path.is_dir() && pyramid.is_file() {
         return vec![stamp(&pyramid)];
     }

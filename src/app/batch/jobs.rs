@@ -3,8 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-use terrain::scene::{Fault, Mode, Scene};
-use terrain::{Error, Result, Role};
+use terrain_engine::scene::{Fault, Mode, Scene};
+use terrain_engine::{Error, Result, Role};
 
 /// The most random cameras one jobs file asks for.
 pub const MAX_RANDOM: usize = 10_000_000;
@@ -117,7 +117,7 @@ impl Jobs {
         let base_dir = path.parent().unwrap_or(Path::new(""));
         let scene_path = base_dir.join(&file.scene);
         // `scene =` may name a sketch, a scene with every default.
-        let (base_text, scene_dir) = terrain::scene::scene_text(&scene_path)?;
+        let (base_text, scene_dir) = terrain_engine::scene::scene_text(&scene_path)?;
         let base: toml::Table = base_text
             .parse()
             .map_err(|e: toml::de::Error| Error::scene(&scene_path, e.message()))?;

@@ -3,7 +3,7 @@
 //! it back as these types.
 
 use serde::{Deserialize, Serialize};
-use terrain::scene::Mode;
+use terrain_engine::scene::Mode;
 
 /// A line of the manifest: one item, done or failed.
 #[derive(Debug, Serialize, Deserialize)]

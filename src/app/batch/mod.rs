@@ -28,13 +28,13 @@
 
 use crate::output::{write_atomic, write_image};
 use crate::progress::Progress;
-use terrain::Camera;
-use terrain::Renderer;
-use terrain::View;
-use terrain::scene::{self, Scene};
-use terrain::sketch::Atlas;
-use terrain::{Error, Result, Role};
-use terrain::{GpuContext, Needs};
+use terrain_engine::Camera;
+use terrain_engine::Renderer;
+use terrain_engine::View;
+use terrain_engine::scene::{self, Scene};
+use terrain_engine::sketch::Atlas;
+use terrain_engine::{Error, Result, Role};
+use terrain_engine::{GpuContext, Needs};
 
 mod inputs;
 mod jobs;
@@ -238,7 +238,7 @@ fn planet_keys(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<Option<P
     let (Some(p), Some(geo)) = (scene.planet(), camera.geo) else {
         return Ok(None);
     };
-    let planet = terrain::planet::Planet {
+    let planet = terrain_engine::planet::Planet {
         radius: p.radius_m,
         sketch: atlas,
     };

@@ -1,10 +1,10 @@
 //! Random cameras: a pure function of (seed, index), so shards and reruns draw the same ones.
 
 use glam::{DVec2, DVec3};
-use terrain::Camera;
-use terrain::Result;
-use terrain::scene::{self, Scene, ground_under};
-use terrain::sketch::Atlas;
+use terrain_engine::Camera;
+use terrain_engine::Result;
+use terrain_engine::scene::{self, Scene, ground_under};
+use terrain_engine::sketch::Atlas;
 
 /// Random cameras stand this far above the sketch's ground, plus the detail's reach (metres).
 pub const RANDOM_HEIGHT_M: (f64, f64) = (30.0, 3000.0);

@@ -5,7 +5,7 @@ use super::App;
 use crate::app::flycam::{PathRecorder, scene_with_path};
 use crate::output::{write_atomic, write_image};
 use std::path::{Path, PathBuf};
-use terrain::{Error, Result, Role};
+use terrain_engine::{Error, Result, Role};
 
 /// `dir/<name(0)>`, or the first of `dir/<name(n)>`, n = 1, 2, … that does not exist yet.
 fn unused(dir: &Path, name: impl Fn(usize) -> String) -> PathBuf {
@@ -52,7 +52,7 @@ impl App {
         // lands in another folder.
         let absolute = std::path::absolute(&self.o.scene_path)
             .map_err(|e| Error::io(Role::Scene, &self.o.scene_path, e))?;
-        let (text, _) = terrain::scene::scene_text(&absolute)?;
+        let (text, _) = terrain_engine::scene::scene_text(&absolute)?;
         let out = scene_with_path(&text, &self.o.scene_path, &path)?;
         let stem = self.stem();
         let file = unused(&self.o.out_dir, |n| match n {

@@ -7,8 +7,8 @@
 use super::App;
 use crate::app::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder, PlanetFlyCamera};
 use std::time::Instant;
-use terrain::Result;
-use terrain::scene::ground_under;
+use terrain_engine::Result;
+use terrain_engine::scene::ground_under;
 use winit::keyboard::KeyCode;
 
 /// The camera the window flies: over a sketch, or over a planet.
@@ -26,7 +26,7 @@ impl Flyer {
     }
 
     /// The camera's `[path]` key, and where its eye is in world metres.
-    pub(super) fn key(&self) -> (terrain::scene::PathKey, glam::DVec3) {
+    pub(super) fn key(&self) -> (terrain_engine::scene::PathKey, glam::DVec3) {
         match self {
             Flyer::Plane(c) => (PathRecorder::key_of(c), c.eye),
             Flyer::Planet(c) => (c.key(), c.world()),
@@ -46,7 +46,7 @@ impl App {
         ground.map(|g| g + self.reach_m + CLEARANCE_M)
     }
 
-    pub(super) fn camera(&self) -> Result<terrain::Camera> {
+    pub(super) fn camera(&self) -> Result<terrain_engine::Camera> {
         let (w, h) = self.size;
         match &self.cam {
             Flyer::Plane(c) => c.camera(self.scene.camera.fov_y_deg, w, h, self.far),

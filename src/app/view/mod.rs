@@ -14,7 +14,7 @@
 //! (`scene::default_path`) until a key or the mouse takes over.
 //!
 //! Rules: the frame is drawn by the same renderers as every other command, on the device of a
-//! wgpu surface made for the window, through the host API ([`terrain::Terrain`], one per mode
+//! wgpu surface made for the window, through the host API ([`terrain_engine::Terrain`], one per mode
 //! and view, rebuilt only when the mode or the view changes; a new window size makes its targets
 //! alone): recorded into
 //! the surface's texture, the figures composited over it from a transparent overlay drawn on the
@@ -32,7 +32,7 @@
 use crate::app::flycam::{FlyCamera, PathRecorder, PlanetFlyCamera};
 use crate::app::hud;
 use crate::app::path::CameraPath;
-use terrain::{Error, Result};
+use terrain_engine::{Error, Result};
 
 mod files;
 mod flight;
@@ -43,10 +43,10 @@ use std::collections::HashSet;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
-use terrain::View;
-use terrain::scene;
-use terrain::scene::{Mode, Scene};
-use terrain::sketch::Atlas;
+use terrain_engine::View;
+use terrain_engine::scene;
+use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::sketch::Atlas;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
 use winit::event::{ElementState, MouseButton, WindowEvent};

@@ -1,5 +1,5 @@
 //! How `terrain view` puts a frame on screen: through a wgpu surface (the terrain drawn by
-//! [`terrain::Terrain`] into the surface's texture, the figures composited over it), or,
+//! [`terrain_engine::Terrain`] into the surface's texture, the figures composited over it), or,
 //! where no surface can be made, through the CPU (the frame read back, the figures drawn on its
 //! pixels, the pixels handed to softbuffer).
 //!
@@ -17,11 +17,11 @@ pub(super) use cpu::CpuPath;
 pub(super) use surface::SurfacePath;
 
 use crate::app::hud::Status;
-use terrain::Camera;
-use terrain::Result;
-use terrain::View;
-use terrain::scene::{Mode, Scene};
-use terrain::sketch::Atlas;
+use terrain_engine::Camera;
+use terrain_engine::Result;
+use terrain_engine::View;
+use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::sketch::Atlas;
 
 /// What the next frame draws, as the window's keys left it.
 pub(super) struct Want<'a> {

@@ -1,7 +1,7 @@
 //! Option values every command parses alike, checked by clap so that a bad one is a usage error
 //! (exit 2) naming the option, the same in every command.
 
-use terrain::scene::Mode;
+use terrain_engine::scene::Mode;
 
 /// The largest image side any command renders (camera.width's range).
 pub const MAX_SIDE: u32 = 16384;
@@ -70,7 +70,7 @@ fn one_of(modes: &[Mode], s: &str) -> Result<Mode, String> {
 
 /// A value of a named enum (a mode, a view, a warp method) by its name: the names are the
 /// possible values `--help` lists and a bad value's error names.
-pub fn named<T: terrain::Named>() -> impl clap::builder::TypedValueParser<Value = T> {
+pub fn named<T: terrain_engine::Named>() -> impl clap::builder::TypedValueParser<Value = T> {
     use clap::builder::TypedValueParser;
     clap::builder::PossibleValuesParser::new(T::all().iter().map(|v| v.name())).try_map(
         |s: String| {

@@ -5,7 +5,7 @@ use crate::args;
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
-use terrain::scene::Mode;
+use terrain_engine::scene::Mode;
 
 #[derive(clap::Args)]
 pub struct Args {

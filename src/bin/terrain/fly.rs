@@ -5,8 +5,8 @@ use crate::args;
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
-use terrain::View;
-use terrain::scene::Mode;
+use terrain_engine::View;
+use terrain_engine::scene::Mode;
 
 #[derive(clap::Args)]
 pub struct Args {

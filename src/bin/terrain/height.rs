@@ -1,13 +1,13 @@
 //! `terrain height SCENE --xy X,Y`: the terrain function's height at a point, as the reference
-//! draws it (`terrain::query`).
+//! draws it (`terrain_engine::query`).
 
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
-use terrain::Error;
-use terrain::scene::{self, Scene};
-use terrain::sketch::Atlas;
-use terrain::{Ground, PlanetGround};
+use terrain_engine::Error;
+use terrain_engine::scene::{self, Scene};
+use terrain_engine::sketch::Atlas;
+use terrain_engine::{Ground, PlanetGround};
 
 #[derive(clap::Args)]
 #[command(group(clap::ArgGroup::new("place").required(true).args(["xy", "map_xy", "lat_lon"])))]
@@ -126,7 +126,12 @@ pub fn run(a: Args) -> Result<()> {
     Ok(())
 }
 
-fn planar(a: &Args, scene: &Scene, atlas: &Atlas, detail: &terrain::Detail) -> Result<Report> {
+fn planar(
+    a: &Args,
+    scene: &Scene,
+    atlas: &Atlas,
+    detail: &terrain_engine::Detail,
+) -> Result<Report> {
     // The point, and how it was given for a warning about it.
     let (p, given) = match (a.xy, a.map_xy, a.lat_lon) {
         (Some([x, y]), _, _) => (glam::DVec2::new(x, y), format!("--xy {x},{y}")),

@@ -3,8 +3,8 @@
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
-use terrain::sketch::{Atlas, Extent, LoadOptions};
-use terrain::sketch::{Georef, Units};
+use terrain_engine::sketch::{Atlas, Extent, LoadOptions};
+use terrain_engine::sketch::{Georef, Units};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -96,7 +96,7 @@ impl GeorefReport {
 }
 
 pub fn run(a: Args) -> Result<()> {
-    if terrain::sketch::tiles::is_pyramid(&a.file) {
+    if terrain_engine::sketch::tiles::is_pyramid(&a.file) {
         return pyramid(a);
     }
     let opts = LoadOptions {
@@ -105,13 +105,17 @@ pub fn run(a: Args) -> Result<()> {
         ..LoadOptions::default()
     };
     // A header that cannot be read leaves the file to the reader, which says why in its terms.
-    if let Ok(Some(h)) = terrain::sketch::read_header(&a.file, &opts)
-        && (h.width as u128) * (h.height as u128) > terrain::sketch::max_cells() as u128
+    if let Ok(Some(h)) = terrain_engine::sketch::read_header(&a.file, &opts)
+        && (h.width as u128) * (h.height as u128) > terrain_engine::sketch::max_cells() as u128
     {
         return header(a, h, &opts);
     }
     let atlas = Atlas::load(&a.file, &opts)?;
-    crate::warn(&terrain::sketch::warnings(&a.file, &opts, &atlas.extent()));
+    crate::warn(&terrain_engine::sketch::warnings(
+        &a.file,
+        &opts,
+        &atlas.extent(),
+    ));
     let r = Report {
         file: a.file.display().to_string(),
         width: atlas.width(),
@@ -131,7 +135,7 @@ pub fn run(a: Args) -> Result<()> {
 
 /// A GeoTIFF larger than memory, from its header and georeference alone: its heights are read
 /// when `terrain tiles` converts it.
-fn header(a: Args, h: terrain::sketch::GridHeader, opts: &LoadOptions) -> Result<()> {
+fn header(a: Args, h: terrain_engine::sketch::GridHeader, opts: &LoadOptions) -> Result<()> {
     // Heights unread: the cells' size is all there is to doubt.
     let extent = Extent {
         width: h.width,
@@ -142,7 +146,7 @@ fn header(a: Args, h: terrain::sketch::GridHeader, opts: &LoadOptions) -> Result
         max_m: 0.0,
         georeferenced: h.georef.is_some(),
     };
-    crate::warn(&terrain::sketch::warnings(&a.file, opts, &extent));
+    crate::warn(&terrain_engine::sketch::warnings(&a.file, opts, &extent));
     let r = Report {
         file: a.file.display().to_string(),
         width: h.width,
@@ -162,9 +166,9 @@ fn header(a: Args, h: terrain::sketch::GridHeader, opts: &LoadOptions) -> Result
 
 /// A tile pyramid, from its `pyramid.toml` alone (a 32k² pyramid is not read to describe it).
 fn pyramid(a: Args) -> Result<()> {
-    let p = terrain::sketch::tiles::Pyramid::open(&a.file)?;
+    let p = terrain_engine::sketch::tiles::Pyramid::open(&a.file)?;
     let m = &p.meta;
-    crate::warn(&terrain::sketch::warnings(
+    crate::warn(&terrain_engine::sketch::warnings(
         &a.file,
         &LoadOptions::default(),
         &m.extent(),
@@ -196,7 +200,7 @@ fn print(r: &Report, json: bool) -> Result<()> {
         }
         _ => format!(
             "heights not read (more than {} cells: `terrain tiles` converts it)",
-            terrain::sketch::max_cells()
+            terrain_engine::sketch::max_cells()
         ),
     };
     outln!(

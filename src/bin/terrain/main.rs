@@ -33,7 +33,7 @@ mod view;
 mod warp;
 
 use clap::{Parser, Subcommand};
-use terrain::Error;
+use terrain_engine::Error;
 
 #[derive(Parser)]
 #[command(
@@ -111,9 +111,9 @@ fn main() {
     };
     // The library prints nothing: its notes and progress are shown here.
     notes::install();
-    terrain::progress::set_reporter(Box::new(terrain_cli::progress::Bars));
+    terrain_engine::progress::set_reporter(Box::new(terrain_cli::progress::Bars));
     // GeoMipMap's block figures over a pyramid are kept in its folder for the next command.
-    terrain::sketch::tiles::set_keep_figures(true);
+    terrain_engine::sketch::tiles::set_keep_figures(true);
     let result = match cli.command {
         Command::Info(a) => info::run(a),
         Command::Tiles(a) => tiles::run(a),
@@ -175,8 +175,11 @@ fn one_line(e: &anyhow::Error) -> String {
 /// The scene at `path` with its `--set` overrides: every command that reads a scene loads it
 /// here. What its sketch leaves in doubt is warned about once the sketch is read
 /// (`scene::load_atlas`), never before: a file that fails to read gets its error alone.
-fn load_scene(path: &std::path::Path, set: &[String]) -> anyhow::Result<terrain::scene::Scene> {
-    Ok(terrain::scene::Scene::load_with(path, set)?)
+fn load_scene(
+    path: &std::path::Path,
+    set: &[String],
+) -> anyhow::Result<terrain_engine::scene::Scene> {
+    Ok(terrain_engine::scene::Scene::load_with(path, set)?)
 }
 
 /// The library's warnings on stderr, one `warning:` line each and each once per command (the

@@ -23,7 +23,7 @@ static NOTES: Notes = Notes;
 impl Log for Notes {
     fn enabled(&self, metadata: &Metadata) -> bool {
         let target = metadata.target();
-        target == "terrain" || target.starts_with("terrain::")
+        target == "terrain" || target.starts_with("terrain_engine::")
     }
 
     fn log(&self, record: &Record) {

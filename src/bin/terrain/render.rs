@@ -4,16 +4,16 @@ use crate::args;
 use anyhow::{Context, Result};
 use serde::Serialize;
 use std::path::PathBuf;
-use terrain::PassTimes;
-use terrain::View;
-use terrain::scene;
-use terrain::scene::CameraReport;
-use terrain::scene::{Mode, Scene};
-use terrain::{Error, Role};
-use terrain::{Frame, Renderer, WorkPerPx};
 use terrain_cli::eval::relief;
 use terrain_cli::output::{self, ImageFormat, Staged};
 use terrain_cli::progress::Spinner;
+use terrain_engine::PassTimes;
+use terrain_engine::View;
+use terrain_engine::scene;
+use terrain_engine::scene::CameraReport;
+use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::{Error, Role};
+use terrain_engine::{Frame, Renderer, WorkPerPx};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -152,9 +152,9 @@ pub fn run(a: Args) -> Result<()> {
     output::add_image(&mut staged, &a.output, last.width, last.height, &last.rgba)?;
     let (mut luminance, mut relief) = (None, None);
     let relative = r.read_positions(&camera)?;
-    let covered_px = terrain::covered_px(&relative);
+    let covered_px = terrain_engine::covered_px(&relative);
     if let Some(p) = &a.positions {
-        let world = terrain::world_positions(&relative, &camera);
+        let world = terrain_engine::world_positions(&relative, &camera);
         let ground = world.chunks_exact(4).map(|q| q[3] > 0.5);
         luminance = terrain_cli::eval::metrics::terrain_luminance(&last.rgba, ground);
         relief = relief::hillshade(r.atlas(), scene::light_of(&scene).sun)
@@ -247,7 +247,7 @@ pub fn run(a: Args) -> Result<()> {
 /// spinner while they render when the image is large.
 fn frames(
     r: &mut Renderer,
-    camera: &terrain::Camera,
+    camera: &terrain_engine::Camera,
     scene: &Scene,
     repeat: u32,
 ) -> Result<Vec<Frame>> {
@@ -262,7 +262,7 @@ fn frames(
             r.forget();
             r.render(camera)
         })
-        .collect::<terrain::Result<Vec<_>>>()?;
+        .collect::<terrain_engine::Result<Vec<_>>>()?;
     if let Some(s) = spinner {
         s.finish();
     }
@@ -270,7 +270,7 @@ fn frames(
 }
 
 /// The passes' counts as a JSON object keyed by pass name.
-fn counters_json(c: &terrain::FrameCounters) -> serde_json::Map<String, serde_json::Value> {
+fn counters_json(c: &terrain_engine::FrameCounters) -> serde_json::Map<String, serde_json::Value> {
     c.iter()
         .map(|(name, p)| (name.to_string(), serde_json::json!(p)))
         .collect()

@@ -2,9 +2,9 @@
 
 use anyhow::Result;
 use std::path::{Path, PathBuf};
-use terrain::scene;
-use terrain::{Error, Role};
 use terrain_cli::output::write_atomic;
+use terrain_engine::scene;
+use terrain_engine::{Error, Role};
 
 #[derive(clap::Args)]
 pub struct Args {

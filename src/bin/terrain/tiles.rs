@@ -4,8 +4,8 @@
 
 use anyhow::Result;
 use std::path::PathBuf;
-use terrain::sketch::LoadOptions;
-use terrain::sketch::tiles::{BuildOptions, Kind, build};
+use terrain_engine::sketch::LoadOptions;
+use terrain_engine::sketch::tiles::{BuildOptions, Kind, build};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -47,9 +47,11 @@ pub fn run(a: Args) -> Result<()> {
     let heights = s.kind == Kind::Heights;
     if heights {
         // Said once the source was read whole, from what the pyramid recorded of it.
-        let meta = terrain::sketch::tiles::Pyramid::open(&a.out_dir)?.meta;
+        let meta = terrain_engine::sketch::tiles::Pyramid::open(&a.out_dir)?.meta;
         let extent = meta.extent();
-        crate::warn(&terrain::sketch::warnings(&a.src, &opts.load, &extent));
+        crate::warn(&terrain_engine::sketch::warnings(
+            &a.src, &opts.load, &extent,
+        ));
     }
     if a.json {
         return crate::print_json(&s);

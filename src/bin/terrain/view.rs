@@ -3,7 +3,7 @@
 use crate::args;
 use anyhow::Result;
 use std::path::PathBuf;
-use terrain::scene::Mode;
+use terrain_engine::scene::Mode;
 
 #[derive(clap::Args)]
 pub struct Args {

@@ -4,10 +4,10 @@
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
-use terrain::scene;
-use terrain::scene::WarpMethod;
-use terrain::stage::quality::{self, Quality};
-use terrain::stage::{CpuStage, StageTimes};
+use terrain_engine::scene;
+use terrain_engine::scene::WarpMethod;
+use terrain_engine::stage::quality::{self, Quality};
+use terrain_engine::stage::{CpuStage, StageTimes};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -61,14 +61,14 @@ struct Region {
     size: usize,
     /// The region's axes: `none` (x and y), or turned 45° for a diagonal heading
     /// (`north_east`: its t axis along (1, 1); `north_west`: along (−1, 1)).
-    turn: terrain::stage::Turn,
+    turn: terrain_engine::stage::Turn,
 }
 
 pub fn run(a: Args) -> Result<()> {
     let mut scene = crate::load_scene(&a.scene, &a.set)?;
     if scene.planet().is_some() {
         // The stage warps a plane; a planet draws with clipmaps, which have no CPU stage.
-        return Err(terrain::Error::scene(
+        return Err(terrain_engine::Error::scene(
             &a.scene,
             "a planet scene: `terrain warp` runs the warped mode's CPU stage over a planar sketch, \
              and a planet draws with clipmaps",

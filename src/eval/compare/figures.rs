@@ -7,9 +7,9 @@ use crate::plot::chart::{Axis, Figure, Panel, Scale, Series, Style};
 use crate::plot::{Rgb, draw_on_rgba, font};
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::Path;
-use terrain::Result;
-use terrain::scene::Mode;
-use terrain::stage::quality::Bin;
+use terrain_engine::Result;
+use terrain_engine::scene::Mode;
+use terrain_engine::stage::quality::Bin;
 
 /// A mode's colour in every figure (rows name their mode as `Mode::name` writes it).
 pub fn colour(mode: &str) -> Rgb {

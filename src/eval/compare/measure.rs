@@ -5,15 +5,15 @@ use super::sweep::Setting;
 use super::{MAX_REFERENCE_HALVINGS, Options, REFERENCE_CONVERGED_DB};
 use crate::eval::metrics;
 use crate::stats::percentile;
-use terrain::Camera;
-use terrain::GpuContext;
-use terrain::PassTimes;
-use terrain::Reference;
-use terrain::Result;
-use terrain::View;
-use terrain::scene::{Mode, Scene};
-use terrain::sketch::Atlas;
-use terrain::{Frame, Renderer};
+use terrain_engine::Camera;
+use terrain_engine::GpuContext;
+use terrain_engine::PassTimes;
+use terrain_engine::Reference;
+use terrain_engine::Result;
+use terrain_engine::View;
+use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::sketch::Atlas;
+use terrain_engine::{Frame, Renderer};
 
 /// The reference renderer's march step (a fraction of the height above the ground).
 fn march_step(reference: &mut Renderer) -> &mut f32 {
@@ -75,7 +75,7 @@ fn measure(
         frames.push(&last);
     }
     let positions = r.read_positions(camera)?;
-    let covered_px = terrain::covered_px(&positions);
+    let covered_px = terrain_engine::covered_px(&positions);
     let width = camera.width;
     let sse = metrics::screen_space_error(&positions, &truth.positions, width as usize, o.window);
     let (pre_ms, pre_bytes) = r.precompute().unwrap_or((0.0, 0));

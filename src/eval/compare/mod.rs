@@ -46,13 +46,13 @@ use report::{DetailUsed, RatioReport, ReferenceFigures, Replot, Report, Row, Ski
 use rounds::{Rounds, RowTimes};
 use std::path::Path;
 use sweep::Setting;
-use terrain::Camera;
-use terrain::scene;
-use terrain::scene::{Mode, Scene};
-use terrain::sketch::Atlas;
-use terrain::stage::CpuStage;
-use terrain::{Error, Result, Role};
-use terrain::{GpuContext, Needs};
+use terrain_engine::Camera;
+use terrain_engine::scene;
+use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::sketch::Atlas;
+use terrain_engine::stage::CpuStage;
+use terrain_engine::{Error, Result, Role};
+use terrain_engine::{GpuContext, Needs};
 
 /// PSNR between the reference at its step and at half of it that counts as converged: finer
 /// than any difference between modes worth reporting (mode images differ from it by 20–45 dB).
@@ -81,7 +81,7 @@ pub struct Options {
     /// The GPU memory the renderers kept for timing in rounds may hold ([`rounds::KEEP_BYTES`];
     /// 0: every setting timed alone).
     pub keep_bytes: u64,
-    /// Each row's work per pixel counted too (`--work`, [`terrain::Renderer::counting_work`]).
+    /// Each row's work per pixel counted too (`--work`, [`terrain_engine::Renderer::counting_work`]).
     pub work: bool,
 }
 
@@ -116,7 +116,7 @@ pub fn default_modes(scene: &Scene) -> Vec<Mode> {
 /// Whether `scene`'s sketch is a tile pyramid, streamed through the tile cache.
 fn streamed(scene: &Scene) -> bool {
     let path = scene.sketch.path.as_ref();
-    path.is_some_and(|p| terrain::sketch::tiles::is_pyramid(&scene.resolve(p)))
+    path.is_some_and(|p| terrain_engine::sketch::tiles::is_pyramid(&scene.resolve(p)))
 }
 
 /// Refuses modes that cannot draw `scene`, in one line, before any work.
@@ -237,7 +237,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     };
     let storage_bytes = settings
         .iter()
-        .map(|s| terrain::needs(&s.apply(&scene), s.mode(), &atlas).storage_bytes)
+        .map(|s| terrain_engine::needs(&s.apply(&scene), s.mode(), &atlas).storage_bytes)
         .max()
         .unwrap_or(0)
         .max(atlas.bytes());
@@ -287,7 +287,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
             |r, frames| measure_lod(r, s, &camera, &truth0, o, frames, steps),
         )?;
         if o.work {
-            let (scene, view) = (s.apply(&scene), terrain::View::Shaded);
+            let (scene, view) = (s.apply(&scene), terrain_engine::View::Shaded);
             let work = crate::eval::counted_work(&ctx, &scene, &atlas, s.mode(), view, &camera)?;
             row.work_per_px = Some(work.per_px(row.covered_px));
         }
@@ -347,7 +347,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     crate::output::write_npy_f64(
         &out_dir.join("reference_positions.npy"),
         &[h as usize, w as usize, 4],
-        &terrain::world_positions(&truth0.positions, &camera),
+        &terrain_engine::world_positions(&truth0.positions, &camera),
     )?;
     let strip_modes: Vec<(String, String, Vec<u8>)> = o
         .modes
@@ -466,7 +466,7 @@ fn ratio_histogram(
     let mut stage = CpuStage::new(scene, &detail)?;
     stage.run(atlas, camera);
     let mut ratios = Vec::new();
-    let q = terrain::stage::quality::measure(
+    let q = terrain_engine::stage::quality::measure(
         &stage.warp.phi,
         stage.sketch_map.n,
         stage.sketch_map.spacing,

@@ -11,12 +11,12 @@ use crate::eval::metrics::{self, ScreenError};
 use crate::output::{Fixed, write_atomic};
 use crate::progress::Progress;
 use std::path::Path;
-use terrain::Camera;
-use terrain::GpuContext;
-use terrain::Renderer;
-use terrain::Result;
-use terrain::scene::Scene;
-use terrain::sketch::Atlas;
+use terrain_engine::Camera;
+use terrain_engine::GpuContext;
+use terrain_engine::Renderer;
+use terrain_engine::Result;
+use terrain_engine::scene::Scene;
+use terrain_engine::sketch::Atlas;
 
 /// A line of `path.csv`: one mode at one frame of the camera path.
 #[derive(serde::Serialize)]

@@ -9,8 +9,8 @@
 
 use crate::output::Fixed;
 use serde::{Deserialize, Serialize};
-use terrain::PassTimes;
-use terrain::stage::quality::Bin;
+use terrain_engine::PassTimes;
+use terrain_engine::stage::quality::Bin;
 
 /// PSNR written for identical images.
 pub const PSNR_CAP_DB: f64 = 100.0;
@@ -64,11 +64,11 @@ pub struct Row {
     pub fragments_per_covered_px: Option<f64>,
     /// What the shading evaluated per pixel showing ground, where counted (`compare --work`).
     #[serde(default)]
-    pub work_per_px: Option<terrain::WorkPerPx>,
+    pub work_per_px: Option<terrain_engine::WorkPerPx>,
     /// What each pass asked of the GPU in the measured frame, by pass name (JSON only; empty
     /// where the adapter has no pipeline statistics queries).
     #[serde(default)]
-    pub counters: std::collections::BTreeMap<String, terrain::PassCounters>,
+    pub counters: std::collections::BTreeMap<String, terrain_engine::PassCounters>,
 }
 
 pub const CSV_COLUMNS: [&str; 27] = [
@@ -353,7 +353,7 @@ pub(crate) mod tests {
             passes_ms: PassTimes::default(),
             covered_px: 100,
             fragments_per_covered_px: Some(1.5),
-            work_per_px: Some(terrain::WorkPerPx {
+            work_per_px: Some(terrain_engine::WorkPerPx {
                 octaves: 4.0,
                 shadow_steps: 0.5,
                 atlas_taps: 24.0,

@@ -23,10 +23,10 @@
 use super::measure::Timed;
 use super::report::Row;
 use super::sweep::Setting;
-use terrain::Baselines;
-use terrain::Camera;
-use terrain::Renderer;
-use terrain::Result;
+use terrain_engine::Baselines;
+use terrain_engine::Camera;
+use terrain_engine::Renderer;
+use terrain_engine::Result;
 
 /// The most GPU memory the renderers kept for the rounds may hold together: at 256² the
 /// warped and GeoMipMap rows of every bundled view fit (0.37–0.73 GiB; jacksboro's three

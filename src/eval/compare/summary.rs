@@ -6,7 +6,7 @@
 use super::report::{PSNR_CAP_DB, Row, TARGET_PSNR_DB, TARGET_SSE_PX};
 use serde::Serialize;
 use std::fmt::Write;
-use terrain::pass;
+use terrain_engine::pass;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct ModeSummary {
@@ -437,7 +437,7 @@ fn time_miss_line(m: &TimeMiss) -> String {
 mod tests {
     use super::*;
     use crate::eval::compare::report::tests::row;
-    use terrain::PassTimes;
+    use terrain_engine::PassTimes;
 
     #[test]
     fn summary_finds_times_to_targets_and_errors_at_the_common_budget() {

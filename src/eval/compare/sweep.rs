@@ -32,13 +32,13 @@
 //!   it changes Φ only where the surface bound `I_s` or the floor clip the importance.
 
 use super::report::Row;
-use terrain::Baselines;
-use terrain::Camera;
-use terrain::Result;
-use terrain::scene::{Mode, Scene};
-use terrain::sketch::Atlas;
-use terrain::stage::Budget;
-use terrain::stage::CpuStage;
+use terrain_engine::Baselines;
+use terrain_engine::Camera;
+use terrain_engine::Result;
+use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::sketch::Atlas;
+use terrain_engine::stage::Budget;
+use terrain_engine::stage::CpuStage;
 
 /// The largest mesh the sweep draws: 2M triangles.
 const MAX_MESH: u32 = 1024;
@@ -280,7 +280,7 @@ fn mesh_within(triangles: u64) -> u32 {
 fn view_mesh(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<u32> {
     let mut s = scene.clone();
     s.warp.mesh = MAX_MESH.max(s.warp.mesh);
-    let detail = terrain::scene::detail_for(&s, atlas, Mode::Warped);
+    let detail = terrain_engine::scene::detail_for(&s, atlas, Mode::Warped);
     let mut stage = CpuStage::new(&s, &detail)?;
     stage.run(atlas, camera);
     Ok(stage.mesh)

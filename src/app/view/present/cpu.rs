@@ -8,12 +8,12 @@ use super::{Drawn, Want};
 use crate::app::hud::{self, Figures, Status};
 use std::num::NonZeroU32;
 use std::sync::Arc;
-use terrain::Camera;
-use terrain::GpuContext;
-use terrain::Renderer;
-use terrain::scene::{Mode, Scene};
-use terrain::sketch::Atlas;
-use terrain::{Error, Result};
+use terrain_engine::Camera;
+use terrain_engine::GpuContext;
+use terrain_engine::Renderer;
+use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::sketch::Atlas;
+use terrain_engine::{Error, Result};
 use winit::window::Window;
 
 /// The CPU path: the renderer's frame read back and handed to softbuffer.
@@ -27,7 +27,7 @@ pub(in crate::app::view) struct CpuPath {
 impl CpuPath {
     /// On `window`, rendering on a device of its own that holds `largest`'s needs.
     pub fn open(window: Arc<Window>, scene: &Scene, atlas: &Atlas, largest: Mode) -> Result<Self> {
-        let ctx = GpuContext::new(&terrain::needs(scene, largest, atlas))?;
+        let ctx = GpuContext::new(&terrain_engine::needs(scene, largest, atlas))?;
         let surface = softbuffer::Context::new(window.clone())
             .and_then(|c| softbuffer::Surface::new(&c, window))
             .map_err(|e| Error::window("cannot draw into it", e))?;

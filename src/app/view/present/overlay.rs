@@ -5,8 +5,8 @@
 //! never a renderer's.
 
 use crate::app::hud;
-use terrain::Camera;
-use terrain::alloc::{Alloc, Texture};
+use terrain_engine::Camera;
+use terrain_engine::alloc::{Alloc, Texture};
 
 /// The window's own full-screen passes: the figures' overlay blended over the frame, and a
 /// texture copied onto the surface. Not a renderer pass: the terrain never goes through it.

@@ -1,4 +1,4 @@
-//! The surface path: the terrain drawn by [`terrain::Terrain`] into the surface's texture,
+//! The surface path: the terrain drawn by [`terrain_engine::Terrain`] into the surface's texture,
 //! the figures composited over it.
 //!
 //! Rule: nothing of the frame leaves the GPU but a screenshot, a copy of the texture presented
@@ -9,13 +9,13 @@ use super::{Drawn, Want};
 use crate::app::hud::{self, Figures, Status};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
-use terrain::Camera;
-use terrain::alloc::{Alloc, Ledger, Texture};
-use terrain::readback::Readback;
-use terrain::scene::{Mode, Scene};
-use terrain::sketch::Atlas;
-use terrain::{Description, Targets, Terrain};
-use terrain::{Error, Result};
+use terrain_engine::Camera;
+use terrain_engine::alloc::{Alloc, Ledger, Texture};
+use terrain_engine::readback::Readback;
+use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::sketch::Atlas;
+use terrain_engine::{Description, Targets, Terrain};
+use terrain_engine::{Error, Result};
 use winit::event_loop::ActiveEventLoop;
 use winit::window::Window;
 
@@ -210,7 +210,7 @@ impl SurfacePath {
         let target: &wgpu::Texture = offscreen.as_deref().unwrap_or(&frame.texture);
         let view = target.create_view(&Default::default());
         let depth = self.depth.create_view(&Default::default());
-        terrain::clear(&mut encoder, &view, &depth);
+        terrain_engine::clear(&mut encoder, &view, &depth);
         terrain.record(&mut encoder, &view, &depth)?;
         self.composite.overlay(&mut encoder, &view);
         if offscreen.is_some() {
@@ -287,7 +287,7 @@ fn depth_texture(alloc: &Alloc, width: u32, height: u32) -> Texture {
 }
 
 /// A read-back's RGBA made opaque: a surface's alpha is the compositor's, not the picture's.
-fn opaque(rgba: terrain::Result<Vec<u8>>) -> terrain::Result<Vec<u8>> {
+fn opaque(rgba: terrain_engine::Result<Vec<u8>>) -> terrain_engine::Result<Vec<u8>> {
     let mut rgba = rgba?;
     rgba.chunks_exact_mut(4).for_each(|px| px[3] = 255);
     Ok(rgba)

@@ -1,9 +1,9 @@
 //! Property tests of the warp over random importance maps (proptest).
 
 use proptest::prelude::*;
-use terrain::scene::WarpMethod;
-use terrain::stage::lines::{LineScratch, line_mapping};
-use terrain::stage::warp::{Warp, pair_unfolded};
+use terrain_engine::scene::WarpMethod;
+use terrain_engine::stage::lines::{LineScratch, line_mapping};
+use terrain_engine::stage::warp::{Warp, pair_unfolded};
 
 /// Importance maps of side 2..48 with values log-uniform over 1e-6..1e6.
 fn importance_map() -> impl Strategy<Value = (usize, Vec<f32>)> {

@@ -3,22 +3,22 @@
 
 use glam::{DVec2, DVec3, DVec4};
 use proptest::prelude::*;
-use terrain::Camera;
-use terrain::geomipmap::{
+use terrain_engine::Camera;
+use terrain_engine::geomipmap::{
     Blocks, Grid, LodParams, Selection, Templates, choose_level, morphed_height,
 };
-use terrain::gpu::uniforms::view_proj;
-use terrain::sketch::{Atlas, LoadOptions};
+use terrain_engine::gpu::uniforms::view_proj;
+use terrain_engine::sketch::{Atlas, LoadOptions};
 
 /// Cells per block side in these tests (the default).
-const BLOCK: usize = terrain::geomipmap::DEFAULT_CELLS;
+const BLOCK: usize = terrain_engine::geomipmap::DEFAULT_CELLS;
 
 /// A `blocks`² grid over a synthetic sketch at spacing `spacing`, with noise octaves down to the
 /// grid's spacing as a baked grid has them (without them every other vertex would lie on its
 /// neighbours' line, and no level would differ).
 fn grid(name: &str, blocks: usize, spacing: f64) -> Grid {
     let atlas = Atlas::synthetic(name, 257, &LoadOptions::default()).unwrap();
-    let detail = terrain::Detail {
+    let detail = terrain_engine::Detail {
         octaves: 6,
         amplitude_m: 12.0,
         gain: 0.5,
@@ -142,7 +142,7 @@ fn tau_is_honoured_with_exact_projection() {
 /// The block-local vertices a block's triangles use on one side (S, E, N, W) as global (i, j).
 fn edge_vertices(
     t: &Templates,
-    g: &terrain::geomipmap::BlockGpu,
+    g: &terrain_engine::geomipmap::BlockGpu,
     side: usize,
 ) -> Vec<(usize, usize)> {
     let mut idx = Vec::new();
@@ -217,7 +217,7 @@ fn shared_edges_use_the_same_vertices_at_the_same_heights() {
                     a.level, sel.visible[o], b.level
                 );
                 for &(gi, gj) in &ea {
-                    let local = |g: &terrain::geomipmap::BlockGpu| {
+                    let local = |g: &terrain_engine::geomipmap::BlockGpu| {
                         (gi - g.origin[0] as usize, gj - g.origin[1] as usize)
                     };
                     let (ia, ja) = local(a);
@@ -241,7 +241,7 @@ fn shared_edges_use_the_same_vertices_at_the_same_heights() {
 /// edge ring, which the stitching strips draw differently.
 fn surface(
     g: &Grid,
-    b: &terrain::geomipmap::BlockGpu,
+    b: &terrain_engine::geomipmap::BlockGpu,
     i: usize,
     j: usize,
     eye: DVec3,

@@ -3,13 +3,13 @@
 
 use glam::IVec2;
 use std::path::Path;
-use terrain::gpu::clipmaps::{lat_lon_of, vertex_cpu as clipmaps_vertex_cpu};
-use terrain::gpu::mesh_split::split_cpu;
-use terrain::gpu::warp_zoom::{centre_cpu, sketch_rect, vertex_cpu};
-use terrain::planet::noise::{lattice_scale, octave_at};
-use terrain::planet::{Planet, unit};
-use terrain::scene::{Mode, Scene};
-use terrain::{Clipmaps, Frame, Renderer, View, Warped};
+use terrain_engine::gpu::clipmaps::{lat_lon_of, vertex_cpu as clipmaps_vertex_cpu};
+use terrain_engine::gpu::mesh_split::split_cpu;
+use terrain_engine::gpu::warp_zoom::{centre_cpu, sketch_rect, vertex_cpu};
+use terrain_engine::planet::noise::{lattice_scale, octave_at};
+use terrain_engine::planet::{Planet, unit};
+use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::{Clipmaps, Frame, Renderer, View, Warped};
 
 fn bundled(name: &str, size: u32, mesh: u32) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -33,7 +33,7 @@ fn render(scene: &Scene, view: View) -> (Renderer, Frame) {
 
 fn render_in(scene: &Scene, mode: Mode, view: View) -> (Renderer, Frame) {
     let mut r = Renderer::new(scene, mode, view).expect("renderer");
-    let camera = terrain::scene::camera_of(scene, &r.atlas).unwrap();
+    let camera = terrain_engine::scene::camera_of(scene, &r.atlas).unwrap();
     let frame = r.render(&camera).expect("frame");
     (r, frame)
 }
@@ -53,7 +53,7 @@ fn gpu_warp_and_zoom_matches_its_cpu_twin() {
         // The normals pass runs only for shading with the mesh's normals.
         scene.render.pixel_normals = false;
         let (r, _) = render(&scene, View::Shaded);
-        let camera = terrain::scene::camera_of(&scene, &r.atlas).unwrap();
+        let camera = terrain_engine::scene::camera_of(&scene, &r.atlas).unwrap();
         let uniforms = r.uniforms(&camera);
         let gpu = warped(&r).read_detailed(&r.ctx).unwrap();
         let range = (r.atlas.max_m - r.atlas.min_m) as f64;
@@ -171,7 +171,8 @@ fn gpu_warp_and_zoom_matches_its_cpu_twin() {
         let mut worst_n = 0.0f32;
         for j in (0..m).step_by(7) {
             for i in (0..m).step_by(7) {
-                let cpu = terrain::gpu::normals::normal_cpu(&gpu, m as u32, IVec2::new(i, j));
+                let cpu =
+                    terrain_engine::gpu::normals::normal_cpu(&gpu, m as u32, IVec2::new(i, j));
                 let g = normals[(j * m + i) as usize];
                 worst_n = worst_n.max((0..3).map(|c| (g[c] - cpu[c]).abs()).fold(0.0, f32::max));
             }
@@ -223,7 +224,7 @@ fn the_clipmaps_pass_agrees_with_its_twin_and_the_terrain_function() {
         let u = lod.uniforms.expect("a planet frame");
         let gpu = lod.read_vertices(r.ctx()).expect("vertices");
         // The same camera drawn without the octaves: the sketch's part of each vertex alone.
-        let camera = terrain::scene::camera_of(&s, &r.atlas).expect("camera");
+        let camera = terrain_engine::scene::camera_of(&s, &r.atlas).expect("camera");
         let mut bare_scene = s.clone();
         bare_scene.detail.octaves = Some(0);
         let mut bare = Renderer::new(&bare_scene, Mode::Clipmaps, View::Shaded).expect("renderer");
@@ -237,7 +238,7 @@ fn the_clipmaps_pass_agrees_with_its_twin_and_the_terrain_function() {
             radius: u.radius as f64,
             sketch: &r.atlas,
         };
-        let geo = terrain::Geo {
+        let geo = terrain_engine::Geo {
             lat: lat.to_radians(),
             lon: lon.to_radians(),
         };

@@ -1,8 +1,8 @@
 //! Every WGSL pass, as combined by the import step in every variant, parses and validates with
 //! naga (no GPU needed), and the uniform block's Rust twin has the WGSL struct's size.
 
-use terrain::gpu::SHADERS;
-use terrain::gpu::shaders::{FLAGS, compose, tested_flags};
+use terrain_engine::gpu::SHADERS;
+use terrain_engine::gpu::shaders::{FLAGS, compose, tested_flags};
 
 fn validate(name: &str, flags: &[&str]) -> naga::Module {
     let source = compose(name, flags).unwrap_or_else(|e| panic!("{name} {flags:?}: {e}"));
@@ -171,7 +171,7 @@ fn wgsl_layout(module: &naga::Module, name: &str) -> (Vec<(String, u32, u32)>, u
 #[test]
 fn uniform_structs_match_the_wgsl_field_by_field() {
     use std::mem::size_of;
-    use terrain::gpu::uniforms::*;
+    use terrain_engine::gpu::uniforms::*;
     let module = validate("warp_zoom", &[]);
     let structs = [
         (
@@ -299,7 +299,7 @@ fn uniform_structs_match_the_wgsl_field_by_field() {
 #[test]
 fn the_planet_block_matches_the_wgsl_field_by_field() {
     use std::mem::size_of;
-    use terrain::gpu::clipmaps::*;
+    use terrain_engine::gpu::clipmaps::*;
     let module = validate("clipmaps", &["NOISE"]);
     let structs = [
         (
@@ -358,7 +358,7 @@ fn the_planet_block_matches_the_wgsl_field_by_field() {
 
 #[test]
 fn view_constants_in_wgsl_are_the_rust_enum() {
-    use terrain::View;
+    use terrain_engine::View;
     let module = validate("terrain", &[]);
     let mut found = 0;
     for (_, c) in module.constants.iter() {
@@ -395,10 +395,11 @@ fn the_fades_constants_are_the_noises() {
     };
     assert_eq!(
         constant("FADE_NOISE_RMS"),
-        terrain::detail::NOISE_RMS as f32
+        terrain_engine::detail::NOISE_RMS as f32
     );
     // The model's factor: the octave's noise frequency is its lattice frequency over
     // LATTICE_PER_CYCLE.
-    let model = 1.0 / (terrain::detail::LATTICE_PER_CYCLE * terrain::detail::LATTICE_PER_CYCLE);
+    let model = 1.0
+        / (terrain_engine::detail::LATTICE_PER_CYCLE * terrain_engine::detail::LATTICE_PER_CYCLE);
     assert_eq!(constant("FADE_MODEL"), model as f32);
 }

@@ -105,7 +105,7 @@ enum SketchGpu {
 ///
 /// ```no_run
 /// use std::path::Path;
-/// use terrain::{Renderer, Scene, View, scene};
+/// use terrain_engine::{Renderer, Scene, View, scene};
 ///
 /// let scene = Scene::load(Path::new("sketches/jacksboro.toml"))?;
 /// let mut renderer = Renderer::new(&scene, scene.render.mode, View::Shaded)?;
@@ -113,7 +113,7 @@ enum SketchGpu {
 /// let frame = renderer.render(&camera)?;
 /// assert_eq!(frame.rgba.len(), (frame.width * frame.height * 4) as usize);
 /// println!("{} triangles, {:.1} ms on the GPU", frame.gpu.triangles, frame.gpu.gpu_ms);
-/// # Ok::<(), terrain::Error>(())
+/// # Ok::<(), terrain_engine::Error>(())
 /// ```
 pub struct Renderer {
     /// The device it draws on, opened for this renderer (or shared, see `with_context`).

@@ -1,10 +1,10 @@
-//! Every pass's bindings, declared once in Rust (`terrain::gpu::bindings`), are the ones its WGSL
+//! Every pass's bindings, declared once in Rust (`terrain_engine::gpu::bindings`), are the ones its WGSL
 //! declares in every variant: the same group, index, name and kind, as naga reflects them from the
 //! composed source (no GPU needed).
 
-use terrain::gpu::SHADERS;
-use terrain::gpu::bindings::Kind;
-use terrain::gpu::shaders::{FLAGS, Key, compose, tested_flags};
+use terrain_engine::gpu::SHADERS;
+use terrain_engine::gpu::bindings::Kind;
+use terrain_engine::gpu::shaders::{FLAGS, Key, compose, tested_flags};
 
 type Declared = Vec<(u32, u32, String, Kind)>;
 

@@ -25,6 +25,7 @@
 //! the CPU every frame.
 
 use crate::camera::Camera;
+use crate::detail::Detail;
 use crate::error::Result;
 use crate::gpu::alloc::{Alloc, Ledger};
 use crate::gpu::context::GpuContext;
@@ -84,6 +85,18 @@ impl Description {
     /// The scene this terrain was described by.
     pub fn scene(&self) -> &Scene {
         &self.scene
+    }
+
+    /// The sketch this terrain is drawn over.
+    pub fn atlas(&self) -> &Atlas {
+        &self.atlas
+    }
+
+    /// The procedural detail as this terrain's mode draws it (the octaves a mesh mode holds,
+    /// the reference's footprint rules): with [`Description::atlas`] and [`Description::scene`]
+    /// the [`Ground`] a [`Terrain`] of this description answers, without a GPU.
+    pub fn detail(&self) -> Detail {
+        scene::detail_for(&self.scene, &self.atlas, self.mode)
     }
 
     /// The limits a device must have to draw this terrain: WebGPU's defaults, raised where the

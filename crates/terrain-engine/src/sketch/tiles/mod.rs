@@ -249,7 +249,7 @@ pub fn is_pyramid(path: &Path) -> bool {
 ///
 /// ```no_run
 /// use std::path::Path;
-/// use terrain::sketch::tiles::{self, BuildOptions};
+/// use terrain_engine::sketch::tiles::{self, BuildOptions};
 ///
 /// let summary = tiles::build(
 ///     Path::new("dem/*.hgt"),
@@ -257,7 +257,7 @@ pub fn is_pyramid(path: &Path) -> bool {
 ///     &BuildOptions { threads: 0, ..Default::default() },
 /// )?;
 /// println!("{} levels, {} tiles", summary.levels, summary.tiles);
-/// # Ok::<(), terrain::Error>(())
+/// # Ok::<(), terrain_engine::Error>(())
 /// ```
 #[cfg(feature = "zstd")]
 pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary> {

@@ -46,14 +46,12 @@ impl<'a> Ground<'a> {
     /// finest), or `None` where nothing is drawn (beyond the sketch with `outside = "void"`).
     ///
     /// ```
-    /// use glam::DVec2;
-    /// use terrain::{Ground, Scene, scene};
+    /// use terrain::{Description, Ground, Scene, glam::DVec2};
     ///
     /// let text = "[sketch]\nsynthetic = \"hills\"\nsize = 129\noutside = \"void\"\n";
-    /// let scene = Scene::parse(text, ".".into()).unwrap();
-    /// let atlas = scene::load_atlas(&scene)?;
-    /// let detail = scene::detail_of(&scene, &atlas);
-    /// let ground = Ground::new(&scene, &atlas, &detail);
+    /// let description = Description::new(Scene::parse(text, ".".into()).unwrap())?;
+    /// let (atlas, detail) = (description.atlas(), description.detail());
+    /// let ground = Ground::new(description.scene(), atlas, &detail);
     ///
     /// // The sketch's centre: the hills plus every octave, within the octaves' reach of them.
     /// let centre = atlas.origin + DVec2::new(atlas.dx, atlas.dy) * 64.0;
