@@ -821,3 +821,25 @@ fn a_held_warp_keeps_almost_every_cells_diagonal() {
         "{changed} of {cells} cells changed"
     );
 }
+
+/// A device lost under a renderer (here destroyed, as a driver reset or an unplugged GPU loses
+/// it) makes the next frame one error of one line, not a panic, in the mesh modes and the
+/// reference alike; the frame before it drew.
+#[test]
+fn a_lost_device_is_one_error_not_a_panic() {
+    for mode in [Mode::Warped, Mode::Geomipmap, Mode::Reference] {
+        let scene = bundled("hills", 48, 32);
+        let atlas = terrain_engine::scene::load_atlas(&scene).unwrap();
+        let needs = terrain_engine::needs(&scene, mode, &atlas);
+        let ctx = terrain_engine::GpuContext::new(&needs).unwrap();
+        let mut r = Renderer::with_context(ctx.clone(), &scene, atlas, mode, View::Shaded).unwrap();
+        let camera = terrain_engine::scene::camera_of(&scene, &r.atlas).unwrap();
+        r.render(&camera).expect("the frame before the loss");
+        ctx.device.destroy();
+        let err = r.render(&camera).map(|_| ()).unwrap_err().to_string();
+        assert!(
+            err.starts_with("GPU: the device was lost: ") && !err.contains('\n'),
+            "{mode}: {err}"
+        );
+    }
+}

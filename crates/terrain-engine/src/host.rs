@@ -173,6 +173,7 @@ impl Terrain {
         let alloc = Alloc {
             device: &ctx.device,
             ledger: &ledger,
+            pipelines: &ctx.pipelines,
         };
         let renderer = build(&ctx, &scene, atlas, mode, view)?;
         let output = OutputPass::new(&alloc, targets, renderer.shader_key)?;
@@ -306,6 +307,7 @@ impl Terrain {
         let alloc = Alloc {
             device: &self.ctx.device,
             ledger: &self._ledger,
+            pipelines: &self.ctx.pipelines,
         };
         let snapshot = Snapshot::new(&alloc, self.targets, camera.width, camera.height)?;
         self.prepare(camera)?;

@@ -10,6 +10,7 @@
 //! puts a WGSL front end in every renderer for what a test checks once, and still leaves the
 //! stages and the resources to Rust.
 
+use super::alloc::Alloc;
 use super::shaders::Key;
 use crate::error::{Error, Result};
 use wgpu::ShaderStages as S;
@@ -158,23 +159,27 @@ fn declared(bindings: &[Binding], group: u32, key: Key) -> impl Iterator<Item = 
 
 /// The layout of bind group `group` of variant `key`.
 pub(crate) fn layout(
-    device: &wgpu::Device,
+    device: &Alloc,
     label: &str,
     bindings: &[Binding],
     group: u32,
     key: Key,
 ) -> wgpu::BindGroupLayout {
-    let entries: Vec<_> = declared(bindings, group, key)
-        .map(|b| wgpu::BindGroupLayoutEntry {
-            binding: b.index,
-            visibility: b.stages,
-            ty: b.kind.ty(),
-            count: None,
+    // One pass's bindings under one label: the label, group and variant key the layout.
+    let shared = format!("{label} {group} {key:?}");
+    device.pipelines.layout(shared, || {
+        let entries: Vec<_> = declared(bindings, group, key)
+            .map(|b| wgpu::BindGroupLayoutEntry {
+                binding: b.index,
+                visibility: b.stages,
+                ty: b.kind.ty(),
+                count: None,
+            })
+            .collect();
+        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries: &entries,
         })
-        .collect();
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some(label),
-        entries: &entries,
     })
 }
 

@@ -28,10 +28,14 @@ pub struct GpuContext {
     /// (shared by the context's clones).
     /// wgpu's own handler panics; a host's device keeps the host's handler (empty then).
     raised: Raised,
+    /// The pipelines and layouts every renderer on this device shares (shared by the
+    /// context's clones).
+    pub pipelines: crate::gpu::pipelines::Pipelines,
 }
 
 /// The first uncaptured error of a device, as text (wgpu's errors are not `Clone`).
-type Raised = std::sync::Arc<std::sync::Mutex<Option<String>>>;
+/// What happened ("the device refused", "the device was lost") and wgpu's words for it.
+type Raised = std::sync::Arc<std::sync::Mutex<Option<(&'static str, String)>>>;
 
 /// What the renderer needs of a device, checked before anything is created.
 pub struct Needs {
@@ -98,9 +102,22 @@ impl GpuContext {
         let first = raised.clone();
         device.on_uncaptured_error(std::sync::Arc::new(move |e: wgpu::Error| {
             if let Ok(mut first) = first.lock() {
-                first.get_or_insert_with(|| e.to_string());
+                first.get_or_insert_with(|| ("the device refused", e.to_string()));
             }
         }));
+        // A lost device (a driver reset, a GPU removed) fails every call after it, each in its
+        // own words (a buffer that cannot be mapped, say): the loss itself is the error to tell.
+        let lost = raised.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            if let Ok(mut first) = lost.lock() {
+                let why = if message.is_empty() {
+                    format!("{reason:?}")
+                } else {
+                    message
+                };
+                *first = Some(("the device was lost", why));
+            }
+        });
         Ok(GpuContext {
             device,
             queue,
@@ -110,6 +127,7 @@ impl GpuContext {
             msaa: if x4 { 4 } else { 1 },
             adapter: info,
             raised,
+            pipelines: Default::default(),
         })
     }
 
@@ -136,6 +154,7 @@ impl GpuContext {
             msaa: if software { 1 } else { 4 },
             adapter: info,
             raised: Raised::default(),
+            pipelines: Default::default(),
         })
     }
 
@@ -185,7 +204,7 @@ impl GpuContext {
     pub fn raised(&self) -> Result<()> {
         let first = self.raised.lock().ok().and_then(|mut f| f.take());
         match first {
-            Some(e) => Err(Error::device("the device refused", Refused(e))),
+            Some((what, e)) => Err(Error::device(what, Refused(e))),
             None => Ok(()),
         }
     }

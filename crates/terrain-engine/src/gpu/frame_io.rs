@@ -295,6 +295,7 @@ pub fn positions_from_depth(
     let alloc = Alloc {
         device: &ctx.device,
         ledger: &Default::default(),
+        pipelines: &ctx.pipelines,
     };
     let readback = Readback::counted(&alloc, width, height, depth.format())?;
     let mut encoder = ctx.device.create_command_encoder(&Default::default());

@@ -24,6 +24,7 @@ pub mod frame_io;
 pub mod mesh_split;
 pub mod normals;
 pub mod output;
+pub mod pipelines;
 pub mod planet;
 pub mod reference;
 pub mod shaders;
@@ -36,6 +37,7 @@ pub mod warp_zoom;
 pub mod work;
 
 use crate::error::Result;
+use alloc::Alloc;
 use bindings::Binding;
 use shaders::Key;
 
@@ -64,29 +66,32 @@ pub const SHADERS: [Shader; 10] = [
     shader!("sun_map", sun_map::BINDINGS),
 ];
 
-/// A compute pipeline for pass `name` in variant `key`, entry point `main`.
+/// A compute pipeline for pass `name` in variant `key`, entry point `main`, over `layout` (the
+/// pass's shared layout of that variant): made once per device.
 pub(crate) fn compute_pipeline(
-    device: &wgpu::Device,
+    device: &Alloc,
     name: &str,
     key: Key,
     layout: &wgpu::BindGroupLayout,
 ) -> Result<wgpu::ComputePipeline> {
-    let module = shader_module(device, name, key)?;
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(name),
-        bind_group_layouts: &[Some(layout)],
-        immediate_size: 0,
-    });
-    Ok(
-        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+    device.pipelines.compute(format!("{name} {key:?}"), || {
+        let module = shader_module(device, name, key)?;
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(name),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        }),
-    )
+            bind_group_layouts: &[Some(layout)],
+            immediate_size: 0,
+        });
+        Ok(
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(name),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: Default::default(),
+                cache: None,
+            }),
+        )
+    })
 }
 
 pub(crate) fn shader_module(

@@ -72,8 +72,10 @@ impl PlanetPass {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
+        let made_from = format!("{} {key:?}", Self::NAME);
         let pipeline_of = |entry, depth| {
             RasterPipeline {
+                made_from: &made_from,
                 layout: &pipeline_layout,
                 module: &module,
                 entry,

@@ -36,7 +36,7 @@ pub const BINDINGS: &[Binding] = &[
 ];
 
 pub struct SunMap {
-    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
     /// A float per atlas texel, at the atlas's own indices.
     pub seen: Buffer,
@@ -60,6 +60,7 @@ impl SunMap {
         // The march alone: no detail, no tallies, the sketch read whole.
         let (name, key) = (Self::NAME, Key::SHADOWS);
         let layout = layout(device, name, BINDINGS, 0, key);
+        let pipeline = compute_pipeline(device, name, key, &layout)?;
         let seen = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("sun seen"),
             size: atlas_buffer.size(),
@@ -74,7 +75,7 @@ impl SunMap {
         let bind_group = bind_group(device, name, &layout, BINDINGS, 0, key, &resources)?;
         let level0 = &atlas.levels[0];
         Ok(SunMap {
-            layout,
+            pipeline,
             bind_group,
             seen,
             size: [level0.width as u32, level0.height as u32],
@@ -84,20 +85,13 @@ impl SunMap {
 
     /// Records the map's making where the frame's `sun` is not the one it holds; the frame's
     /// uniforms must already be written.
-    pub fn record(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        sun: [f32; 3],
-    ) -> Result<()> {
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, sun: [f32; 3]) {
         if self.made_for.get() == Some(sun) {
-            return Ok(());
+            return;
         }
-        let pipeline = compute_pipeline(device, Self::NAME, Key::SHADOWS, &self.layout)?;
         let probe = super::counters::Probe::default();
         let (b, size) = (&self.bind_group, self.size);
-        super::dispatch_grid(encoder, Self::NAME, &pipeline, b, size, probe);
+        super::dispatch_grid(encoder, Self::NAME, &self.pipeline, b, size, probe);
         self.made_for.set(Some(sun));
-        Ok(())
     }
 }

@@ -225,6 +225,7 @@ impl Renderer {
             let alloc = Alloc {
                 device: &self.ctx.device,
                 ledger: &self.ledger,
+                pipelines: &self.ctx.pipelines,
             };
             self.lod.resize(&alloc, size.0, size.1)?;
             if let Some(s) = &mut self.snapshots {
@@ -264,10 +265,12 @@ impl Renderer {
     }
 
     /// The CPU work, then the GPU passes, for `camera`.
+    /// An error after the device was lost is the loss.
     pub fn render(&mut self, camera: &Camera) -> Result<Frame> {
         self.fit(camera)?;
         let cpu = self.lod.prepare(&self.atlas, camera);
-        self.draw(camera, cpu)
+        let frame = self.draw(camera, cpu);
+        frame.map_err(|e| self.ctx.raised().err().unwrap_or(e))
     }
 
     /// A snapshot of `camera`: as [`Renderer::render`], then for a streamed sketch again, each
@@ -379,7 +382,7 @@ impl Renderer {
         if let Some(w) = &self.work {
             w.clear(&mut encoder);
         }
-        self.record_sun_map(&mut encoder)?;
+        self.record_sun_map(&mut encoder);
         let ran = self.lod.record(ctx, &mut encoder, probe);
         if let Some(w) = &self.work {
             w.copy(&mut encoder);
@@ -387,6 +390,7 @@ impl Renderer {
         let alloc = Alloc {
             device: &ctx.device,
             ledger: &self.ledger,
+            pipelines: &ctx.pipelines,
         };
         let (w, h) = self.size;
         let s = match self.snapshots.take() {
@@ -556,7 +560,7 @@ impl Renderer {
         if let SketchGpu::Streamed(s) = &mut self.sketch {
             s.begin_frame(&self.ctx, encoder)?;
         }
-        self.record_sun_map(encoder)?;
+        self.record_sun_map(encoder);
         self.lod.record(&self.ctx, encoder, Probe::default());
         if let SketchGpu::Streamed(s) = &self.sketch {
             s.record_marks(encoder);
@@ -566,14 +570,9 @@ impl Renderer {
 
     /// The sun visibility map made again where the sun moved since it was made (after the
     /// frame's uniforms are written, before the passes that sample it).
-    fn record_sun_map(&self, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        match &self.sun_map {
-            Some(m) => m.record(
-                &self.ctx.device,
-                encoder,
-                self.light.sun.as_vec3().to_array(),
-            ),
-            None => Ok(()),
+    fn record_sun_map(&self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(m) = &self.sun_map {
+            m.record(encoder, self.light.sun.as_vec3().to_array());
         }
     }
 

@@ -181,13 +181,19 @@ impl TerrainPass {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline_of = |layout: &wgpu::PipelineLayout,
+        let (made_from, depth_made_from) = (
+            format!("terrain {key:?}"),
+            format!("terrain {:?}", key | Key::POSITIONS),
+        );
+        let pipeline_of = |made_from: &str,
+                           layout: &wgpu::PipelineLayout,
                            module: &wgpu::ShaderModule,
                            entry: (&str, &str),
                            targets: &[Option<wgpu::ColorTargetState>],
                            samples: u32,
                            depth: Option<(bool, wgpu::CompareFunction)>| {
             RasterPipeline {
+                made_from,
                 layout,
                 module,
                 entry,
@@ -210,8 +216,24 @@ impl TerrainPass {
             let writes = ("terrain_vs", "gbuffer_fs");
             let shades = ("sky_vs", "deferred_fs");
             (
-                pipeline_of(&pipeline_layout, &module, writes, &gbuffer, 1, ground_test),
-                pipeline_of(&shading_layout, &module, shades, &targets, 1, None),
+                pipeline_of(
+                    &made_from,
+                    &pipeline_layout,
+                    &module,
+                    writes,
+                    &gbuffer,
+                    1,
+                    ground_test,
+                ),
+                pipeline_of(
+                    &made_from,
+                    &shading_layout,
+                    &module,
+                    shades,
+                    &targets,
+                    1,
+                    None,
+                ),
                 Some(gbuffer_layout),
             )
         } else {
@@ -219,15 +241,39 @@ impl TerrainPass {
             let sky = ("sky_vs", "sky_fs");
             let sky_test = Some((false, SKY_TEST));
             (
-                pipeline_of(&pipeline_layout, &module, shaded, &targets, n, ground_test),
-                pipeline_of(&pipeline_layout, &module, sky, &targets, n, sky_test),
+                pipeline_of(
+                    &made_from,
+                    &pipeline_layout,
+                    &module,
+                    shaded,
+                    &targets,
+                    n,
+                    ground_test,
+                ),
+                pipeline_of(
+                    &made_from,
+                    &pipeline_layout,
+                    &module,
+                    sky,
+                    &targets,
+                    n,
+                    sky_test,
+                ),
                 None,
             )
         };
         let depth_pipeline = depth_module.map(|m| {
             let targets = [None, Some(DEPTH_COPY.into())];
             let entry = ("terrain_vs", "depth_fs");
-            pipeline_of(&pipeline_layout, &m, entry, &targets, 1, ground_test)
+            pipeline_of(
+                &depth_made_from,
+                &pipeline_layout,
+                &m,
+                entry,
+                &targets,
+                1,
+                ground_test,
+            )
         });
 
         let mut resources = variant.atlas.resources();

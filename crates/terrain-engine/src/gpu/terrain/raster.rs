@@ -2,6 +2,7 @@
 //! pulled from storage (no vertex buffers), triangle lists, reversed-Z depth into [`DEPTH`].
 
 use super::DEPTH;
+use crate::gpu::alloc::Alloc;
 
 /// A render pass of the terrain's: no occlusion queries, one view.
 pub(super) fn render_pass<'e>(
@@ -24,6 +25,9 @@ pub(super) fn render_pass<'e>(
 /// A render pipeline of the raster passes (terrain, planet): vertices pulled from storage (no
 /// vertex buffers), triangle lists, and a reversed-Z depth test into [`DEPTH`] or none.
 pub(crate) struct RasterPipeline<'a> {
+    /// What `module` and `layout` were made from (the WGSL file and its variant key), keying
+    /// the pipeline shared on the device with the rest of this descriptor.
+    pub made_from: &'a str,
     pub layout: &'a wgpu::PipelineLayout,
     pub module: &'a wgpu::ShaderModule,
     /// Vertex and fragment entry points.
@@ -35,8 +39,18 @@ pub(crate) struct RasterPipeline<'a> {
 }
 
 impl RasterPipeline<'_> {
-    pub fn build(&self, device: &wgpu::Device) -> wgpu::RenderPipeline {
+    pub fn build(&self, device: &Alloc) -> wgpu::RenderPipeline {
         let (vs, fs) = self.entry;
+        let shared = format!(
+            "{} {:?} {:?} {} {:?}",
+            self.made_from, self.entry, self.targets, self.samples, self.depth
+        );
+        device
+            .pipelines
+            .render(shared, || self.make(device, vs, fs))
+    }
+
+    fn make(&self, device: &wgpu::Device, vs: &str, fs: &str) -> wgpu::RenderPipeline {
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(fs),
             layout: Some(self.layout),
