@@ -8,10 +8,10 @@
 //! bind groups are made from the very layout the shared pipeline was made with.
 //!
 //! Why: a software rasterizer compiles each pipeline to machine code that stays resident as long
-//! as the pipeline: compare at 256² kept 47 renderers' own pipelines, 2.8 GB resident above one
-//! renderer's, of which the buffers the ledger counts were 0.65 GB. Rejected: wgpu's
-//! `PipelineCache`, which caches the driver's compilation on some backends but still makes one
-//! resident pipeline per call.
+//! as the pipeline, so renderers with pipelines of their own cost more than their buffers
+//! (docs/decisions.md, “Pipelines shared on a device”). Rejected: wgpu's `PipelineCache`, which
+//! caches the driver's compilation on some backends but still makes one resident pipeline per
+//! call.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
