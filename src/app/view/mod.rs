@@ -45,7 +45,7 @@ use std::sync::Arc;
 use std::time::Instant;
 use terrain_engine::View;
 use terrain_engine::scene;
-use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::scene::{MODES, Mode, Scene};
 use terrain_engine::sketch::Atlas;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
@@ -151,13 +151,16 @@ impl App {
     }
 
     fn key(&mut self, code: KeyCode, el: &ActiveEventLoop) -> Result<()> {
-        let mode = |m| Some(m);
-        let new_mode = match code {
-            KeyCode::Digit1 => mode(Mode::Warped),
-            KeyCode::Digit2 => mode(Mode::Geomipmap),
-            KeyCode::Digit3 => mode(Mode::Bruteforce),
+        let digit = match code {
+            KeyCode::Digit1 => Some('1'),
+            KeyCode::Digit2 => Some('2'),
+            KeyCode::Digit3 => Some('3'),
+            KeyCode::Digit4 => Some('4'),
+            KeyCode::Digit5 => Some('5'),
             _ => None,
         };
+        // The mode whose row names the key.
+        let new_mode = digit.and_then(|d| MODES.iter().find(|r| r.key == Some(d)).map(|r| r.mode));
         let planet = matches!(self.cam, Flyer::Planet(_));
         let streamed = self.atlas.pyramid.is_some();
         match new_mode.map(|m| switch_mode(self.mode, m, planet, streamed)) {

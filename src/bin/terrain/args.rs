@@ -43,18 +43,10 @@ pub fn shard(s: &str) -> Result<(usize, usize), String> {
         .ok_or_else(|| "expected I/N with 0 ≤ I < N".into())
 }
 
-/// `view --mode`, `compare --modes`: a mode that draws a mesh (not the reference), over a sketch
-/// or a planet.
+/// `view --mode`, `compare --modes`: a mode compare sweeps and the window flies (not the
+/// reference), over a sketch or a planet.
 pub fn mesh_mode(s: &str) -> Result<Mode, String> {
-    one_of(
-        &[
-            Mode::Warped,
-            Mode::Geomipmap,
-            Mode::Bruteforce,
-            Mode::Clipmaps,
-        ],
-        s,
-    )
+    one_of(&Mode::compared().collect::<Vec<_>>(), s)
 }
 
 fn one_of(modes: &[Mode], s: &str) -> Result<Mode, String> {

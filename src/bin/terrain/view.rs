@@ -41,7 +41,7 @@ pub fn run(a: Args) -> Result<()> {
     let scene = crate::load_scene(&a.scene, &a.set)?;
     let planet = scene.planet().is_some();
     let mode = match a.mode {
-        Some(m) if planet && m != Mode::Clipmaps => anyhow::bail!(
+        Some(m) if !m.draws(planet) => anyhow::bail!(
             "--mode: a planet scene is viewed in clipmaps mode, not {m} (it draws planar sketches)"
         ),
         Some(m) => m,

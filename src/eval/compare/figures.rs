@@ -11,15 +11,10 @@ use terrain_engine::Result;
 use terrain_engine::scene::Mode;
 use terrain_engine::stage::quality::Bin;
 
-/// A mode's colour in every figure (rows name their mode as `Mode::name` writes it).
+/// A mode's colour in every figure, its row's (rows name their mode as `Mode::name` writes it).
 pub fn colour(mode: &str) -> Rgb {
-    match Mode::parse(mode) {
-        Some(Mode::Warped) => Rgb(230, 120, 20),
-        Some(Mode::Geomipmap) => Rgb(40, 100, 200),
-        Some(Mode::Bruteforce) => Rgb(40, 160, 70),
-        Some(Mode::Clipmaps) => Rgb(150, 60, 170),
-        _ => Rgb(120, 120, 120),
-    }
+    let [r, g, b] = Mode::parse(mode).map_or([120, 120, 120], |m| m.row().colour);
+    Rgb(r, g, b)
 }
 
 /// A line per mode through each of its rows' `point` (rows without one left out), in order of x.

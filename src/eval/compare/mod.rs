@@ -48,7 +48,7 @@ use std::path::Path;
 use sweep::Setting;
 use terrain_engine::Camera;
 use terrain_engine::scene;
-use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::scene::{MODES, Mode, Scene};
 use terrain_engine::sketch::Atlas;
 use terrain_engine::stage::CpuStage;
 use terrain_engine::{Error, Result, Role};
@@ -101,16 +101,16 @@ impl Default for Options {
     }
 }
 
-/// The modes `compare` runs on `scene` by default: the mesh modes on a sketch, warped and
-/// GeoMipMap on a tile pyramid (brute force bakes the whole sketch), clipmaps on a planet.
+/// The modes `compare` runs on `scene` by default: the compared modes
+/// ([`terrain_engine::scene::ModeRow::compared`])
+/// that draw its kind of scene, less those that bake the whole sketch on a tile pyramid.
 pub fn default_modes(scene: &Scene) -> Vec<Mode> {
-    if scene.planet().is_some() {
-        vec![Mode::Clipmaps]
-    } else if streamed(scene) {
-        vec![Mode::Warped, Mode::Geomipmap]
-    } else {
-        vec![Mode::Warped, Mode::Geomipmap, Mode::Bruteforce]
-    }
+    let (planet, streamed) = (scene.planet().is_some(), streamed(scene));
+    MODES
+        .iter()
+        .filter(|r| r.compared && r.mode.draws(planet) && !(streamed && r.bakes_whole_sketch))
+        .map(|r| r.mode)
+        .collect()
 }
 
 /// Whether `scene`'s sketch is a tile pyramid, streamed through the tile cache.
@@ -122,7 +122,7 @@ fn streamed(scene: &Scene) -> bool {
 /// Refuses modes that cannot draw `scene`, in one line, before any work.
 fn check_modes(scene: &Scene, modes: &[Mode]) -> Result<()> {
     let planet = scene.planet().is_some();
-    match modes.iter().find(|&&m| (m == Mode::Clipmaps) != planet) {
+    match modes.iter().find(|&&m| !m.draws(planet)) {
         Some(m) if planet => Err(Error::value(
             "--modes",
             format!("a planet scene compares clipmaps, not {m} (it draws planar sketches)"),

@@ -85,24 +85,36 @@ impl Setting {
         self.mode().name()
     }
 
+    /// The row's label: each of the mode's swept keys as its row in the mode table names it
+    /// (`tau=0.5 block=17`); a warped mesh of fixed size is marked `fixed`.
     pub fn label(&self) -> String {
+        let keys = self.mode().row().sweep;
+        let values = self.values();
+        let words: Vec<String> = keys
+            .iter()
+            .zip(values)
+            .filter_map(|(&(key, name), v)| match key {
+                "warp.budget" => (v == 0.0).then(|| name.to_string()),
+                _ => Some(format!("{name}={v}")),
+            })
+            .collect();
+        words.join(" ")
+    }
+
+    /// The values of the mode's swept keys, in its row's order (a flag as 0 or 1).
+    fn values(&self) -> Vec<f64> {
         match *self {
             Setting::Warped {
                 quad_px,
                 mesh,
-                budget: true,
-            } => format!("quad_px={quad_px} mesh={mesh}"),
-            Setting::Warped {
-                quad_px,
-                mesh,
-                budget: false,
-            } => format!("quad_px={quad_px} mesh={mesh} fixed"),
-            Setting::GeoMipMap { tau, block } => format!("tau={tau} block={block}"),
-            Setting::BruteForce { k } => format!("K={k}"),
+                budget,
+            } => vec![quad_px, mesh as f64, budget as u8 as f64],
+            Setting::GeoMipMap { tau, block } => vec![tau, block as f64],
+            Setting::BruteForce { k } => vec![k as f64],
             Setting::Clipmaps {
                 phi_steps,
                 rings_per_level,
-            } => format!("phi_steps={phi_steps} rings={rings_per_level}"),
+            } => vec![phi_steps as f64, rings_per_level as f64],
         }
     }
 
@@ -295,6 +307,48 @@ mod tests {
         Row {
             triangles,
             ..row(mode, 1.0, 30.0, 0.5)
+        }
+    }
+
+    /// A row's label names each swept key as the mode table does, in its order.
+    #[test]
+    fn labels_name_the_swept_keys_from_the_mode_table() {
+        let cases = [
+            (
+                Setting::Warped {
+                    quad_px: 2.0,
+                    mesh: 125,
+                    budget: false,
+                },
+                "quad_px=2 mesh=125 fixed",
+            ),
+            (
+                Setting::Warped {
+                    quad_px: 1.5,
+                    mesh: 512,
+                    budget: true,
+                },
+                "quad_px=1.5 mesh=512",
+            ),
+            (
+                Setting::GeoMipMap {
+                    tau: 0.5,
+                    block: 17,
+                },
+                "tau=0.5 block=17",
+            ),
+            (Setting::BruteForce { k: 2 }, "K=2"),
+            (
+                Setting::Clipmaps {
+                    phi_steps: 512,
+                    rings_per_level: 20,
+                },
+                "phi_steps=512 rings=20",
+            ),
+        ];
+        for (s, label) in cases {
+            assert_eq!(s.label(), label);
+            assert_eq!(s.values().len(), s.mode().row().sweep.len());
         }
     }
 

@@ -10,10 +10,12 @@
 //! scene and mode: a flag is derived there and nowhere else. Each scheme states what it needs of
 //! the adapter ([`Lod::needs`], no default), so no mode is silently taken to need nothing.
 //!
-//! Adding a mode: its `Mode` row (`scene/render.rs`), its module here with its arms in
-//! [`scheme`], [`needs`] and [`shader_key`] (exhaustive matches: the compiler lists them), its
-//! pass in `gpu/` with its [`crate::gpu::SHADERS`] row, its WGSL and its CPU twin's check in
-//! `checks/`, the settings `terrain compare` sweeps for it, and its page in docs/modes.md.
+//! Adding a mode: its variant and its row in [`crate::scene::MODES`] (`scene/render.rs`: its
+//! names, what it draws, its chart colour, its window key, the keys compare sweeps), its module
+//! here with its arms in [`scheme`], [`needs`] and [`shader_key`] (exhaustive matches: the
+//! compiler lists them), its pass in `gpu/` with its [`crate::gpu::SHADERS`] row, its WGSL and
+//! its CPU twin's check in `checks/`, its settings in `compare`'s sweep (`Setting`, whose
+//! matches the compiler lists too), and its page in docs/modes.md.
 //!
 //! Rejected alternative: an enum of the modes with a `match` in every method (what this replaced:
 //! three renderer types each wrapped again, their submit–read–time code written three times). A

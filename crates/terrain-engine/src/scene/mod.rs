@@ -41,7 +41,8 @@ pub use detail::{
 };
 pub(crate) use detail::{FINEST_WAVELENGTH_M, MAX_OCTAVES};
 pub use render::{
-    LightSection, Mode, Msaa, PlanetSection, ReferenceSection, RenderSection, StreamSection,
+    LightSection, MODES, Mode, ModeRow, Msaa, PlanetSection, ReferenceSection, RenderSection,
+    Scenes, StreamSection,
 };
 
 use serde::{Deserialize, Serialize};

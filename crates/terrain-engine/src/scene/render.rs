@@ -117,37 +117,161 @@ crate::names::named_enum! {
     }
 }
 
+/// Which scenes a mode draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scenes {
+    /// Planar sketches.
+    Flat,
+    /// Planets (a `[planet]` section or `sketch.synthetic = "planet"`).
+    Planet,
+    /// Both.
+    Both,
+}
+
+/// A mode as everything around it knows it: the renderer, the tools, `compare`, `view` and the
+/// charts read its row in [`MODES`] and nothing else about it. The scheme behind it is built in
+/// `lod/` (`scheme`, `needs` and `shader_key`: exhaustive matches the compiler holds to the enum).
+#[derive(Clone, Copy, Debug)]
+pub struct ModeRow {
+    /// The mode (its key's value is [`Named::name`](crate::Named::name)).
+    pub mode: Mode,
+    /// Its name as the papers write it, for legends, summaries and the window's figures.
+    pub display: &'static str,
+    /// Whether the terrain pass draws it as a mesh (the G-buffer, multisampling and the sun map
+    /// apply).
+    pub mesh: bool,
+    /// Whether it bakes the whole sketch into a grid, which a tile pyramid, streamed in tiles,
+    /// cannot feed.
+    pub bakes_whole_sketch: bool,
+    /// The scenes it draws.
+    pub scenes: Scenes,
+    /// Whether `compare` sweeps it by default on the scenes it draws (the reference is what
+    /// every mode is measured against).
+    pub compared: bool,
+    /// Its colour in every chart, RGB.
+    pub colour: [u8; 3],
+    /// The key that switches `view` to it, if the window switches to it.
+    pub key: Option<char>,
+    /// The scene keys `compare`'s rows of it set, as its rows' labels name them.
+    pub sweep: &'static [(&'static str, &'static str)],
+}
+
+/// Every mode, one row each.
+pub const MODES: [ModeRow; 5] = [
+    ModeRow {
+        mode: Mode::Warped,
+        display: "warped",
+        mesh: true,
+        bakes_whole_sketch: false,
+        scenes: Scenes::Flat,
+        compared: true,
+        colour: [230, 120, 20],
+        key: Some('1'),
+        sweep: &[
+            ("warp.quad_px", "quad_px"),
+            ("warp.mesh", "mesh"),
+            ("warp.budget", "fixed"),
+        ],
+    },
+    ModeRow {
+        mode: Mode::Geomipmap,
+        display: "GeoMipMap",
+        mesh: true,
+        bakes_whole_sketch: false,
+        scenes: Scenes::Flat,
+        compared: true,
+        colour: [40, 100, 200],
+        key: Some('2'),
+        sweep: &[("geomipmap.tau", "tau"), ("geomipmap.block", "block")],
+    },
+    ModeRow {
+        mode: Mode::Bruteforce,
+        display: "brute force",
+        mesh: true,
+        bakes_whole_sketch: true,
+        scenes: Scenes::Flat,
+        compared: true,
+        colour: [40, 160, 70],
+        key: Some('3'),
+        sweep: &[("geomipmap.k", "K")],
+    },
+    ModeRow {
+        mode: Mode::Reference,
+        display: "reference",
+        mesh: false,
+        bakes_whole_sketch: false,
+        scenes: Scenes::Both,
+        compared: false,
+        colour: [120, 120, 120],
+        key: None,
+        sweep: &[],
+    },
+    ModeRow {
+        mode: Mode::Clipmaps,
+        display: "spherical clipmaps",
+        mesh: false,
+        bakes_whole_sketch: false,
+        scenes: Scenes::Planet,
+        compared: true,
+        colour: [150, 60, 170],
+        key: None,
+        sweep: &[
+            ("planet.phi_steps", "phi_steps"),
+            ("planet.rings_per_level", "rings"),
+        ],
+    },
+];
+
 impl Mode {
-    /// The modes that draw a mesh (every one but the ray-marched reference).
-    pub const MESHES: [Mode; 4] = [
-        Mode::Warped,
-        Mode::Geomipmap,
-        Mode::Bruteforce,
-        Mode::Clipmaps,
-    ];
+    /// This mode's row in [`MODES`].
+    pub fn row(self) -> &'static ModeRow {
+        // Every variant has its row: the table's test holds them in the enum's order.
+        &MODES[self as usize]
+    }
 
-    /// Brute force: it draws every vertex of a grid baked whole, so a streamed sketch (a tile
-    /// pyramid) cannot feed it. (GeoMipMap over a pyramid reads its blocks' vertices through the
-    /// tile cache instead.)
+    /// Whether the mode draws `planet` scenes (true) or planar sketches (false).
+    pub fn draws(self, planet: bool) -> bool {
+        match self.row().scenes {
+            Scenes::Both => true,
+            Scenes::Planet => planet,
+            Scenes::Flat => !planet,
+        }
+    }
+
+    /// The modes `compare` sweeps and `view` flies (every one but the ray-marched reference,
+    /// which they measure against).
+    pub fn compared() -> impl Iterator<Item = Mode> {
+        MODES.iter().filter(|r| r.compared).map(|r| r.mode)
+    }
+
+    /// [`ModeRow::bakes_whole_sketch`].
     pub fn bakes_whole_sketch(self) -> bool {
-        self == Mode::Bruteforce
+        self.row().bakes_whole_sketch
     }
 
-    /// The modes that draw the sketch as a mesh in the terrain pass (warped, GeoMipMap, brute
-    /// force).
+    /// [`ModeRow::mesh`].
     pub fn is_mesh(self) -> bool {
-        matches!(self, Mode::Warped | Mode::Geomipmap | Mode::Bruteforce)
+        self.row().mesh
     }
 
-    /// The mode's name as the papers write it, for legends and the window's figures
-    /// ("GeoMipMap", "brute force"); [`Named::name`](crate::Named::name) is the key's value.
+    /// [`ModeRow::display`].
     pub fn display(self) -> &'static str {
-        match self {
-            Mode::Warped => "warped",
-            Mode::Geomipmap => "GeoMipMap",
-            Mode::Bruteforce => "brute force",
-            Mode::Reference => "reference",
-            Mode::Clipmaps => "spherical clipmaps",
+        self.row().display
+    }
+}
+
+#[cfg(test)]
+mod modes_tests {
+    use super::*;
+
+    /// The table holds one row per mode, in the enum's order, which [`Mode::row`] indexes by.
+    #[test]
+    fn every_mode_has_its_row_in_order() {
+        assert_eq!(MODES.len(), Mode::ALL.len());
+        for (i, m) in Mode::ALL.iter().enumerate() {
+            assert_eq!(MODES[i].mode, *m);
+            assert_eq!(*m as usize, i);
+            assert_eq!(m.row().mode, *m);
         }
     }
 }
