@@ -173,7 +173,7 @@ impl Terrain {
         let alloc = Alloc {
             device: &ctx.device,
             ledger: &ledger,
-            pipelines: &ctx.pipelines,
+            shared: &ctx.shared,
         };
         let renderer = build(&ctx, &scene, atlas, mode, view)?;
         let output = OutputPass::new(&alloc, targets, renderer.shader_key)?;
@@ -307,7 +307,7 @@ impl Terrain {
         let alloc = Alloc {
             device: &self.ctx.device,
             ledger: &self._ledger,
-            pipelines: &self.ctx.pipelines,
+            shared: &self.ctx.shared,
         };
         let snapshot = Snapshot::new(&alloc, self.targets, camera.width, camera.height)?;
         self.prepare(camera)?;

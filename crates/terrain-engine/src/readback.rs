@@ -38,7 +38,7 @@ impl Readback {
         let alloc = Alloc {
             device,
             ledger: &Ledger::default(),
-            pipelines: &Default::default(),
+            shared: &Default::default(),
         };
         Readback::counted(&alloc, texture.width(), texture.height(), texture.format())
     }

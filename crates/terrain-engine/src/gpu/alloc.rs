@@ -14,7 +14,7 @@
 //! Vulkan and DX12 backends set it; on GL — llvmpipe, where CI and most servers render — it
 //! reads 0. It also counts the whole device, which `compare` shares between renderers.
 
-pub use super::pipelines::Pipelines;
+pub use super::shared::OnDevice;
 use std::ops::Deref;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -81,8 +81,8 @@ pub struct Alloc<'a> {
     pub device: &'a wgpu::Device,
     /// The ledger that counts them.
     pub ledger: &'a Ledger,
-    /// The pipelines and layouts shared by everything drawn on the device.
-    pub pipelines: &'a Pipelines,
+    /// What everything drawn on the device shares: pipelines, layouts, the sketch.
+    pub shared: &'a OnDevice,
 }
 
 impl Deref for Alloc<'_> {

@@ -167,7 +167,7 @@ pub(crate) fn layout(
 ) -> wgpu::BindGroupLayout {
     // One pass's bindings under one label: the label, group and variant key the layout.
     let shared = format!("{label} {group} {key:?}");
-    device.pipelines.layout(shared, || {
+    device.shared.layout(shared, || {
         let entries: Vec<_> = declared(bindings, group, key)
             .map(|b| wgpu::BindGroupLayoutEntry {
                 binding: b.index,

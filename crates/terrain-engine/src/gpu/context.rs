@@ -28,9 +28,9 @@ pub struct GpuContext {
     /// (shared by the context's clones).
     /// wgpu's own handler panics; a host's device keeps the host's handler (empty then).
     raised: Raised,
-    /// The pipelines and layouts every renderer on this device shares (shared by the
+    /// What every renderer on this device shares: pipelines, layouts, the sketch (shared by the
     /// context's clones).
-    pub pipelines: crate::gpu::pipelines::Pipelines,
+    pub shared: crate::gpu::shared::OnDevice,
 }
 
 /// The first uncaptured error of a device, as text (wgpu's errors are not `Clone`).
@@ -127,7 +127,7 @@ impl GpuContext {
             msaa: if x4 { 4 } else { 1 },
             adapter: info,
             raised,
-            pipelines: Default::default(),
+            shared: Default::default(),
         })
     }
 
@@ -154,7 +154,7 @@ impl GpuContext {
             msaa: if software { 1 } else { 4 },
             adapter: info,
             raised: Raised::default(),
-            pipelines: Default::default(),
+            shared: Default::default(),
         })
     }
 

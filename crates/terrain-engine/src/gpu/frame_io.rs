@@ -109,12 +109,19 @@ pub fn uniform_buffer(device: &Alloc) -> Buffer {
 
 /// The atlas pyramid in a read-only storage buffer (see `shaders/shared/atlas.wgsl` for why not
 /// a texture).
-pub fn upload_atlas(device: &Alloc, atlas: &Atlas) -> Buffer {
+pub fn upload_atlas(device: &Alloc, atlas: &Atlas) -> std::sync::Arc<Buffer> {
+    use std::hash::{Hash, Hasher};
     let texels = super::uniforms::atlas_texels(atlas);
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("sketch atlas"),
-        contents: bytemuck::cast_slice(&texels),
-        usage: wgpu::BufferUsages::STORAGE,
+    let bytes: &[u8] = bytemuck::cast_slice(&texels);
+    // Renderers of one sketch on one device share its upload (`gpu::shared`).
+    let mut hasher = std::collections::hash_map::DefaultHasher::new();
+    bytes.hash(&mut hasher);
+    device.shared.sketch(hasher.finish(), || {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("sketch atlas"),
+            contents: bytes,
+            usage: wgpu::BufferUsages::STORAGE,
+        })
     })
 }
 
@@ -295,7 +302,7 @@ pub fn positions_from_depth(
     let alloc = Alloc {
         device: &ctx.device,
         ledger: &Default::default(),
-        pipelines: &ctx.pipelines,
+        shared: &ctx.shared,
     };
     let readback = Readback::counted(&alloc, width, height, depth.format())?;
     let mut encoder = ctx.device.create_command_encoder(&Default::default());

@@ -24,10 +24,10 @@ pub mod frame_io;
 pub mod mesh_split;
 pub mod normals;
 pub mod output;
-pub mod pipelines;
 pub mod planet;
 pub mod reference;
 pub mod shaders;
+pub mod shared;
 pub mod snapshot;
 pub mod stream;
 pub mod sun_map;
@@ -74,7 +74,7 @@ pub(crate) fn compute_pipeline(
     key: Key,
     layout: &wgpu::BindGroupLayout,
 ) -> Result<wgpu::ComputePipeline> {
-    device.pipelines.compute(format!("{name} {key:?}"), || {
+    device.shared.compute(format!("{name} {key:?}"), || {
         let module = shader_module(device, name, key)?;
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(name),

@@ -93,7 +93,7 @@ impl OutputPass {
             immediate_size: 0,
         });
         let shared = format!("{} {key:?} {targets:?}", Self::NAME);
-        let pipeline = device.pipelines.render(shared, || {
+        let pipeline = device.shared.render(shared, || {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(Self::NAME),
                 layout: Some(&pipeline_layout),

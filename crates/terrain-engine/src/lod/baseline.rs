@@ -413,7 +413,7 @@ impl Lod for Baselines {
         let device = Alloc {
             device: &ctx.device,
             ledger: &self.ledger,
-            pipelines: &ctx.pipelines,
+            shared: &ctx.shared,
         };
         self.terrain.write_indices(&device, queue, &self.indices);
         let draw = !self.indices.is_empty();

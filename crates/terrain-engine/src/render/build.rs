@@ -19,7 +19,7 @@ pub(super) fn renderer(
     let alloc = Alloc {
         device: &ctx.device,
         ledger: &ledger,
-        pipelines: &ctx.pipelines,
+        shared: &ctx.shared,
     };
     let planet = scene.planet().is_some();
     let frame = uniform_buffer(&alloc);

@@ -96,7 +96,7 @@ struct Submitted {
 
 /// The sketch on the GPU: the whole pyramid, or a tile pyramid through the tile cache.
 enum SketchGpu {
-    Whole(Buffer),
+    Whole(std::sync::Arc<Buffer>),
     Streamed(Box<Stream>),
 }
 
@@ -225,7 +225,7 @@ impl Renderer {
             let alloc = Alloc {
                 device: &self.ctx.device,
                 ledger: &self.ledger,
-                pipelines: &self.ctx.pipelines,
+                shared: &self.ctx.shared,
             };
             self.lod.resize(&alloc, size.0, size.1)?;
             if let Some(s) = &mut self.snapshots {
@@ -390,7 +390,7 @@ impl Renderer {
         let alloc = Alloc {
             device: &ctx.device,
             ledger: &self.ledger,
-            pipelines: &ctx.pipelines,
+            shared: &ctx.shared,
         };
         let (w, h) = self.size;
         let s = match self.snapshots.take() {

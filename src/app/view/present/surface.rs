@@ -10,7 +10,7 @@ use crate::app::hud::{self, Figures, Status};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 use terrain_engine::Camera;
-use terrain_engine::alloc::{Alloc, Ledger, Pipelines, Texture};
+use terrain_engine::alloc::{Alloc, Ledger, OnDevice, Texture};
 use terrain_engine::readback::Readback;
 use terrain_engine::scene::{Mode, Scene};
 use terrain_engine::sketch::Atlas;
@@ -28,8 +28,8 @@ pub(in crate::app::view) struct SurfacePath {
     pub(super) device: wgpu::Device,
     queue: wgpu::Queue,
     ledger: Ledger,
-    /// Pipelines of the window's own (the terrain's are shared through its context).
-    pipelines: Pipelines,
+    /// What the window's own objects share (the terrain's share its context's).
+    shared: OnDevice,
     depth: Texture,
     pub(super) terrain: Option<Terrain>,
     composite: Composite,
@@ -94,11 +94,11 @@ impl SurfacePath {
             return Ok(Err(format!("the surface refuses its configuration: {e}")));
         }
         let ledger = Ledger::default();
-        let pipelines = Pipelines::default();
+        let shared = OnDevice::default();
         let alloc = Alloc {
             device: &device,
             ledger: &ledger,
-            pipelines: &pipelines,
+            shared: &shared,
         };
         let depth = depth_texture(&alloc, config.width, config.height);
         let composite = Composite::new(&device, config.format);
@@ -108,7 +108,7 @@ impl SurfacePath {
             device,
             queue,
             ledger,
-            pipelines,
+            shared,
             depth,
             terrain: None,
             composite,
@@ -120,7 +120,7 @@ impl SurfacePath {
         Alloc {
             device: &self.device,
             ledger: &self.ledger,
-            pipelines: &self.pipelines,
+            shared: &self.shared,
         }
     }
 
@@ -187,7 +187,7 @@ impl SurfacePath {
         let alloc = Alloc {
             device: &self.device,
             ledger: &self.ledger,
-            pipelines: &self.pipelines,
+            shared: &self.shared,
         };
         self.composite
             .update(&alloc, &self.queue, hud::lines(&figures, status), camera);

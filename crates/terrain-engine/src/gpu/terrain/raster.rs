@@ -45,9 +45,7 @@ impl RasterPipeline<'_> {
             "{} {:?} {:?} {} {:?}",
             self.made_from, self.entry, self.targets, self.samples, self.depth
         );
-        device
-            .pipelines
-            .render(shared, || self.make(device, vs, fs))
+        device.shared.render(shared, || self.make(device, vs, fs))
     }
 
     fn make(&self, device: &wgpu::Device, vs: &str, fs: &str) -> wgpu::RenderPipeline {
