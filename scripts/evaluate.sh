@@ -314,11 +314,10 @@ table-compare-summary() {
     jq -r --arg v "$v" '
       def ms: if . == null then null else (. * 1 | round | tostring) + " ms" end;
       def best($m): [.rows[] | select(.mode == $m) | .psnr_db] | max | fx(1);
-      def name: {warped: "warped", geomipmap: "GeoMipMap", bruteforce: "brute force"}[.] // .;
       . as $r | .summary.budget_ms as $b
       | .summary.modes | to_entries[]
       | .key as $i | .value as $s
-      | "| \(if $i == 0 then $v else "" end) | \($s.mode | name) | \(if $s.ms_to_30db == null then "not reached (best \($r | best($s.mode)) dB)" else "\($s.ms_to_30db | ms) (\($s.setting_30db))" end) | \(if $s.ms_to_1px == null then "not reached" else "\($s.ms_to_1px | ms) (\($s.setting_1px))" end) | \($s.psnr_at_budget_db | fx(1)) dB, \($s.sse_at_budget_px | fx(2)) px\(if $i == 0 then " at \($b | ms)" else "" end) |"' \
+      | "| \(if $i == 0 then $v else "" end) | \($s.display) | \(if $s.ms_to_30db == null then "not reached (best \($r | best($s.mode)) dB)" else "\($s.ms_to_30db | ms) (\($s.setting_30db))" end) | \(if $s.ms_to_1px == null then "not reached" else "\($s.ms_to_1px | ms) (\($s.setting_1px))" end) | \($s.psnr_at_budget_db | fx(1)) dB, \($s.sse_at_budget_px | fx(2)) px\(if $i == 0 then " at \($b | ms)" else "" end) |"' \
       "$dir/report.json"
   done
 }

@@ -11,6 +11,9 @@ use terrain_engine::pass;
 #[derive(Clone, Debug, Serialize)]
 pub struct ModeSummary {
     pub mode: String,
+    /// The mode's name as the papers write it, its row's in the mode table (for the scripts'
+    /// tables and the charts' legends).
+    pub display: String,
     /// Least frame time reaching 30 dB PSNR; `None`: no setting reaches it.
     pub ms_to_30db: Option<f64>,
     pub setting_30db: Option<String>,
@@ -291,6 +294,7 @@ pub fn summarise(rows: &[Row]) -> Summary {
             let within = || rows_of(rows, m).filter(|r| r.frame_ms <= budget);
             ModeSummary {
                 mode: m.to_string(),
+                display: super::figures::display(m).to_string(),
                 ms_to_30db: db.as_ref().map(|d| d.0),
                 setting_30db: db.map(|d| d.1),
                 ms_to_1px: px.as_ref().map(|d| d.0),

@@ -82,14 +82,15 @@ pub(super) fn renderer(
         samples,
         deferred: mode.is_mesh() && ctx.deferred(scene.render.deferred, samples),
     };
-    if planet != (mode == Mode::Clipmaps) && mode != Mode::Reference {
+    if !mode.draws(planet) {
         return Err(crate::Error::value(
             "render.mode",
             if planet {
                 format!("a planet scene draws with clipmaps, not {mode}")
             } else {
-                "clipmaps draws planet scenes (a [planet] section or sketch.synthetic = \"planet\")"
-                    .to_string()
+                format!(
+                    "{mode} draws planet scenes (a [planet] section or sketch.synthetic = \"planet\")"
+                )
             },
         ));
     }
