@@ -7,7 +7,8 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use std::path::Path;
-use terrain_engine::sketch::tiles::{BuildOptions, Pyramid, build};
+use terrain_engine::sketch::convert::{BuildOptions, build};
+use terrain_engine::sketch::tiles::Pyramid;
 
 fn bench_tiles(c: &mut Criterion) {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("sketches/jacksboro_fault_dem.asc");

@@ -41,7 +41,7 @@ impl log::Log for Capture {
 fn jacksboro_pyramid(name: &str) -> PathBuf {
     let asc = common::manifest_dir().join("sketches/jacksboro_fault_dem.asc");
     let pyr = scratch(name).join("pyr");
-    terrain_engine::sketch::tiles::build(&asc, &pyr, &Default::default()).unwrap();
+    terrain_engine::sketch::convert::build(&asc, &pyr, &Default::default()).unwrap();
     pyr
 }
 

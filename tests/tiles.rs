@@ -6,7 +6,8 @@ mod common;
 
 use common::{psnr, scratch, terrain};
 use std::path::{Path, PathBuf};
-use terrain_engine::sketch::tiles::{BORDER, BuildOptions, Pyramid, SIDE, TILE, build};
+use terrain_engine::sketch::convert::{BuildOptions, build};
+use terrain_engine::sketch::tiles::{BORDER, Pyramid, SIDE, TILE};
 use terrain_engine::sketch::{Atlas, LoadOptions};
 
 /// Heights with detail at every scale and no symmetry, so a misplaced node shows.
@@ -46,7 +47,7 @@ fn write_asc(
     std::fs::write(path, text).unwrap();
 }
 
-fn convert(src: &Path, out: &Path) -> terrain_engine::sketch::tiles::BuildSummary {
+fn convert(src: &Path, out: &Path) -> terrain_engine::sketch::convert::BuildSummary {
     build(src, out, &BuildOptions::default())
         .unwrap_or_else(|e| panic!("tiles {}: {e}", src.display()))
 }

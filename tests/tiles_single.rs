@@ -8,7 +8,7 @@ mod common;
 
 use common::{manifest_dir, scratch};
 use std::path::{Path, PathBuf};
-use terrain_engine::sketch::tiles::{BuildOptions, build};
+use terrain_engine::sketch::convert::{BuildOptions, build};
 use terrain_engine::sketch::{Atlas, LoadOptions};
 use tiff::encoder::{Compression, TiffEncoder, colortype::Gray32Float};
 use tiff::tags::Tag;
@@ -17,7 +17,7 @@ fn convert_with(
     src: &Path,
     out: &Path,
     load: LoadOptions,
-) -> terrain_engine::sketch::tiles::BuildSummary {
+) -> terrain_engine::sketch::convert::BuildSummary {
     let opts = BuildOptions {
         load,
         threads: 2,

@@ -1,11 +1,34 @@
 //! Axes: the range an axis shows and its labelled ticks (the rules in [`super::chart`]'s doc), and
 //! [`Frame`], the axis as plotters draws it.
 
-use super::chart::{Axis, Scale};
 use plotters::coord::combinators::LogCoord;
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Scale {
+    Linear,
+    Log10,
+}
+
+#[derive(Clone, Debug)]
+pub struct Axis {
+    pub label: String,
+    pub scale: Scale,
+    /// Fixed range; `None` fits the data.
+    pub range: Option<(f64, f64)>,
+}
+
+impl Axis {
+    pub fn new(label: &str, scale: Scale) -> Axis {
+        Axis {
+            label: label.to_string(),
+            scale,
+            range: None,
+        }
+    }
+}
 
 /// An axis as drawn: its range and its labelled ticks. To plotters it is an axis whose mapping
 /// is plotters' own (linear, or its `log_scale`) and whose key points are our ticks.

@@ -9,6 +9,7 @@
 //! Over 400 lines for its tests (about 160: the SVG's texts and marks and the PNG's pixels held
 //! against the figure they draw); the drawing itself is under 300.
 
+pub use super::axis::{Axis, Scale};
 use super::axis::{Frame, range};
 use super::{Rgb, draw_on_rgba, drawing_error, font, fonts};
 use crate::output::{write_atomic, write_image};
@@ -19,30 +20,6 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::iter::once;
 use std::path::Path;
 use terrain_engine::{Error, Result};
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Scale {
-    Linear,
-    Log10,
-}
-
-#[derive(Clone, Debug)]
-pub struct Axis {
-    pub label: String,
-    pub scale: Scale,
-    /// Fixed range; `None` fits the data.
-    pub range: Option<(f64, f64)>,
-}
-
-impl Axis {
-    pub fn new(label: &str, scale: Scale) -> Axis {
-        Axis {
-            label: label.to_string(),
-            scale,
-            range: None,
-        }
-    }
-}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Style {

@@ -5,7 +5,8 @@
 use anyhow::Result;
 use std::path::PathBuf;
 use terrain_engine::sketch::LoadOptions;
-use terrain_engine::sketch::tiles::{BuildOptions, Kind, build};
+use terrain_engine::sketch::convert::{BuildOptions, build};
+use terrain_engine::sketch::tiles::Kind;
 
 #[derive(clap::Args)]
 pub struct Args {

@@ -128,7 +128,7 @@ pub(super) fn measure_lod(
     timed: u32,
     steps: &[Camera],
 ) -> Result<(Row, Vec<u8>)> {
-    super::rounds::set_tau(r, s);
+    s.set_tau(r);
     let (mut row, rgba) = measure(r, s, camera, truth, o, timed)?;
     row.lod_change_levels = lod_change_along(r, steps)?;
     Ok((row, rgba))

@@ -23,7 +23,6 @@
 use super::measure::Timed;
 use super::report::Row;
 use super::sweep::Setting;
-use terrain_engine::Baselines;
 use terrain_engine::Camera;
 use terrain_engine::Renderer;
 use terrain_engine::Result;
@@ -159,7 +158,7 @@ impl Rounds {
             .collect();
         for (e, t) in self.rows.iter().zip(&mut times) {
             let r = &mut self.kept[e.renderer].1;
-            set_tau(r, &e.setting);
+            e.setting.set_tau(r);
             r.forget();
             if let Err(err) = r.render_settled(camera) {
                 t.failure = Some(format!("settling before the timing rounds: {err}"));
@@ -172,7 +171,7 @@ impl Rounds {
                 }
                 let e = self.rows[k];
                 let r = &mut self.kept[e.renderer].1;
-                set_tau(r, &e.setting);
+                e.setting.set_tau(r);
                 r.forget();
                 match r.render(camera) {
                     Ok(frame) if frame.gpu.triangles == e.triangles => times[k].timed.push(&frame),
@@ -199,15 +198,6 @@ impl Rounds {
 /// baked grid, τ set per frame).
 fn same_renderer(a: &Setting, b: &Setting) -> bool {
     matches!((*a, *b), (Setting::GeoMipMap { block: x, .. }, Setting::GeoMipMap { block: y, .. }) if x == y)
-}
-
-/// Sets a GeoMipMap renderer's τ to `s`'s (its settings of one block size share a renderer).
-pub(super) fn set_tau(r: &mut Renderer, s: &Setting) {
-    if let Setting::GeoMipMap { tau, .. } = *s
-        && let Some(b) = r.lod_mut::<Baselines>()
-    {
-        b.params.tau = tau;
-    }
 }
 
 /// The rows' order in round `round`: as kept, reversed in odd rounds.

@@ -118,6 +118,16 @@ impl Setting {
         }
     }
 
+    /// Sets a GeoMipMap renderer's τ to this setting's (its settings of one block size share a
+    /// renderer).
+    pub fn set_tau(&self, r: &mut terrain_engine::Renderer) {
+        if let Setting::GeoMipMap { tau, .. } = *self
+            && let Some(b) = r.lod_mut::<Baselines>()
+        {
+            b.params.tau = tau;
+        }
+    }
+
     /// The scene with this setting's keys set.
     pub fn apply(&self, scene: &Scene) -> Scene {
         let mut s = scene.clone();

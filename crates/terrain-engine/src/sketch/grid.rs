@@ -26,7 +26,7 @@ pub fn limit_cells(cells: usize) {
 }
 
 /// The largest grid a reader allocates now (cells): [`limit_cells`]'s, or 2^28; a larger file is
-/// read only by `tiles::build`, band by band.
+/// read only by `convert::build`, band by band.
 pub fn max_cells() -> usize {
     CELL_LIMIT.load(std::sync::atomic::Ordering::Relaxed)
 }

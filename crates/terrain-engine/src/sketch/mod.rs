@@ -14,6 +14,9 @@
 //! milliseconds, the pyramid costs one build at load time (a third more memory).
 
 mod asc;
+// The converters write zstd tiles and read their sources in place (Unix positional reads).
+#[cfg(feature = "zstd")]
+pub mod convert;
 pub(crate) mod cubic;
 pub(crate) mod fill;
 pub(crate) mod georef;

@@ -517,12 +517,12 @@ mod tests {
         let src = dir.join("sketch.asc");
         std::fs::write(&src, asc).unwrap();
         let out = dir.join("pyr");
-        let opts = super::super::BuildOptions {
+        let opts = crate::sketch::convert::BuildOptions {
             load: Default::default(),
             threads: 1,
             ..Default::default()
         };
-        super::super::build(&src, &out, &opts).unwrap();
+        crate::sketch::convert::build(&src, &out, &opts).unwrap();
         Pyramid::open(&out).unwrap()
     }
 

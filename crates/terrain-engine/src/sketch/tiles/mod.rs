@@ -29,17 +29,12 @@
 //!   the predicted byte planes 4.12× (`cargo test --release --lib tiles -- --nocapture`).
 
 pub(crate) mod blocks;
-// The builders write zstd tiles and read their sources in place (Unix positional reads).
-#[cfg(feature = "zstd")]
-pub(crate) mod build;
 pub(crate) mod cache;
-mod codec;
+pub(crate) mod codec;
 pub mod image;
 pub(crate) mod read;
 
 pub use blocks::{measure as measure_blocks, set_keep_figures};
-#[cfg(feature = "zstd")]
-pub use build::{BuildOptions, BuildSummary};
 pub use cache::StreamStats;
 pub use image::ImagePyramid;
 pub use read::{Pyramid, raw_grid_within};
@@ -239,33 +234,4 @@ pub(crate) fn tile_path(dir: &Path, l: usize, tx: usize, ty: usize) -> PathBuf {
 /// Whether `path` is a pyramid folder (it holds [`META`]).
 pub fn is_pyramid(path: &Path) -> bool {
     path.is_dir() && path.join(META).is_file()
-}
-
-/// Converts `src` into a pyramid in `out` (created, or resumed where a run stopped).
-///
-/// `src` is any sketch file or a quoted glob of tiles on one grid; a scene whose `sketch.path`
-/// names `out` then streams it. A GeoTIFF of 8-bit RGB or RGBA pixels (or grey ones, with
-/// [`BuildOptions::image`]) is an image: its pyramid ([`image`]) is for `surface.image`.
-///
-/// ```no_run
-/// use std::path::Path;
-/// use terrain_engine::sketch::tiles::{self, BuildOptions};
-///
-/// let summary = tiles::build(
-///     Path::new("dem/*.hgt"),
-///     Path::new("dem-pyramid"),
-///     &BuildOptions { threads: 0, ..Default::default() },
-/// )?;
-/// println!("{} levels, {} tiles", summary.levels, summary.tiles);
-/// # Ok::<(), terrain_engine::Error>(())
-/// ```
-#[cfg(feature = "zstd")]
-pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary> {
-    if is_pyramid(src) {
-        return Err(Error::sketch(src, "is a tile pyramid already"));
-    }
-    match build::is_image(src, opts.image) {
-        true => image::build(src, out, opts),
-        false => build::heights(src, out, opts),
-    }
 }

@@ -259,7 +259,7 @@ pub fn raw_grid_within(dir: &Path, cells: usize) -> Result<RawGrid> {
 }
 
 /// Rows `r0..r1` of level `l`, whole width, from the interiors of its tiles.
-pub(in crate::sketch::tiles) fn read_rows(
+pub(crate) fn read_rows(
     out: &Path,
     meta: &Meta,
     l: usize,

@@ -24,12 +24,6 @@
 //! channel, each differenced: on textured imagery both compress less than the Sub filter
 //! (figures in docs/decisions.md, “Image pyramids”).
 
-#[cfg(feature = "zstd")]
-mod build;
-
-#[cfg(feature = "zstd")]
-pub(crate) use build::build;
-
 use super::codec::{compress, decompress_tile};
 use super::{FORMAT, Kind, META, MetaGeoref, level_sizes, tile_path};
 use crate::error::{Error, Result, Role};

@@ -2,7 +2,7 @@
 //! scratch, a coarser level's averaged from the tiles below; its tiles are encoded in parallel.
 //!
 //! Rule: a coarser band averages in the atlas's order of additions, so a pyramid's levels and the
-//! atlas's agree bit for bit; nodata is filled within the band alone (`tiles::build`'s rules).
+//! atlas's agree bit for bit; nodata is filled within the band alone (`convert::build`'s rules).
 
 use super::resume::write_quietly;
 use crate::error::{Error, Result, Role};
@@ -48,7 +48,7 @@ pub(super) fn coarser_band(
 }
 
 /// The rows a band of tile row `ty` holds, clamped to a level of `h` rows.
-pub(in crate::sketch::tiles) fn band_rows(ty: usize, h: usize) -> (usize, usize) {
+pub(in crate::sketch::convert) fn band_rows(ty: usize, h: usize) -> (usize, usize) {
     let r0 = (ty * TILE).saturating_sub(BORDER);
     let r1 = ((ty + 1) * TILE + BORDER).min(h);
     (r0, r1)

@@ -4,16 +4,16 @@
 //! Rule: a folder built from other sources or options is refused, never mixed; nothing is
 //! written in place, so a killed run leaves only temporaries, removed when it resumes.
 
-use super::super::codec::{HEADER_BYTES, TileHeader};
 use crate::error::{Error, Result, Role};
 use crate::io::write_atomic;
+use crate::sketch::tiles::codec::{HEADER_BYTES, TileHeader};
 use serde::{Deserialize, Serialize};
 use std::os::unix::fs::FileExt;
 use std::path::Path;
 
 /// Removes the temporary files (`.NAME.PID.tmp`) a killed build left half written under `dir`,
 /// so a resumed build leaves the folder as a fresh one would.
-pub(in crate::sketch::tiles) fn remove_temporaries(dir: &Path) {
+pub(in crate::sketch::convert) fn remove_temporaries(dir: &Path) {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return;
     };
@@ -31,25 +31,25 @@ pub(in crate::sketch::tiles) fn remove_temporaries(dir: &Path) {
 
 /// `build.json`: what a pyramid folder is being built from.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(in crate::sketch::tiles) struct Plan {
-    pub(in crate::sketch::tiles) format: String,
+pub(in crate::sketch::convert) struct Plan {
+    pub(in crate::sketch::convert) format: String,
     /// Heights or an image: the same source converted as the other is another pyramid.
     #[serde(default)]
-    pub(in crate::sketch::tiles) kind: crate::sketch::tiles::Kind,
-    pub(in crate::sketch::tiles) sources: Vec<SourceStamp>,
-    pub(in crate::sketch::tiles) spacing_m: Option<f64>,
-    pub(in crate::sketch::tiles) height_scale: Option<f64>,
-    pub(in crate::sketch::tiles) height_range_m: Option<[f64; 2]>,
+    pub(in crate::sketch::convert) kind: crate::sketch::tiles::Kind,
+    pub(in crate::sketch::convert) sources: Vec<SourceStamp>,
+    pub(in crate::sketch::convert) spacing_m: Option<f64>,
+    pub(in crate::sketch::convert) height_scale: Option<f64>,
+    pub(in crate::sketch::convert) height_range_m: Option<[f64; 2]>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(in crate::sketch::tiles) struct SourceStamp {
+pub(in crate::sketch::convert) struct SourceStamp {
     path: String,
     bytes: u64,
     mtime_ns: u128,
 }
 
-pub(in crate::sketch::tiles) fn stamp(path: &Path) -> Result<SourceStamp> {
+pub(in crate::sketch::convert) fn stamp(path: &Path) -> Result<SourceStamp> {
     let m = std::fs::metadata(path).map_err(|e| Error::io(Role::Sketch, path, e))?;
     let mtime_ns = m
         .modified()
@@ -67,7 +67,7 @@ pub(in crate::sketch::tiles) fn stamp(path: &Path) -> Result<SourceStamp> {
 }
 
 /// Creates `out` with its `build.json`, or checks that the one there is this build's.
-pub(in crate::sketch::tiles) fn start_or_resume(out: &Path, plan: &Plan) -> Result<()> {
+pub(in crate::sketch::convert) fn start_or_resume(out: &Path, plan: &Plan) -> Result<()> {
     let recorded = out.join("build.json");
     match std::fs::read(&recorded) {
         Ok(bytes) => {
@@ -102,7 +102,7 @@ pub(in crate::sketch::tiles) fn start_or_resume(out: &Path, plan: &Plan) -> Resu
 
 /// Whether a tile file is there and as long as its header says (a run killed mid-write leaves
 /// only temporary names, but a disk that lost power may keep a short file).
-pub(in crate::sketch::tiles) fn tile_is_whole(path: &Path) -> bool {
+pub(in crate::sketch::convert) fn tile_is_whole(path: &Path) -> bool {
     let Ok(file) = std::fs::File::open(path) else {
         return false;
     };
@@ -116,7 +116,7 @@ pub(in crate::sketch::tiles) fn tile_is_whole(path: &Path) -> bool {
 
 /// Writes under a temporary name and renames; no fsync (tiles are many, and a killed process
 /// loses nothing the kernel holds; a power loss is what [`tile_is_whole`] checks for).
-pub(in crate::sketch::tiles) fn write_quietly(path: &Path, bytes: &[u8]) -> Result<()> {
+pub(in crate::sketch::convert) fn write_quietly(path: &Path, bytes: &[u8]) -> Result<()> {
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(Role::OutputFolder, dir, e))?;
     }

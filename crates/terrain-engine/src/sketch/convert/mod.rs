@@ -1,5 +1,7 @@
-//! `terrain tiles`: converts a sketch (a file, or a glob of tiles) into a tile pyramid with
-//! bounded memory, resumably.
+//! `terrain tiles`: converts a sketch (a file, or a glob of tiles) or an image into a tile
+//! pyramid ([`crate::sketch::tiles`]) with bounded memory, resumably. Apart from the pyramids it
+//! writes: the readers (`tiles`, the streamed atlas) never reach the converter, which reads its
+//! sources through the sketch's loaders.
 //!
 //! Rules:
 //! - Memory is bounded by a few bands of level 0's width, whatever the sketch's height: level 0 is
@@ -14,7 +16,7 @@
 //! - A cloud-optimised GeoTIFF's overviews are ignored: every coarser level is the 2×2 average
 //!   of the one below, so the pyramid is the atlas's whatever resampling made the overviews
 //!   (docs/decisions.md, “Single files read window by window”).
-//! - Nodata is filled within each band by the atlas's rule ([`crate::sketch::fill`]): a hole that a
+//! - Nodata is filled within each band by the atlas's rule (`sketch::fill`): a hole that a
 //!   band does not close from its own rows is closed from those, not from rows further away, so a
 //!   holed sketch's tiled fill can differ from the whole-grid one near bands' edges. A sketch with
 //!   no nodata converts bit for bit.
@@ -24,26 +26,55 @@
 //! - The scratch folder `.build` is removed once `pyramid.toml` is written.
 
 mod bands;
+mod image;
 mod level0;
 pub(super) mod resume;
 mod scratch;
 
-use super::codec::{HEADER_BYTES, TileHeader};
-use super::read::read_rows;
-use super::{BORDER, FORMAT, META, Meta, SIDE, TILE, level_sizes, tile_path};
 use crate::error::{Error, Result, Role};
 use crate::io::write_atomic;
 use crate::sketch::load::LoadOptions;
 use crate::sketch::mosaic;
-pub(in crate::sketch::tiles) use bands::band_rows;
+use crate::sketch::tiles::codec::{HEADER_BYTES, TileHeader};
+use crate::sketch::tiles::read::read_rows;
+use crate::sketch::tiles::{self, BORDER, FORMAT, META, Meta, SIDE, TILE, level_sizes, tile_path};
+pub(in crate::sketch::convert) use bands::band_rows;
 use bands::{coarser_band, write_band};
-pub(in crate::sketch::tiles) use level0::is_tiff;
+pub(in crate::sketch::convert) use level0::is_tiff;
 use resume::{Plan, remove_temporaries, stamp, start_or_resume, tile_is_whole};
-pub(in crate::sketch::tiles) use scratch::meta_georef;
+pub(in crate::sketch::convert) use scratch::meta_georef;
 use serde::Serialize;
 use std::os::unix::fs::FileExt;
 use std::path::Path;
 use std::time::Instant;
+
+/// Converts `src` into a pyramid in `out` (created, or resumed where a run stopped).
+///
+/// `src` is any sketch file or a quoted glob of tiles on one grid; a scene whose `sketch.path`
+/// names `out` then streams it. A GeoTIFF of 8-bit RGB or RGBA pixels (or grey ones, with
+/// [`BuildOptions::image`]) is an image: its pyramid ([`tiles::image`]) is for `surface.image`.
+///
+/// ```no_run
+/// use std::path::Path;
+/// use terrain_engine::sketch::convert::{self, BuildOptions};
+///
+/// let summary = convert::build(
+///     Path::new("dem/*.hgt"),
+///     Path::new("dem-pyramid"),
+///     &BuildOptions { threads: 0, ..Default::default() },
+/// )?;
+/// println!("{} levels, {} tiles", summary.levels, summary.tiles);
+/// # Ok::<(), terrain_engine::Error>(())
+/// ```
+pub fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary> {
+    if tiles::is_pyramid(src) {
+        return Err(Error::sketch(src, "is a tile pyramid already"));
+    }
+    match is_image(src, opts.image) {
+        true => image::build(src, out, opts),
+        false => heights(src, out, opts),
+    }
+}
 
 /// What the command asked for beyond the source.
 #[derive(Clone, Debug, Default)]
@@ -61,7 +92,7 @@ pub struct BuildOptions {
 #[derive(Clone, Debug, Serialize)]
 pub struct BuildSummary {
     /// What the pyramid holds: `heights` or `image`.
-    pub kind: super::Kind,
+    pub kind: tiles::Kind,
     /// Level 0's nodes (an image's pixels) per row.
     pub width: usize,
     /// Level 0's rows.
@@ -80,7 +111,7 @@ pub struct BuildSummary {
     pub seconds: f64,
 }
 
-/// Converts the height map `src` into a pyramid in `out`: [`super::build`] for heights.
+/// Converts the height map `src` into a pyramid in `out`: [`build`] for heights.
 pub(super) fn heights(src: &Path, out: &Path, opts: &BuildOptions) -> Result<BuildSummary> {
     let start = Instant::now();
     let sources = if mosaic::is_glob(src) {
@@ -90,18 +121,18 @@ pub(super) fn heights(src: &Path, out: &Path, opts: &BuildOptions) -> Result<Bui
     };
     let plan = Plan {
         format: FORMAT.into(),
-        kind: super::Kind::Heights,
+        kind: tiles::Kind::Heights,
         sources: sources.iter().map(|p| stamp(p)).collect::<Result<_>>()?,
         spacing_m: opts.load.spacing_m,
         height_scale: opts.load.height_scale,
         height_range_m: opts.load.height_range_m,
     };
     start_or_resume(out, &plan)?;
-    if super::is_pyramid(out) {
+    if tiles::is_pyramid(out) {
         // Whole already: nothing to read or write.
-        let meta = super::Pyramid::open(out)?.meta;
+        let meta = tiles::Pyramid::open(out)?.meta;
         return Ok(BuildSummary {
-            kind: super::Kind::Heights,
+            kind: tiles::Kind::Heights,
             width: meta.width,
             height: meta.height,
             levels: meta.levels.len(),
@@ -119,7 +150,7 @@ pub(super) fn heights(src: &Path, out: &Path, opts: &BuildOptions) -> Result<Bui
     let levels = level_sizes(width, height);
     let mut meta = Meta {
         format: FORMAT.into(),
-        kind: super::Kind::Heights,
+        kind: tiles::Kind::Heights,
         source: src.display().to_string(),
         width,
         height,
@@ -183,7 +214,7 @@ pub(super) fn heights(src: &Path, out: &Path, opts: &BuildOptions) -> Result<Bui
     write_atomic(&out.join(META), toml_text(&meta)?.as_bytes())?;
     let _ = std::fs::remove_dir_all(&scratch_dir);
     Ok(BuildSummary {
-        kind: super::Kind::Heights,
+        kind: tiles::Kind::Heights,
         width,
         height,
         levels: meta.levels.len(),
@@ -246,10 +277,10 @@ fn finish_meta(out: &Path, meta: &mut Meta) -> Result<()> {
     let mut cols = 0.0f64;
     let east = BORDER + (w - 1 - (tx_n - 1) * TILE);
     for ty in 0..ty_n {
-        let west_tile = super::read::read_tile_file(&tile_path(out, 0, 0, ty), SIDE)?;
+        let west_tile = tiles::read::read_tile_file(&tile_path(out, 0, 0, ty), SIDE)?;
         let east_tile = match tx_n {
             1 => west_tile.clone(),
-            _ => super::read::read_tile_file(&tile_path(out, 0, tx_n - 1, ty), SIDE)?,
+            _ => tiles::read::read_tile_file(&tile_path(out, 0, tx_n - 1, ty), SIDE)?,
         };
         for j in 0..TILE {
             if (1..h - 1).contains(&(ty * TILE + j)) {
@@ -270,7 +301,7 @@ fn toml_text(meta: &Meta) -> Result<String> {
     toml::to_string(meta).map_err(|e| Error::encode("pyramid.toml", e))
 }
 
-pub(in crate::sketch::tiles) fn folder_bytes(dir: &Path) -> u64 {
+pub(in crate::sketch::convert) fn folder_bytes(dir: &Path) -> u64 {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return 0;
     };

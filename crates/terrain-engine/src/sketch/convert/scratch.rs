@@ -240,7 +240,7 @@ fn write_pieces(
         })
 }
 
-pub(in crate::sketch::tiles) fn meta_georef(g: Georef) -> MetaGeoref {
+pub(in crate::sketch::convert) fn meta_georef(g: Georef) -> MetaGeoref {
     MetaGeoref {
         units: match g.units {
             Units::Degrees => "degrees".into(),

@@ -31,7 +31,7 @@ use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 
 /// Whether `path` names a GeoTIFF (by its extension, as the readers tell formats).
-pub(in crate::sketch::tiles) fn is_tiff(path: &Path) -> bool {
+pub(in crate::sketch::convert) fn is_tiff(path: &Path) -> bool {
     has_extension(path, &["tif", "tiff"])
 }
 

@@ -7,17 +7,15 @@
 //!   from level l−1's tiles. What is held at once is a band, the file's chunk rows under it and
 //!   one tile per encoding thread, whatever the image's height: about 2 KB per pixel of width
 //!   for a file tiled by 256 rows (docs/decisions.md, “Image pyramids”).
-//! - Resuming is the heights' (`tiles::build`): `build.json` fingerprints the source and the
+//! - Resuming is the heights' (`convert::build`): `build.json` fingerprints the source and the
 //!   kind, tiles are renamed into place, a band whose tiles are all whole is skipped, and
 //!   `pyramid.toml` is written last.
 
-use super::{ImageMeta, ImagePyramid, encode_tile, tile_is_whole};
+use super::resume::{Plan, remove_temporaries, stamp, start_or_resume, write_quietly};
+use super::{BuildOptions, BuildSummary, band_rows, folder_bytes};
 use crate::error::{Error, Result, Role};
 use crate::io::write_atomic;
-use crate::sketch::tiles::build::resume::{
-    Plan, remove_temporaries, stamp, start_or_resume, write_quietly,
-};
-use crate::sketch::tiles::build::{BuildOptions, BuildSummary, band_rows, folder_bytes};
+use crate::sketch::tiles::image::{ImageMeta, ImagePyramid, encode_tile, tile_is_whole};
 use crate::sketch::tiles::{BORDER, FORMAT, Kind, META, SIDE, TILE, level_sizes, tile_path};
 use crate::surface::tiff::{ImageTiff, Samples};
 use std::path::Path;
@@ -34,7 +32,7 @@ pub(crate) fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<Build
                 .into(),
         ));
     }
-    if crate::sketch::is_glob(src) || !crate::sketch::tiles::build::is_tiff(src) {
+    if crate::sketch::is_glob(src) || !super::is_tiff(src) {
         return Err(bad(
             "an image pyramid is made from a GeoTIFF; make one with `gdal_translate -of GTiff \
              -co TILED=YES -co COMPRESS=DEFLATE IN OUT.tif`"
@@ -96,7 +94,7 @@ pub(crate) fn build(src: &Path, out: &Path, opts: &BuildOptions) -> Result<Build
         tile: TILE,
         border: BORDER,
         levels: level_sizes(width, height),
-        georef: crate::sketch::tiles::build::meta_georef(georef),
+        georef: super::meta_georef(georef),
     };
     remove_temporaries(out);
     let threads = match opts.threads {
@@ -151,7 +149,10 @@ fn coarser_band(
     let (f0, f1) = (2 * r0, 2 * r1);
     for fty in f0 / t..=(f1 - 1) / t {
         for ftx in 0..tiles_x {
-            let fine = super::read_tile_file(&tile_path(out, l - 1, ftx, fty), side)?;
+            let fine = crate::sketch::tiles::image::read_tile_file(
+                &tile_path(out, l - 1, ftx, fty),
+                side,
+            )?;
             let at = |x: usize, y: usize| {
                 let k = ((y - fty * t + b) * side + x - ftx * t + b) * 4;
                 [fine[k], fine[k + 1], fine[k + 2], fine[k + 3]]
