@@ -314,6 +314,11 @@ impl App {
             return Ok(());
         };
         let drawn = present.draw(&camera, &want, &status, shots > 0)?;
+        if !drawn.presented {
+            // Nothing shown (a minimised window): neither a frame nor a screenshot; the next
+            // redraw tries again.
+            return Ok(());
+        }
         self.presented_at.push(Instant::now());
         self.cpu_ms.push(drawn.cpu_ms);
         self.frames += 1;

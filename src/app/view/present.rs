@@ -59,6 +59,8 @@ pub(super) struct Drawn {
     pub height: u32,
     /// The frame's CPU stage (or the baselines' block selection), ms.
     pub cpu_ms: f64,
+    /// Whether the frame reached the window (not where it shows nothing: minimised, covered).
+    pub presented: bool,
 }
 
 pub(super) enum Present {

@@ -70,6 +70,7 @@ impl CpuPath {
             height: frame.height,
             cpu_ms: frame.cpu_us * 1e-3,
             shot: shot.then_some(frame.rgba),
+            presented: true,
         })
     }
 

@@ -192,7 +192,16 @@ impl SurfacePath {
         self.composite
             .update(&alloc, &self.queue, hud::lines(&figures, status), camera);
 
-        let frame = next_texture(&self.surface, &self.device, &self.config)?;
+        let drawn = |shot, presented| Drawn {
+            shot,
+            width: camera.width,
+            height: camera.height,
+            cpu_ms: info.cpu_us * 1e-3,
+            presented,
+        };
+        let Some(frame) = next_texture(&self.surface, &self.device, &self.config)? else {
+            return Ok(drawn(None, false));
+        };
         let mut encoder = self.device.create_command_encoder(&Default::default());
         // Where the surface allows no copies, a screenshot's frame is drawn into a texture that
         // does, and copied from there onto the surface.
@@ -247,26 +256,24 @@ impl SurfacePath {
             .transpose()?;
         self.queue.present(frame);
         self.poll()?;
-        Ok(Drawn {
-            shot: rgba,
-            width: camera.width,
-            height: camera.height,
-            cpu_ms: info.cpu_us * 1e-3,
-        })
+        Ok(drawn(rgba, true))
     }
 }
 
-/// `surface`'s next texture, the surface configured again where it has changed.
+/// `surface`'s next texture, the surface configured again where it has changed (or was lost);
+/// `None` where the window shows nothing now (minimised, covered, or the compositor too slow to
+/// hand a texture over): the frame is skipped and the next one tries again.
 fn next_texture(
     surface: &wgpu::Surface,
     device: &wgpu::Device,
     config: &wgpu::SurfaceConfiguration,
-) -> Result<wgpu::SurfaceTexture> {
+) -> Result<Option<wgpu::SurfaceTexture>> {
     for _ in 0..3 {
         match surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => {
-                return Ok(t);
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => return Ok(Some(t)),
+            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                return Ok(None);
             }
             _ => surface.configure(device, config),
         }
