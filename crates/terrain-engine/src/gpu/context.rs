@@ -24,8 +24,8 @@ pub struct GpuContext {
     /// A software rasterizer (llvmpipe, lavapipe, WARP): no hardware to multisample for free.
     pub software: bool,
     /// The first error wgpu raised outside any call that returns one (an allocation out of
-    /// memory, a lost device), on a device this context opened: [`GpuContext::wait`] returns it
-    /// (shared by the context's clones).
+    /// memory) or the device's loss, on a device this context opened: [`GpuContext::wait`]
+    /// returns it (shared by the context's clones).
     /// wgpu's own handler panics; a host's device keeps the host's handler (empty then).
     raised: Raised,
     /// What every renderer on this device shares: pipelines, layouts, the sketch (shared by the
@@ -33,8 +33,8 @@ pub struct GpuContext {
     pub shared: crate::gpu::shared::OnDevice,
 }
 
-/// The first uncaptured error of a device, as text (wgpu's errors are not `Clone`).
-/// What happened ("the device refused", "the device was lost") and wgpu's words for it.
+/// The first error a device raised outside a call: what happened ("the device refused", "the
+/// device was lost") and wgpu's words for it, as text (wgpu's errors are not `Clone`).
 type Raised = std::sync::Arc<std::sync::Mutex<Option<(&'static str, String)>>>;
 
 /// What the renderer needs of a device, checked before anything is created.
@@ -192,11 +192,12 @@ impl GpuContext {
     /// Blocks until the queue is idle; the first error the device raised since it was opened
     /// (out of memory, a lost device), if any, as [`Error::Device`].
     pub fn wait(&self) -> Result<()> {
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
+        let polled = self.device.poll(wgpu::PollType::wait_indefinitely());
+        // The loss, where the device reported one, says more than the poll's failure.
+        self.raised()?;
+        polled
             .map(|_| ())
-            .map_err(|e| Error::device("device lost while waiting", e))?;
-        self.raised()
+            .map_err(|e| Error::device("device lost while waiting", e))
     }
 
     /// The first error the device raised outside a call that returns one since the last

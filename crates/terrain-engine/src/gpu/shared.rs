@@ -88,16 +88,6 @@ impl OnDevice {
         made
     }
 
-    /// How many pipelines and layouts are shared now.
-    pub fn len(&self) -> usize {
-        lock(&self.objects).len()
-    }
-
-    /// Whether none is.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
     fn get_or<E>(
         &self,
         key: String,
