@@ -94,6 +94,40 @@ pub(crate) fn compute_pipeline(
     })
 }
 
+/// A pass's shader module of one variant, made the first time a pipeline not yet shared on the
+/// device needs it: a renderer whose pipelines are all shared parses no WGSL.
+pub(crate) struct Module<'a> {
+    device: &'a wgpu::Device,
+    name: &'a str,
+    key: Key,
+    made: std::cell::OnceCell<wgpu::ShaderModule>,
+}
+
+impl<'a> Module<'a> {
+    pub fn new(device: &'a wgpu::Device, name: &'a str, key: Key) -> Module<'a> {
+        Module {
+            device,
+            name,
+            key,
+            made: std::cell::OnceCell::new(),
+        }
+    }
+
+    /// The module, made on first use.
+    pub fn get(&self) -> Result<&wgpu::ShaderModule> {
+        if let Some(m) = self.made.get() {
+            return Ok(m);
+        }
+        let m = shader_module(self.device, self.name, self.key)?;
+        Ok(self.made.get_or_init(|| m))
+    }
+
+    /// What it is made from (the WGSL file and the variant), keying the pipelines made with it.
+    pub fn made_from(&self) -> String {
+        format!("{} {:?}", self.name, self.key)
+    }
+}
+
 pub(crate) fn shader_module(
     device: &wgpu::Device,
     name: &str,

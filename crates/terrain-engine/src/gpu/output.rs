@@ -86,7 +86,6 @@ impl OutputPass {
     /// targets, written into `targets`.
     pub fn new(device: &Alloc, targets: Targets, key: Key) -> Result<OutputPass> {
         let layout = bindings::layout(device, Self::NAME, BINDINGS, 0, key);
-        let module = shader_module(device, Self::NAME, key)?;
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(Self::NAME),
             bind_group_layouts: &[Some(&layout)],
@@ -94,37 +93,41 @@ impl OutputPass {
         });
         let shared = format!("{} {key:?} {targets:?}", Self::NAME);
         let pipeline = device.shared.render(shared, || {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(Self::NAME),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(targets.colour.into())],
+            // Parsed only where the device has no such pipeline yet.
+            let module = shader_module(device, Self::NAME, key)?;
+            Ok(
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(Self::NAME),
+                    layout: Some(&pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some("fs"),
+                        compilation_options: Default::default(),
+                        targets: &[Some(targets.colour.into())],
+                    }),
+                    primitive: Default::default(),
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: targets.depth,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: wgpu::MultisampleState {
+                        count: targets.samples,
+                        ..Default::default()
+                    },
+                    multiview_mask: None,
+                    cache: None,
                 }),
-                primitive: Default::default(),
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: targets.depth,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: wgpu::MultisampleState {
-                    count: targets.samples,
-                    ..Default::default()
-                },
-                multiview_mask: None,
-                cache: None,
-            })
-        });
+            )
+        })?;
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("output uniforms"),
             size: std::mem::size_of::<OutputUniforms>() as u64,

@@ -5,10 +5,10 @@
 //! with an infinite far plane, so a view holds ground from a metre to 20,000 km away without
 //! z-fighting. Owns the colour and depth targets.
 
+use super::Module;
 use super::alloc::{Alloc, Buffer};
 use super::bindings::{Binding, bind_group, buffer, layout};
 use super::formats::{COLOUR, DEPTH_COPY};
-use super::shader_module;
 use super::shaders::Key;
 use super::stream::AtlasBinding;
 use super::terrain::RasterPipeline;
@@ -66,16 +66,14 @@ impl PlanetPass {
         // The view distances the output pass reads (`POSITIONS`, always set for a planet).
         let targets = [Some(COLOUR.into()), Some(DEPTH_COPY.into())];
         let layout = layout(device, Self::NAME, BINDINGS, 0, key);
-        let module = shader_module(device, Self::NAME, key)?;
+        let module = Module::new(device, Self::NAME, key);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("planet"),
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let made_from = format!("{} {key:?}", Self::NAME);
         let pipeline_of = |entry, depth| {
             RasterPipeline {
-                made_from: &made_from,
                 layout: &pipeline_layout,
                 module: &module,
                 entry,
@@ -85,11 +83,11 @@ impl PlanetPass {
             }
             .build(device)
         };
-        let sky = pipeline_of(("sky_vs", "sky_fs"), (false, super::terrain::SKY_TEST));
+        let sky = pipeline_of(("sky_vs", "sky_fs"), (false, super::terrain::SKY_TEST))?;
         let planet_pipeline = pipeline_of(
             ("planet_vs", "planet_fs"),
             (true, wgpu::CompareFunction::Greater),
-        );
+        )?;
         let mut resources = atlas.resources();
         resources.extend([
             ("frame", buffer(frame)),

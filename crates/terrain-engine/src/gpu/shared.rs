@@ -49,15 +49,13 @@ impl OnDevice {
     }
 
     /// The render pipeline keyed `key`, made by `make` the first time.
-    pub(crate) fn render(
+    pub(crate) fn render<E>(
         &self,
         key: String,
-        make: impl FnOnce() -> wgpu::RenderPipeline,
-    ) -> wgpu::RenderPipeline {
-        match self.get_or(format!("render {key}"), || {
-            Ok::<_, ()>(Object::Render(make()))
-        }) {
-            Ok(Object::Render(p)) => p,
+        make: impl FnOnce() -> Result<wgpu::RenderPipeline, E>,
+    ) -> Result<wgpu::RenderPipeline, E> {
+        match self.get_or(format!("render {key}"), || make().map(Object::Render))? {
+            Object::Render(p) => Ok(p),
             _ => unreachable!("each kind keys with its own prefix"),
         }
     }

@@ -8,9 +8,9 @@
 //!   multisampled targets the hardware resolves, and the depth copy for positions in a second,
 //!   single-sampled pass of the terrain's depth alone.
 
+use super::Module;
 use super::alloc::{Alloc, Buffer, Texture};
 use super::bindings::{self, Binding, Kind, buffer};
-use super::shader_module;
 use super::shaders::Key;
 use super::stream::AtlasBinding;
 use crate::error::Result;
@@ -169,31 +169,22 @@ impl TerrainPass {
         }
 
         let layout = bindings::layout(device, Self::NAME, BINDINGS, 0, key);
-        let module = shader_module(device, "terrain", key)?;
+        let module = Module::new(device, Self::NAME, key);
         // Multisampled: the same shaders with the depth copy's entry point.
-        let depth_module = if multisampled {
-            Some(shader_module(device, "terrain", key | Key::POSITIONS)?)
-        } else {
-            None
-        };
+        let depth_module =
+            multisampled.then(|| Module::new(device, Self::NAME, key | Key::POSITIONS));
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("terrain"),
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let (made_from, depth_made_from) = (
-            format!("terrain {key:?}"),
-            format!("terrain {:?}", key | Key::POSITIONS),
-        );
-        let pipeline_of = |made_from: &str,
-                           layout: &wgpu::PipelineLayout,
-                           module: &wgpu::ShaderModule,
+        let pipeline_of = |layout: &wgpu::PipelineLayout,
+                           module: &Module,
                            entry: (&str, &str),
                            targets: &[Option<wgpu::ColorTargetState>],
                            samples: u32,
                            depth: Option<(bool, wgpu::CompareFunction)>| {
             RasterPipeline {
-                made_from,
                 layout,
                 module,
                 entry,
@@ -216,24 +207,8 @@ impl TerrainPass {
             let writes = ("terrain_vs", "gbuffer_fs");
             let shades = ("sky_vs", "deferred_fs");
             (
-                pipeline_of(
-                    &made_from,
-                    &pipeline_layout,
-                    &module,
-                    writes,
-                    &gbuffer,
-                    1,
-                    ground_test,
-                ),
-                pipeline_of(
-                    &made_from,
-                    &shading_layout,
-                    &module,
-                    shades,
-                    &targets,
-                    1,
-                    None,
-                ),
+                pipeline_of(&pipeline_layout, &module, writes, &gbuffer, 1, ground_test)?,
+                pipeline_of(&shading_layout, &module, shades, &targets, 1, None)?,
                 Some(gbuffer_layout),
             )
         } else {
@@ -241,40 +216,19 @@ impl TerrainPass {
             let sky = ("sky_vs", "sky_fs");
             let sky_test = Some((false, SKY_TEST));
             (
-                pipeline_of(
-                    &made_from,
-                    &pipeline_layout,
-                    &module,
-                    shaded,
-                    &targets,
-                    n,
-                    ground_test,
-                ),
-                pipeline_of(
-                    &made_from,
-                    &pipeline_layout,
-                    &module,
-                    sky,
-                    &targets,
-                    n,
-                    sky_test,
-                ),
+                pipeline_of(&pipeline_layout, &module, shaded, &targets, n, ground_test)?,
+                pipeline_of(&pipeline_layout, &module, sky, &targets, n, sky_test)?,
                 None,
             )
         };
-        let depth_pipeline = depth_module.map(|m| {
-            let targets = [None, Some(DEPTH_COPY.into())];
-            let entry = ("terrain_vs", "depth_fs");
-            pipeline_of(
-                &depth_made_from,
-                &pipeline_layout,
-                &m,
-                entry,
-                &targets,
-                1,
-                ground_test,
-            )
-        });
+        let depth_pipeline = depth_module
+            .as_ref()
+            .map(|m| {
+                let targets = [None, Some(DEPTH_COPY.into())];
+                let entry = ("terrain_vs", "depth_fs");
+                pipeline_of(&pipeline_layout, m, entry, &targets, 1, ground_test)
+            })
+            .transpose()?;
 
         let mut resources = variant.atlas.resources();
         resources.push(("frame", buffer(frame)));

@@ -2,6 +2,8 @@
 //! pulled from storage (no vertex buffers), triangle lists, reversed-Z depth into [`DEPTH`].
 
 use super::DEPTH;
+use crate::error::Result;
+use crate::gpu::Module;
 use crate::gpu::alloc::Alloc;
 
 /// A render pass of the terrain's: no occlusion queries, one view.
@@ -25,11 +27,10 @@ pub(super) fn render_pass<'e>(
 /// A render pipeline of the raster passes (terrain, planet): vertices pulled from storage (no
 /// vertex buffers), triangle lists, and a reversed-Z depth test into [`DEPTH`] or none.
 pub(crate) struct RasterPipeline<'a> {
-    /// What `module` and `layout` were made from (the WGSL file and its variant key), keying
-    /// the pipeline shared on the device with the rest of this descriptor.
-    pub made_from: &'a str,
     pub layout: &'a wgpu::PipelineLayout,
-    pub module: &'a wgpu::ShaderModule,
+    /// Made only where the device shares no such pipeline yet; what it is made from keys the
+    /// pipeline with the rest of this descriptor.
+    pub module: &'a Module<'a>,
     /// Vertex and fragment entry points.
     pub entry: (&'a str, &'a str),
     pub targets: &'a [Option<wgpu::ColorTargetState>],
@@ -39,21 +40,27 @@ pub(crate) struct RasterPipeline<'a> {
 }
 
 impl RasterPipeline<'_> {
-    pub fn build(&self, device: &Alloc) -> wgpu::RenderPipeline {
-        let (vs, fs) = self.entry;
+    pub fn build(&self, device: &Alloc) -> Result<wgpu::RenderPipeline> {
         let shared = format!(
             "{} {:?} {:?} {} {:?}",
-            self.made_from, self.entry, self.targets, self.samples, self.depth
+            self.module.made_from(),
+            self.entry,
+            self.targets,
+            self.samples,
+            self.depth
         );
-        device.shared.render(shared, || self.make(device, vs, fs))
+        device
+            .shared
+            .render(shared, || Ok(self.make(device, self.module.get()?)))
     }
 
-    fn make(&self, device: &wgpu::Device, vs: &str, fs: &str) -> wgpu::RenderPipeline {
+    fn make(&self, device: &wgpu::Device, module: &wgpu::ShaderModule) -> wgpu::RenderPipeline {
+        let (vs, fs) = self.entry;
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(fs),
             layout: Some(self.layout),
             vertex: wgpu::VertexState {
-                module: self.module,
+                module,
                 entry_point: Some(vs),
                 compilation_options: Default::default(),
                 buffers: &[],
@@ -74,7 +81,7 @@ impl RasterPipeline<'_> {
                 ..Default::default()
             },
             fragment: Some(wgpu::FragmentState {
-                module: self.module,
+                module,
                 entry_point: Some(fs),
                 compilation_options: Default::default(),
                 targets: self.targets,
