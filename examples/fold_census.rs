@@ -13,8 +13,8 @@
 
 use glam::DVec3;
 use std::path::PathBuf;
-use terrain_cli::app::path::Flight;
 use terrain_engine::Camera;
+use terrain_engine::flight::path::Flight;
 use terrain_engine::scene::{self, Scene, WarpMethod};
 use terrain_engine::stage::CpuStage;
 use terrain_engine::stage::pair_unfolded;

@@ -5,11 +5,11 @@
 mod common;
 use common::*;
 use glam::DVec3;
-use terrain_cli::app::path::Flight;
 use terrain_cli::eval::compare::temporal;
 use terrain_engine::Camera;
 use terrain_engine::Renderer;
 use terrain_engine::View;
+use terrain_engine::flight::path::Flight;
 use terrain_engine::scene::{self, Mode, Scene};
 use terrain_engine::stage::CpuStage;
 

@@ -87,6 +87,15 @@ fn a_host_texture_holds_the_bytes_terrain_render_writes() {
     );
     // And the read-back helper gives the same.
     assert_eq!(terrain.render_to_image(&camera).unwrap(), drawn);
+    // As does the read-back that does not wait (a browser's), once the device is polled.
+    let readback = terrain::readback::Readback::new(&device, &colour).unwrap();
+    let mut encoder = device.create_command_encoder(&Default::default());
+    readback.record(&mut encoder, &colour).unwrap();
+    queue.submit([encoder.finish()]);
+    let (send, got) = std::sync::mpsc::channel();
+    readback.read_rgba_later(move |texels| send.send(texels).unwrap());
+    device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
+    assert_eq!(got.recv().unwrap().unwrap(), drawn);
 }
 
 /// A planet through the same API: the clipmaps' frame in the host's texture is `terrain render`'s.

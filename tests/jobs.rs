@@ -640,7 +640,7 @@ fn the_bundled_jobs_file_and_flight_load() {
     let scene =
         terrain_engine::scene::Scene::load(&manifest_dir().join("sketches/jacksboro-flight.toml"))
             .unwrap();
-    let path = terrain_cli::app::path::CameraPath::of_scene(
+    let path = terrain_engine::flight::path::CameraPath::of_scene(
         &scene,
         &terrain_engine::scene::load_atlas(&scene).unwrap(),
     )

@@ -401,7 +401,7 @@ fn view_keys_switch_mode_record_the_path_and_quit() {
         (last[0] - first[0]).abs() < 1.0,
         "moved sideways: {first:?} → {last:?}"
     );
-    assert!(terrain_cli::app::path::CameraPath::new(&path).is_ok());
+    assert!(terrain_engine::flight::path::CameraPath::new(&path).is_ok());
 }
 
 /// Over a planet the window draws what `render` draws (clipmaps), and W flies along the
@@ -481,5 +481,5 @@ fn view_flies_over_a_planet_and_records_a_planet_path() {
         (last.altitude_m.unwrap() - 10_000.0).abs() < 1.0,
         "{last:?}"
     );
-    assert!(terrain_cli::app::path::PlanetFlight::of_scene(&recorded, 6_371_000.0).is_ok());
+    assert!(terrain_engine::flight::path::PlanetFlight::of_scene(&recorded, 6_371_000.0).is_ok());
 }

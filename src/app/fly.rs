@@ -20,7 +20,6 @@
 //! the renderer (docs/decisions.md, “PNG encoding off the render loop”).
 
 use crate::app::animation;
-use crate::app::path::Flight;
 use crate::output::{Fixed, write_atomic, write_image};
 use crate::progress::Progress;
 use crate::stats::percentile;
@@ -29,6 +28,7 @@ use std::path::{Path, PathBuf};
 use terrain_engine::PassTimes;
 use terrain_engine::Renderer;
 use terrain_engine::View;
+use terrain_engine::flight::path::Flight;
 use terrain_engine::pass;
 use terrain_engine::scene::{Mode, Scene};
 use terrain_engine::sketch::tiles::StreamStats;

@@ -7,10 +7,10 @@
 //! RGBA, composited over the surface's texture on the GPU); the two show the same text in the
 //! same place.
 
-use crate::app::flycam::FlyCamera;
 use crate::plot::{Rgb, draw_on_rgba, font};
 use terrain_engine::Frame;
 use terrain_engine::View;
+use terrain_engine::flight::flycam::FlyCamera;
 use terrain_engine::scene::Mode;
 use terrain_engine::stage::StageTimes;
 

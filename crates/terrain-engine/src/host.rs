@@ -58,6 +58,13 @@ impl Description {
         Ok(Description::with_atlas(scene, atlas))
     }
 
+    /// `scene` over its sketch file's bytes (`sketch.path` names the file, whose name tells
+    /// its format): a page that fetched the sketch, with no file system to read it from.
+    pub fn from_bytes(scene: Scene, sketch: &[u8]) -> Result<Description> {
+        let atlas = scene::load_atlas_from(&scene, sketch)?;
+        Ok(Description::with_atlas(scene, atlas))
+    }
+
     /// `scene` over its sketch already read (a host that builds several terrains of one sketch,
     /// as `terrain view` does for each mode, reads it once).
     pub fn with_atlas(scene: Scene, atlas: Atlas) -> Description {

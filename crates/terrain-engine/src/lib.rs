@@ -39,6 +39,7 @@ mod camera;
 mod checks;
 mod detail;
 mod error;
+pub mod flight;
 mod geomipmap;
 mod gpu;
 mod host;

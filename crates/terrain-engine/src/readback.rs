@@ -114,25 +114,57 @@ impl Readback {
     /// The texels of the submitted copy, four bytes each, rows top first, as the texture
     /// stores them (a depth texture's as little-endian f32). Waits for the device.
     pub fn read(&self, device: &wgpu::Device) -> Result<Vec<u8>> {
-        let padded = padded_row(self.width) as usize;
-        let row = self.width as usize * 4;
-        read_buffer(device, &self.buffer, |bytes| {
-            (0..self.height as usize)
-                .flat_map(|y| bytes[y * padded..y * padded + row].iter().copied())
-                .collect()
-        })
+        read_buffer(device, &self.buffer, |bytes| self.unpad(bytes))
     }
 
     /// As [`Readback::read`], a BGRA texture's texels swapped into RGBA.
     pub fn read_rgba(&self, device: &wgpu::Device) -> Result<Vec<u8>> {
         let mut texels = self.read(device)?;
+        self.swap_bgra(&mut texels);
+        Ok(texels)
+    }
+
+    /// As [`Readback::read_rgba`] without waiting: `done` gets the texels once the device has
+    /// mapped the copy. For a browser, whose page cannot block on the GPU: the mapping completes
+    /// between its tasks. The read-back is spent.
+    pub fn read_rgba_later(self, done: impl FnOnce(Result<Vec<u8>>) + wgpu::WasmNotSend + 'static) {
+        let buffer = (*self.buffer).clone();
+        buffer
+            .clone()
+            .slice(..)
+            .map_async(wgpu::MapMode::Read, move |mapped| {
+                let texels = mapped
+                    .map_err(|e| Error::device("readback failed", e))
+                    .and_then(|()| {
+                        let view = buffer
+                            .slice(..)
+                            .get_mapped_range()
+                            .map_err(|e| Error::device("readback mapping", e))?;
+                        let mut texels = self.unpad(&view);
+                        self.swap_bgra(&mut texels);
+                        Ok(texels)
+                    });
+                buffer.unmap();
+                done(texels)
+            });
+    }
+
+    /// The rows of a mapped copy without wgpu's padding.
+    fn unpad(&self, bytes: &[u8]) -> Vec<u8> {
+        let padded = padded_row(self.width) as usize;
+        let row = self.width as usize * 4;
+        (0..self.height as usize)
+            .flat_map(|y| bytes[y * padded..y * padded + row].iter().copied())
+            .collect()
+    }
+
+    fn swap_bgra(&self, texels: &mut [u8]) {
         if matches!(
             self.format,
             wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
         ) {
             texels.chunks_exact_mut(4).for_each(|px| px.swap(0, 2));
         }
-        Ok(texels)
     }
 }
 

@@ -2,9 +2,9 @@
 //! overwrite a file.
 
 use super::App;
-use crate::app::flycam::{PathRecorder, scene_with_path};
 use crate::output::{write_atomic, write_image};
 use std::path::{Path, PathBuf};
+use terrain_engine::flight::flycam::{PathRecorder, scene_with_path};
 use terrain_engine::{Error, Result, Role};
 
 /// `dir/<name(0)>`, or the first of `dir/<name(n)>`, n = 1, 2, … that does not exist yet.

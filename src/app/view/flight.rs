@@ -5,9 +5,11 @@
 //! clearance; over a planet the camera keeps its own altitude above the ground.
 
 use super::App;
-use crate::app::flycam::{CLEARANCE_M, FlyCamera, Motion, PathRecorder, PlanetFlyCamera};
 use std::time::Instant;
 use terrain_engine::Result;
+use terrain_engine::flight::flycam::{
+    CLEARANCE_M, FlyCamera, Motion, PathRecorder, PlanetFlyCamera,
+};
 use terrain_engine::scene::ground_under;
 use winit::keyboard::KeyCode;
 

@@ -8,7 +8,7 @@
 //! `<scene>-flown.toml`, the scene with that `[path]`); P writes a screenshot to `--out-dir`
 //! (`<scene>-view-<n>.png`); neither ever overwrites a file, taking the next free number; Esc
 //! quits. The figures on screen: mode, view, frame time per pass, triangles, height above the
-//! ground. Over a planet the same keys fly great circles (`flycam::PlanetFlyCamera`) in clipmaps
+//! ground. Over a planet the same keys fly great circles (`terrain_engine::flight::flycam::PlanetFlyCamera`) in clipmaps
 //! mode (1/2/3 do nothing), and a recorded path is a planet's `[path]`: the camera's keys and the
 //! time flown. A sketch given with no camera place and no `[path]` tours its default orbit
 //! (`scene::default_path`) until a key or the mouse takes over.
@@ -29,9 +29,9 @@
 //! Rejected alternative: the CPU copy for every frame, a read-back per frame and a second
 //! upload to the display (docs/decisions.md, “View presented through a surface”).
 
-use crate::app::flycam::{FlyCamera, PathRecorder, PlanetFlyCamera};
 use crate::app::hud;
-use crate::app::path::CameraPath;
+use terrain_engine::flight::flycam::{FlyCamera, PathRecorder, PlanetFlyCamera};
+use terrain_engine::flight::path::CameraPath;
 use terrain_engine::{Error, Result};
 
 mod files;

@@ -37,7 +37,6 @@ pub mod summary;
 pub mod sweep;
 pub mod temporal;
 
-use crate::app::path::Flight;
 use crate::output::{write_atomic, write_image};
 use crate::progress::Progress;
 use measure::{measure_lod, renderer};
@@ -47,6 +46,7 @@ use rounds::{Rounds, RowTimes};
 use std::path::Path;
 use sweep::Setting;
 use terrain_engine::Camera;
+use terrain_engine::flight::path::Flight;
 use terrain_engine::scene;
 use terrain_engine::scene::{MODES, Mode, Scene};
 use terrain_engine::sketch::Atlas;

@@ -6,7 +6,6 @@ use super::report::{self, PathMode, PathReport, Stats};
 use super::sweep::Setting;
 use super::temporal::{self, LodChange};
 use super::{Options, figures};
-use crate::app::path::{Flight, world_eye};
 use crate::eval::metrics::{self, ScreenError};
 use crate::output::{Fixed, write_atomic};
 use crate::progress::Progress;
@@ -15,6 +14,7 @@ use terrain_engine::Camera;
 use terrain_engine::GpuContext;
 use terrain_engine::Renderer;
 use terrain_engine::Result;
+use terrain_engine::flight::path::{Flight, world_eye};
 use terrain_engine::scene::Scene;
 use terrain_engine::sketch::Atlas;
 

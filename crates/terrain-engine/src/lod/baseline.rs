@@ -34,7 +34,7 @@ use crate::gpu::warp_zoom::WarpZoomPass;
 use crate::scene::Mode;
 use crate::sketch::Atlas;
 use std::any::Any;
-use std::time::Instant;
+use web_time::Instant;
 
 /// The largest baked grid the default K allows (2^22 vertices: 64 MiB of vertices and normals).
 const MAX_DEFAULT_VERTICES: f64 = 4_194_304.0;

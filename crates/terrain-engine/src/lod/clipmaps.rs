@@ -23,7 +23,7 @@ use crate::planet::{Planet, Tangent};
 use crate::sketch::Atlas;
 use glam::DVec3;
 use std::any::Any;
-use std::time::Instant;
+use web_time::Instant;
 
 const PASSES: [&str; 2] = [ClipmapsPass::NAME, PlanetPass::NAME];
 

@@ -33,7 +33,7 @@ use crate::scene::{Mode, Scene};
 use crate::sketch::Atlas;
 use crate::sketch::tiles::cache::StreamStats;
 use crate::stage::StageTimes;
-use std::time::Instant;
+use web_time::Instant;
 
 /// One rendered frame: RGBA8 sRGB pixels, rows top first.
 pub struct Frame {

@@ -44,6 +44,24 @@ pub fn load_atlas(scene: &Scene) -> Result<Atlas> {
     Ok(atlas)
 }
 
+/// The scene's sketch from its file's bytes, read as [`load_atlas`] reads the file (a page
+/// fetches them; a browser has no file system). A synthetic sketch ignores `bytes`; a planet's
+/// global file and a tile pyramid are refused (they are read from disk).
+pub fn load_atlas_from(scene: &Scene, bytes: &[u8]) -> Result<Atlas> {
+    let mut atlas = match (&scene.sketch.path, scene.planet()) {
+        (Some(p), None) => Atlas::from_bytes(p, bytes, &scene_load_options(scene))?,
+        (Some(_), Some(_)) => {
+            return Err(Error::value(
+                "sketch.path",
+                "a planet's global sketch is read from a file, not from bytes",
+            ));
+        }
+        (None, _) => load_sketch(scene)?,
+    };
+    atlas.water_m = scene.sketch.water_level_m as f32;
+    Ok(atlas)
+}
+
 /// What the scene's sketch file took on trust (`sketch::warnings`) and the scene's places that
 /// lie far off the sketch (`scene::off_map_warnings`), one line each; nothing for a planet,
 /// whose sketch is global and whose places are latitudes and longitudes.

@@ -22,8 +22,8 @@ mod surface;
 
 pub(crate) use build::stream_config;
 pub use build::{
-    camera_of, detail_for, detail_of, ground_under, light_of, load_atlas, scene_load_options,
-    warnings,
+    camera_of, detail_for, detail_of, ground_under, light_of, load_atlas, load_atlas_from,
+    scene_load_options, warnings,
 };
 pub use parse::{Fault, is_sketch_path, scene_text};
 pub use place::{

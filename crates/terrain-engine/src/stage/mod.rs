@@ -27,7 +27,7 @@ use glam::DVec2;
 use hold::{Hold, ROW_STEP};
 use importance::{ErrorTerm, ImportanceMap, ImportanceParams};
 use sketch_map::{Resampler, SketchMap};
-use std::time::Instant;
+use web_time::Instant;
 
 /// Microseconds spent in each part of the stage.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]

@@ -16,12 +16,12 @@
 //! Rejected alternative: a fixed speed. Near the ground it overshoots a hill in one frame; 10 km up
 //! it takes minutes to cross the sketch.
 
+use crate::Camera;
+use crate::scene::{PathKey, PathSection, Scene};
+use crate::sketch::Atlas;
+use crate::{Error, Result, Role};
 use glam::DVec3;
 use std::path::Path;
-use terrain_engine::Camera;
-use terrain_engine::scene::{PathKey, PathSection, Scene};
-use terrain_engine::sketch::Atlas;
-use terrain_engine::{Error, Result, Role};
 
 /// Metres kept between the eye and the highest the terrain can reach under it.
 pub const CLEARANCE_M: f64 = 2.0;
@@ -29,23 +29,32 @@ const MAX_PITCH: f64 = 89.0 * std::f64::consts::PI / 180.0;
 /// Radians per pixel of mouse motion.
 const LOOK_PER_PX: f64 = 0.004;
 
+/// The keys held in a frame, as the camera reads them.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Motion {
     /// Each in −1 … 1: forward/back (W/S), right/left (D/A), up/down (E/Q).
     pub forward: f64,
+    /// Right (D) is positive.
     pub right: f64,
+    /// Up (E) is positive.
     pub up: f64,
+    /// Shift held: four times the speed.
     pub fast: bool,
 }
 
+/// The interactive camera over a sketch: an eye in world metres, yaw and pitch in radians.
 #[derive(Clone, Debug)]
 pub struct FlyCamera {
+    /// World metres.
     pub eye: DVec3,
+    /// 0 looks north (+y), growing towards east.
     pub yaw: f64,
+    /// Above the horizon is positive, within ±89°.
     pub pitch: f64,
 }
 
 impl FlyCamera {
+    /// The fly camera where `c` stands, looking where it looks.
     pub fn from_camera(c: &Camera) -> FlyCamera {
         FlyCamera::looking(c.eye, c.forward)
     }
@@ -59,6 +68,7 @@ impl FlyCamera {
         }
     }
 
+    /// The unit direction the camera looks in.
     pub fn forward(&self) -> DVec3 {
         let (sy, cy) = self.yaw.sin_cos();
         let (sp, cp) = self.pitch.sin_cos();
@@ -89,12 +99,14 @@ impl FlyCamera {
         self.keep_above(floor);
     }
 
+    /// Lifts the eye to `floor` where it is below it.
     pub fn keep_above(&mut self, floor: Option<f64>) {
         if let Some(f) = floor {
             self.eye.z = self.eye.z.max(f);
         }
     }
 
+    /// The camera to draw: this eye and direction, `fov_y_deg`, an image of `width` × `height`.
     pub fn camera(&self, fov_y_deg: f64, width: u32, height: u32, far: f64) -> Result<Camera> {
         Camera::new(
             self.eye,
@@ -115,13 +127,17 @@ fn look(yaw: &mut f64, pitch: &mut f64, dx: f64, dy: f64) {
 /// The interactive camera over a planet of `radius` metres: its keys, angles in radians.
 #[derive(Clone, Debug)]
 pub struct PlanetFlyCamera {
+    /// The nadir's latitude.
     pub lat: f64,
+    /// The nadir's longitude.
     pub lon: f64,
     /// Above the ground (the terrain function with every octave, or the sea), metres.
     pub altitude: f64,
     /// The heading: 0 north, growing towards east.
     pub yaw: f64,
+    /// Above the horizon is positive.
     pub pitch: f64,
+    /// The planet's radius, metres.
     pub radius: f64,
 }
 
@@ -144,6 +160,7 @@ impl PlanetFlyCamera {
         }
     }
 
+    /// Turns by a mouse motion of `dx`, `dy` pixels.
     pub fn look(&mut self, dx: f64, dy: f64) {
         look(&mut self.yaw, &mut self.pitch, dx, dy);
     }
@@ -165,8 +182,7 @@ impl PlanetFlyCamera {
         if along > 0.0 {
             let arc = (speed * dt * along / norm / self.radius).min(Self::MAX_ARC_PER_S * dt);
             let bearing = self.yaw + right.atan2(ahead);
-            let (lat, lon, track) =
-                terrain_engine::planet::travel(self.lat, self.lon, bearing, arc);
+            let (lat, lon, track) = crate::planet::travel(self.lat, self.lon, bearing, arc);
             (self.lat, self.lon) = (lat, lon);
             self.yaw = (self.yaw + track - bearing).rem_euclid(std::f64::consts::TAU);
         }
@@ -191,7 +207,7 @@ impl PlanetFlyCamera {
     /// Where the eye is, metres from the planet's centre (the altitude counted from the sphere):
     /// for measuring the distance flown.
     pub fn world(&self) -> DVec3 {
-        terrain_engine::planet::unit(self.lat, self.lon) * (self.radius + self.altitude)
+        crate::planet::unit(self.lat, self.lon) * (self.radius + self.altitude)
     }
 
     /// The camera `scene`'s camera becomes with these keys, at `width` × `height`.
@@ -204,13 +220,14 @@ impl PlanetFlyCamera {
         c.heading_deg = Some(self.yaw.to_degrees());
         c.pitch_deg = Some(self.pitch.to_degrees());
         (c.width, c.height) = (width, height);
-        terrain_engine::scene::camera_of(&s, atlas)
+        crate::scene::camera_of(&s, atlas)
     }
 }
 
 /// Records the path flown: a key every second of flight or 500 m (over a planet, every second).
 #[derive(Debug, Default)]
 pub struct PathRecorder {
+    /// The keys recorded so far.
     pub keys: Vec<PathKey>,
     distance_m: f64,
     seconds: f64,
@@ -368,14 +385,14 @@ mod tests {
             &path,
         )
         .unwrap();
-        let scene = terrain_engine::scene::Scene::parse(
+        let scene = crate::scene::Scene::parse(
             &format!(
                 "{text}\n[camera]\nposition = [0.0, 0.0, 900.0]\nlook_at = [10.0, 10.0, 0.0]\n"
             ),
             std::path::PathBuf::new(),
         )
         .unwrap();
-        assert!(crate::app::path::CameraPath::new(scene.path.as_ref().unwrap()).is_ok());
+        assert!(crate::flight::path::CameraPath::new(scene.path.as_ref().unwrap()).is_ok());
     }
 
     fn planet_cam() -> PlanetFlyCamera {
@@ -385,7 +402,7 @@ mod tests {
             altitude: 1000.0,
             yaw: 0.0,
             pitch: -0.2,
-            radius: terrain_engine::planet::EARTH_RADIUS_M,
+            radius: crate::planet::EARTH_RADIUS_M,
         }
     }
 
@@ -394,7 +411,7 @@ mod tests {
     /// planet's `[path]` (its keys, the time flown) that a planet flight takes.
     #[test]
     fn a_planet_camera_flies_great_circles_and_records_a_planet_path() {
-        let r = terrain_engine::planet::EARTH_RADIUS_M;
+        let r = crate::planet::EARTH_RADIUS_M;
         let mut c = planet_cam();
         let ahead = Motion {
             forward: 1.0,
@@ -439,12 +456,12 @@ mod tests {
             &path,
         )
         .unwrap();
-        let scene = terrain_engine::scene::Scene::parse(
+        let scene = crate::scene::Scene::parse(
             &format!("{text}\n[camera]\nlat_deg = 0.0\nlon_deg = 0.0\naltitude_m = 1000.0\n"),
             std::path::PathBuf::new(),
         )
         .unwrap();
-        let flight = crate::app::path::PlanetFlight::of_scene(&scene, r).unwrap();
+        let flight = crate::flight::path::PlanetFlight::of_scene(&scene, r).unwrap();
         let end = flight.at(flight.duration_s);
         assert!((end[0].to_radians() - c.lat).abs() < 1e-12, "{end:?}");
     }

@@ -13,12 +13,12 @@
 //! speed changes with the spacing of the keys (a camera that lurches), and its uniform
 //! parameterisation loops past closely spaced keys.
 
+use crate::Camera;
+use crate::scene::{self as place, ground_under};
+use crate::scene::{PathKey, PathSection, Scene};
+use crate::sketch::Atlas;
+use crate::{Error, Result};
 use glam::{DVec2, DVec3};
-use terrain_engine::Camera;
-use terrain_engine::scene::{self as place, ground_under};
-use terrain_engine::scene::{PathKey, PathSection, Scene};
-use terrain_engine::sketch::Atlas;
-use terrain_engine::{Error, Result};
 
 /// Arc-length samples per segment.
 const SAMPLES: usize = 512;
@@ -27,14 +27,17 @@ pub const LOOK_AHEAD_S: f64 = 2.0;
 /// The least height above the sketch's surface a path's camera keeps.
 pub const CLEARANCE_M: f64 = 2.0;
 
+/// A sketch's camera path: the curve through its keys and its arc length.
 pub struct CameraPath {
     keys: Vec<PathKey>,
+    /// Metres a second along the curve.
     pub speed_mps: f64,
     /// Cumulative arc length at each (segment, sample), `SAMPLES + 1` per segment.
     lengths: Vec<f64>,
 }
 
 impl CameraPath {
+    /// The path through `section`'s keys (at least two).
     pub fn new(section: &PathSection) -> Result<CameraPath> {
         if section.keys.len() < 2 {
             return Err(Error::value(
@@ -110,10 +113,12 @@ impl CameraPath {
         self.keys.len() - 1
     }
 
+    /// The curve's length, metres.
     pub fn length_m(&self) -> f64 {
         *self.lengths.last().unwrap_or(&0.0)
     }
 
+    /// Seconds from the first key to the last.
     pub fn duration_s(&self) -> f64 {
         self.length_m() / self.speed_mps
     }
@@ -209,13 +214,15 @@ impl CameraPath {
         }
         let mut base = scene.clone();
         base.camera.aim(eye, eye + self.direction(s) * 100.0);
-        terrain_engine::scene::camera_of(&base, atlas)
+        crate::scene::camera_of(&base, atlas)
     }
 }
 
 /// What a command flies: a sketch's camera path, or a flight over a planet.
 pub enum Flight {
+    /// Over a sketch.
     Path(CameraPath),
+    /// Over a planet.
     Planet(PlanetFlight),
 }
 
@@ -229,6 +236,7 @@ impl Flight {
         })
     }
 
+    /// Seconds from the first key to the last.
     pub fn duration_s(&self) -> f64 {
         match self {
             Flight::Path(p) => p.duration_s(),
@@ -273,8 +281,8 @@ impl Flight {
 pub fn world_eye(camera: &Camera, radius: Option<f64>) -> DVec3 {
     match (camera.geo, radius) {
         (Some(g), Some(r)) => {
-            terrain_engine::planet::unit(g.lat, g.lon) * r
-                + terrain_engine::planet::Tangent::at(g.lat, g.lon).world(camera.eye)
+            crate::planet::unit(g.lat, g.lon) * r
+                + crate::planet::Tangent::at(g.lat, g.lon).world(camera.eye)
         }
         _ => camera.eye,
     }
@@ -289,6 +297,7 @@ pub fn world_eye(camera: &Camera, radius: Option<f64>) -> DVec3 {
 /// magnitude of height.
 pub struct PlanetFlight {
     keys: Vec<PathKey>,
+    /// The flight's length in time, seconds.
     pub duration_s: f64,
     /// Whether the camera rests at each key (a scene's path) or moves evenly (the default pass).
     ease: bool,
@@ -319,8 +328,7 @@ impl PlanetFlight {
         );
         let altitude = c.altitude_m.unwrap_or(1.0);
         let angle = altitude.clamp(10.0, 0.1 * radius) / radius;
-        let (lat2, lon2, track) =
-            terrain_engine::planet::travel(lat, lon, c.heading().to_radians(), angle);
+        let (lat2, lon2, track) = crate::planet::travel(lat, lon, c.heading().to_radians(), angle);
         let key = |lat: f64, lon: f64, heading: f64| PathKey {
             position: None,
             look_at: None,
@@ -366,17 +374,14 @@ impl PlanetFlight {
         let (la, oa, ha, da, pa) = get(a);
         let (lb, ob, hb, db, pb) = get(b);
         // The great circle between the two nadirs.
-        let (ua, ub) = (
-            terrain_engine::planet::unit(la, oa),
-            terrain_engine::planet::unit(lb, ob),
-        );
+        let (ua, ub) = (crate::planet::unit(la, oa), crate::planet::unit(lb, ob));
         let angle = ua.angle_between(ub);
         let dir = if angle < 1e-12 {
             ua
         } else {
             (ua * ((1.0 - w) * angle).sin() + ub * (w * angle).sin()) / angle.sin()
         };
-        let (lat, lon) = terrain_engine::planet::lat_lon(dir);
+        let (lat, lon) = crate::planet::lat_lon(dir);
         let altitude = (ha.ln() + (hb.ln() - ha.ln()) * w).exp();
         let turn = (db - da + 540.0).rem_euclid(360.0) - 180.0;
         [
@@ -398,7 +403,7 @@ impl PlanetFlight {
         c.altitude_m = Some(altitude);
         c.heading_deg = Some(heading);
         c.pitch_deg = Some(pitch);
-        terrain_engine::scene::camera_of(&s, atlas)
+        crate::scene::camera_of(&s, atlas)
     }
 }
 
