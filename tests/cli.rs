@@ -592,3 +592,89 @@ fn pass_times_are_keyed_by_the_passes_that_ran() {
         }
     }
 }
+
+/// `terrain web` with a module given (`--pkg`) writes the site: the page, the module, the scene
+/// as resolved with its sketch beside it, and `site.json`; the page's reading of those bytes
+/// (`Description::from_bytes`) gives the atlas and camera `render` reads from the files. What
+/// the page cannot fetch is refused in one line.
+#[test]
+fn web_writes_a_site_the_page_reads_as_render_does() {
+    use terrain::{Description, Scene};
+    let dir = scratch("web-site");
+    let pkg = dir.join("pkg");
+    std::fs::create_dir_all(&pkg).unwrap();
+    write(&pkg, "terrain_web.js", "export default function init() {}");
+    write(&pkg, "terrain_web_bg.wasm", b"\0asm\x01\0\0\0");
+    let site = dir.join("site");
+    let jacksboro = manifest_dir().join("sketches/jacksboro.toml");
+    let (code, _, err) = terrain(&[
+        "web",
+        jacksboro.to_str().unwrap(),
+        "--out-dir",
+        site.to_str().unwrap(),
+        "--pkg",
+        pkg.to_str().unwrap(),
+        "--size",
+        "64x48",
+        "--mode",
+        "geomipmap",
+        "--set",
+        "detail.octaves=3",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    for f in [
+        "index.html",
+        "main.js",
+        "pkg/terrain_web.js",
+        "pkg/terrain_web_bg.wasm",
+    ] {
+        assert!(site.join(f).is_file(), "{f} missing");
+    }
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(site.join("site.json")).unwrap()).unwrap();
+    assert_eq!(meta["mode"], "geomipmap");
+    assert_eq!(
+        (meta["width"].as_u64(), meta["height"].as_u64()),
+        (Some(64), Some(48))
+    );
+    assert_eq!(meta["sketch"], "sketch/jacksboro_fault_dem.asc");
+
+    let text = std::fs::read_to_string(site.join("scene.toml")).unwrap();
+    let page_scene = Scene::parse(&text, ".".into()).unwrap();
+    assert_eq!(
+        page_scene.detail.octaves,
+        Some(3),
+        "the --set is in the site's scene"
+    );
+    let bytes = std::fs::read(site.join("sketch/jacksboro_fault_dem.asc")).unwrap();
+    let page = Description::from_bytes(page_scene, &bytes).unwrap();
+    let mut here = Scene::load_with(&jacksboro, &["detail.octaves=3".into()]).unwrap();
+    (here.camera.width, here.camera.height) = (64, 48);
+    let native = Description::new(here).unwrap();
+    let (pa, na) = (page.atlas(), native.atlas());
+    assert_eq!(pa.levels[0].data, na.levels[0].data);
+    assert_eq!(
+        (pa.dx, pa.origin, pa.water_m),
+        (na.dx, na.origin, na.water_m)
+    );
+    let (a, b) = (page.camera(64, 48).unwrap(), native.camera(64, 48).unwrap());
+    assert_eq!((a.eye, a.forward), (b.eye, b.forward));
+
+    let planet = manifest_dir().join("sketches/planet-10km.toml");
+    let out = dir.join("planet-site");
+    let args = [
+        "web",
+        planet.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ];
+    fails_with(&args, "planet");
+    let glob = manifest_dir().join("tests/data/formats/*Float32.tif");
+    let args = [
+        "web",
+        glob.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+    ];
+    fails_with(&args, "one sketch file");
+}

@@ -31,6 +31,7 @@ mod scene;
 mod tiles;
 mod view;
 mod warp;
+mod web;
 
 use clap::{Parser, Subcommand};
 use terrain_engine::Error;
@@ -75,6 +76,9 @@ enum Command {
     /// An interactive window flying through the terrain (mouse look, WASD/QE, 1/2/3 modes,
     /// V views, F freeze, R record the path, P screenshot, Esc quit).
     View(view::Args),
+    /// Writes the scene as a static web site drawn in the browser through WebGPU (the same
+    /// renderer, as WebAssembly); --serve serves it on 127.0.0.1.
+    Web(web::Args),
 }
 
 /// The exit code of every usage error: an unknown option, a bad option value, a bad `--set`.
@@ -125,6 +129,7 @@ fn main() {
         Command::Fly(a) => fly::run(a),
         Command::Batch(a) => batch::run(a),
         Command::View(a) => view::run(a),
+        Command::Web(a) => web::run(a),
     };
     if let Err(e) = result {
         eprintln!("error: {}", one_line(&e));
