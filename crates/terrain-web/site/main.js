@@ -163,7 +163,14 @@ async function main() {
       'ArrowUp', 'ArrowDown', 'ArrowLeft', 'ArrowRight', 'PageUp', 'PageDown']) viewer.key(code, false);
   });
   if (!still) {
-    new ResizeObserver(() => { fit(site); viewer.resize(canvas.width, canvas.height); }).observe(canvas);
+    new ResizeObserver(() => {
+      fit(site);
+      try {
+        viewer.resize(canvas.width, canvas.height);
+      } catch (e) {
+        fail('The canvas could not resize', e);
+      }
+    }).observe(canvas);
   }
 
   message.hidden = true;

@@ -60,14 +60,16 @@ pub fn context_2d(
         .ok_or_else(|| JsError::new("the canvas: no 2D context for the copied frames"))
 }
 
-/// The viewer's own colour texture of `size` for [`Present::Copy`]: copied from, sRGB-encoded.
-pub fn own_colour(
+/// A single-sampled 2D texture of `size`: the viewer's own colour target (copied from) and its
+/// depth.
+pub fn texture(
     device: &wgpu::Device,
     format: wgpu::TextureFormat,
     (w, h): (u32, u32),
+    usage: wgpu::TextureUsages,
 ) -> wgpu::Texture {
     device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("page frame"),
+        label: Some("page target"),
         size: wgpu::Extent3d {
             width: w,
             height: h,
@@ -77,9 +79,19 @@ pub fn own_colour(
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        usage,
         view_formats: &[],
     })
+}
+
+/// The viewer's own colour target for [`Present::Copy`], of `size`.
+pub fn own_colour(
+    device: &wgpu::Device,
+    format: wgpu::TextureFormat,
+    size: (u32, u32),
+) -> wgpu::Texture {
+    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+    texture(device, format, size, usage)
 }
 
 impl Present {

@@ -52,6 +52,8 @@ pub struct Viewer {
     present: Present,
     /// The canvas's size, pixels.
     size: (u32, u32),
+    /// The scene's own camera at that size: the still, and the far distance a flight keeps.
+    scene_camera: Camera,
     targets: Targets,
     depth: wgpu::TextureView,
     description: Description,
@@ -198,6 +200,7 @@ impl Viewer {
             queue,
             present,
             size: (width, height),
+            scene_camera: camera.clone(),
             targets,
             description,
             terrain,
@@ -307,15 +310,17 @@ impl Viewer {
     }
 
     /// The canvas is now `width` × `height` pixels.
-    pub fn resize(&mut self, width: u32, height: u32) {
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<(), JsError> {
         let (width, height) = (width.max(1), height.max(1));
         if (width, height) == self.size {
-            return;
+            return Ok(());
         }
+        self.scene_camera = self.description.camera(width, height).map_err(error)?;
         self.size = (width, height);
         self.present.resize(&self.device, self.size);
         self.depth = depth_view(&self.device, width, height);
         self.unsettle();
+        Ok(())
     }
 
     /// Draws in the mode named `name` from now on (a mode of [`Viewer::modes`]).
@@ -431,7 +436,7 @@ impl Viewer {
     fn camera(&mut self, dt: f64) -> Result<Camera, JsError> {
         let (w, h) = self.size;
         if self.still {
-            return self.description.camera(w, h).map_err(error);
+            return Ok(self.scene_camera.clone());
         }
         if let Some((path, t)) = &mut self.tour {
             *t = (*t + dt).rem_euclid(path.duration_s());
@@ -445,9 +450,8 @@ impl Viewer {
             .map(|g| g + self.reach_m + CLEARANCE_M);
         self.fly.step(dt, &self.motion, floor);
         let scene = self.description.scene();
-        let far = self.description.camera(w, h).map_err(error)?.far;
         self.fly
-            .camera(scene.camera.fov_y_deg, w, h, far)
+            .camera(scene.camera.fov_y_deg, w, h, self.scene_camera.far)
             .map_err(error)
     }
 
@@ -489,22 +493,8 @@ fn limits(description: &Description) -> wgpu::Limits {
 }
 
 fn depth_view(device: &wgpu::Device, width: u32, height: u32) -> wgpu::TextureView {
-    device
-        .create_texture(&wgpu::TextureDescriptor {
-            label: Some("page depth"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: DEPTH,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            view_formats: &[],
-        })
-        .create_view(&Default::default())
+    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT;
+    present::texture(device, DEPTH, (width, height), usage).create_view(&Default::default())
 }
 
 /// The adapter as the browser names it: "google swiftshader", say.
