@@ -1,6 +1,6 @@
 //! The tools around the `terrain` library: the jobs users run ([`app`]: fly, batch, the window,
 //! camera paths) and the evaluation ([`eval`]: image metrics, `compare`), over what both use:
-//! the files they write ([`output`]), their charts and text ([`plot`]), progress bars
+//! the files they write ([`output`], and [`ground_truth`] beside images), their charts and text ([`plot`]), progress bars
 //! ([`progress`]) and order statistics ([`stats`]). The `terrain` binary (`src/bin/terrain/`) is their command line.
 //! Modules lower in that list do not use the ones above them: the jobs do not use the evaluation.
 //!
@@ -10,6 +10,7 @@
 
 pub mod app;
 pub mod eval;
+pub mod ground_truth;
 pub mod output;
 pub mod plot;
 pub mod progress;

@@ -128,25 +128,42 @@ pub fn write_image(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<
 /// `values` (row-major, of `shape`) as a NumPy `.npy` file of little-endian f64, byte for byte
 /// what `numpy.save` writes for that array.
 pub fn npy_f64(shape: &[usize], values: &[f64]) -> Vec<u8> {
-    debug_assert_eq!(shape.iter().product::<usize>(), values.len());
+    npy(
+        "<f8",
+        shape,
+        values.iter().flat_map(|v| v.to_le_bytes()),
+        values.len(),
+    )
+}
+
+/// As [`npy_f64`], of f32.
+pub fn npy_f32(shape: &[usize], values: &[f32]) -> Vec<u8> {
+    npy(
+        "<f4",
+        shape,
+        values.iter().flat_map(|v| v.to_le_bytes()),
+        values.len(),
+    )
+}
+
+fn npy(descr: &str, shape: &[usize], data: impl Iterator<Item = u8>, count: usize) -> Vec<u8> {
+    debug_assert_eq!(shape.iter().product::<usize>(), count);
     let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
     let tuple = if dims.len() == 1 {
         format!("({},)", dims[0])
     } else {
         format!("({})", dims.join(", "))
     };
-    let mut header = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': {tuple}, }}");
+    let mut header = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {tuple}, }}");
     // Magic (6) + version (2) + length (2) + header + newline, padded to a multiple of 64.
     let unpadded = 10 + header.len() + 1;
     header.push_str(&" ".repeat((64 - unpadded % 64) % 64));
     header.push('\n');
-    let mut bytes = Vec::with_capacity(10 + header.len() + 8 * values.len());
+    let mut bytes = Vec::with_capacity(10 + header.len() + 8 * count);
     bytes.extend_from_slice(b"\x93NUMPY\x01\x00");
     bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
     bytes.extend_from_slice(header.as_bytes());
-    for v in values {
-        bytes.extend_from_slice(&v.to_le_bytes());
-    }
+    bytes.extend(data);
     bytes
 }
 

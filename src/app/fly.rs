@@ -20,7 +20,8 @@
 //! the renderer (docs/decisions.md, “PNG encoding off the render loop”).
 
 use crate::app::animation;
-use crate::output::{Fixed, write_atomic, write_image};
+use crate::ground_truth;
+use crate::output::{Fixed, Staged, write_atomic, write_image};
 use crate::progress::Progress;
 use crate::stats::percentile;
 use serde::Serialize;
@@ -32,6 +33,7 @@ use terrain_engine::flight::path::Flight;
 use terrain_engine::pass;
 use terrain_engine::scene::{Mode, Scene};
 use terrain_engine::sketch::tiles::StreamStats;
+use terrain_engine::truth::{Extrinsics, Intrinsics, Output, Truth};
 use terrain_engine::{Error, Result, Role};
 
 pub struct Options {
@@ -45,6 +47,9 @@ pub struct Options {
     /// A streamed sketch: each frame waits for its tiles as a snapshot does
     /// ([`Renderer::render_settled`]); its figures are then those of the frame written.
     pub settle: bool,
+    /// What each frame writes (`--outputs`): its image and the ground truth beside it, flow to
+    /// the next frame included.
+    pub outputs: Vec<Output>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -235,13 +240,18 @@ impl Plan {
     }
 }
 
-/// Whether `file` is one of a flight's frames (`frame-00042.png`), or one torn by a kill while
-/// written (`.frame-00042.png.PID.tmp`, see `output::write_atomic`).
+/// Whether `file` is one of a flight's frames (`frame-00042.png`) or their ground truth
+/// (`frame-00042.depth.npy`), or one torn by a kill while written (`.frame-00042.png.PID.tmp`,
+/// see `output::write_atomic`).
 fn is_frame(file: &str) -> bool {
     let frame = |f: &str| {
         f.strip_prefix("frame-")
-            .and_then(|f| f.strip_suffix(".png"))
-            .is_some_and(|k| k.len() >= 5 && k.bytes().all(|b| b.is_ascii_digit()))
+            .and_then(|f| f.split_once('.'))
+            .is_some_and(|(k, suffix)| {
+                k.len() >= 5
+                    && k.bytes().all(|b| b.is_ascii_digit())
+                    && (suffix == "png" || ground_truth::is_truth_suffix(suffix))
+            })
     };
     let torn = file
         .strip_prefix('.')
@@ -272,6 +282,7 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) 
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
     let mut r = Renderer::new(scene, o.mode, o.view)?;
     let atlas = r.atlas().clone();
+    ground_truth::check(&o.outputs, &atlas, scene.planet().is_some(), true)?;
     // A planet's flight runs in equal time from key to key; a sketch's path at constant speed.
     let flight = Flight::of_scene(scene, &atlas)?;
     let (times, frames_note) = frame_times(flight.duration_s(), o);
@@ -325,10 +336,38 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) 
         progress.advance(1.0, &format!("frame {}/{count}", k + 1));
         Ok(true)
     };
-    if o.settle {
-        // Each frame waits for its tiles, frame after frame: nothing to overlap.
+    let truth_wanted = o.outputs.iter().any(|&x| x != Output::Rgb);
+    let mut lines = String::new();
+    if o.settle || truth_wanted {
+        // Each frame waits for its tiles, or is read back for its truth, frame after frame:
+        // nothing to overlap.
+        let detail = r.detail.clone();
+        let ground = terrain_engine::Ground::new(scene, &atlas, &detail);
+        let mut last: Option<Truth> = None;
         for (k, camera) in cameras.iter().enumerate() {
-            if !take(k, r.render_settled(camera)?)? {
+            let frame = match o.settle {
+                true => r.render_settled(camera)?,
+                false => r.render(camera)?,
+            };
+            if truth_wanted {
+                let truth = Truth::new(camera, &r.read_positions(camera)?)?;
+                let image = out_dir.join(format!("frame-{k:05}.png"));
+                let mut staged = Staged::default();
+                let mut written =
+                    ground_truth::stage(&mut staged, &image, &o.outputs, &truth, &atlas, &ground)?;
+                // The frame before's flow, now that this one's points are known.
+                if let (Some(before), true) = (&last, o.outputs.contains(&Output::Flow)) {
+                    let image = out_dir.join(format!("frame-{:05}.png", k - 1));
+                    ground_truth::stage_flow(&mut staged, &image, before, &truth)?;
+                }
+                staged.commit()?;
+                if o.outputs.contains(&Output::Flow) && k + 1 < cameras.len() {
+                    written.extend(ground_truth::flow_files(&image));
+                }
+                lines += &frame_line(k, camera, &written)?;
+                last = Some(truth);
+            }
+            if !take(k, frame)? {
                 break;
             }
         }
@@ -337,6 +376,9 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) 
     }
     writer.finish()?;
     progress.finish();
+    if truth_wanted {
+        write_atomic(&out_dir.join("frames.jsonl"), lines.as_bytes())?;
+    }
     let rows: Vec<CsvRow> = records.iter().map(CsvRow::of).collect();
     write_atomic(
         &out_dir.join("frames.csv"),
@@ -392,6 +434,29 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) 
         gpu_memory_bytes: r.gpu_bytes(),
         stream,
     })
+}
+
+/// A line of `frames.jsonl` (written with the ground truth): the frame's camera in OpenCV's
+/// convention and its files, as a batch's manifest line gives them.
+fn frame_line(
+    k: usize,
+    camera: &terrain_engine::Camera,
+    written: &ground_truth::Written,
+) -> Result<String> {
+    let name = |p: &PathBuf| {
+        p.file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned()
+    };
+    let line = serde_json::json!({
+        "frame": k,
+        "intrinsics": Intrinsics::of(camera),
+        "extrinsics": Extrinsics::of(camera),
+        "outputs": written.iter().map(|(o, p)| (o.clone(), name(p))).collect::<std::collections::BTreeMap<_, _>>(),
+    });
+    let text = serde_json::to_string(&line).map_err(|e| Error::encode("frames.jsonl line", e))?;
+    Ok(text + "\n")
 }
 
 /// Writes frames' PNGs on worker threads (all cores but the renderer's, at most 8), each file

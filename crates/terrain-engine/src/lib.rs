@@ -56,6 +56,7 @@ pub mod scene;
 pub mod sketch;
 pub mod stage;
 pub mod surface;
+pub mod truth;
 
 // The versions of wgpu and glam the API's types are of, for a host to name them by.
 pub use glam;

@@ -17,6 +17,7 @@ use crate::output::write_atomic;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::truth::Output;
 use terrain_engine::{Error, Result, Role};
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -30,6 +31,13 @@ pub struct Inputs {
     pub set: Vec<String>,
     pub size: Option<[u32; 2]>,
     pub mode: Option<Mode>,
+    /// `--outputs` (a record without it was made with the image alone).
+    #[serde(default = "image_alone")]
+    pub outputs: Vec<Output>,
+}
+
+fn image_alone() -> Vec<Output> {
+    vec![Output::Rgb]
 }
 
 /// A file the items read: its canonical path, and its size and modification time (`None`:
@@ -54,7 +62,7 @@ pub fn record_path(manifest: &Path) -> PathBuf {
 impl Inputs {
     /// The inputs of `jobs`'s items: `scenes` are the items' scenes that parse (a job that does
     /// not fails on its own, whatever it names).
-    pub fn of(jobs: &Jobs, scenes: &[Scene]) -> Inputs {
+    pub fn of(jobs: &Jobs, scenes: &[Scene], outputs: &[Output]) -> Inputs {
         let mut files: Vec<Stamp> = scenes
             .iter()
             .flat_map(|s| {
@@ -75,6 +83,7 @@ impl Inputs {
             set,
             size: size.map(|(w, h)| [w, h]),
             mode,
+            outputs: outputs.to_vec(),
         }
     }
 
@@ -102,7 +111,7 @@ impl Inputs {
                 .map_or("", |f| f.path.as_str());
             return Some(format!("another sketch or map ({path} changed)"));
         }
-        let opts = |i: &Inputs| (i.set.clone(), i.size, i.mode);
+        let opts = |i: &Inputs| (i.set.clone(), i.size, i.mode, i.outputs.clone());
         if opts(self) != opts(theirs) {
             return Some(format!(
                 "other options ({}, now {})",
@@ -118,8 +127,12 @@ impl Inputs {
         let mut out: Vec<String> = self.set.iter().map(|s| format!("--set {s}")).collect();
         out.extend(self.size.map(|[w, h]| format!("--size {w}x{h}")));
         out.extend(self.mode.map(|m| format!("--mode {m}")));
+        if self.outputs != image_alone() {
+            let names: Vec<&str> = self.outputs.iter().map(|o| o.name()).collect();
+            out.push(format!("--outputs {}", names.join(",")));
+        }
         if out.is_empty() {
-            return "no --set, --size or --mode".into();
+            return "no --set, --size, --mode or --outputs".into();
         }
         out.join(" ")
     }

@@ -3,7 +3,9 @@
 //! it back as these types.
 
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use terrain_engine::scene::Mode;
+use terrain_engine::truth::{Extrinsics, Intrinsics};
 
 /// A line of the manifest: one item, done or failed.
 #[derive(Debug, Serialize, Deserialize)]
@@ -39,6 +41,11 @@ pub struct Snapshot {
     pub cpu_stage_us: f64,
     pub gpu_ms: f64,
     pub frame_ms: f64,
+    /// The camera in OpenCV's convention (docs/batch.md, "Camera conventions").
+    pub intrinsics: Intrinsics,
+    pub extrinsics: Extrinsics,
+    /// The files written, by output name (`rgb` the image), relative to the manifest's folder.
+    pub outputs: BTreeMap<String, String>,
 }
 
 /// A snapshot's camera. On a planet `position` and `look_at` are in the nadir's tangent frame
@@ -51,6 +58,14 @@ pub struct SnapshotCamera {
     pub fov_y_deg: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub planet: Option<PlanetKeys>,
+    /// Over a georeferenced sketch: the eye's latitude and longitude (degrees) and its height
+    /// above the ground or water under it (metres).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lat_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lon_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub altitude_m: Option<f64>,
 }
 
 /// A planet camera's keys, as `[camera]` takes them.

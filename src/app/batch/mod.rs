@@ -26,20 +26,25 @@
 //! Rejected alternative: one process per snapshot (a shell loop over `terrain render`). Every
 //! launch opens the device and compiles the pipelines again; `batch` measures what that costs.
 
-use crate::output::{write_atomic, write_image};
+use crate::ground_truth;
+use crate::output::{Staged, add_image, write_atomic};
 use crate::progress::Progress;
 use terrain_engine::Camera;
 use terrain_engine::Renderer;
 use terrain_engine::View;
 use terrain_engine::scene::{self, Scene};
 use terrain_engine::sketch::Atlas;
+use terrain_engine::truth::{Extrinsics, Intrinsics, Output, Truth};
 use terrain_engine::{Error, Result, Role};
 use terrain_engine::{GpuContext, Needs};
 
+mod export;
 mod inputs;
 mod jobs;
 mod manifest;
 mod random;
+
+pub use export::{Export, export};
 
 pub use inputs::{Inputs, Stamp, record_path};
 pub use jobs::{Item, ItemKind, Jobs, JobsFile, MAX_RANDOM, Overrides, Random, RandomSection};
@@ -56,6 +61,10 @@ pub struct Options {
     pub resume: bool,
     /// `--set`, `--size` and `--mode`, for every item.
     pub overrides: Overrides,
+    /// What each item writes (`--outputs`): the image and the ground truth beside it.
+    pub outputs: Vec<Output>,
+    /// The cameras written for other tools once the items are done (`--export`).
+    pub export: Option<Export>,
 }
 
 pub struct Summary {
@@ -65,6 +74,8 @@ pub struct Summary {
     pub failed: usize,
     pub seconds: f64,
     pub manifest: PathBuf,
+    /// The files `--export` wrote.
+    pub exported: Vec<PathBuf>,
 }
 
 pub fn manifest_name(shard: (usize, usize)) -> String {
@@ -75,8 +86,8 @@ pub fn manifest_name(shard: (usize, usize)) -> String {
     }
 }
 
-/// The names done according to `manifest` (complete `ok` lines whose image exists); rewrites it
-/// with only those lines, first of each name.
+/// The names done according to `manifest` (complete `ok` lines whose image and every other
+/// file they list exist); rewrites it with only those lines, first of each name.
 fn resume_from(manifest: &Path, out_dir: &Path) -> Result<HashSet<String>> {
     let Ok(text) = std::fs::read_to_string(manifest) else {
         // Nothing to resume: a first run with `--resume`, as a scheduler's job script always
@@ -94,7 +105,11 @@ fn resume_from(manifest: &Path, out_dir: &Path) -> Result<HashSet<String>> {
             continue;
         }
         let name = v.name;
-        if out_dir.join(format!("{name}.png")).is_file() && done.insert(name) {
+        let files_exist = v
+            .snapshot
+            .as_ref()
+            .is_some_and(|s| s.outputs.values().all(|f| out_dir.join(f).is_file()));
+        if files_exist && out_dir.join(format!("{name}.png")).is_file() && done.insert(name) {
             kept += line;
             kept.push('\n');
         }
@@ -106,11 +121,17 @@ fn resume_from(manifest: &Path, out_dir: &Path) -> Result<HashSet<String>> {
 /// Removes the temporary files a killed run left while writing this shard's images or manifest
 /// (`.NAME.png.PID.tmp`, see `output::write_atomic`). Only this shard's names: another shard
 /// writing into the same folder may be alive. Best effort: a file that will not go is harmless.
-fn remove_torn_writes(out_dir: &Path, items: &[Item], manifest: &Path) {
+fn remove_torn_writes(out_dir: &Path, items: &[Item], outputs: &[Output], manifest: &Path) {
     let Ok(entries) = std::fs::read_dir(out_dir) else {
         return;
     };
-    let mut ours: HashSet<String> = items.iter().map(|it| format!("{}.png", it.name)).collect();
+    let mut ours: HashSet<String> = HashSet::new();
+    for it in items {
+        let image = PathBuf::from(format!("{}.png", it.name));
+        for f in std::iter::once(image.clone()).chain(ground_truth::files(&image, outputs)) {
+            ours.insert(f.to_string_lossy().into_owned());
+        }
+    }
     for m in [manifest.to_path_buf(), record_path(manifest)] {
         if let Some(m) = m.file_name() {
             ours.insert(m.to_string_lossy().into_owned());
@@ -178,8 +199,15 @@ impl Cache {
     }
 }
 
-/// Renders item `item`: its scene, its camera, the snapshot written to `out_dir`.
-fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> Result<Snapshot> {
+/// Renders item `item`: its scene, its camera, the snapshot and its ground truth written to
+/// `out_dir`.
+fn render_item(
+    jobs: &Jobs,
+    item: &Item,
+    cache: &mut Cache,
+    out_dir: &Path,
+    outputs: &[Output],
+) -> Result<Snapshot> {
     if !plain_name(&item.name) {
         return Err(Error::Job {
             name: item.name.clone(),
@@ -212,8 +240,33 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
     r.relight(&scene);
     let frame = r.render_settled(&camera)?;
     let planet = planet_keys(&scene, r.atlas(), &camera)?;
+    ground_truth::check(outputs, r.atlas(), planet.is_some(), false)?;
     let output = out_dir.join(format!("{}.png", item.name));
-    write_image(&output, frame.width, frame.height, &frame.rgba)?;
+    let mut staged = Staged::default();
+    add_image(&mut staged, &output, frame.width, frame.height, &frame.rgba)?;
+    let written = if outputs.iter().any(|&o| o != Output::Rgb) {
+        let truth = Truth::new(&camera, &r.read_positions(&camera)?)?;
+        let ground = terrain_engine::Ground::new(&scene, r.atlas(), &r.detail);
+        ground_truth::stage(&mut staged, &output, outputs, &truth, r.atlas(), &ground)?
+    } else {
+        ground_truth::Written::from([(Output::Rgb.name().into(), output.clone())])
+    };
+    staged.commit()?;
+    let place = match planet {
+        Some(_) => None,
+        None => Some(scene::report(
+            &scene,
+            r.atlas(),
+            camera.eye,
+            camera.eye + camera.forward,
+        )?),
+    };
+    let relative = |p: &PathBuf| {
+        p.file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned()
+    };
     Ok(Snapshot {
         output: output.file_name().map(|n| n.to_string_lossy().into_owned()),
         mode: scene.render.mode,
@@ -222,7 +275,19 @@ fn render_item(jobs: &Jobs, item: &Item, cache: &mut Cache, out_dir: &Path) -> R
             look_at: (camera.eye + camera.forward * 100.0).to_array(),
             fov_y_deg: camera.fov_y.to_degrees(),
             planet,
+            lat_deg: place.as_ref().and_then(|p| p.lat_deg),
+            lon_deg: place.as_ref().and_then(|p| p.lon_deg),
+            altitude_m: place
+                .as_ref()
+                .filter(|p| p.lat_deg.is_some())
+                .map(|p| p.altitude_m),
         },
+        intrinsics: Intrinsics::of(&camera),
+        extrinsics: Extrinsics::of(&camera),
+        outputs: written
+            .iter()
+            .map(|(k, p)| (k.clone(), relative(p)))
+            .collect(),
         width: frame.width,
         height: frame.height,
         triangles: frame.gpu.triangles,
@@ -257,7 +322,7 @@ fn planet_keys(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<Option<P
 
 /// The inputs of `jobs`'s items. Fails only on a bad `--set` (a usage error, as in `render`): a
 /// scene fault of the base or of a job fails the items that have it.
-fn inputs_of(jobs: &Jobs) -> Result<Inputs> {
+fn inputs_of(jobs: &Jobs, outputs: &[Output]) -> Result<Inputs> {
     let base = match jobs.base_scene() {
         Err(e @ Error::Override { .. }) => return Err(e),
         base => base.ok(),
@@ -266,13 +331,13 @@ fn inputs_of(jobs: &Jobs) -> Result<Inputs> {
         .into_iter()
         .chain((0..jobs.explicit_jobs()).filter_map(|k| jobs.job_scene(k).ok()))
         .collect();
-    Ok(Inputs::of(jobs, &scenes))
+    Ok(Inputs::of(jobs, &scenes, outputs))
 }
 
 pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
     let mut jobs = Jobs::load(jobs_path)?;
     jobs.overrides = o.overrides.clone();
-    let inputs = inputs_of(&jobs)?;
+    let inputs = inputs_of(&jobs, &o.outputs)?;
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(Role::OutputFolder, out_dir, e))?;
     inputs::check_folder(out_dir, &inputs)?;
     let manifest = out_dir.join(manifest_name(o.shard));
@@ -290,7 +355,7 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
         .filter(|it| it.index % o.shard.1 == o.shard.0)
         .collect();
     if o.resume {
-        remove_torn_writes(out_dir, &items, &manifest);
+        remove_torn_writes(out_dir, &items, &o.outputs, &manifest);
     }
     let mut file = std::fs::OpenOptions::new()
         .append(true)
@@ -310,7 +375,7 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
             continue;
         }
         let t0 = Instant::now();
-        let result = render_item(&jobs, item, &mut cache, out_dir);
+        let result = render_item(&jobs, item, &mut cache, out_dir, &o.outputs);
         let mut line = ManifestLine {
             index: item.index,
             name: item.name.clone(),
@@ -340,13 +405,19 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
         progress.advance(1.0, &item.name);
     }
     progress.finish();
+    let seconds = start.elapsed().as_secs_f64();
+    let exported = match o.export {
+        Some(format) => export(format, &manifest)?,
+        None => Vec::new(),
+    };
     Ok(Summary {
         total: items.len(),
         rendered,
         skipped: items.len() - todo,
         failed,
-        seconds: start.elapsed().as_secs_f64(),
+        seconds,
         manifest,
+        exported,
     })
 }
 

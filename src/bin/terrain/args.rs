@@ -74,3 +74,8 @@ pub fn named<T: terrain_engine::Named>() -> impl clap::builder::TypedValueParser
         },
     )
 }
+
+/// `--outputs rgb,depth,…`: the ground truth written beside each image (docs/batch.md).
+pub fn outputs(s: &str) -> Result<Vec<terrain_engine::truth::Output>, String> {
+    terrain_engine::truth::parse_outputs(s)
+}

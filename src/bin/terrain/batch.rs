@@ -5,7 +5,9 @@ use crate::args;
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
+use terrain_cli::app::batch::{Export, export};
 use terrain_engine::scene::Mode;
+use terrain_engine::truth::Output;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -30,6 +32,15 @@ pub struct Args {
     /// Overrides every item's render.mode.
     #[arg(long, value_parser = crate::args::named::<Mode>(), conflicts_with = "merge")]
     mode: Option<Mode>,
+    /// What each item writes: rgb (its image) and the ground truth beside it (depth, distance,
+    /// positions, latlon, normals; docs/batch.md).
+    #[arg(long, value_name = "LIST", value_parser = args::outputs, default_value = "rgb", conflicts_with = "merge")]
+    outputs: Vec<Vec<Output>>,
+    /// Writes the cameras for other tools beside the images once the items are done: nerf
+    /// (transforms.json) or colmap (cameras.txt, images.txt, points3D.txt). With --shard, give it
+    /// to --merge.
+    #[arg(long, value_enum)]
+    export: Option<Export>,
     /// Merges the shard manifests in --out-dir into manifest.jsonl instead of rendering.
     #[arg(long, conflicts_with_all = ["shard", "resume"])]
     merge: bool,
@@ -48,6 +59,8 @@ struct Report {
     seconds: f64,
     snapshots_per_s: f64,
     manifest: PathBuf,
+    /// What `--export` wrote.
+    exported: Vec<PathBuf>,
 }
 
 /// `--json` of `--merge`.
@@ -56,11 +69,18 @@ struct Merged {
     lines: usize,
     missing: Vec<String>,
     failed: usize,
+    exported: Vec<PathBuf>,
 }
 
 pub fn run(a: Args) -> Result<()> {
     if a.merge {
         return merge(&a);
+    }
+    if a.export.is_some() && a.shard.is_some_and(|(_, n)| n > 1) {
+        anyhow::bail!(
+            "--export with --shard: each shard holds part of the cameras; give --export to \
+             `terrain batch --merge` once every shard is done"
+        );
     }
     let o = terrain_cli::app::batch::Options {
         shard: a.shard.unwrap_or((0, 1)),
@@ -70,6 +90,8 @@ pub fn run(a: Args) -> Result<()> {
             size: a.size,
             mode: a.mode,
         },
+        outputs: a.outputs.concat(),
+        export: a.export,
     };
     let s = terrain_cli::app::batch::run(&a.jobs, &a.out_dir, &o)?;
     let r = Report {
@@ -80,6 +102,7 @@ pub fn run(a: Args) -> Result<()> {
         seconds: s.seconds,
         snapshots_per_s: s.rendered as f64 / s.seconds.max(1e-9),
         manifest: s.manifest,
+        exported: s.exported,
     };
     if a.json {
         crate::print_json(&r)?;
@@ -107,10 +130,15 @@ pub fn run(a: Args) -> Result<()> {
 
 fn merge(a: &Args) -> Result<()> {
     let (lines, missing, failed) = terrain_cli::app::batch::merge_manifests(&a.jobs, &a.out_dir)?;
+    let exported = match a.export {
+        Some(format) => export(format, &a.out_dir.join("manifest.jsonl"))?,
+        None => Vec::new(),
+    };
     let m = Merged {
         lines,
         missing,
         failed,
+        exported,
     };
     if a.json {
         crate::print_json(&m)?;

@@ -38,6 +38,11 @@ pub struct Args {
     /// does, instead of showing a coarser level while they load.
     #[arg(long)]
     settle: bool,
+    /// What each frame writes: rgb (its image) and the ground truth beside it (depth, distance,
+    /// positions, latlon, normals, and flow to the next frame with its occlusion mask;
+    /// docs/batch.md); with more than rgb, `frames.jsonl` gives each frame's camera.
+    #[arg(long, value_name = "LIST", value_parser = args::outputs, default_value = "rgb")]
+    outputs: Vec<Vec<terrain_engine::truth::Output>>,
     /// Overrides a scene key (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
@@ -81,6 +86,7 @@ pub fn run(a: Args) -> Result<()> {
         fps: a.fps,
         mp4: !a.no_mp4,
         settle: a.settle,
+        outputs: a.outputs.concat(),
     };
     let o = terrain_cli::app::fly::run(&scene, &opts, &a.out_dir, |p| say_plan(p, &a.out_dir))?;
     if let Some(note) = &o.mp4_note {

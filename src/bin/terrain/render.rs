@@ -12,6 +12,7 @@ use terrain_engine::View;
 use terrain_engine::scene;
 use terrain_engine::scene::CameraReport;
 use terrain_engine::scene::{Mode, Scene};
+use terrain_engine::truth::{Extrinsics, Intrinsics, Output, Truth};
 use terrain_engine::{Error, Role};
 use terrain_engine::{Frame, Renderer, WorkPerPx};
 
@@ -44,6 +45,10 @@ pub struct Args {
     /// as a NumPy .npy of f64, shape (height, width, 4).
     #[arg(long, value_name = "FILE.npy")]
     positions: Option<PathBuf>,
+    /// What to write: rgb (the image) and the ground truth beside it, `NAME.depth.npy` and so on
+    /// (rgb, depth, distance, positions, latlon, normals; docs/batch.md).
+    #[arg(long, value_name = "LIST", value_parser = args::outputs, default_value = "rgb")]
+    outputs: Vec<Vec<Output>>,
     /// Prints one JSON object on stdout instead of the summary line.
     #[arg(long)]
     json: bool,
@@ -91,6 +96,11 @@ struct Report {
     output: PathBuf,
     /// Where the camera stood and looked (`docs/scene.md`, `[camera]`).
     camera: CameraReport,
+    /// The camera in OpenCV's convention (docs/batch.md, "Camera conventions").
+    intrinsics: Intrinsics,
+    extrinsics: Extrinsics,
+    /// What was written, by output name (`rgb` the image).
+    outputs: terrain_cli::ground_truth::Written,
     detail: Detail,
     /// The baselines' figures (absent for the other modes).
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
@@ -142,7 +152,10 @@ pub fn run(a: Args) -> Result<()> {
     if let Some(size) = a.size {
         (scene.camera.width, scene.camera.height) = size;
     }
+    let outputs: Vec<Output> = a.outputs.concat();
     let mut r = Renderer::new(&scene, mode, a.view)?;
+    let planet = scene.planet().is_some();
+    terrain_cli::ground_truth::check(&outputs, r.atlas(), planet, false)?;
     let camera = scene::camera_of(&scene, r.atlas())?;
     let camera_report = scene::camera_report(&scene, r.atlas(), &camera)?;
     let frames = frames(&mut r, &camera, &scene, a.repeat)?;
@@ -162,6 +175,16 @@ pub fn run(a: Args) -> Result<()> {
         let shape = [last.height as usize, last.width as usize, 4];
         staged.add(p, &output::npy_f64(&shape, &world))?;
     }
+    let truth = Truth::new(&camera, &relative)?;
+    let ground = terrain_engine::Ground::new(&scene, r.atlas(), &r.detail);
+    let written = terrain_cli::ground_truth::stage(
+        &mut staged,
+        &a.output,
+        &outputs,
+        &truth,
+        r.atlas(),
+        &ground,
+    )?;
     staged.commit()?;
     let work = if a.json {
         let (ctx, atlas) = (r.ctx(), r.atlas());
@@ -209,6 +232,9 @@ pub fn run(a: Args) -> Result<()> {
         frames: a.repeat,
         output: a.output.clone(),
         camera: camera_report,
+        intrinsics: Intrinsics::of(&camera),
+        extrinsics: Extrinsics::of(&camera),
+        outputs: written,
         detail: Detail {
             octaves: d.octaves,
             amplitude_m: d.amplitude_m,

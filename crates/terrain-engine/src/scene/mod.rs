@@ -27,8 +27,8 @@ pub use build::{
 };
 pub use parse::{Fault, is_sketch_path, scene_text};
 pub use place::{
-    CameraReport, DEFAULT_PATH_S, camera_report, default_path, off_map_warning, off_map_warnings,
-    pose, resolve_key, world_of_map,
+    CameraReport, DEFAULT_PATH_S, camera_report, default_path, map_of_world, off_map_warning,
+    off_map_warnings, pose, report, resolve_key, world_of_map,
 };
 pub use starter::starter;
 pub use surface::{Style, SurfaceSection};
