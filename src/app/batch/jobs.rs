@@ -214,13 +214,32 @@ impl Jobs {
                 }
                 continue;
             }
+            // A job's camera is one camera, laid over the base's as a whole (`lay_camera`).
+            if let (Some(toml::Value::Table(base)), toml::Value::Table(given)) =
+                (merged.get_mut(key), value)
+                && key == "camera"
+            {
+                let keys: Vec<&str> = given.keys().map(String::as_str).collect();
+                terrain_engine::scene::lay_camera(base, &keys);
+            }
             merge(&mut merged, key, value.clone());
         }
         let text = toml::to_string(&merged).map_err(|e| e.to_string())?;
-        self.scene_of(&text).map_err(|fault| match fault {
+        let reason = self.scene_of(&text).map_err(|fault| match fault {
             Fault::Text(reason) => name_the_key(&text, &reason),
             fault => fault.to_string(),
-        })
+        });
+        // A camera fault names where its keys came from: the job's and the base scene's files.
+        reason.map_err(
+            |r| match job.contains_key("camera") && r.starts_with("camera") {
+                true => format!(
+                    "{r} (the job's camera in {} laid over the camera of {})",
+                    self.path.display(),
+                    self.scene_path.display()
+                ),
+                false => r,
+            },
+        )
     }
 
     pub fn base_scene(&self) -> Result<Scene> {

@@ -42,18 +42,17 @@ mod export;
 mod inputs;
 mod jobs;
 mod manifest;
-mod random;
 
 pub use export::{Export, export};
 
 pub use inputs::{Inputs, Stamp, record_path};
 pub use jobs::{Item, ItemKind, Jobs, JobsFile, MAX_RANDOM, Overrides, Random, RandomSection};
 pub use manifest::{ManifestLine, PlanetKeys, Snapshot, SnapshotCamera, Status};
-pub use random::{RANDOM_HEIGHT_M, random_camera};
 use std::collections::HashSet;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+pub use terrain_engine::scene::{RANDOM_HEIGHT_M, random_camera};
 
 pub struct Options {
     /// (i, n): this run renders items k with k mod n = i.

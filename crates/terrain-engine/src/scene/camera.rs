@@ -44,6 +44,26 @@ pub struct CameraSection {
     /// Far distance in metres; by default the farthest corner of the sketch.
     pub far_m: Option<f64>,
 }
+/// The `[camera]` keys that say where it stands.
+pub const PLACE_KEYS: [&str; 5] = ["position", "map_xy", "lat_deg", "lon_deg", "altitude_m"];
+/// The `[camera]` keys that say where it looks.
+pub const AIM_KEYS: [&str; 3] = ["look_at", "heading_deg", "pitch_deg"];
+
+/// Lays the camera keys `given` (a jobs file's job, or `--set camera.…`) over the `[camera]`
+/// table `base` as one camera: where `given` places the camera, the base's place and aim go
+/// whole; where it only aims it, the base's aim goes and its place stays. The optics (`fov_y_deg`,
+/// `width`, `height`, `far_m`) merge key by key. Rejected: merging every key, which mixed two
+/// cameras' keys into one that gives two places or two aims.
+pub fn lay_camera(base: &mut toml::Table, given: &[&str]) {
+    let gives = |keys: &[&str]| given.iter().any(|k| keys.contains(k));
+    let dropped: &[&str] = match (gives(&PLACE_KEYS), gives(&AIM_KEYS)) {
+        (true, _) => &[PLACE_KEYS.as_slice(), AIM_KEYS.as_slice()].concat(),
+        (false, true) => &AIM_KEYS,
+        (false, false) => &[],
+    };
+    base.retain(|k, _| !dropped.iter().any(|d| *d == k));
+}
+
 impl Default for CameraSection {
     fn default() -> Self {
         CameraSection {

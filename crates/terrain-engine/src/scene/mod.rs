@@ -16,6 +16,7 @@ mod check;
 mod detail;
 mod parse;
 pub(crate) mod place;
+mod random;
 mod render;
 mod starter;
 mod surface;
@@ -34,12 +35,13 @@ pub use starter::starter;
 pub use surface::{Style, SurfaceSection};
 
 pub(crate) use camera::Placement;
-pub use camera::{CameraSection, PathKey, PathSection};
+pub use camera::{AIM_KEYS, CameraSection, PLACE_KEYS, PathKey, PathSection, lay_camera};
 pub use detail::{
     DetailSection, GeoMipMapSection, ImportanceSection, Triangulation, WarpMethod, WarpSection,
     default_bias,
 };
 pub(crate) use detail::{FINEST_WAVELENGTH_M, MAX_OCTAVES};
+pub use random::{RANDOM_HEIGHT_M, RANDOM_PLANET_ALTITUDE_M, random_camera};
 pub use render::{
     LightSection, MODES, Mode, ModeRow, Msaa, PlanetSection, ReferenceSection, RenderSection,
     Scenes, StreamSection,

@@ -88,6 +88,14 @@ impl Scene {
         } else {
             let mut table: toml::Table = toml::from_str(text)
                 .map_err(|e| Fault::Text(one_line(e.message(), e.span(), text)))?;
+            // `--set camera.position=…` is a camera of its own, not keys mixed into the file's.
+            let camera_keys: Vec<&str> = overrides
+                .iter()
+                .filter_map(|o| o.split_once('=')?.0.trim().strip_prefix("camera."))
+                .collect();
+            if let Some(toml::Value::Table(camera)) = table.get_mut("camera") {
+                super::camera::lay_camera(camera, &camera_keys);
+            }
             for o in overrides {
                 apply_override(&mut table, o).map_err(|reason| Fault::Override {
                     arg: o.clone(),

@@ -1,10 +1,12 @@
-//! Random cameras: a pure function of (seed, index), so shards and reruns draw the same ones.
+//! Random cameras over a scene (a batch's `[random]`, the Python `random_cameras`): a pure
+//! function of (seed, index), so shards and reruns draw the same ones. Rejected: a generator
+//! crate's stream, whose values may change between its versions and would change the cameras.
 
+use crate::camera::Camera;
+use crate::error::Result;
+use crate::scene::{self, Scene, ground_under};
+use crate::sketch::Atlas;
 use glam::{DVec2, DVec3};
-use terrain_engine::Camera;
-use terrain_engine::Result;
-use terrain_engine::scene::{self, Scene, ground_under};
-use terrain_engine::sketch::Atlas;
 
 /// Random cameras stand this far above the sketch's ground, plus the detail's reach (metres).
 pub const RANDOM_HEIGHT_M: (f64, f64) = (30.0, 3000.0);
