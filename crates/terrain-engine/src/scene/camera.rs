@@ -61,7 +61,7 @@ pub fn lay_camera(base: &mut toml::Table, given: &[&str]) {
         (false, true) => &AIM_KEYS,
         (false, false) => &[],
     };
-    base.retain(|k, _| !dropped.iter().any(|d| *d == k));
+    base.retain(|k, _| !dropped.contains(&k));
 }
 
 impl Default for CameraSection {

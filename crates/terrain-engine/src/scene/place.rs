@@ -428,7 +428,7 @@ pub fn camera_report(
 
 /// What a planar camera with eye `eye` looking at `target` is in the keys people place it by.
 /// Its `look_at` is the scene's own where it gives one, else the ground the view's central ray
-/// meets ([`ground_ahead`]), so it names what the view is centred on; `target` where the ray
+/// meets (`ground_ahead`), so it names what the view is centred on; `target` where the ray
 /// meets nothing.
 pub fn report(scene: &Scene, atlas: &Atlas, eye: DVec3, target: DVec3) -> Result<CameraReport> {
     let (heading_deg, pitch_deg) = heading_pitch(target - eye);

@@ -1,0 +1,33 @@
+"""Procedural terrain snapshots and their ground truth, rendered on the GPU.
+
+``terrain`` renders a height map (the *sketch*) with procedural detail added at render time,
+by geometry image warping (Dachsbacher & Stamminger, *Rendering Procedural Terrain by Geometry
+Image Warping*, 2004). A :class:`Renderer` keeps one device and its pipelines across calls;
+:meth:`Renderer.render` returns the picture and, beside it, depth, distance, world positions,
+latitude and longitude and normals as NumPy arrays.
+
+>>> import terrain
+>>> scene = terrain.Scene.load("sketches/jacksboro.toml")          # doctest: +SKIP
+>>> renderer = terrain.Renderer(scene, size=256)                    # doctest: +SKIP
+>>> out = renderer.render(outputs=["rgb", "depth"])                 # doctest: +SKIP
+>>> out["rgb"].shape, out["depth"].dtype                            # doctest: +SKIP
+((256, 256, 3), dtype('float32'))
+"""
+
+from ._terrain import (
+    Camera,
+    Error,
+    Renderer,
+    Scene,
+    devices_opened,
+    random_cameras,
+)
+
+__all__ = [
+    "Camera",
+    "Error",
+    "Renderer",
+    "Scene",
+    "devices_opened",
+    "random_cameras",
+]
