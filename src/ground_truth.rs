@@ -1,6 +1,7 @@
 //! The ground truth's files beside an image `DIR/NAME.png` (docs/batch.md, "Ground truth"):
 //! `NAME.depth.npy` and `NAME.depth.tif`, `NAME.distance.npy`, `NAME.positions.npy`,
-//! `NAME.latlon.npy`, `NAME.normals.npy`, and for a flight's frame `NAME.flow.npy`,
+//! `NAME.latlon.npy`, `NAME.normals.npy`, `NAME.surface.png` (indexed, its palette the legend's
+//! colours) with `NAME.surface.json` (the legend), and for a flight's frame `NAME.flow.npy`,
 //! `NAME.flow.flo` and `NAME.occlusion.png`.
 //!
 //! Rules: each file is staged with the image ([`Staged`]), so the image and its truth land
@@ -12,7 +13,7 @@
 use crate::output::{Staged, npy_f32, npy_f64};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use terrain_engine::truth::{Output, Truth};
+use terrain_engine::truth::{Output, SURFACE_CLASSES, Truth, class_srgb};
 use terrain_engine::{Atlas, Error, Ground, Result, Role};
 
 /// The files written for one image: output name → path (`rgb` the image itself).
@@ -49,6 +50,7 @@ fn suffixes(o: Output) -> &'static [&'static str] {
         Output::Positions => &["positions.npy"],
         Output::Latlon => &["latlon.npy"],
         Output::Normals => &["normals.npy"],
+        Output::Surface => &["surface.png", "surface.json"],
         Output::Flow => &["flow.npy", "flow.flo", "occlusion.png"],
     }
 }
@@ -83,13 +85,14 @@ pub fn check(outputs: &[Output], atlas: &Atlas, planet: bool, flow_allowed: bool
     Ok(())
 }
 
-/// Stages the files of `outputs` (but flow) for `truth` beside `image`; what was staged, by
-/// output name.
+/// Stages the files of `outputs` (but flow) for `truth` beside `image`, with `classes` (the
+/// frame's surface classes, where `surface` is asked for); what was staged, by output name.
 pub fn stage(
     staged: &mut Staged,
     image: &Path,
     outputs: &[Output],
     truth: &Truth,
+    classes: Option<&[u8]>,
     atlas: &Atlas,
     ground: &Ground,
 ) -> Result<Written> {
@@ -125,6 +128,13 @@ pub fn stage(
                 &[h, w, 3],
                 &truth.normals(ground)?,
             )?,
+            Output::Surface => {
+                let classes = classes.ok_or(Error::Internal("surface classes not drawn"))?;
+                let png = beside(image, "surface.png");
+                staged.add(&png, &indexed_png(&png, w, h, classes)?)?;
+                staged.add(&beside(image, "surface.json"), legend().as_bytes())?;
+                png
+            }
         };
         written.insert(o.name().into(), first);
     }
@@ -193,6 +203,34 @@ fn tiff_f32(path: &Path, width: usize, height: usize, v: &[f32]) -> Result<Vec<u
         .write_image::<tiff::encoder::colortype::Gray32Float>(width as u32, height as u32, v)
         .map_err(fail)?;
     Ok(bytes.into_inner())
+}
+
+/// The surface classes' legend: `{"classes": [{"index", "name", "colour"}, …]}`, `colour` the
+/// palette's sRGB bytes in `NAME.surface.png`.
+pub fn legend() -> String {
+    let classes: Vec<serde_json::Value> = SURFACE_CLASSES
+        .iter()
+        .enumerate()
+        .map(
+            |(i, (name, _))| serde_json::json!({"index": i, "name": name, "colour": class_srgb(i)}),
+        )
+        .collect();
+    serde_json::json!({ "classes": classes }).to_string()
+}
+
+/// An 8-bit indexed PNG of class indices, its palette the legend's colours.
+fn indexed_png(path: &Path, width: usize, height: usize, v: &[u8]) -> Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    let fail = |e: png::EncodingError| Error::file(Role::Output, path, format!("PNG: {e}"));
+    let mut enc = png::Encoder::new(&mut bytes, width as u32, height as u32);
+    enc.set_color(png::ColorType::Indexed);
+    enc.set_depth(png::BitDepth::Eight);
+    let palette: Vec<u8> = (0..SURFACE_CLASSES.len()).flat_map(class_srgb).collect();
+    enc.set_palette(palette);
+    let mut w = enc.write_header().map_err(fail)?;
+    w.write_image_data(v).map_err(fail)?;
+    w.finish().map_err(fail)?;
+    Ok(bytes)
 }
 
 /// An 8-bit grey PNG.

@@ -402,3 +402,69 @@ fn colmap_and_nerf_exports_read_back_as_their_tools_read_them() {
         assert!((frame["cx"].as_f64().unwrap() - 24.0).abs() < 1e-12);
     }
 }
+
+#[test]
+fn surface_classes_are_indexed_with_their_legend_and_follow_the_water_and_the_sky() {
+    let dir = scratch("truth-surface");
+    let image = dir.join("flooded.png");
+    let (code, out, err) = terrain(&[
+        "render",
+        manifest_dir()
+            .join("sketches/jacksboro.toml")
+            .to_str()
+            .unwrap(),
+        "-o",
+        image.to_str().unwrap(),
+        "--size",
+        "96x64",
+        "--set",
+        "sketch.water_level_m=420",
+        "--outputs",
+        "surface,positions",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let json: Value = serde_json::from_str(&out).unwrap();
+    let png_path = dir.join("flooded.surface.png");
+    assert_eq!(json["outputs"]["surface"].as_str(), png_path.to_str());
+    let legend: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("flooded.surface.json")).unwrap())
+            .unwrap();
+    let names: Vec<&str> = legend["classes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names[..3], ["sky", "water", "meadow"]);
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(&png_path).unwrap(),
+    ));
+    let mut reader = decoder.read_info().unwrap();
+    let palette = reader.info().palette.clone().expect("an indexed PNG");
+    for (i, class) in legend["classes"].as_array().unwrap().iter().enumerate() {
+        let rgb: Vec<u8> = serde_json::from_value(class["colour"].clone()).unwrap();
+        assert_eq!(palette[3 * i..3 * i + 3], rgb[..], "palette entry {i}");
+    }
+    let mut classes = vec![0; reader.output_buffer_size().unwrap()];
+    reader.next_frame(&mut classes).unwrap();
+    let (_, positions) = npy(&dir.join("flooded.positions.npy"));
+    let (mut agree, mut ground, mut seen) = (0, 0, std::collections::BTreeSet::new());
+    for (i, &c) in classes.iter().enumerate() {
+        let sky = positions[4 * i + 3] < 0.5;
+        assert_eq!(c == 0, sky, "pixel {i}: class {c}, sky {sky}");
+        assert!((c as usize) < names.len());
+        if sky {
+            continue;
+        }
+        ground += 1;
+        seen.insert(names[c as usize]);
+        let under = positions[4 * i + 2] <= 420.0 + 0.05;
+        agree += usize::from((c == 1) == under);
+    }
+    assert!(seen.contains("water") && seen.len() >= 3, "{seen:?}");
+    assert!(
+        agree * 100 >= ground * 99,
+        "water class matches the water's height at {agree} of {ground}"
+    );
+}

@@ -232,6 +232,8 @@ struct PyRenderer {
     scene: Scene,
     mode: Mode,
     held: Held,
+    /// The surface classes' renderer, made when `surface` is first asked for.
+    classes: Option<Held>,
 }
 
 #[pymethods]
@@ -267,13 +269,15 @@ impl PyRenderer {
             scene: s,
             mode,
             held: built.map_err(err)?,
+            classes: None,
         })
     }
 
     /// Renders the view from `camera` (a `Camera`; default the scene's own) and returns a dict
     /// of NumPy arrays: each of `outputs` ("rgb" uint8 (H, W, 3); "depth", "distance" float32
     /// (H, W); "positions" float64 (H, W, 4); "latlon" float64 (H, W, 2); "normals" float32
-    /// (H, W, 3)), and the camera's "K" (3×3), "world_to_camera" and "camera_to_world" (4×4).
+    /// (H, W, 3); "surface" uint8 (H, W), indices into `SURFACE_CLASSES`), and the camera's "K"
+    /// (3×3), "world_to_camera" and "camera_to_world" (4×4).
     #[pyo3(signature = (camera = None, outputs = vec!["rgb".to_string()]))]
     fn render<'py>(
         &mut self,
@@ -286,9 +290,15 @@ impl PyRenderer {
             Some(c) => c.placed_in(&self.scene),
             None => self.scene.clone(),
         };
-        // `move` takes the `&mut Held` whole (a closure otherwise captures the field inside it).
-        let (held, job) = (&mut self.held, (&scene, &wanted[..]));
-        let rendered = py.detach(move || render(&mut held.0, job.0, job.1));
+        if wanted.contains(&Output::Surface) && self.classes.is_none() {
+            let r = &self.held.0;
+            let made = terrain_engine::truth::surface_renderer(r, &self.scene, self.mode);
+            self.classes = Some(Held(made.map_err(err)?));
+        }
+        // `move` takes the `&mut Held`s whole (a closure otherwise captures the fields inside).
+        let (held, classes) = (&mut self.held, self.classes.as_mut());
+        let job = (&scene, &wanted[..]);
+        let rendered = py.detach(move || render(&mut held.0, classes, job.0, job.1));
         let r = rendered.map_err(err)?;
         let (w, h) = (r.camera.width as usize, r.camera.height as usize);
         let dict = PyDict::new(py);
@@ -320,6 +330,10 @@ impl PyRenderer {
                     Output::Normals => {
                         let n = t.normals(&ground).map_err(err)?;
                         dict.set_item("normals", array(py, n, &[h, w, 3])?)?
+                    }
+                    Output::Surface => {
+                        let c = r.classes.clone().unwrap_or_default();
+                        dict.set_item("surface", array(py, c, &[h, w])?)?
                     }
                 }
             }
@@ -370,15 +384,18 @@ impl PyRenderer {
     }
 }
 
-/// What one render leaves: the picture, its camera, and its pixels' points when asked for.
+/// What one render leaves: the picture, its camera, its pixels' points and surface classes when
+/// asked for.
 struct Rendered {
     rgba: Vec<u8>,
     camera: terrain_engine::Camera,
     truth: Option<Truth>,
+    classes: Option<Vec<u8>>,
 }
 
 fn render(
     r: &mut terrain_engine::Renderer,
+    classes: Option<&mut Held>,
     scene: &Scene,
     wanted: &[Output],
 ) -> terrain_engine::Result<Rendered> {
@@ -398,10 +415,15 @@ fn render(
         true => Some(Truth::new(&camera, &r.read_positions(&camera)?)?),
         false => None,
     };
+    let classes = match (classes, wanted.contains(&Output::Surface)) {
+        (Some(c), true) => Some(terrain_engine::truth::surface_classes(&mut c.0, &camera)?),
+        _ => None,
+    };
     Ok(Rendered {
         rgba: frame.rgba,
         camera,
         truth,
+        classes,
     })
 }
 
@@ -458,5 +480,10 @@ fn _terrain(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(random_cameras, m)?)?;
     m.add_function(wrap_pyfunction!(devices_opened, m)?)?;
     m.add("Error", m.py().get_type::<Error>())?;
+    let names: Vec<&str> = terrain_engine::truth::SURFACE_CLASSES
+        .iter()
+        .map(|(name, _)| *name)
+        .collect();
+    m.add("SURFACE_CLASSES", names)?;
     Ok(())
 }

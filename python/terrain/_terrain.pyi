@@ -8,6 +8,9 @@ import numpy.typing as npt
 
 _Path = Union[str, PathLike]
 
+SURFACE_CLASSES: List[str]
+"""The surface classes' names by index ("sky", "water", "meadow", …): the legend of "surface"."""
+
 class Error(Exception):
     """A scene, sketch, camera or device the renderer cannot use; its message is one line."""
 
@@ -70,7 +73,8 @@ class Renderer:
     ) -> Dict[str, npt.NDArray[np.generic]]:
         """The view from `camera` (default the scene's): a dict of the `outputs` asked for
         ("rgb" uint8 (H, W, 3); "depth", "distance" float32 (H, W); "positions" float64
-        (H, W, 4); "latlon" float64 (H, W, 2); "normals" float32 (H, W, 3)) and the camera's
+        (H, W, 4); "latlon" float64 (H, W, 2); "normals" float32 (H, W, 3); "surface" uint8
+        (H, W), indices into SURFACE_CLASSES) and the camera's
         "K" (3×3), "world_to_camera" and "camera_to_world" (4×4, OpenCV's axes)."""
     def height_at(self, x: float, y: float) -> Optional[float]:
         """The terrain's height at world point (x, y), metres; None where nothing is drawn."""

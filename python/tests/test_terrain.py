@@ -21,7 +21,7 @@ def renderer():
 
 
 def test_outputs_have_their_shapes_and_dtypes(renderer):
-    out = renderer.render(outputs=["rgb", "depth", "distance", "positions", "normals"])
+    out = renderer.render(outputs=["rgb", "depth", "distance", "positions", "normals", "surface"])
     assert out["rgb"].shape == (SIZE, SIZE, 3) and out["rgb"].dtype == np.uint8
     for name in ("depth", "distance"):
         assert out[name].shape == (SIZE, SIZE) and out[name].dtype == np.float32
@@ -38,6 +38,12 @@ def test_outputs_have_their_shapes_and_dtypes(renderer):
     assert np.all(out["normals"][ground][:, 2] > 0)
     # The picture is not blank.
     assert out["rgb"].std() > 5
+    # Surface classes: the sky's (0) exactly on sky, the land's elsewhere.
+    assert out["surface"].shape == (SIZE, SIZE) and out["surface"].dtype == np.uint8
+    assert np.array_equal(out["surface"] == 0, ~ground)
+    assert terrain.SURFACE_CLASSES[0] == "sky"
+    land = {terrain.SURFACE_CLASSES[c] for c in np.unique(out["surface"][ground])}
+    assert land and "sky" not in land
 
 
 def test_depth_is_the_distance_along_the_axis_to_the_positions(renderer):

@@ -343,6 +343,10 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) 
         // nothing to overlap.
         let detail = r.detail.clone();
         let ground = terrain_engine::Ground::new(scene, &atlas, &detail);
+        let mut classes = match o.outputs.contains(&Output::Surface) {
+            true => Some(terrain_engine::truth::surface_renderer(&r, scene, o.mode)?),
+            false => None,
+        };
         let mut last: Option<Truth> = None;
         for (k, camera) in cameras.iter().enumerate() {
             let frame = match o.settle {
@@ -353,8 +357,19 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) 
                 let truth = Truth::new(camera, &r.read_positions(camera)?)?;
                 let image = out_dir.join(format!("frame-{k:05}.png"));
                 let mut staged = Staged::default();
-                let mut written =
-                    ground_truth::stage(&mut staged, &image, &o.outputs, &truth, &atlas, &ground)?;
+                let drawn = match &mut classes {
+                    Some(c) => Some(terrain_engine::truth::surface_classes(c, camera)?),
+                    None => None,
+                };
+                let mut written = ground_truth::stage(
+                    &mut staged,
+                    &image,
+                    &o.outputs,
+                    &truth,
+                    drawn.as_deref(),
+                    &atlas,
+                    &ground,
+                )?;
                 // The frame before's flow, now that this one's points are known.
                 if let (Some(before), true) = (&last, o.outputs.contains(&Output::Flow)) {
                     let image = out_dir.join(format!("frame-{:05}.png", k - 1));

@@ -11,6 +11,9 @@
 //!   ([`crate::Ground::normal_at`]): the gradient the mesh modes and the reference shade with.
 //! - Sky: depth and distance `inf`, positions 0 with w 0, normals 0, latitude and longitude NaN,
 //!   flow NaN and occluded.
+//! - The surface class is drawn by the GPU: the frame again in [`View::Surface`], single-sampled
+//!   (a multisampled edge would blend two classes' colours), each pixel's colour read back as the
+//!   nearest of the legend's; its sky from its own depth.
 //! - Cameras in OpenCV's convention: x right, y down, z forward, the top-left pixel's centre at
 //!   (0, 0); square pixels, the principal point at the image's centre.
 //!
@@ -19,7 +22,10 @@
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
+use crate::gpu::uniforms::View;
 use crate::query::Ground;
+use crate::render::Renderer;
+use crate::scene::{Mode, Msaa, Scene};
 use crate::sketch::Atlas;
 use glam::{DMat3, DMat4, DVec2, DVec3};
 
@@ -38,6 +44,8 @@ crate::names::named_enum! {
         Latlon = "latlon",
         /// The shaded surface's world normal, f32; 0 on sky.
         Normals = "normals",
+        /// The surface class drawn per pixel, u8, [`SURFACE_CLASSES`] its legend (0 the sky).
+        Surface = "surface",
         /// Optical flow to the next frame, pixels, f32 (`fly` only), with its occlusion mask.
         Flow = "flow",
     }
@@ -305,3 +313,70 @@ impl Truth {
 /// before the point counts as hidden: a pixel's own slope across it, at grazing views a few
 /// per cent of the depth.
 pub const OCCLUSION_MARGIN: f64 = 0.02;
+
+/// The surface classes, by index: name and colour in the surface view (linear RGB; the twin of
+/// `class_colour` in shading.wgsl). 0 is the sky; `ramp` and `image` are `surface.style`'s.
+pub const SURFACE_CLASSES: [(&str, [f32; 3]); 12] = [
+    ("sky", [0.0, 0.0, 0.0]),
+    ("water", [0.0, 0.0, 1.0]),
+    ("meadow", [0.5, 1.0, 0.0]),
+    ("heath", [1.0, 1.0, 0.0]),
+    ("forest", [0.0, 0.5, 0.0]),
+    ("soil", [0.5, 0.0, 0.0]),
+    ("scree", [0.5, 0.5, 0.5]),
+    ("rock", [1.0, 0.0, 1.0]),
+    ("sand", [1.0, 0.5, 0.0]),
+    ("snow", [1.0, 1.0, 1.0]),
+    ("ramp", [0.0, 1.0, 1.0]),
+    ("image", [0.5, 0.0, 1.0]),
+];
+
+/// A class's colour as the 8-bit sRGB bytes a snapshot holds.
+pub fn class_srgb(class: usize) -> [u8; 3] {
+    let encode = |v: f32| {
+        let s = if v <= 0.003_130_8 {
+            12.92 * v
+        } else {
+            1.055 * v.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0).round() as u8
+    };
+    SURFACE_CLASSES[class].1.map(encode)
+}
+
+/// A renderer of `scene`'s surface classes on `r`'s device, sketch and mode: the view
+/// [`View::Surface`], single-sampled.
+pub fn surface_renderer(r: &Renderer, scene: &Scene, mode: Mode) -> Result<Renderer> {
+    let mut s = scene.clone();
+    s.render.msaa = Msaa::Off;
+    Renderer::with_context(r.ctx().clone(), &s, r.atlas().clone(), mode, View::Surface)
+}
+
+/// Each pixel's surface class (an index into [`SURFACE_CLASSES`]) from `camera`, drawn by
+/// `classes` (a [`surface_renderer`]): the nearest legend colour to what it drew, the sky where
+/// its depth shows none.
+pub fn surface_classes(classes: &mut Renderer, camera: &Camera) -> Result<Vec<u8>> {
+    classes.forget();
+    let frame = classes.render_settled(camera)?;
+    let relative = classes.read_positions(camera)?;
+    let palette: Vec<[u8; 3]> = (0..SURFACE_CLASSES.len()).map(class_srgb).collect();
+    Ok(frame
+        .rgba
+        .chunks_exact(4)
+        .zip(&relative)
+        .map(|(px, p)| {
+            if p[3] < 0.5 {
+                return 0;
+            }
+            let d = |c: &[u8; 3]| {
+                (0..3)
+                    .map(|k| (px[k] as i32 - c[k] as i32).pow(2))
+                    .sum::<i32>()
+            };
+            // Ground is never the sky's class: the nearest of the rest.
+            (1..palette.len())
+                .min_by_key(|&k| d(&palette[k]))
+                .unwrap_or(0) as u8
+        })
+        .collect())
+}

@@ -164,6 +164,17 @@ struct Cache {
     ctx: Option<GpuContext>,
     key: String,
     renderer: Option<Renderer>,
+    /// The surface classes' renderer of the same scene, made when an item first asks for them.
+    classes: Option<Renderer>,
+}
+
+/// The surface classes of a frame, drawn by the cache's class renderer.
+struct Classes<'a>(&'a mut Renderer);
+
+impl Classes<'_> {
+    fn map(self, camera: &Camera) -> Result<Vec<u8>> {
+        terrain_engine::truth::surface_classes(self.0, camera)
+    }
 }
 
 fn scene_key(scene: &Scene) -> String {
@@ -192,9 +203,21 @@ impl Cache {
             };
             let r = Renderer::with_context(ctx, scene, atlas, scene.render.mode, View::Shaded)?;
             self.renderer = Some(r);
+            self.classes = None;
             self.key = key;
         }
         Ok(self.renderer.as_mut().expect("just built"))
+    }
+
+    /// The class renderer of `scene` (made on first use, on the same device and sketch).
+    fn classes(&mut self, scene: &Scene) -> Result<Classes<'_>> {
+        self.renderer(scene)?;
+        if self.classes.is_none() {
+            let r = self.renderer.as_ref().expect("just built");
+            let made = terrain_engine::truth::surface_renderer(r, scene, scene.render.mode)?;
+            self.classes = Some(made);
+        }
+        Ok(Classes(self.classes.as_mut().expect("just built")))
     }
 }
 
@@ -245,12 +268,27 @@ fn render_item(
     add_image(&mut staged, &output, frame.width, frame.height, &frame.rgba)?;
     let written = if outputs.iter().any(|&o| o != Output::Rgb) {
         let truth = Truth::new(&camera, &r.read_positions(&camera)?)?;
+        let classes = match outputs.contains(&Output::Surface) {
+            true => Some(cache.classes(&scene)?.map(&camera)?),
+            false => None,
+        };
+        let r = cache.renderer(&scene)?;
         let ground = terrain_engine::Ground::new(&scene, r.atlas(), &r.detail);
-        ground_truth::stage(&mut staged, &output, outputs, &truth, r.atlas(), &ground)?
+        let atlas = r.atlas();
+        ground_truth::stage(
+            &mut staged,
+            &output,
+            outputs,
+            &truth,
+            classes.as_deref(),
+            atlas,
+            &ground,
+        )?
     } else {
         ground_truth::Written::from([(Output::Rgb.name().into(), output.clone())])
     };
     staged.commit()?;
+    let r = cache.renderer(&scene)?;
     let place = match planet {
         Some(_) => None,
         None => Some(scene::report(
@@ -364,6 +402,7 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
         ctx: None,
         key: String::new(),
         renderer: None,
+        classes: None,
     };
     let todo = items.iter().filter(|it| !done.contains(&it.name)).count();
     let mut progress = Progress::new("batch", todo as f64);
@@ -395,6 +434,7 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
                 failed += 1;
                 // A device error may leave the renderer unusable; the next item builds a new one.
                 cache.renderer = None;
+                cache.classes = None;
             }
         }
         let text = serde_json::to_string(&line).map_err(|e| Error::encode("manifest line", e))?;

@@ -46,7 +46,7 @@ pub struct Args {
     #[arg(long, value_name = "FILE.npy")]
     positions: Option<PathBuf>,
     /// What to write: rgb (the image) and the ground truth beside it, `NAME.depth.npy` and so on
-    /// (rgb, depth, distance, positions, latlon, normals; docs/batch.md).
+    /// (rgb, depth, distance, positions, latlon, normals, surface; docs/batch.md).
     #[arg(long, value_name = "LIST", value_parser = args::outputs, default_value = "rgb")]
     outputs: Vec<Vec<Output>>,
     /// Prints one JSON object on stdout instead of the summary line.
@@ -176,12 +176,20 @@ pub fn run(a: Args) -> Result<()> {
         staged.add(p, &output::npy_f64(&shape, &world))?;
     }
     let truth = Truth::new(&camera, &relative)?;
+    let classes = match outputs.contains(&Output::Surface) {
+        true => {
+            let mut drawn = terrain_engine::truth::surface_renderer(&r, &scene, mode)?;
+            Some(terrain_engine::truth::surface_classes(&mut drawn, &camera)?)
+        }
+        false => None,
+    };
     let ground = terrain_engine::Ground::new(&scene, r.atlas(), &r.detail);
     let written = terrain_cli::ground_truth::stage(
         &mut staged,
         &a.output,
         &outputs,
         &truth,
+        classes.as_deref(),
         r.atlas(),
         &ground,
     )?;

@@ -19,6 +19,7 @@ const VIEW_SPLIT_OCTAVE: u32 = 2u;
 const VIEW_IMPORTANCE: u32 = 3u;
 const VIEW_NORMALS: u32 = 4u;
 const VIEW_COVERAGE: u32 = 5u;
+const VIEW_SURFACE: u32 = 6u;
 
 // The frame's uniform block, one struct per concern, each with its Rust twin of the same name in
 // `gpu::uniforms` (tests/shaders.rs checks every field's offset and size). `pad` fields only fill

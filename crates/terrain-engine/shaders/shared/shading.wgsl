@@ -70,6 +70,10 @@ fn phases(mu: f32) -> vec2<f32> {
 // The single-scattering integral over `len` metres from height `eye_z` along `dir`, in STEPS
 // samples spaced quadratically from the eye, plus an isotropic share for higher orders.
 fn scatter(eye_z: f32, dir: vec3<f32>, len: f32) -> Scatter {
+    // The surface view's colours are labels: no air between them and the eye.
+    if (frame.camera.view == VIEW_SURFACE) {
+        return Scatter(vec3<f32>(0.0), vec3<f32>(1.0));
+    }
     let hm = frame.shading.haze_height_m;
     let haze = frame.shading.haze_per_m;
     let phase = phases(dot(dir, frame.shading.sun));
@@ -123,6 +127,9 @@ fn aerial(colour: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32> {
 // Exposure and the tone map (Khronos PBR Neutral: linear through the mid-tones, so the terrain's
 // contrast stays as lit, highlights rolled off to white without shifting hue).
 fn display(c_in: vec3<f32>) -> vec3<f32> {
+    if (frame.camera.view == VIEW_SURFACE) {
+        return c_in;
+    }
     let start = 0.8 - 0.04;
     let desaturation = 0.15;
     var c = c_in * frame.shading.exposure;
@@ -185,6 +192,36 @@ const BROAD_M: f32 = 2000.0;
 // is a smoothstep of the form at the pixel's footprint, so a transition is as wide as the
 // landform that makes it.
 fn albedo(local: vec3<f32>, footprint: f32) -> vec3<f32> {
+    let w = cover(local, footprint);
+    let meadow = vec3<f32>(0.100, 0.175, 0.062);
+    let heath = vec3<f32>(0.170, 0.163, 0.080);
+    let forest = vec3<f32>(0.070, 0.170, 0.085);
+    let soil = vec3<f32>(0.250, 0.205, 0.150);
+    let scree = vec3<f32>(0.260, 0.250, 0.235);
+    let rock = vec3<f32>(0.230, 0.222, 0.210);
+    let sand = vec3<f32>(0.220, 0.195, 0.145);
+    let snow = vec3<f32>(0.800, 0.820, 0.870);
+    var c = mix(meadow, heath, w.dry);
+    c = mix(c, forest, w.wooded);
+    c = mix(c, soil, w.soil);
+    c = mix(c, scree, w.scree);
+    c = mix(c, rock, w.rock);
+    c = mix(c, sand, w.sand);
+    return mix(c, snow, w.snowy);
+}
+
+// The surface types' weights at a point, each laid over the ones before it in this order.
+struct Cover {
+    dry: f32,
+    wooded: f32,
+    soil: f32,
+    scree: f32,
+    rock: f32,
+    sand: f32,
+    snowy: f32,
+}
+
+fn cover(local: vec3<f32>, footprint: f32) -> Cover {
     let form = sketch_form(local.xy, footprint);
     let steepness = length(form.xy);
     let slope = 1.0 - inverseSqrt(1.0 + steepness * steepness);
@@ -194,31 +231,68 @@ fn albedo(local: vec3<f32>, footprint: f32) -> vec3<f32> {
     let h = local.z;
     // Facing north: the ground falls toward the north.
     let north = -form.y / max(steepness, 1e-3) * smoothstep(0.0, 0.05, slope);
-    let meadow = vec3<f32>(0.100, 0.175, 0.062);
-    let heath = vec3<f32>(0.170, 0.163, 0.080);
-    let forest = vec3<f32>(0.070, 0.170, 0.085);
-    let soil = vec3<f32>(0.250, 0.205, 0.150);
-    let scree = vec3<f32>(0.260, 0.250, 0.235);
-    let rock = vec3<f32>(0.230, 0.222, 0.210);
-    let sand = vec3<f32>(0.220, 0.195, 0.145);
-    let snow = vec3<f32>(0.800, 0.820, 0.870);
+    var w: Cover;
     // Grass: dry on crests, lush toward the valley floor.
-    let dry = smoothstep(-0.02, 0.05, above - 2.0 * hollow);
-    var c = mix(meadow, heath, dry);
+    w.dry = smoothstep(-0.02, 0.05, above - 2.0 * hollow);
     // Forest: moderate slopes, hollows and slopes facing north, up to the tree line.
     let tree_line = 1700.0;
     let moist = 0.5 + 8.0 * hollow - 4.0 * above + 0.25 * north;
-    let wooded = smoothstep(0.01, 0.06, slope) * (1.0 - smoothstep(0.25, 0.35, slope))
+    w.wooded = smoothstep(0.01, 0.06, slope) * (1.0 - smoothstep(0.25, 0.35, slope))
         * smoothstep(0.3, 0.8, moist) * (1.0 - smoothstep(tree_line - 150.0, tree_line, h));
-    c = mix(c, forest, wooded);
     // Bare ground where the slope sheds its soil, scree below cliffs, rock on them.
-    c = mix(c, soil, smoothstep(0.22, 0.32, slope) * (1.0 - wooded));
-    c = mix(c, scree, smoothstep(0.30, 0.40, slope) * smoothstep(-0.01, 0.02, hollow));
-    c = mix(c, rock, smoothstep(0.38, 0.50, slope - 2.0 * hollow));
-    c = mix(c, sand, 1.0 - smoothstep(frame.atlas.water_m + 1.0, frame.atlas.water_m + 5.0, h));
+    w.soil = smoothstep(0.22, 0.32, slope) * (1.0 - w.wooded);
+    w.scree = smoothstep(0.30, 0.40, slope) * smoothstep(-0.01, 0.02, hollow);
+    w.rock = smoothstep(0.38, 0.50, slope - 2.0 * hollow);
+    w.sand = 1.0 - smoothstep(frame.atlas.water_m + 1.0, frame.atlas.water_m + 5.0, h);
     let snow_line = 1900.0 - 250.0 * north;
-    let snowy = smoothstep(snow_line, snow_line + 200.0, h) * (1.0 - smoothstep(0.45, 0.6, slope));
-    return mix(c, snow, snowy);
+    w.snowy = smoothstep(snow_line, snow_line + 200.0, h) * (1.0 - smoothstep(0.45, 0.6, slope));
+    return w;
+}
+
+// The surface classes of the surface view (the legend is `truth::SURFACE_CLASSES`; 0 is the sky,
+// which the CPU knows from the depth): the type that shows most at a point, the last laid over
+// the rest with at least half its weight.
+const CLASS_WATER: u32 = 1u;
+const CLASS_MEADOW: u32 = 2u;
+const CLASS_HEATH: u32 = 3u;
+const CLASS_FOREST: u32 = 4u;
+const CLASS_SOIL: u32 = 5u;
+const CLASS_SCREE: u32 = 6u;
+const CLASS_ROCK: u32 = 7u;
+const CLASS_SAND: u32 = 8u;
+const CLASS_SNOW: u32 = 9u;
+const CLASS_RAMP: u32 = 10u;
+const CLASS_IMAGE: u32 = 11u;
+
+fn natural_class(local: vec3<f32>, footprint: f32) -> u32 {
+    let w = cover(local, footprint);
+    var c = select(CLASS_MEADOW, CLASS_HEATH, w.dry >= 0.5);
+    c = select(c, CLASS_FOREST, w.wooded >= 0.5);
+    c = select(c, CLASS_SOIL, w.soil >= 0.5);
+    c = select(c, CLASS_SCREE, w.scree >= 0.5);
+    c = select(c, CLASS_ROCK, w.rock >= 0.5);
+    c = select(c, CLASS_SAND, w.sand >= 0.5);
+    return select(c, CLASS_SNOW, w.snowy >= 0.5);
+}
+
+// A class's colour in the surface view: corners and mid-points of the colour cube, apart enough
+// that each comes back from the 8-bit target unmistakably (the twin of `SURFACE_CLASSES`).
+fn class_colour(c: u32) -> vec3<f32> {
+    var palette = array<vec3<f32>, 12>(
+        vec3<f32>(0.0, 0.0, 0.0),
+        vec3<f32>(0.0, 0.0, 1.0),
+        vec3<f32>(0.5, 1.0, 0.0),
+        vec3<f32>(1.0, 1.0, 0.0),
+        vec3<f32>(0.0, 0.5, 0.0),
+        vec3<f32>(0.5, 0.0, 0.0),
+        vec3<f32>(0.5, 0.5, 0.5),
+        vec3<f32>(1.0, 0.0, 1.0),
+        vec3<f32>(1.0, 0.5, 0.0),
+        vec3<f32>(1.0, 1.0, 1.0),
+        vec3<f32>(0.0, 1.0, 1.0),
+        vec3<f32>(0.5, 0.0, 1.0),
+    );
+    return palette[min(c, 11u)];
 }
 
 // The reflectance a map's white stands for (paper's, a little below fresh snow's): lit on level
@@ -511,6 +585,9 @@ fn sun_seen_at(local: vec2<f32>, l: u32) -> f32 {
 // ground faces. On the water's surface (`sketch.water_level_m`), water: its body lit alike, and
 // the sky it reflects (Schlick).
 fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32> {
+    if (frame.camera.view == VIEW_SURFACE) {
+        return class_colour(surface_class(local, dist * frame.camera.pixel_scale));
+    }
     let sun_light = sun_at(local.z);
     // A ramp colours the bed under the water too, as a map's depth tints do.
 #ifdef RAMP
@@ -547,6 +624,25 @@ fn lit(local: vec3<f32>, n: vec3<f32>, to_eye: vec3<f32>, dist: f32) -> vec3<f32
     }
 #endif
     return colour;
+}
+
+// The class the shaded picture shows at `local`: water, the ramp's or the image's colours, or
+// the natural surface's type, as `lit` decides.
+fn surface_class(local: vec3<f32>, footprint: f32) -> u32 {
+#ifdef RAMP
+    var c = CLASS_RAMP;
+#else
+    if (on_water(local.z)) {
+        return CLASS_WATER;
+    }
+    var c = natural_class(local, footprint);
+#endif
+#ifdef IMAGE
+    if (drape_at(local.xy).a >= 0.5) {
+        c = CLASS_IMAGE;
+    }
+#endif
+    return c;
 }
 
 // The margin's march: at most this many steps, then a bisection of the last in MARGIN_HALVINGS.
