@@ -794,3 +794,86 @@ fn fly_over_a_planet_passes_straight_ahead() {
         "{nadirs:?}"
     );
 }
+
+/// A job's camera is one camera laid over the base's: an explicit `position` and `look_at` over a
+/// starter scene (placed by heading and pitch), a `look_at` over a `map_xy` camera, and
+/// `--set camera.…` alike; a job's own conflict names both files.
+#[test]
+fn a_jobs_camera_replaces_the_base_cameras_place_and_aim() {
+    let dir = scratch("jobs-camera");
+    let dem = manifest_dir().join("tests/data/formats/utm-metres-Float32.tif");
+    let (code, _, err) = terrain(&[
+        "scene",
+        dem.to_str().unwrap(),
+        "-o",
+        dir.join("starter.toml").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    // The starter's camera by map_xy and altitude (its commented place given), aimed by heading
+    // and pitch.
+    let starter = std::fs::read_to_string(dir.join("starter.toml")).unwrap();
+    let placed = starter
+        .replace("# map_xy = ", "map_xy = ")
+        .replace("# altitude_m = ", "altitude_m = ");
+    assert!(placed.contains("\nmap_xy = ") && placed.contains("\naltitude_m = "));
+    std::fs::write(dir.join("mine.toml"), &placed).unwrap();
+    let jobs = dir.join("jobs.toml");
+    std::fs::write(
+        &jobs,
+        "scene = \"mine.toml\"\n\
+         [[job]]\nname = \"explicit\"\n\
+         camera = { position = [500.0, 200.0, 1500.0], look_at = [1500.0, 1500.0, 500.0] }\n\
+         [[job]]\nname = \"aimed\"\ncamera = { look_at = [1400.0, 1400.0, 550.0] }\n\
+         [[job]]\nname = \"two-places\"\n\
+         camera = { position = [500.0, 200.0, 1500.0], map_xy = [747000.0, 4057500.0] }\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let (code, _, _) = batch(&jobs, &out, &["--size", "32"]);
+    assert_eq!(code, 1, "one job fails");
+    let lines = manifest(&out.join("manifest.jsonl"));
+    let by_name = |n: &str| lines.iter().find(|l| l["name"] == n).unwrap().clone();
+    let explicit = by_name("explicit");
+    assert_eq!(explicit["status"], "ok", "{explicit}");
+    assert_eq!(
+        explicit["camera"]["position"],
+        serde_json::json!([500.0, 200.0, 1500.0])
+    );
+    let aimed = by_name("aimed");
+    assert_eq!(aimed["status"], "ok", "{aimed}");
+    // It kept the base's place: the eye over the base's map_xy (the sketch's south-west node is
+    // at 746130.58, 4056850.80).
+    let map_xy: Vec<f64> = placed
+        .lines()
+        .find(|l| l.starts_with("map_xy = "))
+        .map(|l| {
+            let v = l.split('[').nth(1).unwrap().split(']').next().unwrap();
+            v.split(',').map(|x| x.trim().parse().unwrap()).collect()
+        })
+        .unwrap();
+    let eye = &aimed["camera"]["position"];
+    assert!(
+        (eye[0].as_f64().unwrap() - (map_xy[0] - 746130.58)).abs() < 1.0,
+        "{eye}"
+    );
+    let bad = by_name("two-places");
+    let why = bad["error"].as_str().unwrap();
+    assert!(
+        why.contains("give one place") && why.contains("jobs.toml") && why.contains("mine.toml"),
+        "{why}"
+    );
+    // `--set camera.…` on the command line is one camera too.
+    let (code, _, err) = terrain(&[
+        "render",
+        dir.join("mine.toml").to_str().unwrap(),
+        "-o",
+        dir.join("set.png").to_str().unwrap(),
+        "--size",
+        "32",
+        "--set",
+        "camera.position=[500.0, 200.0, 1500.0]",
+        "--set",
+        "camera.look_at=[1500.0, 1500.0, 500.0]",
+    ]);
+    assert_eq!(code, 0, "{err}");
+}

@@ -1,7 +1,8 @@
-//! `import terrain` as a user meets it: the package (`python/`) installed with pip into a fresh
-//! virtual environment (maturin builds its native module, from the package registry), then its
-//! pytest suite (`python/tests`, pytest from the registry) run against the bundled sketches and
-//! a GDAL GeoTIFF, and the dataset example run as its docstring says.
+//! `import terrain` as a user meets it: the package (`python/`) built into a wheel for this
+//! platform by pip (maturin, from the package registry, builds its native module), the wheel
+//! installed into a fresh virtual environment, then its pytest suite (`python/tests`, pytest from
+//! the registry) run against the bundled sketches and a GDAL GeoTIFF, and the dataset example run
+//! as its docstring says.
 //!
 //! Own harness (libtest-mimic): without a Python 3 with `venv` it reports itself skipped with
 //! the reason, and fails where `TERRAIN_REQUIRE_PYTHON_TESTS` is set (`.ci/run` sets it).
@@ -62,15 +63,39 @@ fn the_package_installs_in_a_fresh_venv_and_passes_its_pytest_suite() {
             .arg(&venv),
     );
     let bin = |name: &str| -> PathBuf { venv.join("bin").join(name) };
-    // `pip install ./python`, as docs/python.md says, with pytest beside it. The native module
-    // builds into the workspace's target folder, beside what `cargo test` built.
+    // The wheel `pip install ./python` builds (docs/python.md), kept in `target/wheels/`; its
+    // native module builds into the workspace's target folder, beside what `cargo test` built.
+    let wheels = target_dir(&root).join("wheels");
+    let _ = std::fs::remove_dir_all(&wheels);
     run(
-        "pip install ./python pytest",
+        "pip wheel ./python",
+        Command::new(bin("pip"))
+            .args([
+                "wheel",
+                "--quiet",
+                "--disable-pip-version-check",
+                "--no-deps",
+                "-w",
+            ])
+            .arg(&wheels)
+            .arg(root.join("python"))
+            .env("CARGO_TARGET_DIR", target_dir(&root))
+            .current_dir(&dir),
+    );
+    let wheel = std::fs::read_dir(&wheels)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.extension().is_some_and(|e| e == "whl"))
+        .expect("a wheel");
+    let name = wheel.file_name().unwrap().to_string_lossy().into_owned();
+    assert!(name.starts_with("terrain_renderer-"), "{name}");
+    run(
+        "pip install the wheel and pytest",
         Command::new(bin("pip"))
             .args(["install", "--quiet", "--disable-pip-version-check"])
-            .arg(root.join("python"))
+            .arg(&wheel)
             .arg("pytest")
-            .env("CARGO_TARGET_DIR", target_dir(&root))
             .current_dir(&dir),
     );
     // From outside the repository, so `import terrain` is the installed package.

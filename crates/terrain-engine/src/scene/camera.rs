@@ -235,3 +235,26 @@ impl PathKey {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::lay_camera;
+
+    fn laid(base: &str, given: &[&str]) -> Vec<String> {
+        let mut t: toml::Table = base.parse().unwrap();
+        lay_camera(&mut t, given);
+        t.keys().cloned().collect()
+    }
+
+    #[test]
+    fn a_place_replaces_place_and_aim_an_aim_only_the_aim() {
+        let base = "map_xy = [1.0, 2.0]\naltitude_m = 50.0\nheading_deg = 0.0\npitch_deg = -45.0\n\
+                    fov_y_deg = 40.0\nwidth = 64\n";
+        assert_eq!(laid(base, &["position", "look_at"]), ["fov_y_deg", "width"]);
+        assert_eq!(
+            laid(base, &["look_at"]),
+            ["altitude_m", "fov_y_deg", "map_xy", "width"]
+        );
+        assert_eq!(laid(base, &["width"]).len(), 6, "optics merge key by key");
+    }
+}
