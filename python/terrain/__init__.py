@@ -14,7 +14,17 @@ latitude and longitude and normals as NumPy arrays.
 ((256, 256, 3), dtype('float32'))
 """
 
-from ._terrain import (
+import os as _os
+import tempfile as _tempfile
+
+# Mesa's Vulkan device-select layer connects to a Wayland display whenever an adapter is
+# requested; where XDG_RUNTIME_DIR is unset or empty (a container, a CI job, ssh) libwayland then
+# prints an error about a display nobody asked for. Pointing it at the temporary folder makes the
+# probe fail quietly, as the `terrain` command does; a real Wayland session always sets it.
+if not _os.environ.get("XDG_RUNTIME_DIR") and "WAYLAND_DISPLAY" not in _os.environ:
+    _os.environ["XDG_RUNTIME_DIR"] = _tempfile.gettempdir()
+
+from ._terrain import (  # noqa: E402
     Camera,
     Error,
     Renderer,

@@ -22,12 +22,12 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use terrain_engine::{Error, Result, Role};
 
-/// The formats `--export` writes.
+/// The formats `--export` writes: `nerf`, `transforms.json` (instant-ngp, nerfstudio); `colmap`,
+/// COLMAP's text model (`cameras.txt`, `images.txt`, `points3D.txt`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Export {
-    /// `transforms.json` (instant-ngp, nerfstudio).
+    // (No doc comments on the values: clap would turn `batch --help` into its long form.)
     Nerf,
-    /// COLMAP's text model: `cameras.txt`, `images.txt`, `points3D.txt`.
     Colmap,
 }
 

@@ -20,7 +20,8 @@ pub struct Args {
     #[arg(long, value_name = "I/N", value_parser = args::shard)]
     shard: Option<(usize, usize)>,
     /// Skips items the manifest lists as done; retries failed ones. Refused where the manifest
-    /// was made from other inputs (jobs file, base scene, sketches, --set, --size, --mode).
+    /// was made from other inputs (jobs file, base scene, sketches, --set, --size, --mode,
+    /// --outputs).
     #[arg(long)]
     resume: bool,
     /// Overrides a scene key in every item (repeatable).
@@ -33,7 +34,7 @@ pub struct Args {
     #[arg(long, value_parser = crate::args::named::<Mode>(), conflicts_with = "merge")]
     mode: Option<Mode>,
     /// What each item writes: rgb (its image) and the ground truth beside it (depth, distance,
-    /// positions, latlon, normals; docs/batch.md).
+    /// positions, latlon, normals, surface; docs/batch.md).
     #[arg(long, value_name = "LIST", value_parser = args::outputs, default_value = "rgb", conflicts_with = "merge")]
     outputs: Vec<Vec<Output>>,
     /// Writes the cameras for other tools beside the images once the items are done: nerf

@@ -39,7 +39,7 @@ pub struct Args {
     #[arg(long)]
     settle: bool,
     /// What each frame writes: rgb (its image) and the ground truth beside it (depth, distance,
-    /// positions, latlon, normals, and flow to the next frame with its occlusion mask;
+    /// positions, latlon, normals, surface, and flow to the next frame with its occlusion mask;
     /// docs/batch.md); with more than rgb, `frames.jsonl` gives each frame's camera.
     #[arg(long, value_name = "LIST", value_parser = args::outputs, default_value = "rgb")]
     outputs: Vec<Vec<terrain_engine::truth::Output>>,
