@@ -14,6 +14,11 @@
 //! because the APNG of a long flight (363 MB for the bundled one) is more than browsers play
 //! smoothly; without ffmpeg, or where it fails, the APNG is made from the frames at the end.
 //!
+//! With ground truth (`Options::outputs` beyond the image) each frame is drawn and read back
+//! before the next: its files ([`crate::ground_truth`]) land together, the flow of the frame
+//! before with them once this frame's points are known, and `frames.jsonl` gives every frame's
+//! camera at the end (a flight without ground truth removes an earlier one's).
+//!
 //! Frames' PNGs are encoded on other threads (`FrameWriter`) while the next frame renders.
 //! Encoded in the render loop, a PNG can take longer than a fast GPU draws the frame; the GPU,
 //! idle most of each frame, lowers its clocks, and the frame times would measure the encoder, not
@@ -391,8 +396,12 @@ pub fn run(scene: &Scene, o: &Options, out_dir: &Path, say: impl FnOnce(&Plan)) 
     }
     writer.finish()?;
     progress.finish();
+    let jsonl = out_dir.join("frames.jsonl");
     if truth_wanted {
-        write_atomic(&out_dir.join("frames.jsonl"), lines.as_bytes())?;
+        write_atomic(&jsonl, lines.as_bytes())?;
+    } else if jsonl.exists() {
+        // An earlier flight's cameras, which no frame of this one matches.
+        std::fs::remove_file(&jsonl).map_err(|e| Error::io(Role::Output, &jsonl, e))?;
     }
     let rows: Vec<CsvRow> = records.iter().map(CsvRow::of).collect();
     write_atomic(

@@ -6,17 +6,21 @@
 //!   `random-<i>`; item k belongs to shard i of n when k mod n = i, so shards are deterministic and
 //!   together are exactly the unsharded set. A random camera depends only on the seed and its own
 //!   index, never on which shard or run draws it.
-//! - A job's keys are merged into the base scene's TOML and the result is checked like any scene
-//!   file, so a bad key fails that job naming the key. A job that fails (bad keys, a missing
+//! - A job's keys are merged into the base scene's TOML (its camera laid over the base's as one
+//!   camera, `scene::lay_camera`) and the result is checked like any scene file, so a bad key
+//!   fails that job naming the key. A job that fails (bad keys, a missing
 //!   sketch, a camera under the ground, a device error) is recorded with its cause and the rest
 //!   carry on; the command exits non-zero at the end if any failed.
 //! - One device for the batch, and one renderer (pipelines, atlas, baked grid) kept while
 //!   consecutive items share everything but the camera.
-//! - Each snapshot is written atomically, then its line is appended to the manifest
-//!   (`manifest.jsonl`, or `manifest-<i>-of-<n>.jsonl` for a shard) and flushed. `--resume` keeps
-//!   the manifest's complete `ok` lines whose image exists, drops the rest (failed items, a line
+//! - Each snapshot and its ground truth (`--outputs`, [`crate::ground_truth`]) are written
+//!   atomically together, then its line is appended to the manifest (`manifest.jsonl`, or
+//!   `manifest-<i>-of-<n>.jsonl` for a shard) and flushed. `--resume` keeps the manifest's
+//!   complete `ok` lines whose image and listed files exist, drops the rest (failed items, a line
 //!   torn by a kill) and renders what is missing, so nothing is lost or listed twice; it also
-//!   removes the temporary files a kill left mid-write for this shard's images.
+//!   removes the temporary files a kill left mid-write for this shard's files.
+//! - `--export` writes the cameras of the manifest's `ok` lines for NeRF or COLMAP once the
+//!   items are done (`export`).
 //! - Beside each manifest, a record of what its items were made from (the `inputs` module): a
 //!   folder whose manifest was made from other inputs is refused, with `--resume` or without, so
 //!   a resumed batch never keeps another batch's images and no run replaces another's manifest.
