@@ -153,23 +153,33 @@ pub fn rows(m: DMat4) -> [[f64; 4]; 4] {
     ]
 }
 
-/// Where world point `p` lands in `camera`'s image (pixels, OpenCV's convention) and its depth
-/// along the axis; `None` at or behind the eye's plane.
-pub fn project(camera: &Camera, p: DVec3) -> Option<(DVec2, f64)> {
-    let k = Intrinsics::of(camera);
-    let c = world_to_camera_rotation(camera) * (p - camera.eye);
-    (c.z > 0.0).then(|| {
-        let uv = DVec2::new(k.fx * c.x / c.z + k.cx, k.fy * c.y / c.z + k.cy);
-        (uv, c.z)
-    })
+/// A camera's projection, made once for the many points it projects.
+#[derive(Clone, Copy, Debug)]
+pub struct Projection {
+    k: Intrinsics,
+    rotation: DMat3,
+    eye: DVec3,
 }
 
-/// The unit ray from the eye through pixel position `uv` (OpenCV's convention).
-pub fn pixel_ray(camera: &Camera, uv: DVec2) -> DVec3 {
-    let k = Intrinsics::of(camera);
-    let x = (uv.x - k.cx) / k.fx;
-    let y = (uv.y - k.cy) / k.fy;
-    (camera.forward + camera.right * x - camera.up * y).normalize()
+impl Projection {
+    /// The projection of `camera` at its image size.
+    pub fn of(camera: &Camera) -> Projection {
+        Projection {
+            k: Intrinsics::of(camera),
+            rotation: world_to_camera_rotation(camera),
+            eye: camera.eye,
+        }
+    }
+
+    /// Where world point `p` lands in the image (pixels, OpenCV's convention) and its depth
+    /// along the axis; `None` at or behind the eye's plane.
+    pub fn point(&self, p: DVec3) -> Option<(DVec2, f64)> {
+        let (k, c) = (&self.k, self.rotation * (p - self.eye));
+        (c.z > 0.0).then(|| {
+            let uv = DVec2::new(k.fx * c.x / c.z + k.cx, k.fy * c.y / c.z + k.cy);
+            (uv, c.z)
+        })
+    }
 }
 
 /// A frame's pixels as world points: what every output is computed from.
@@ -281,6 +291,7 @@ impl Truth {
         let (w, _) = self.size();
         let (nw, nh) = next.size();
         let next_depth = next.depth();
+        let projection = Projection::of(&next.camera);
         let mut flow = Vec::with_capacity(self.positions.len() / 2);
         let mut occluded = Vec::with_capacity(self.positions.len() / 4);
         for i in 0..self.positions.len() / 4 {
@@ -290,7 +301,7 @@ impl Truth {
                 continue;
             };
             let here = DVec2::new((i % w) as f64, (i / w) as f64);
-            let Some((uv, z)) = project(&next.camera, p) else {
+            let Some((uv, z)) = projection.point(p) else {
                 flow.extend_from_slice(&[f32::NAN; 2]);
                 occluded.push(true);
                 continue;

@@ -172,15 +172,6 @@ struct Cache {
     classes: Option<Renderer>,
 }
 
-/// The surface classes of a frame, drawn by the cache's class renderer.
-struct Classes<'a>(&'a mut Renderer);
-
-impl Classes<'_> {
-    fn map(self, camera: &Camera) -> Result<Vec<u8>> {
-        terrain_engine::truth::surface_classes(self.0, camera)
-    }
-}
-
 fn scene_key(scene: &Scene) -> String {
     let mut s = scene.clone();
     s.camera.aim(glam::DVec3::ZERO, glam::DVec3::ZERO);
@@ -214,14 +205,14 @@ impl Cache {
     }
 
     /// The class renderer of `scene` (made on first use, on the same device and sketch).
-    fn classes(&mut self, scene: &Scene) -> Result<Classes<'_>> {
+    fn classes(&mut self, scene: &Scene) -> Result<&mut Renderer> {
         self.renderer(scene)?;
         if self.classes.is_none() {
             let r = self.renderer.as_ref().expect("just built");
             let made = terrain_engine::truth::surface_renderer(r, scene, scene.render.mode)?;
             self.classes = Some(made);
         }
-        Ok(Classes(self.classes.as_mut().expect("just built")))
+        Ok(self.classes.as_mut().expect("just built"))
     }
 }
 
@@ -273,7 +264,10 @@ fn render_item(
     let written = if outputs.iter().any(|&o| o != Output::Rgb) {
         let truth = Truth::new(&camera, &r.read_positions(&camera)?)?;
         let classes = match outputs.contains(&Output::Surface) {
-            true => Some(cache.classes(&scene)?.map(&camera)?),
+            true => Some(terrain_engine::truth::surface_classes(
+                cache.classes(&scene)?,
+                &camera,
+            )?),
             false => None,
         };
         let r = cache.renderer(&scene)?;

@@ -249,21 +249,10 @@ fn cover(local: vec3<f32>, footprint: f32) -> Cover {
     return w;
 }
 
-// The surface classes of the surface view (the legend is `truth::SURFACE_CLASSES`; 0 is the sky,
-// which the CPU knows from the depth): the type that shows most at a point, the last laid over
-// the rest with at least half its weight.
-const CLASS_WATER: u32 = 1u;
-const CLASS_MEADOW: u32 = 2u;
-const CLASS_HEATH: u32 = 3u;
-const CLASS_FOREST: u32 = 4u;
-const CLASS_SOIL: u32 = 5u;
-const CLASS_SCREE: u32 = 6u;
-const CLASS_ROCK: u32 = 7u;
-const CLASS_SAND: u32 = 8u;
-const CLASS_SNOW: u32 = 9u;
-const CLASS_RAMP: u32 = 10u;
-const CLASS_IMAGE: u32 = 11u;
-
+// The surface classes of the surface view: `CLASS_SKY`, `CLASS_WATER`, … and their colours
+// `CLASS_COLOURS` come from `truth::SURFACE_CLASSES` through `#import constants` (0, the sky,
+// the CPU knows from the depth). A point's class is the type that shows most there: the last laid
+// over the rest with at least half its weight.
 fn natural_class(local: vec3<f32>, footprint: f32) -> u32 {
     let w = cover(local, footprint);
     var c = select(CLASS_MEADOW, CLASS_HEATH, w.dry >= 0.5);
@@ -275,24 +264,11 @@ fn natural_class(local: vec3<f32>, footprint: f32) -> u32 {
     return select(c, CLASS_SNOW, w.snowy >= 0.5);
 }
 
-// A class's colour in the surface view: corners and mid-points of the colour cube, apart enough
-// that each comes back from the 8-bit target unmistakably (the twin of `SURFACE_CLASSES`).
+// A class's colour in the surface view (copied to a variable: an index into an array constant
+// must be a constant).
 fn class_colour(c: u32) -> vec3<f32> {
-    var palette = array<vec3<f32>, 12>(
-        vec3<f32>(0.0, 0.0, 0.0),
-        vec3<f32>(0.0, 0.0, 1.0),
-        vec3<f32>(0.5, 1.0, 0.0),
-        vec3<f32>(1.0, 1.0, 0.0),
-        vec3<f32>(0.0, 0.5, 0.0),
-        vec3<f32>(0.5, 0.0, 0.0),
-        vec3<f32>(0.5, 0.5, 0.5),
-        vec3<f32>(1.0, 0.0, 1.0),
-        vec3<f32>(1.0, 0.5, 0.0),
-        vec3<f32>(1.0, 1.0, 1.0),
-        vec3<f32>(0.0, 1.0, 1.0),
-        vec3<f32>(0.5, 0.0, 1.0),
-    );
-    return palette[min(c, 11u)];
+    var palette = CLASS_COLOURS;
+    return palette[min(c, CLASS_COUNT - 1u)];
 }
 
 // The reflectance a map's white stands for (paper's, a little below fresh snow's): lit on level

@@ -33,8 +33,34 @@ static CONSTANTS: LazyLock<String> = LazyLock::new(|| {
         format!("const TOP_M: f32 = {};", f(light::TOP_M)),
         format!("const FAR_M: f32 = {};", f(light::FAR_M)),
     ]
+    .into_iter()
+    .chain(surface_classes())
+    .collect::<Vec<_>>()
     .join("\n")
 });
+
+/// The surface view's classes (`truth::SURFACE_CLASSES`): `CLASS_<NAME>` each its index,
+/// `CLASS_COUNT`, and `CLASS_COLOURS`, their colours in order.
+fn surface_classes() -> Vec<String> {
+    let classes = &crate::truth::SURFACE_CLASSES;
+    let colours: Vec<String> = classes
+        .iter()
+        .map(|(_, [r, g, b])| format!("vec3<f32>({r:?}, {g:?}, {b:?})"))
+        .collect();
+    let n = classes.len();
+    classes
+        .iter()
+        .enumerate()
+        .map(|(i, (name, _))| format!("const CLASS_{}: u32 = {i}u;", name.to_uppercase()))
+        .chain([
+            format!("const CLASS_COUNT: u32 = {n}u;"),
+            format!(
+                "const CLASS_COLOURS: array<vec3<f32>, {n}> = array<vec3<f32>, {n}>({});",
+                colours.join(", ")
+            ),
+        ])
+        .collect()
+}
 
 const SHARED: [(&str, &str); 9] = [
     ("frame", include_str!("../../shaders/shared/frame.wgsl")),
@@ -268,24 +294,26 @@ mod tests {
     fn the_shared_constants_are_the_rust_values() {
         use naga::{Expression, Literal};
         let module = naga::front::wgsl::parse_str(&CONSTANTS).unwrap();
-        let literal = |e: naga::Handle<Expression>| match module.global_expressions[e] {
-            Expression::Literal(Literal::F32(v)) => v as f64,
-            Expression::Literal(Literal::U32(v)) => v as f64,
-            Expression::Literal(Literal::I32(v)) => v as f64,
-            ref other => panic!("{other:?}"),
-        };
+        fn flat(module: &naga::Module, e: naga::Handle<Expression>, out: &mut Vec<f64>) {
+            match &module.global_expressions[e] {
+                Expression::Compose { components, .. } => {
+                    components.iter().for_each(|&c| flat(module, c, out))
+                }
+                Expression::Literal(Literal::F32(v)) => out.push(*v as f64),
+                Expression::Literal(Literal::U32(v)) => out.push(*v as f64),
+                Expression::Literal(Literal::I32(v)) => out.push(*v as f64),
+                other => panic!("{other:?}"),
+            }
+        }
         let values = |name: &str| -> Vec<f64> {
             let (_, c) = module
                 .constants
                 .iter()
                 .find(|(_, c)| c.name.as_deref() == Some(name))
                 .unwrap_or_else(|| panic!("{name} missing"));
-            match &module.global_expressions[c.init] {
-                Expression::Compose { components, .. } => {
-                    components.iter().map(|&e| literal(e)).collect()
-                }
-                _ => vec![literal(c.init)],
-            }
+            let mut out = Vec::new();
+            flat(&module, c.init, &mut out);
+            out
         };
         use crate::light;
         let f32s = |v: &[f64]| v.iter().map(|&x| x as f32 as f64).collect::<Vec<_>>();
@@ -302,7 +330,19 @@ mod tests {
         ] {
             assert_eq!(values(name), f32s(&[v]), "{name}");
         }
-        assert_eq!(module.constants.len(), 9, "a constant without its check");
+        let classes = &crate::truth::SURFACE_CLASSES;
+        for (i, (name, _)) in classes.iter().enumerate() {
+            let name = format!("CLASS_{}", name.to_uppercase());
+            assert_eq!(values(&name), [i as f64], "{name}");
+        }
+        assert_eq!(values("CLASS_COUNT"), [classes.len() as f64]);
+        let colours: Vec<f64> = classes.iter().flat_map(|c| c.1.map(f64::from)).collect();
+        assert_eq!(values("CLASS_COLOURS"), colours);
+        assert_eq!(
+            module.constants.len(),
+            9 + classes.len() + 2,
+            "a constant without its check"
+        );
     }
 
     #[test]
