@@ -325,8 +325,9 @@ impl Truth {
 /// per cent of the depth.
 pub const OCCLUSION_MARGIN: f64 = 0.02;
 
-/// The surface classes, by index: name and colour in the surface view (linear RGB; the twin of
-/// `class_colour` in shading.wgsl). 0 is the sky; `ramp` and `image` are `surface.style`'s.
+/// The surface classes, by index: name and colour in the surface view (linear RGB; the WGSL
+/// gets them as `CLASS_*` and `CLASS_COLOURS` through `#import constants`). 0 is the sky; `ramp`
+/// and `image` are `surface.style`'s.
 pub const SURFACE_CLASSES: [(&str, [f32; 3]); 12] = [
     ("sky", [0.0, 0.0, 0.0]),
     ("water", [0.0, 0.0, 1.0]),
