@@ -9,12 +9,15 @@
 //! plotters, indicatif and the metrics.
 
 pub mod app;
+pub mod error;
 pub mod eval;
 pub mod ground_truth;
 pub mod output;
 pub mod plot;
 pub mod progress;
 pub mod stats;
+
+pub use error::{Error, Result};
 
 /// docs/embedding.md's host, compiled with the doctests so that the page cannot drift from the
 /// API it describes.

@@ -1,5 +1,5 @@
 //! The library's error type: one variant per kind of cause, each printing as one line that names
-//! the cause and, for a file, the role the file plays (scene, sketch, jobs file, output, …), so
+//! the cause and, for a file, the role the file plays (scene, sketch, output, …), so
 //! "No such file or directory" always says which file the user got wrong.
 //!
 //! The binary prints `Display` and exits non-zero; nothing a user gives the program may panic instead.
@@ -16,20 +16,16 @@ pub enum Role {
     Sketch,
     /// `importance.max_map`: a sketch-format map of I_s.
     ImportanceMap,
-    /// `batch`'s jobs file, listing the scenes it renders.
-    JobsFile,
     /// A file the command writes (image, figure, report, animation).
     Output,
     /// The folder a command writes into.
     OutputFolder,
-    /// `batch`'s manifest, read by `--resume` and `--merge` and appended to.
-    Manifest,
-    /// `compare --replot`'s report.json.
-    Report,
     /// `surface.color_ramp`: a colour ramp in gdaldem `color-relief`'s text format.
     ColorRamp,
     /// `surface.image`: imagery draped over the ground.
     Image,
+    /// A file of the host's own (a batch's jobs file, a report), named as its messages name it.
+    Named(&'static str),
 }
 
 impl fmt::Display for Role {
@@ -38,13 +34,11 @@ impl fmt::Display for Role {
             Role::Scene => "scene",
             Role::Sketch => "sketch",
             Role::ImportanceMap => "importance map",
-            Role::JobsFile => "jobs file",
             Role::Output => "output",
             Role::OutputFolder => "output folder",
-            Role::Manifest => "manifest",
-            Role::Report => "report",
             Role::ColorRamp => "colour ramp",
             Role::Image => "surface image",
+            Role::Named(name) => name,
         })
     }
 }
@@ -136,22 +130,6 @@ pub enum Error {
         /// wgpu's error.
         source: Box<dyn std::error::Error + Send + Sync>,
     },
-    /// No window can be opened (no display, a window system error); `source` is winit's or
-    /// softbuffer's error.
-    #[error("window: {what}: {source}")]
-    Window {
-        /// What was being done, e.g. "cannot open one".
-        what: String,
-        /// The window system's error, kept as text.
-        source: Box<dyn std::error::Error + Send + Sync>,
-    },
-    /// No display to open a window on; `cause` is winit's reason in the user's terms (its
-    /// source-file location dropped) with what to do about it.
-    #[error("window: {cause}")]
-    NoDisplay {
-        /// Why no display can be opened, and what to do about it.
-        cause: String,
-    },
     /// A scene value that cannot be used although it parsed (a synthetic sketch's name, a camera
     /// path whose keys coincide); `key` names it as the scene file spells it.
     #[error("{key}: {}", Line(reason))]
@@ -164,14 +142,6 @@ pub enum Error {
     /// A height query at a point or along a ray that cannot be answered (not finite).
     #[error("height query: {}", Line(.0))]
     Query(String),
-    /// One job of a batch that cannot run as the jobs file gives it.
-    #[error("job {name:?}: {}", Line(reason))]
-    Job {
-        /// The job's name, as in the jobs file or `random-k`.
-        name: String,
-        /// Why it cannot run.
-        reason: String,
-    },
     /// A report, manifest line or scene that serde could not encode.
     #[error("cannot encode the {what}: {source}")]
     Encode {
@@ -291,14 +261,6 @@ impl Error {
         Error::Encode {
             what,
             source: Box::new(source),
-        }
-    }
-    /// The window system refused `what`; its error is kept as text, since winit's and
-    /// softbuffer's errors hold raw window handles and cannot cross threads.
-    pub fn window(what: impl Into<String>, source: impl fmt::Display) -> Self {
-        Error::Window {
-            what: what.into(),
-            source: source.to_string().into(),
         }
     }
 

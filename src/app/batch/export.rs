@@ -16,11 +16,12 @@
 //! Rejected: COLMAP's binary model, which its own `model_converter` makes from the text one.
 
 use super::manifest::{ManifestLine, Snapshot, Status};
+use crate::error::MANIFEST;
 use crate::output::write_atomic;
 use glam::{DMat3, DMat4, DQuat};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use terrain_engine::{Error, Result, Role};
+use terrain_engine::{Error, Result};
 
 /// The formats `--export` writes: `nerf`, `transforms.json` (instant-ngp, nerfstudio); `colmap`,
 /// COLMAP's text model (`cameras.txt`, `images.txt`, `points3D.txt`).
@@ -33,8 +34,7 @@ pub enum Export {
 
 /// Writes `format`'s files beside `manifest` from its `ok` lines; the files written.
 pub fn export(format: Export, manifest: &Path) -> Result<Vec<PathBuf>> {
-    let text =
-        std::fs::read_to_string(manifest).map_err(|e| Error::io(Role::Manifest, manifest, e))?;
+    let text = std::fs::read_to_string(manifest).map_err(|e| Error::io(MANIFEST, manifest, e))?;
     let shots: Vec<(String, Snapshot)> = text
         .lines()
         .filter_map(|l| serde_json::from_str::<ManifestLine>(l).ok())

@@ -13,12 +13,13 @@
 //!   inputs; one of other inputs, or one without a record, is refused, never replaced.
 
 use super::jobs::{Jobs, Overrides};
+use crate::error::MANIFEST;
 use crate::output::write_atomic;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use terrain_engine::scene::{Mode, Scene};
 use terrain_engine::truth::Output;
-use terrain_engine::{Error, Result, Role};
+use terrain_engine::{Error, Result};
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Inputs {
@@ -138,9 +139,9 @@ impl Inputs {
     }
 
     pub fn read(path: &Path) -> Result<Inputs> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(Role::Manifest, path, e))?;
+        let bytes = std::fs::read(path).map_err(|e| Error::io(MANIFEST, path, e))?;
         serde_json::from_slice(&bytes)
-            .map_err(|e| Error::decode(Role::Manifest, path, "a batch's inputs record", e))
+            .map_err(|e| Error::decode(MANIFEST, path, "a batch's inputs record", e))
     }
 
     pub fn write(&self, path: &Path) -> Result<()> {
@@ -205,7 +206,7 @@ pub fn check_folder(out_dir: &Path, ours: &Inputs) -> Result<()> {
         let record = record_path(&manifest);
         let refuse = |why: String| {
             Error::file(
-                Role::Manifest,
+                MANIFEST,
                 &manifest,
                 format!("was made from {why}; use another --out-dir, or remove it"),
             )
@@ -240,7 +241,7 @@ pub fn shards_inputs(out_dir: &Path) -> Result<Option<Inputs>> {
                 if let Some(change) = inputs.change_from(theirs) {
                     let other = other.file_name().unwrap_or_default().to_string_lossy();
                     return Err(Error::file(
-                        Role::Manifest,
+                        MANIFEST,
                         &manifest,
                         format!(
                             "was made from {change}, unlike {other}: the shards are not one batch"

@@ -1,10 +1,11 @@
 //! The jobs file: its base scene, its `[[job]]` tables merged into that scene's TOML, its
 //! `[random]` cameras, and the items they make, in order.
 
+use crate::error::JOBS_FILE;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use terrain_engine::scene::{Fault, Mode, Scene};
-use terrain_engine::{Error, Result, Role};
+use terrain_engine::{Error, Result};
 
 /// The most random cameras one jobs file asks for.
 pub const MAX_RANDOM: usize = 10_000_000;
@@ -58,7 +59,7 @@ pub enum ItemKind {
 }
 
 fn bad(path: &Path, reason: impl Into<String>) -> Error {
-    Error::file(Role::JobsFile, path, reason)
+    Error::file(JOBS_FILE, path, reason)
 }
 
 /// The jobs file as written (docs/scene.md, "Jobs file"); unknown keys are refused by name.
@@ -85,7 +86,7 @@ pub struct RandomSection {
 
 impl Jobs {
     pub fn load(path: &Path) -> Result<Jobs> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(Role::JobsFile, path, e))?;
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(JOBS_FILE, path, e))?;
         Jobs::parse(path, &text)
     }
 

@@ -30,6 +30,7 @@
 //! Rejected alternative: one process per snapshot (a shell loop over `terrain render`). Every
 //! launch opens the device and compiles the pipelines again; `batch` measures what that costs.
 
+use crate::error::MANIFEST;
 use crate::ground_truth;
 use crate::output::{Staged, add_image, write_atomic};
 use crate::progress::Progress;
@@ -224,9 +225,9 @@ fn render_item(
     cache: &mut Cache,
     out_dir: &Path,
     outputs: &[Output],
-) -> Result<Snapshot> {
+) -> crate::Result<Snapshot> {
     if !plain_name(&item.name) {
-        return Err(Error::Job {
+        return Err(crate::Error::Job {
             name: item.name.clone(),
             reason: "use letters, digits, '-', '_' and '.' in its name (it names the output file)"
                 .into(),
@@ -234,7 +235,7 @@ fn render_item(
     }
     let (scene, camera) = match item.kind {
         ItemKind::Explicit(k) => {
-            let scene = jobs.job_scene(k).map_err(|reason| Error::Job {
+            let scene = jobs.job_scene(k).map_err(|reason| crate::Error::Job {
                 name: item.name.clone(),
                 reason,
             })?;
@@ -395,7 +396,7 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
     let mut file = std::fs::OpenOptions::new()
         .append(true)
         .open(&manifest)
-        .map_err(|e| Error::io(Role::Manifest, &manifest, e))?;
+        .map_err(|e| Error::io(MANIFEST, &manifest, e))?;
     let mut cache = Cache {
         ctx: None,
         key: String::new(),
@@ -438,7 +439,7 @@ pub fn run(jobs_path: &Path, out_dir: &Path, o: &Options) -> Result<Summary> {
         let text = serde_json::to_string(&line).map_err(|e| Error::encode("manifest line", e))?;
         writeln!(file, "{text}")
             .and_then(|_| file.flush())
-            .map_err(|e| Error::io(Role::Manifest, &manifest, e))?;
+            .map_err(|e| Error::io(MANIFEST, &manifest, e))?;
         progress.advance(1.0, &item.name);
     }
     progress.finish();
@@ -477,7 +478,7 @@ pub fn merge_manifests(jobs_path: &Path, out_dir: &Path) -> Result<(usize, Vec<S
             continue;
         }
         let text = std::fs::read_to_string(entry.path())
-            .map_err(|e| Error::io(Role::Manifest, entry.path(), e))?;
+            .map_err(|e| Error::io(MANIFEST, entry.path(), e))?;
         for v in text
             .lines()
             .filter_map(|l| serde_json::from_str::<ManifestLine>(l).ok())

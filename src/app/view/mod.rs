@@ -30,9 +30,9 @@
 //! upload to the display (docs/decisions.md, “View presented through a surface”).
 
 use crate::app::hud;
+use crate::{Error, Result};
 use terrain_engine::flight::flycam::{FlyCamera, PathRecorder, PlanetFlyCamera};
 use terrain_engine::flight::path::CameraPath;
-use terrain_engine::{Error, Result};
 
 mod files;
 mod flight;

@@ -16,9 +16,9 @@ mod surface;
 pub(super) use cpu::CpuPath;
 pub(super) use surface::SurfacePath;
 
+use crate::Result;
 use crate::app::hud::Status;
 use terrain_engine::Camera;
-use terrain_engine::Result;
 use terrain_engine::View;
 use terrain_engine::scene::{Mode, Scene};
 use terrain_engine::sketch::Atlas;

@@ -37,6 +37,7 @@ pub mod summary;
 pub mod sweep;
 pub mod temporal;
 
+use crate::error::REPORT;
 use crate::output::{write_atomic, write_image};
 use crate::progress::Progress;
 use measure::{measure_lod, renderer};
@@ -421,8 +422,8 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
 /// to the figures, without measuring again). Returns the rows' count.
 pub fn replot(out_dir: &Path) -> Result<usize> {
     let path = out_dir.join("report.json");
-    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(Role::Report, &path, e))?;
-    let bad = |why: String| Error::file(Role::Report, &path, why);
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(REPORT, &path, e))?;
+    let bad = |why: String| Error::file(REPORT, &path, why);
     let report: Replot = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
     let mut rows = report.rows;
     report::mark_fronts(&mut rows);

@@ -6,6 +6,7 @@
 
 use super::{Drawn, Want};
 use crate::app::hud::{self, Figures, Status};
+use crate::{Error, Result};
 use std::num::NonZeroU32;
 use std::sync::Arc;
 use terrain_engine::Camera;
@@ -13,7 +14,6 @@ use terrain_engine::GpuContext;
 use terrain_engine::Renderer;
 use terrain_engine::scene::{Mode, Scene};
 use terrain_engine::sketch::Atlas;
-use terrain_engine::{Error, Result};
 use winit::window::Window;
 
 /// The CPU path: the renderer's frame read back and handed to softbuffer.

@@ -7,6 +7,7 @@
 use super::overlay::Composite;
 use super::{Drawn, Want};
 use crate::app::hud::{self, Figures, Status};
+use crate::{Error, Result};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 use terrain_engine::Camera;
@@ -15,7 +16,6 @@ use terrain_engine::readback::Readback;
 use terrain_engine::scene::{Mode, Scene};
 use terrain_engine::sketch::Atlas;
 use terrain_engine::{Description, Targets, Terrain};
-use terrain_engine::{Error, Result};
 use winit::event_loop::ActiveEventLoop;
 use winit::window::Window;
 
@@ -74,7 +74,7 @@ impl SurfacePath {
             required_limits: description.required_limits(),
             ..Default::default()
         }))
-        .map_err(|e| Error::device("the adapter that presents to the window", e))?;
+        .map_err(|e| terrain_engine::Error::device("the adapter that presents to the window", e))?;
         let (width, height) = (size.width.max(1), size.height.max(1));
         let Some(mut config) = surface.get_default_config(&adapter, width, height) else {
             return Ok(Err("the adapter cannot present to this window".into()));
@@ -138,7 +138,7 @@ impl SurfacePath {
         self.device
             .poll(wgpu::PollType::Poll)
             .map(|_| ())
-            .map_err(|e| Error::device("the device was lost", e))
+            .map_err(|e| terrain_engine::Error::device("the device was lost", e).into())
     }
 
     pub(super) fn draw(
@@ -278,8 +278,9 @@ fn next_texture(
             _ => surface.configure(device, config),
         }
     }
-    Err(Error::Internal(
-        "the window's surface gives no texture to draw into",
+    Err(Error::window(
+        "its surface",
+        "gives no texture to draw into, configured three times",
     ))
 }
 
