@@ -414,9 +414,29 @@ fn terrain_fs(in: VsOut) -> FragOut {
     return out;
 }
 
-fn shade(in: Surface) -> FragOut {
+// Where the mesh lies within its own spacing of the water's level, the point a pixel is shaded at
+// takes the sketch's height at the pixel's footprint (the terrain function's there, the octaves
+// fading out at the shore), so the shore is the sketch's contour through the pixel. The mesh's
+// height alone draws it along the edges between the mesh's water vertices: facets wherever its
+// triangles are coarser than the sketch's cells (docs/decisions.md, “The shore is the sketch's
+// contour”). The world position, hence depth and distance, stays the mesh's.
+fn shore_local(in: Surface, footprint: f32) -> vec3<f32> {
+#ifdef RAMP
+    return in.local;
+#else
+    let water = frame.atlas.water_m;
+    if (in.local.z > water + max(in.spacing, frame.detail.shore_m)) {
+        return in.local;
+    }
+    return vec3<f32>(in.local.xy, max(atlas_height(in.local.xy, footprint), water));
+#endif
+}
+
+fn shade(surface: Surface) -> FragOut {
+    var in = surface;
     let to_eye = frame.camera.eye - in.local;
     let dist = max(length(to_eye), 1e-3);
+    in.local = shore_local(in, dist * frame.camera.pixel_scale);
     let n = shading_normal(in, dist * frame.camera.pixel_scale);
     var colour = lit(in.local, n, to_eye, dist);
     if (frame.camera.view == VIEW_WIREFRAME) {
