@@ -55,6 +55,8 @@ fn depth_of(w: f32) -> f32 {
     return clamp(output.near / w, 0.0, 1.0);
 }
 
+// SHORE: the scene can show water, whose specks the pass cleans up.
+#ifdef SHORE
 // What a pixel shows: 0 no ground of the sketch (sky, or the world beyond it), 1 land, 2 water.
 // The frame's colour alpha is 0 on water (`water_alpha` in shading.wgsl), 1 elsewhere.
 fn class_at(q: vec2<i32>) -> u32 {
@@ -128,6 +130,7 @@ fn cleaned(p: vec2<i32>, colour: vec3<f32>) -> vec3<f32> {
     }
     return select(colour, sum / max(count, 1.0), count > 0.0);
 }
+#endif
 
 #ifdef FROM_BUFFERS
 #else
@@ -156,7 +159,9 @@ fn fs(in: VsOut) -> FsOut {
     colour = textureLoad(colour_in, p, 0).rgb;
     out.depth = depth_of(view_w_at(p));
 #endif
+#ifdef SHORE
     colour = cleaned(vec2<i32>(p), colour);
+#endif
     if (output.encode_srgb == 1u) {
         colour = srgb(colour);
     }

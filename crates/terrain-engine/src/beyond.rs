@@ -60,6 +60,13 @@ impl Beyond {
         }
     }
 
+    /// Whether ground at or under `atlas`'s water level can show: the sketch dipping to it, or
+    /// the ground beyond reaching it (the sea, or a plain at or under it).
+    pub fn meets_water(&self, atlas: &Atlas) -> bool {
+        let water = atlas.water_m as f64;
+        atlas.min_m as f64 <= water || (self.outside != Outside::Void && self.level_m <= water)
+    }
+
     /// The margin's fade at distance `d` beyond the edge: 1 at the edge, 0 from `margin_m` on,
     /// with no slope at either end.
     pub fn fade(&self, d: f64) -> f64 {
@@ -144,5 +151,29 @@ mod tests {
         // The sea floor lies under the water.
         let sea = Beyond::new(&atlas, Outside::Ocean);
         assert!(sea.level_m < atlas.water_m as f64);
+    }
+
+    #[test]
+    fn water_shows_where_the_sketch_or_the_ground_beyond_meets_its_level() {
+        let raw = crate::sketch::RawGrid {
+            width: 11,
+            height: 11,
+            dx: 10.0,
+            dy: 10.0,
+            data: vec![0.0; 11 * 11],
+            georef: None,
+        };
+        let mut atlas =
+            crate::sketch::Atlas::from_raw(raw, &crate::sketch::LoadOptions::default()).unwrap();
+        let meets =
+            |atlas: &crate::sketch::Atlas, outside| Beyond::new(atlas, outside).meets_water(atlas);
+        (atlas.min_m, atlas.max_m, atlas.edge_mean_m, atlas.water_m) = (248.0, 1069.0, 400.0, 0.0);
+        assert!(!meets(&atlas, Outside::Plain) && !meets(&atlas, Outside::Void));
+        assert!(meets(&atlas, Outside::Ocean), "the sea beyond");
+        atlas.edge_mean_m = -3.0;
+        assert!(meets(&atlas, Outside::Plain), "a plain under the water");
+        assert!(!meets(&atlas, Outside::Void), "nothing beyond");
+        atlas.water_m = 420.0;
+        assert!(meets(&atlas, Outside::Void), "the sketch flooded");
     }
 }

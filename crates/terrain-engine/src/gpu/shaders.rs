@@ -114,6 +114,7 @@ flags!(
     SUN_MAP,
     RAMP,
     IMAGE,
+    SHORE,
 );
 
 impl Key {

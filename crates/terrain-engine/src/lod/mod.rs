@@ -101,8 +101,13 @@ pub fn shader_key(s: &Shared, mode: Mode) -> Key {
     // The sketch's shadow from its sun clearance map: a renderer made with one binds it.
     let sun_map = s.atlas_binding.sun_seen.is_some();
     // The ground coloured by a ramp: a renderer made for one binds its stops.
-    key.set(Key::RAMP, s.atlas_binding.ramp.is_some());
+    let ramp = s.atlas_binding.ramp.is_some();
+    key.set(Key::RAMP, ramp);
     key.set(Key::IMAGE, s.atlas_binding.drape.is_some());
+    // The output pass's clean-up of specks at the shore, where water can show: ground of the
+    // sketch or beyond it at or under the water's level, and no ramp (which colours the bed).
+    let beyond = crate::beyond::Beyond::new(s.atlas, scene.outside(s.atlas));
+    key.set(Key::SHORE, !ramp && beyond.meets_water(s.atlas));
     match mode {
         Mode::Warped | Mode::Geomipmap | Mode::Bruteforce => {
             let pixel_normals = scene.render.pixel_normals;
