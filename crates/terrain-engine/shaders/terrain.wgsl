@@ -436,8 +436,9 @@ fn shade(surface: Surface) -> FragOut {
     var in = surface;
     let to_eye = frame.camera.eye - in.local;
     let dist = max(length(to_eye), 1e-3);
-    in.local = shore_local(in, dist * frame.camera.pixel_scale);
-    let n = shading_normal(in, dist * frame.camera.pixel_scale);
+    let footprint = dist * frame.camera.pixel_scale;
+    in.local = shore_local(in, footprint);
+    let n = shading_normal(in, footprint);
     var colour = lit(in.local, n, to_eye, dist);
     if (frame.camera.view == VIEW_WIREFRAME) {
         // Wireframe: the quad mesh's grid lines over the shaded terrain.

@@ -129,18 +129,22 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_margin_is_twice_the_relief_within_an_eighth_and_a_half_of_the_side() {
+    /// A level sketch of `width` × `height` nodes 10 m apart, at 0 m.
+    fn level_atlas(width: usize, height: usize) -> Atlas {
         let raw = crate::sketch::RawGrid {
-            width: 101,
-            height: 51,
+            width,
+            height,
             dx: 10.0,
             dy: 10.0,
-            data: vec![0.0; 101 * 51],
+            data: vec![0.0; width * height],
             georef: None,
         };
-        let mut atlas =
-            crate::sketch::Atlas::from_raw(raw, &crate::sketch::LoadOptions::default()).unwrap();
+        Atlas::from_raw(raw, &crate::sketch::LoadOptions::default()).unwrap()
+    }
+
+    #[test]
+    fn the_margin_is_twice_the_relief_within_an_eighth_and_a_half_of_the_side() {
+        let mut atlas = level_atlas(101, 51);
         atlas.max_m = 10.0;
         // Sides 1000 × 500 m: relief 10 m gives an eighth of 500 m.
         assert_eq!(Beyond::new(&atlas, Outside::Plain).margin_m, 62.5);
@@ -155,18 +159,8 @@ mod tests {
 
     #[test]
     fn water_shows_where_the_sketch_or_the_ground_beyond_meets_its_level() {
-        let raw = crate::sketch::RawGrid {
-            width: 11,
-            height: 11,
-            dx: 10.0,
-            dy: 10.0,
-            data: vec![0.0; 11 * 11],
-            georef: None,
-        };
-        let mut atlas =
-            crate::sketch::Atlas::from_raw(raw, &crate::sketch::LoadOptions::default()).unwrap();
-        let meets =
-            |atlas: &crate::sketch::Atlas, outside| Beyond::new(atlas, outside).meets_water(atlas);
+        let mut atlas = level_atlas(11, 11);
+        let meets = |atlas: &Atlas, outside| Beyond::new(atlas, outside).meets_water(atlas);
         (atlas.min_m, atlas.max_m, atlas.edge_mean_m, atlas.water_m) = (248.0, 1069.0, 400.0, 0.0);
         assert!(!meets(&atlas, Outside::Plain) && !meets(&atlas, Outside::Void));
         assert!(meets(&atlas, Outside::Ocean), "the sea beyond");
