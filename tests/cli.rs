@@ -617,9 +617,11 @@ fn web_writes_a_site_the_page_reads_as_render_does() {
         "--size",
         "64x48",
         "--mode",
-        "geomipmap",
+        "warped",
         "--set",
         "detail.octaves=3",
+        "--set",
+        "render.mode=\"reference\"",
     ]);
     assert_eq!(code, 0, "{err}");
     for f in [
@@ -632,7 +634,7 @@ fn web_writes_a_site_the_page_reads_as_render_does() {
     }
     let meta: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(site.join("site.json")).unwrap()).unwrap();
-    assert_eq!(meta["mode"], "geomipmap");
+    assert_eq!(meta["mode"], "warped", "--mode over the scene's");
     assert_eq!(
         (meta["width"].as_u64(), meta["height"].as_u64()),
         (Some(64), Some(48))
@@ -669,6 +671,16 @@ fn web_writes_a_site_the_page_reads_as_render_does() {
         out.to_str().unwrap(),
     ];
     fails_with(&args, "planet");
+    // A baked mode reads the bake back before its first frame, which a page cannot wait for.
+    let args = [
+        "web",
+        jacksboro.to_str().unwrap(),
+        "--out-dir",
+        out.to_str().unwrap(),
+        "--mode",
+        "geomipmap",
+    ];
+    fails_with(&args, "render.mode");
     let glob = manifest_dir().join("tests/data/formats/*Float32.tif");
     let args = [
         "web",

@@ -216,9 +216,20 @@ pub(crate) fn read_buffer<T>(
     device
         .poll(wgpu::PollType::wait_indefinitely())
         .map_err(|e| Error::device("device lost while waiting", e))?;
-    rx.recv()
-        .map_err(|e| Error::device("readback callback never ran", e))?
-        .map_err(|e| Error::device("readback failed", e))?;
+    // A web page cannot wait for its GPU (`poll` returns at once there, and the callback runs
+    // only once the page yields): blocking on it would freeze the page, so there it is an error.
+    #[cfg(target_arch = "wasm32")]
+    let answer = rx.try_recv().map_err(|e| {
+        Error::device(
+            "a readback that waits for the GPU, which a web page cannot do",
+            e,
+        )
+    })?;
+    #[cfg(not(target_arch = "wasm32"))]
+    let answer = rx
+        .recv()
+        .map_err(|e| Error::device("readback callback never ran", e))?;
+    answer.map_err(|e| Error::device("readback failed", e))?;
     let out = {
         let view = slice
             .get_mapped_range()

@@ -6,7 +6,7 @@ use std::cell::Cell;
 use std::collections::{HashSet, VecDeque};
 use std::rc::Rc;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use terrain::readback::Readback;
 use terrain::{Camera, Description, Mode, Scene, Targets, Terrain, View, wgpu};
 use terrain_engine::flight::flycam::{CLEARANCE_M, FlyCamera, Motion};
@@ -39,6 +39,12 @@ const MOVES: &[(&str, Move)] = &[
     ("ShiftRight", |_| {}),
 ];
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Frames submitted and not yet finished on the GPU beyond which an animation frame draws
+/// nothing: a browser calls the page sixty times a second whatever its adapter, and on a slow
+/// one (SwiftShader: seconds a frame) every frame submitted meanwhile would queue behind the
+/// first, a capture or a mode switch minutes late. Two keep a fast GPU busy across the
+/// callback's latency.
+const MOST_IN_FLIGHT: usize = 2;
 
 /// A scene drawn into a canvas: the page's one object.
 #[wasm_bindgen]
@@ -74,6 +80,8 @@ pub struct Viewer {
     /// Frames drawn since the mode, view or size last changed.
     frames: u64,
     settled: Arc<AtomicBool>,
+    /// Frames submitted and not yet finished on the GPU.
+    in_flight: Arc<AtomicUsize>,
     /// A capture asked for and not yet delivered.
     capturing: Rc<Cell<bool>>,
     /// Frames shown by copy before the mode, view or size last changed.
@@ -215,6 +223,7 @@ impl Viewer {
             reach_m,
             frames: 0,
             settled: Arc::default(),
+            in_flight: Arc::default(),
             capturing: Rc::default(),
             shown_before: 0,
             last_ms: None,
@@ -226,8 +235,12 @@ impl Viewer {
     }
 
     /// Draws a frame at `now_ms` (the animation frame's time): the camera moved by the time
-    /// since the last, the CPU stage, the passes into the canvas.
+    /// since the last, the CPU stage, the passes into the canvas. Draws nothing while
+    /// [`MOST_IN_FLIGHT`] frames are still on the GPU.
     pub fn frame(&mut self, now_ms: f64) -> Result<(), JsError> {
+        if self.in_flight.load(Ordering::Acquire) >= MOST_IN_FLIGHT {
+            return Ok(());
+        }
         let dt = self
             .last_ms
             .map_or(0.0, |l| ((now_ms - l) / 1000.0).clamp(0.0, MOST_DT_S));
@@ -274,11 +287,15 @@ impl Viewer {
                 };
             });
         }
-        if self.frames == 0 {
-            let settled = self.settled.clone();
-            self.queue
-                .on_submitted_work_done(move || settled.store(true, Ordering::Release));
-        }
+        let in_flight = self.in_flight.clone();
+        let settled = (self.frames == 0).then(|| self.settled.clone());
+        in_flight.fetch_add(1, Ordering::AcqRel);
+        self.queue.on_submitted_work_done(move || {
+            in_flight.fetch_sub(1, Ordering::AcqRel);
+            if let Some(s) = settled {
+                s.store(true, Ordering::Release);
+            }
+        });
         self.frames += 1;
         Ok(())
     }
@@ -294,8 +311,7 @@ impl Viewer {
         promise
     }
 
-    /// Whether a capture waits for its frame or its copy: a held still draws frames until it
-    /// is delivered (Chromium sends a page's WebGPU work to its GPU process as more follows).
+    /// Whether a capture waits for its frame or its copy: a held still draws a frame for it.
     pub fn capture_pending(&self) -> bool {
         self.capturing.get()
     }
@@ -472,11 +488,18 @@ impl Viewer {
     }
 }
 
-/// The modes the page offers: those `terrain view` switches between on a key, over a sketch.
+/// The modes the page offers: those `terrain view` switches between on a key, over a sketch,
+/// but those that bake the whole sketch (GeoMipMap, brute force): their bake reads its heights
+/// back from the GPU before the first frame, which a page cannot wait for.
 fn page_modes() -> impl Iterator<Item = &'static ModeRow> {
     MODES
         .iter()
-        .filter(|r| r.key.is_some() && r.mode.draws(false))
+        .filter(|r| r.key.is_some() && r.mode.draws(false) && !bakes(r.mode))
+}
+
+/// Whether `mode` bakes a single-file sketch, as the page's always is, reading the bake back.
+fn bakes(mode: Mode) -> bool {
+    matches!(mode, Mode::Geomipmap | Mode::Bruteforce)
 }
 
 /// The limits of the largest terrain the page may switch to.
