@@ -8,7 +8,7 @@
 //! Own harness (libtest-mimic), one browser at a time. Without Chromium, the wasm32 target or
 //! wasm-bindgen the tests report themselves skipped, naming what is missing, and fail where
 //! `TERRAIN_REQUIRE_WEB_TESTS` is set (`.ci/run` installs them and sets it). SwiftShader draws on
-//! the machine's CPU, seconds a frame: the stills are the 512², the flight a 128² window.
+//! the machine's CPU, seconds a frame: the stills are the 512², the flight a 128² viewport.
 
 mod common;
 use common::*;
@@ -419,6 +419,7 @@ fn the_page_flies_its_path_and_switches_to_the_wireframe_without_a_console_error
         "[...document.querySelectorAll('#controls button')].map((b) => b.textContent)",
     );
     eprintln!("web flight: the page's buttons {modes}");
+    assert!(!modes.to_string().contains("GeoMipMap"), "{modes}");
     eval(&tab, "window.terrain.setView('wireframe')");
     let wire = frames(10);
     assert_eq!(wire["view"], "wireframe", "{wire}");

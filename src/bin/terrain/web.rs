@@ -80,7 +80,8 @@ pub fn run(a: Args) -> Result<()> {
         return Err(Error::value(
             "render.mode",
             format!(
-                "{mode} bakes the sketch and reads it back from the GPU before its first frame,                  which a web page cannot wait for: the page draws warped"
+                "{mode} bakes the sketch and reads it back from the GPU before its first frame, \
+                 which a web page cannot wait for: the page draws warped"
             ),
         )
         .into());
