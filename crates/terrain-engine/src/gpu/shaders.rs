@@ -353,7 +353,12 @@ mod tests {
         assert_eq!(Key::of(&key.defs()), key);
         assert!(key.contains(Key::NOISE) && !key.contains(Key::NOISE | Key::BUMP));
         assert!(key.any(Key::NOISE | Key::BUMP) && !key.any(Key::BUMP));
-        assert_eq!(FLAGS.len(), 20);
+        // A bit each in the key's u32, and every flag's name round-trips to its own bit.
+        assert!(FLAGS.len() <= 32, "{} flags", FLAGS.len());
+        for (i, name) in FLAGS.iter().enumerate() {
+            assert_eq!(Key::of(&[*name]), Key(1 << i), "{name}");
+            assert_eq!(Key(1 << i).defs(), [*name]);
+        }
     }
 
     #[test]
