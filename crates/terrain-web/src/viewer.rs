@@ -494,12 +494,7 @@ impl Viewer {
 fn page_modes() -> impl Iterator<Item = &'static ModeRow> {
     MODES
         .iter()
-        .filter(|r| r.key.is_some() && r.mode.draws(false) && !bakes(r.mode))
-}
-
-/// Whether `mode` bakes a single-file sketch, as the page's always is, reading the bake back.
-fn bakes(mode: Mode) -> bool {
-    matches!(mode, Mode::Geomipmap | Mode::Bruteforce)
+        .filter(|r| r.key.is_some() && r.mode.draws(false) && !r.mode.bakes())
 }
 
 /// The limits of the largest terrain the page may switch to.

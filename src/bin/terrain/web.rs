@@ -76,7 +76,7 @@ pub fn run(a: Args) -> Result<()> {
     };
     // GeoMipMap and brute force bake the sketch and read its heights back before their first
     // frame; a page cannot wait for its GPU.
-    if matches!(mode, Mode::Geomipmap | Mode::Bruteforce) {
+    if mode.bakes() {
         return Err(Error::value(
             "render.mode",
             format!(

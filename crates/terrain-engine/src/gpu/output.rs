@@ -8,8 +8,9 @@
 //! drawn with [`crate::host::Terrain::view_proj`], hides the terrain where it is nearer and is
 //! hidden where it is farther, drawn before the terrain or after it. On the way, where the scene
 //! can show water (`SHORE`), a speck of land or water (a region under four pixels, told by the
-//! frame's alpha) takes the colour of the region around it. Rejected: building every pass's pipelines for the host's formats and sample
-//! count, a variant of each per host, where this one pass costs a full-screen triangle.
+//! frame's alpha) takes the colour of the region around it. Rejected: building every pass's
+//! pipelines for the host's formats and sample count, a variant of each per host, where this one
+//! pass costs a full-screen triangle.
 
 use super::alloc::{Alloc, Buffer};
 use super::bindings::{self, Binding, Kind, buffer};
