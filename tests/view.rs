@@ -331,19 +331,23 @@ fn rendered(dir: &std::path::Path, mode: &str) -> Vec<u8> {
     read_png(&png).unwrap().2
 }
 
+/// A shell function for the xdotool scripts: `written FILE` waits (up to a minute) until the
+/// window has written FILE. A screenshot is taken at the next frame drawn, seconds after its key
+/// on a loaded machine, so a key that moves the camera waits for the shot before it.
+const WRITTEN: &str =
+    "written() { n=0; while [ ! -s \"$1\" ] && [ $n -lt 600 ]; do sleep 0.1; n=$((n+1)); done; }";
+
 fn view_keys_switch_mode_record_the_path_and_quit() {
     let dir = scratch("view-keys");
     let scene = dir.join("gaussian.toml");
     std::fs::copy(manifest_dir().join("sketches/gaussian.toml"), &scene).unwrap();
     let shot = dir.join("shot.png");
     // 2: GeoMipMap; P: screenshot; R, W held for 2 s, R: a recorded flight north; Esc: quit.
-    // A screenshot is taken at the next frame drawn, which on a loaded machine comes seconds
-    // later: each key after a P waits for its file, so W never moves the camera of a pending shot.
     let script = format!(
         "timeout 120 {bin} view {scene} --size 160x120 --screenshot {shot} --out-dir {dir} & pid=$!\n\
          wid=$(xdotool search --sync --name 'terrain view')\n\
          xdotool windowfocus --sync $wid\n\
-         written() {{ n=0; while [ ! -s \"$1\" ] && [ $n -lt 600 ]; do sleep 0.1; n=$((n+1)); done; }}\n\
+         {WRITTEN}\n\
          sleep 1; xdotool key 2; sleep 3; xdotool key p; written {shot}\n\
          xdotool key p; written {dir}/gaussian-view-2.png\n\
          xdotool key r; xdotool keydown w; sleep 2; xdotool keyup w; xdotool key r; sleep 1\n\
@@ -431,7 +435,7 @@ fn view_flies_over_a_planet_and_records_a_planet_path() {
         "timeout 120 {bin} view {scene} --size 160x120 --screenshot {shot} --out-dir {dir} & pid=$!\n\
          wid=$(xdotool search --sync --name 'terrain view')\n\
          xdotool windowfocus --sync $wid\n\
-         written() {{ n=0; while [ ! -s \"$1\" ] && [ $n -lt 600 ]; do sleep 0.1; n=$((n+1)); done; }}\n\
+         {WRITTEN}\n\
          sleep 2; xdotool key p; written {shot}\n\
          xdotool key r; xdotool keydown w; sleep 2; xdotool keyup w; xdotool key r; sleep 1\n\
          xdotool key Escape\n\
