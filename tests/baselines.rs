@@ -133,3 +133,74 @@ fn geomipmap_at_half_a_pixel_matches_brute_force_with_far_fewer_triangles() {
         );
     }
 }
+
+/// GeoMipMap's block sizes and brute force of one K on one device bake one grid: the renderer
+/// that bakes it first counts it, the others lend it and draw what they draw alone, a renderer of
+/// another terrain function bakes its own, and a lent grid outlives the renderer that baked it.
+#[test]
+fn renderers_of_one_terrain_on_a_device_share_its_baked_grid() {
+    let base = |extra: &[&str]| {
+        let path = manifest_dir().join("sketches/gaussian.toml");
+        let o: Vec<String> = ["camera.width=96", "camera.height=96", "geomipmap.k=1"]
+            .iter()
+            .chain(extra)
+            .map(|s| s.to_string())
+            .collect();
+        Scene::load_with(&path, &o).unwrap()
+    };
+    let (s17, s65) = (base(&["geomipmap.block=17"]), base(&["geomipmap.block=65"]));
+    let other = base(&["geomipmap.block=65", "detail.amplitude_m=3"]);
+    let atlas = terrain_engine::scene::load_atlas(&s17).unwrap();
+    let needs = terrain_engine::needs(&s17, Mode::Geomipmap, &atlas);
+    // Each device's sketch is uploaded by a warped renderer first, and counted in its ledger.
+    let warped = |ctx: &terrain_engine::GpuContext| {
+        Renderer::with_context(ctx.clone(), &s17, atlas.clone(), Mode::Warped, View::Shaded)
+            .unwrap()
+    };
+    let alone = |s: &Scene, mode: Mode| {
+        let ctx = terrain_engine::GpuContext::new(&needs).unwrap();
+        let _sketch = warped(&ctx);
+        let mut r = Renderer::with_context(ctx, s, atlas.clone(), mode, View::Shaded).unwrap();
+        let bytes = r.gpu_bytes();
+        let cam = terrain_engine::scene::camera_of(s, &r.atlas).unwrap();
+        (
+            bytes,
+            r.render(&cam).unwrap().rgba,
+            r.precompute().unwrap().1,
+        )
+    };
+    let ctx = terrain_engine::GpuContext::new(&needs).unwrap();
+    let _sketch = warped(&ctx);
+    let on_ctx = |s: &Scene, mode: Mode| {
+        Renderer::with_context(ctx.clone(), s, atlas.clone(), mode, View::Shaded).unwrap()
+    };
+    let first = on_ctx(&s17, Mode::Geomipmap);
+    let mut lent = on_ctx(&s65, Mode::Geomipmap);
+    let mut brute = on_ctx(&s65, Mode::Bruteforce);
+    let mut own = on_ctx(&other, Mode::Geomipmap);
+    let (bytes65, image65, baked) = alone(&s65, Mode::Geomipmap);
+    assert!(baked > 0);
+    assert_eq!(
+        first.precompute().unwrap().1,
+        baked,
+        "one grid for blocks of 17 and 65"
+    );
+    assert_eq!(
+        lent.gpu_bytes() + baked,
+        bytes65,
+        "the lent grid is counted once"
+    );
+    let (brute_bytes, brute_image, _) = alone(&s65, Mode::Bruteforce);
+    assert_eq!(brute.gpu_bytes() + baked, brute_bytes);
+    let (own_bytes, ..) = alone(&other, Mode::Geomipmap);
+    assert_eq!(
+        own.gpu_bytes(),
+        own_bytes,
+        "another terrain function bakes its own grid"
+    );
+    drop(first);
+    let cam = terrain_engine::scene::camera_of(&s65, &lent.atlas).unwrap();
+    assert_eq!(lent.render(&cam).unwrap().rgba, image65);
+    assert_eq!(brute.render(&cam).unwrap().rgba, brute_image);
+    let _ = own.render(&cam).unwrap();
+}

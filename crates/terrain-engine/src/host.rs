@@ -198,6 +198,14 @@ impl Terrain {
         })
     }
 
+    /// Whether the terrain is drawn yet. Natively always; in a browser GeoMipMap and brute
+    /// force read their baked grid back before their first frame, which a page cannot wait
+    /// for, so until the read-back arrives (a few of the page's tasks) frames show the sky
+    /// alone: a page keeps drawing its last terrain until the new one is ready.
+    pub fn ready(&mut self) -> Result<bool> {
+        self.renderer.ready()
+    }
+
     /// The formats and samples this terrain draws into.
     pub fn targets(&self) -> Targets {
         self.targets

@@ -58,8 +58,9 @@ pub struct Grid {
     /// World position of vertex (0, 0).
     pub origin: DVec2,
     /// The baked heights, row by row; empty for a grid over a tile pyramid, whose vertices are
-    /// read on the GPU (so [`Grid::z`] and what reads it are for baked grids).
-    pub heights: Vec<f32>,
+    /// read on the GPU (so [`Grid::z`] and what reads it are for baked grids). Shared with the
+    /// bake, which renderers of one terrain share.
+    pub heights: std::sync::Arc<[f32]>,
 }
 
 impl Grid {
@@ -217,7 +218,7 @@ mod tests {
                 cells: c,
                 spacing: 1.0,
                 origin: DVec2::ZERO,
-                heights: vec![0.0; (c + 1) * (c + 1)],
+                heights: vec![0.0; (c + 1) * (c + 1)].into(),
             };
             let t = Templates::new(&grid);
             let levels = grid.levels();

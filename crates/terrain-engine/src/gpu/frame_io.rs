@@ -352,6 +352,37 @@ pub fn read_pod<T: bytemuck::Pod>(ctx: &GpuContext, source: &wgpu::Buffer) -> Re
     read_buffer(ctx, &staging, |b| bytemuck::cast_slice(b).to_vec())
 }
 
+/// As [`read_pod`] without waiting: `done` gets the values once the device has mapped the copy
+/// (natively at the next `poll`; in a browser between the page's tasks, as a page cannot block
+/// on its GPU).
+pub fn read_pod_later<T: bytemuck::Pod>(
+    ctx: &GpuContext,
+    source: &wgpu::Buffer,
+    done: impl FnOnce(Result<Vec<T>>) + wgpu::WasmNotSend + 'static,
+) {
+    let size = source.size();
+    let staging = staging(ctx, "readback", size);
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(source, 0, &staging, 0, size);
+    ctx.queue.submit([encoder.finish()]);
+    let mapped = staging.clone();
+    staging
+        .slice(..)
+        .map_async(wgpu::MapMode::Read, move |result| {
+            let values = result
+                .map_err(|e| crate::Error::device("readback failed", e))
+                .and_then(|()| {
+                    let view = mapped
+                        .slice(..)
+                        .get_mapped_range()
+                        .map_err(|e| crate::Error::device("readback mapping", e))?;
+                    Ok(bytemuck::cast_slice(&view).to_vec())
+                });
+            mapped.unmap();
+            done(values)
+        });
+}
+
 pub(crate) fn read_buffer<T>(
     ctx: &GpuContext,
     buffer: &wgpu::Buffer,

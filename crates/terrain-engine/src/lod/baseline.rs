@@ -25,15 +25,18 @@ use crate::geomipmap::{BlockGpu, Blocks, Grid, LodParams, Selection, Templates};
 use crate::gpu::alloc::{Alloc, Buffer, Ledger};
 use crate::gpu::context::GpuContext;
 use crate::gpu::counters::Probe;
-use crate::gpu::frame_io::{read_vec4, uniform_buffer};
+use crate::gpu::frame_io::{read_pod_later, uniform_buffer};
 use crate::gpu::normals::NormalsPass;
 use crate::gpu::shaders::Key;
+use crate::gpu::shared::{BakedGrid, Heights};
 use crate::gpu::terrain::{TerrainPass, Variant};
 use crate::gpu::uniforms::{BlockUniforms, FrameInputs, FrameUniforms};
 use crate::gpu::warp_zoom::WarpZoomPass;
 use crate::scene::Mode;
 use crate::sketch::Atlas;
 use std::any::Any;
+use std::hash::{Hash, Hasher};
+use std::sync::Arc;
 use web_time::Instant;
 
 /// The largest baked grid the default K allows (2^22 vertices: 64 MiB of vertices and normals).
@@ -48,42 +51,35 @@ fn default_k(atlas: &Atlas) -> u32 {
         .unwrap_or(0)
 }
 
-pub struct Bake {
-    pub detailed: Buffer,
-    /// The grid's normals, unless the terrain is lit per pixel.
-    pub normals: Option<Buffer>,
-    pub ms: f64,
-}
-
-impl Bake {
-    /// GPU bytes the baked grid keeps: its positions, and its normals if it has them.
-    pub fn bytes(&self) -> u64 {
-        self.detailed.bytes() + self.normals.as_ref().map_or(0, |b| b.bytes())
-    }
-}
+/// Cells a baked grid's side is a multiple of: the largest block but one (65), so that the
+/// grids of blocks of 17, 33 and 65 vertices are one grid and their renderers share one bake
+/// (`gpu::shared`); blocks of 129 round to their own 128.
+const GRID_UNIT: usize = 64;
 
 /// The grid over the square enclosing the atlas at spacing d_atlas / 2^k, in blocks of `cells`
-/// cells a side, its heights not yet baked.
-pub fn grid_of(atlas: &Atlas, k: u32, cells: usize) -> Grid {
+/// cells a side, its side rounded up to a multiple of `unit` cells (at least `cells`), its
+/// heights not yet baked.
+pub fn grid_of(atlas: &Atlas, k: u32, cells: usize, unit: usize) -> Grid {
     let spacing = atlas.d_atlas() / (1u32 << k) as f64;
     let side = (atlas.max_corner() - atlas.origin).max_element();
-    let blocks = ((side / (cells as f64 * spacing)).ceil() as usize).max(1);
+    let unit = unit.max(cells);
+    let units = ((side / (unit as f64 * spacing)).ceil() as usize).max(1);
     Grid {
-        n: cells * blocks + 1,
+        n: unit * units + 1,
         cells,
         spacing,
         origin: atlas.origin,
-        heights: Vec::new(),
+        heights: Default::default(),
     }
 }
 
 /// Bakes the terrain function over [`grid_of`]'s grid; its normals too unless the scene lights
-/// the terrain per pixel; warp & zoom in the scheme's variant `key`.
-pub fn bake(s: &Shared, key: Key, k: u32, cells: usize) -> Result<(Grid, Bake)> {
-    let (ctx, device, atlas, detail) = (s.ctx, &s.alloc, s.atlas, s.detail);
-    let start = Instant::now();
-    let mut grid = grid_of(atlas, k, cells);
-    let (n, spacing) = (grid.n, grid.spacing);
+/// the terrain per pixel; warp & zoom in the scheme's variant `key`. A renderer on the same device
+/// holding the same bake (the same sketch, terrain function, K and grid) lends it instead.
+pub fn bake(s: &Shared, key: Key, k: u32, cells: usize) -> Result<(Grid, Arc<BakedGrid>)> {
+    let (ctx, atlas, detail) = (s.ctx, s.atlas, s.detail);
+    let mut grid = grid_of(atlas, k, cells, GRID_UNIT);
+    let n = grid.n;
     let bytes = (n * n) as u64 * 16;
     if bytes > ctx.limits.max_storage_buffer_binding_size {
         let advice = if k > 0 {
@@ -100,10 +96,46 @@ pub fn bake(s: &Shared, key: Key, k: u32, cells: usize) -> Result<(Grid, Bake)> 
             advice,
         });
     }
-    let frame = uniform_buffer(device);
     let uniforms = FrameUniforms::for_bake(atlas, detail, atlas.origin, n as u32);
+    // What the bake reads: the sketch (its buffer, alive while this renderer holds it), the frame's
+    // uniforms (the terrain function, the grid's origin and size), the variant, and the spacing.
+    let mut hasher = std::collections::hash_map::DefaultHasher::new();
+    s.atlas_binding.atlas.hash(&mut hasher);
+    bytemuck::bytes_of(&uniforms).hash(&mut hasher);
+    let pixel_normals = s.scene.render.pixel_normals;
+    let shared_key = format!(
+        "{:x} {key:?} k{k} n{n} {}",
+        hasher.finish(),
+        if pixel_normals {
+            "pixel normals"
+        } else {
+            "mesh normals"
+        }
+    );
+    let baked = s.alloc.shared.baked_grid(shared_key, || {
+        bake_grid(s, key, &uniforms, &grid, pixel_normals)
+    })?;
+    if let Some(heights) = baked.heights.get()? {
+        grid.heights = heights;
+    }
+    Ok((grid, baked))
+}
+
+/// Runs warp & zoom (and the normals) over `grid` with Φ the identity and reads its heights back:
+/// natively before it returns; in a browser, which cannot wait for its GPU, a few of the page's
+/// tasks later ([`Baselines::ready`]).
+fn bake_grid(
+    s: &Shared,
+    key: Key,
+    uniforms: &FrameUniforms,
+    grid: &Grid,
+    pixel_normals: bool,
+) -> Result<BakedGrid> {
+    let (ctx, device) = (s.ctx, &s.alloc);
+    let (n, spacing) = (grid.n, grid.spacing);
+    let frame = uniform_buffer(device);
     ctx.queue
-        .write_buffer(&frame, 0, bytemuck::bytes_of(&uniforms));
+        .write_buffer(&frame, 0, bytemuck::bytes_of(uniforms));
     let warp_zoom = WarpZoomPass::new(device, &frame, s.atlas_binding, n as u32, n as u32, key)?;
     let phi: Vec<[f32; 2]> = (0..n * n)
         .map(|v| {
@@ -115,15 +147,15 @@ pub fn bake(s: &Shared, key: Key, k: u32, cells: usize) -> Result<(Grid, Bake)> 
         .collect();
     ctx.queue
         .write_buffer(&warp_zoom.phi, 0, bytemuck::cast_slice(&phi));
-    let normals = if s.scene.render.pixel_normals {
-        None
-    } else {
-        Some(NormalsPass::new(
+    drop(phi);
+    let normals = match pixel_normals {
+        true => None,
+        false => Some(NormalsPass::new(
             device,
             &frame,
             &warp_zoom.detailed,
             n as u32,
-        )?)
+        )?),
     };
     let mut encoder = device.create_command_encoder(&Default::default());
     warp_zoom.record(&mut encoder, n as u32, Probe::default());
@@ -132,13 +164,26 @@ pub fn bake(s: &Shared, key: Key, k: u32, cells: usize) -> Result<(Grid, Bake)> 
     }
     ctx.queue.submit([encoder.finish()]);
     let detailed = warp_zoom.into_detailed();
-    grid.heights = read_vec4(ctx, &detailed)?.iter().map(|v| v[2]).collect();
-    let bake = Bake {
+    let heights = Heights::default();
+    let read = heights.clone();
+    read_pod_later::<[f32; 4]>(ctx, &detailed, move |v| {
+        read.set(v.map(|v| v.iter().map(|p| p[2]).collect()));
+    });
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        ctx.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::device("device lost while waiting", e))?;
+        ctx.raised()?;
+        if heights.get()?.is_none() {
+            return Err(Error::Internal("the baked grid's read-back never ran"));
+        }
+    }
+    Ok(BakedGrid {
         detailed,
         normals: normals.map(NormalsPass::into_normals),
-        ms: start.elapsed().as_secs_f64() * 1e3,
-    };
-    Ok((grid, bake))
+        heights,
+    })
 }
 
 /// GeoMipMap or brute force (`kind`) over one baked grid, or GeoMipMap over a streamed sketch.
@@ -149,16 +194,22 @@ pub struct Baselines {
     pub grid: Grid,
     /// The baked grid on the GPU; `None` over a tile pyramid, whose grid vertices the terrain
     /// pass evaluates where it draws them.
-    pub bake: Option<Bake>,
+    pub bake: Option<Arc<BakedGrid>>,
     /// The grid's blocks: each one's δ per level and the box of its vertices.
     pub blocks: Blocks,
     /// Triangle templates per level: the interior, and each side's strip toward a neighbour.
     pub templates: Templates,
     /// The last frame's level of each block, and which blocks it drew.
     pub selection: Selection,
+    /// The baked grid's heights are still on their way back (in a browser): nothing is drawn.
+    pending: bool,
     /// τ, the exact bound, geomorphing: how GeoMipMap chooses levels.
     pub params: LodParams,
-    indices: Vec<u32>,
+    /// Indices the last frame drew.
+    indices: usize,
+    /// The blocks whose indices the index buffer holds: a frame of the same blocks (brute force's
+    /// every frame, GeoMipMap's held view) writes none.
+    written: Option<Vec<BlockGpu>>,
     block_buffer: Buffer,
     /// Blocks the block buffer holds, and indices the index buffer holds.
     capacity: (usize, usize),
@@ -204,7 +255,7 @@ fn streamed_grid(
     }
     s.atlas_binding
         .check_vertex_marks(s.ctx, "render.mode", "GeoMipMap", "use warped mode")?;
-    let grid = grid_of(atlas, 0, cells);
+    let grid = grid_of(atlas, 0, cells, cells);
     let per_side = grid.blocks_per_side();
     let stats =
         crate::sketch::tiles::blocks::block_stats_of(pyramid, cells, per_side, atlas.water_m)?;
@@ -234,12 +285,17 @@ impl Baselines {
             None => {
                 let k = scene.geomipmap.k.unwrap_or_else(|| default_k(s.atlas));
                 let (grid, bake) = bake(s, key, k, cells)?;
-                let blocks = Blocks::new(&grid);
+                // In a browser the heights arrive a few tasks later: no blocks until then
+                // (`ready`).
+                let blocks = match grid.heights.is_empty() {
+                    true => Blocks::from_stats(0, cells, grid.spacing, Vec::new(), Vec::new()),
+                    false => Blocks::new(&grid),
+                };
                 (grid, blocks, Some(bake))
             }
         };
         let templates = Templates::new(&grid);
-        let all = blocks.per_side * blocks.per_side;
+        let all = grid.blocks_per_side().pow(2);
         let capacity = match bake {
             Some(_) => (all, all * cells * cells * 6),
             // An index is slot << slot_shift | vertex: no more slots than 32 bits number.
@@ -273,12 +329,9 @@ impl Baselines {
         let (width, height) = (scene.camera.width, scene.camera.height);
         let detailed = bake.as_ref().map(|b| &*b.detailed);
         let terrain = TerrainPass::new(device, s.frame, detailed, n, width, height, &variant)?;
-        let mut selection = Selection::default();
-        if kind == Mode::Bruteforce {
-            selection.all_at(&grid, &blocks, 0);
-        }
+        let pending = bake.is_some() && grid.heights.is_empty();
         let g = &scene.geomipmap;
-        Ok(Baselines {
+        let mut baselines = Baselines {
             kind,
             params: LodParams {
                 tau: g.tau,
@@ -291,15 +344,28 @@ impl Baselines {
             bake,
             blocks,
             templates,
-            selection,
-            indices: Vec::new(),
+            selection: Selection::default(),
+            pending,
+            indices: 0,
+            written: None,
             block_buffer,
             capacity,
             dropped: 0,
             noted: false,
             terrain,
             ledger: s.alloc.ledger.clone(),
-        })
+        };
+        if !pending {
+            baselines.place_all();
+        }
+        Ok(baselines)
+    }
+
+    /// Brute force draws every block at level 0, always.
+    fn place_all(&mut self) {
+        if self.kind == Mode::Bruteforce {
+            self.selection.all_at(&self.grid, &self.blocks, 0);
+        }
     }
 }
 
@@ -365,6 +431,32 @@ impl Lod for Baselines {
         0
     }
 
+    /// Whether the baked grid's heights are back, and the blocks made from them.
+    fn ready(&mut self) -> Result<bool> {
+        if !self.pending {
+            return Ok(true);
+        }
+        let Some(heights) = self
+            .bake
+            .as_ref()
+            .map(|b| b.heights.get())
+            .transpose()?
+            .flatten()
+        else {
+            return Ok(false);
+        };
+        self.grid.heights = heights;
+        self.blocks = Blocks::new(&self.grid);
+        self.pending = false;
+        self.place_all();
+        Ok(true)
+    }
+
+    /// A fresh renderer uploads its blocks and indices with its first frame.
+    fn forget(&mut self) {
+        self.written = None;
+    }
+
     fn resize(&mut self, alloc: &crate::gpu::alloc::Alloc, width: u32, height: u32) -> Result<()> {
         self.terrain.resize(alloc, width, height)?;
         Ok(())
@@ -373,7 +465,7 @@ impl Lod for Baselines {
     /// Chooses the blocks for `camera` (GeoMipMap; brute force draws all, always).
     fn prepare(&mut self, _: &Atlas, camera: &Camera) -> CpuTimes {
         let start = Instant::now();
-        if self.kind == Mode::Geomipmap {
+        if self.kind == Mode::Geomipmap && !self.pending {
             self.selection
                 .select(&self.grid, &self.blocks, camera, &self.params);
         }
@@ -403,20 +495,26 @@ impl Lod for Baselines {
     ) -> &'static [&'static str] {
         let queue = &ctx.queue;
         self.fit();
-        self.templates
-            .append(&self.selection.gpu, &mut self.indices);
-        queue.write_buffer(
-            &self.block_buffer,
-            0,
-            bytemuck::cast_slice(&self.selection.gpu),
-        );
-        let device = Alloc {
-            device: &ctx.device,
-            ledger: &self.ledger,
-            shared: &ctx.shared,
-        };
-        self.terrain.write_indices(&device, queue, &self.indices);
-        let draw = !self.indices.is_empty();
+        let blocks = &self.selection.gpu;
+        let same = self.written.as_deref().is_some_and(|w| {
+            bytemuck::cast_slice::<_, u8>(w) == bytemuck::cast_slice::<_, u8>(blocks)
+        });
+        if !same {
+            queue.write_buffer(&self.block_buffer, 0, bytemuck::cast_slice(blocks));
+            let device = Alloc {
+                device: &ctx.device,
+                ledger: &self.ledger,
+                shared: &ctx.shared,
+            };
+            // Made for the upload and dropped after it: a baked grid's whole index list is
+            // tens of MB, which a renderer kept between frames would hold for nothing.
+            let mut indices = Vec::new();
+            self.templates.append(blocks, &mut indices);
+            self.indices = indices.len();
+            self.terrain.write_indices(&device, queue, &indices);
+            self.written = Some(blocks.clone());
+        }
+        let draw = self.indices > 0;
         self.terrain.record(encoder, draw, probe);
         &[TerrainPass::NAME]
     }
@@ -430,7 +528,7 @@ impl Lod for Baselines {
     }
 
     fn triangles(&self) -> u64 {
-        self.indices.len() as u64 / 3
+        self.indices as u64 / 3
     }
 
     fn visible(&self) -> bool {
@@ -444,7 +542,7 @@ impl Lod for Baselines {
     fn precompute(&self) -> Option<(f64, u64)> {
         Some((
             self.precompute_ms,
-            self.bake.as_ref().map_or(0, Bake::bytes),
+            self.bake.as_ref().map_or(0, |b| b.bytes()),
         ))
     }
 

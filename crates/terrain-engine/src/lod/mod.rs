@@ -204,6 +204,12 @@ pub trait Lod: Any {
     /// Forgets what earlier frames leave to the next (the warped mode's budget hysteresis), so the
     /// next frame is what a fresh renderer would draw: for snapshots of unrelated cameras.
     fn forget(&mut self) {}
+    /// Whether the scheme can draw: false while what it reads back from the GPU before its
+    /// first frame is on its way (in a browser, which cannot wait for its GPU; natively it is
+    /// there once the renderer is made). Frames before then draw the sky alone.
+    fn ready(&mut self) -> Result<bool> {
+        Ok(true)
+    }
     /// Places a planet's sun where `scene`'s camera sees it at the scene's light (see
     /// [`clipmaps::sun_world`]): for a renderer reused across scenes that differ only in the
     /// camera. Nothing to do off a planet, where the light is the frame's.

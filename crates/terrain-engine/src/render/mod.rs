@@ -220,6 +220,8 @@ impl Renderer {
     /// Fits the scheme's targets to `camera`'s image: nothing happens at the same size, and at
     /// another only what depends on it is made again (targets, per-pixel buffers, read-back).
     fn fit(&mut self, camera: &Camera) -> Result<()> {
+        // A scheme still waiting for its read-back draws the sky; one that failed is the error.
+        self.lod.ready()?;
         let size = (camera.width, camera.height);
         if size != self.size {
             let alloc = Alloc {
@@ -234,6 +236,13 @@ impl Renderer {
             self.size = size;
         }
         Ok(())
+    }
+
+    /// Whether the terrain is drawn: false only in a browser while the baselines' baked grid is
+    /// read back (a page cannot wait for its GPU), when frames show the sky alone. An error is
+    /// the read-back's failure.
+    pub fn ready(&mut self) -> Result<bool> {
+        self.lod.ready()
     }
 
     /// The next frame's level of detail is chosen as by a fresh renderer, whatever frames came
