@@ -38,8 +38,8 @@ fn main() {
             the_page_draws_what_render_draws_for_the_bundled_scene_and_a_users_geotiff,
         ),
         (
-            "the_page_flies_its_path_and_switches_to_the_wireframe_without_a_console_error",
-            the_page_flies_its_path_and_switches_to_the_wireframe_without_a_console_error,
+            "the_page_flies_its_path_and_switches_mode_and_view_without_a_console_error",
+            the_page_flies_its_path_and_switches_mode_and_view_without_a_console_error,
         ),
         (
             "a_browser_without_webgpu_gets_a_message_not_a_blank_page",
@@ -295,20 +295,22 @@ fn write_png(path: &Path, rgba: &[u8]) {
     terrain_cli::output::write_image(path, SIZE, SIZE, rgba).unwrap();
 }
 
-/// The bundled scene and a user's GeoTIFF (written by GDAL), each exported, served and opened
-/// with `?still=1`: the canvas against `terrain render` of the same scene at the same size.
+/// The bundled scene (warped) and a user's GeoTIFF (written by GDAL; GeoMipMap, whose bake the
+/// page reads back without waiting), each exported, served and opened with `?still=1`: the
+/// canvas against `terrain render` of the same scene, mode and size.
 fn the_page_draws_what_render_draws_for_the_bundled_scene_and_a_users_geotiff() {
     let root = manifest_dir();
     let sources = [
-        ("jacksboro", root.join("sketches/jacksboro.toml")),
+        ("jacksboro", root.join("sketches/jacksboro.toml"), "warped"),
         (
             "geotiff",
             root.join("tests/data/formats/utm-metres-Float32.tif"),
+            "geomipmap",
         ),
     ];
-    for (name, source) in sources {
+    for (name, source, mode) in sources {
         let dir = scratch(&format!("web-{name}"));
-        let site = serve(&source, &dir.join("site"), &[]);
+        let site = serve(&source, &dir.join("site"), &["--mode", mode]);
         // A browser each: SwiftShader, still busy with one page's frames, keeps a second tab
         // from opening within the protocol's timeout.
         let browser = browser();
@@ -319,7 +321,7 @@ fn the_page_draws_what_render_draws_for_the_bundled_scene_and_a_users_geotiff() 
         let first_frame_ms = settled(&tab);
         let page = canvas_rgba(&tab, SIZE);
         let stats = eval(&tab, "window.terrain.stats()");
-        let reference = rendered_rgba(&source, &dir, SIZE);
+        let reference = rendered_rgba_with(&source, &dir, SIZE, &["--mode", mode]);
         let db = psnr(&page, &reference);
         write_png(&dir.join("page.png"), &page);
         eprintln!(
@@ -331,7 +333,7 @@ fn the_page_draws_what_render_draws_for_the_bundled_scene_and_a_users_geotiff() 
             "{name}: the page's still is {db:.2} dB from render's (page.png and render.png in {})",
             dir.display()
         );
-        assert_eq!(stats["mode"], "warped");
+        assert_eq!(stats["mode"], mode);
         assert!(stats["triangles"].as_f64().unwrap() > 1000.0, "{stats}");
         assert!(
             stats["adapter"]
@@ -351,8 +353,9 @@ fn the_page_draws_what_render_draws_for_the_bundled_scene_and_a_users_geotiff() 
 }
 
 /// The bundled scene flown along its path for sixty frames (the picture moves), then switched to
-/// the wireframe view, drawing frames: no console error.
-fn the_page_flies_its_path_and_switches_to_the_wireframe_without_a_console_error() {
+/// GeoMipMap (its bake read back while the warped mode goes on drawing) and to the wireframe
+/// view, drawing frames: no console error.
+fn the_page_flies_its_path_and_switches_mode_and_view_without_a_console_error() {
     let dir = scratch("web-fly");
     let site = serve(
         &manifest_dir().join("sketches/jacksboro.toml"),
@@ -413,16 +416,42 @@ fn the_page_flies_its_path_and_switches_to_the_wireframe_without_a_console_error
     let fps = 1000.0 / flown["frame_ms"].as_f64().unwrap();
     assert!(fps.is_finite() && fps > 0.0, "{flown}");
 
-    // The page offers the warped mode alone (its viewer's `page_modes` says why).
+    // The comparison users come for: GeoMipMap's button. Until its bake is back the warped
+    // mode draws on and `coming` names it; then its frames count from 0.
     let modes = eval(
         &tab,
         "[...document.querySelectorAll('#controls button')].map((b) => b.textContent)",
     );
     eprintln!("web flight: the page's buttons {modes}");
-    assert!(!modes.to_string().contains("GeoMipMap"), "{modes}");
+    let clicked = eval(
+        &tab,
+        "(() => { const b = [...document.querySelectorAll('#controls button')]
+             .find((b) => b.textContent === 'GeoMipMap');
+           if (!b) return false; window.clicked = performance.now(); b.click(); return true; })()",
+    );
+    assert_eq!(clicked, true, "no GeoMipMap button among {modes}");
+    let switched = eval(
+        &tab,
+        "new Promise((resolve) => {
+           const poll = () => {
+             const s = window.terrain.stats();
+             s.mode === 'geomipmap' && s.frames >= 10
+               ? resolve({ ...s, since_click_ms: performance.now() - window.clicked })
+               : requestAnimationFrame(poll);
+           };
+           poll();
+         })",
+    );
+    eprintln!("web flight: GeoMipMap, stats {switched}");
+    assert_eq!(switched["coming"], "", "{switched}");
+    assert!(
+        switched["triangles"].as_f64().unwrap() > 1000.0,
+        "{switched}"
+    );
     eval(&tab, "window.terrain.setView('wireframe')");
     let wire = frames(10);
     assert_eq!(wire["view"], "wireframe", "{wire}");
+    assert_eq!(wire["mode"], "geomipmap", "{wire}");
     let errors = errors.lock().unwrap();
     assert!(errors.is_empty(), "{errors:?}");
 }

@@ -259,16 +259,28 @@ pub fn streamed_jacksboro(dir: &std::path::Path, extra: &str) -> PathBuf {
 
 /// `terrain render SCENE -o DIR/render.png --size SIZE`'s pixels (RGBA).
 pub fn rendered_rgba(scene: &std::path::Path, dir: &std::path::Path, size: u32) -> Vec<u8> {
+    rendered_rgba_with(scene, dir, size, &[])
+}
+
+/// As [`rendered_rgba`], with `extra` arguments to `render` (a `--mode`, say).
+pub fn rendered_rgba_with(
+    scene: &std::path::Path,
+    dir: &std::path::Path,
+    size: u32,
+    extra: &[&str],
+) -> Vec<u8> {
     let png = dir.join("render.png");
     let size = size.to_string();
-    let (code, _, err) = terrain(&[
+    let mut args = vec![
         "render",
         scene.to_str().unwrap(),
         "-o",
         png.to_str().unwrap(),
         "--size",
         &size,
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let (code, _, err) = terrain(&args);
     assert_eq!(code, 0, "{err}");
     read_png(&png).expect("render wrote its image").2
 }

@@ -112,7 +112,8 @@ async function main() {
   const wire = button('Wireframe', 'the mesh over the picture (key V)', () =>
     window.terrain.setView(viewer.view() === 'wireframe' ? 'shaded' : 'wireframe'));
   function mark() {
-    for (const [name, b] of modeButtons) b.setAttribute('aria-pressed', String(name === viewer.mode()));
+    const chosen = viewer.coming() || viewer.mode();
+    for (const [name, b] of modeButtons) b.setAttribute('aria-pressed', String(name === chosen));
     wire.setAttribute('aria-pressed', String(viewer.view() === 'wireframe'));
   }
   mark();
@@ -195,8 +196,10 @@ async function main() {
       const s = window.terrain.stats();
       const fps = s.frame_ms ? (1000 / s.frame_ms).toFixed(1) : '–';
       const cpu = s.cpu_stage_us == null ? '–' : (s.cpu_stage_us / 1000).toFixed(2);
+      const coming = s.coming ? ` · baking ${s.coming}…` : '';
       overlay.textContent = `${fps} fps · ${Number(s.triangles).toLocaleString('en')} triangles\n`
-        + `CPU stage ${cpu} ms · ${s.mode}${s.view === 'shaded' ? '' : ` · ${s.view}`}\n${s.adapter}`;
+        + `CPU stage ${cpu} ms · ${s.mode}${s.view === 'shaded' ? '' : ` · ${s.view}`}${coming}\n`
+        + s.adapter;
     }
     requestAnimationFrame(frame);
   }

@@ -66,6 +66,10 @@ pub struct Viewer {
     terrain: Terrain,
     mode: Mode,
     view: View,
+    /// A terrain switched to and not yet drawn, with its mode and view: GeoMipMap's and brute
+    /// force's bake is read back from the GPU before it can draw, which a page cannot wait for,
+    /// so the terrain before goes on drawing until it is ready.
+    coming: Option<(Terrain, Mode, View)>,
     adapter: String,
     /// `?still=1`: the scene's own camera, held.
     still: bool,
@@ -231,6 +235,7 @@ impl Viewer {
             cpu_us: VecDeque::new(),
             triangles: 0,
             capture: None,
+            coming: None,
         })
     }
 
@@ -248,6 +253,10 @@ impl Viewer {
             push(&mut self.intervals_ms, now_ms - last);
         }
         self.last_ms = Some(now_ms);
+        self.take_coming()?;
+        // Until the terrain switched to draws, no frame settles: the one before goes on drawing
+        // (and a first terrain still reading its bake back draws the sky).
+        let ready = self.coming.is_none() && self.terrain.ready().map_err(error)?;
         let camera = self.camera(dt)?;
         let info = self.terrain.prepare(&camera).map_err(error)?;
         push(&mut self.cpu_us, info.cpu_us);
@@ -288,7 +297,7 @@ impl Viewer {
             });
         }
         let in_flight = self.in_flight.clone();
-        let settled = (self.frames == 0).then(|| self.settled.clone());
+        let settled = (self.frames == 0 && ready).then(|| self.settled.clone());
         in_flight.fetch_add(1, Ordering::AcqRel);
         self.queue.on_submitted_work_done(move || {
             in_flight.fetch_sub(1, Ordering::AcqRel);
@@ -296,7 +305,7 @@ impl Viewer {
                 s.store(true, Ordering::Release);
             }
         });
-        self.frames += 1;
+        self.frames += u64::from(ready);
         Ok(())
     }
 
@@ -379,6 +388,14 @@ impl Viewer {
         self.mode.name().into()
     }
 
+    /// The mode switched to and not yet drawn (its bake on its way back from the GPU), by name;
+    /// empty when none.
+    pub fn coming(&self) -> String {
+        self.coming
+            .as_ref()
+            .map_or(String::new(), |(_, mode, _)| mode.name().into())
+    }
+
     /// The view drawn, by name.
     pub fn view(&self) -> String {
         self.view.name().into()
@@ -425,9 +442,10 @@ impl Viewer {
         self.tour.is_some()
     }
 
-    /// `{frame_ms, cpu_stage_us, triangles, adapter, mode, view, frames}`: medians over the last
-    /// sixty frames (`frame_ms` between animation frames, `cpu_stage_us` the CPU stage's), the
-    /// last frame's triangles, the adapter's name.
+    /// `{frame_ms, cpu_stage_us, triangles, adapter, mode, view, frames, coming}`: medians over
+    /// the last sixty frames (`frame_ms` between animation frames, `cpu_stage_us` the CPU
+    /// stage's), the last frame's triangles, the adapter's name, the mode switched to and not
+    /// yet drawn.
     pub fn stats(&self) -> Result<JsValue, JsError> {
         let o = js_sys::Object::new();
         let set = |k: &str, v: JsValue| js_sys::Reflect::set(&o, &k.into(), &v).map(|_| ());
@@ -440,6 +458,7 @@ impl Viewer {
             set("mode", self.mode.name().into())?;
             set("view", self.view.name().into())?;
             set("frames", JsValue::from_f64(self.frames as f64))?;
+            set("coming", self.coming().into())?;
             set("present", self.present.name().into())
         })()
         .map_err(|_| JsError::new("stats: an object the page cannot write"))?;
@@ -473,10 +492,25 @@ impl Viewer {
 
     fn rebuild(&mut self, mode: Mode, view: View) -> Result<(), JsError> {
         let description = self.description.clone().with_mode(mode).with_view(view);
-        self.terrain =
+        let terrain =
             Terrain::new(&self.device, &self.queue, self.targets, description).map_err(error)?;
-        (self.mode, self.view) = (mode, view);
+        self.coming = Some((terrain, mode, view));
         self.unsettle();
+        self.take_coming()
+    }
+
+    /// Draws with the terrain switched to from now on, once it is ready.
+    fn take_coming(&mut self) -> Result<(), JsError> {
+        let Some((terrain, ..)) = &mut self.coming else {
+            return Ok(());
+        };
+        if !terrain.ready().map_err(error)? {
+            return Ok(());
+        }
+        if let Some((terrain, mode, view)) = self.coming.take() {
+            (self.terrain, self.mode, self.view) = (terrain, mode, view);
+            self.unsettle();
+        }
         Ok(())
     }
 
@@ -488,13 +522,11 @@ impl Viewer {
     }
 }
 
-/// The modes the page offers: those `terrain view` switches between on a key, over a sketch,
-/// but those that bake the whole sketch (GeoMipMap, brute force): their bake reads its heights
-/// back from the GPU before the first frame, which a page cannot wait for.
+/// The modes the page offers: those `terrain view` switches between on a key, over a sketch.
 fn page_modes() -> impl Iterator<Item = &'static ModeRow> {
     MODES
         .iter()
-        .filter(|r| r.key.is_some() && r.mode.draws(false) && !r.mode.bakes())
+        .filter(|r| r.key.is_some() && r.mode.draws(false))
 }
 
 /// The limits of the largest terrain the page may switch to.

@@ -74,18 +74,6 @@ pub fn run(a: Args) -> Result<()> {
         None if scene.render.mode == Mode::Reference => Mode::Warped,
         None => scene.render.mode,
     };
-    // GeoMipMap and brute force bake the sketch and read its heights back before their first
-    // frame; a page cannot wait for its GPU.
-    if mode.bakes() {
-        return Err(Error::value(
-            "render.mode",
-            format!(
-                "{mode} bakes the sketch and reads it back from the GPU before its first frame, \
-                 which a web page cannot wait for: the page draws warped"
-            ),
-        )
-        .into());
-    }
     let pkg = match &a.pkg {
         Some(dir) => dir.clone(),
         None => build_module()?,

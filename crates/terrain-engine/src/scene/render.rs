@@ -249,12 +249,6 @@ impl Mode {
         self.row().bakes_whole_sketch
     }
 
-    /// Whether it bakes a sketch held in memory into a grid, read back before its first frame
-    /// (GeoMipMap, brute force); over a tile pyramid only [`Mode::bakes_whole_sketch`]'s do.
-    pub fn bakes(self) -> bool {
-        matches!(self, Mode::Geomipmap | Mode::Bruteforce)
-    }
-
     /// [`ModeRow::mesh`].
     pub fn is_mesh(self) -> bool {
         self.row().mesh
