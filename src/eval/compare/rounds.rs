@@ -4,7 +4,8 @@
 //! Rules:
 //! - A setting's renderer is kept for the rounds while the renderers kept so far hold at most
 //!   [`KEEP_BYTES`] of GPU memory (`Renderer::gpu_bytes`; GeoMipMap's settings of one block size
-//!   share one). A setting that does not fit is timed alone, its `repeat` frames one after
+//!   share one renderer, and its block sizes and brute force of one K one baked grid, counted
+//!   in the renderer that baked it). A setting that does not fit is timed alone, its `repeat` frames one after
 //!   another as it is measured, and `report.json`'s `timed_alone` names it.
 //! - A round that is not timed comes first: each row's renderer settles at the camera again.
 //! - Odd rounds visit the settings in reverse: each setting's mean place in a round is the same.
@@ -27,10 +28,11 @@ use terrain_engine::Camera;
 use terrain_engine::Renderer;
 use terrain_engine::Result;
 
-/// The most GPU memory the renderers kept for the rounds may hold together: at 256² the
-/// warped and GeoMipMap rows of every bundled view fit (0.37–0.73 GiB; jacksboro's three
-/// GeoMipMap grids take about 170 MB each, its 31 warped renderers 261 MB together). Beside
-/// them live the reference renderer and one renderer at a time that did not fit.
+/// The most GPU memory the renderers kept for the rounds may hold together: at 256² every row
+/// of the bundled view fits (0.55 GB: jacksboro's GeoMipMap grid 105 MB, counted in its first
+/// block size and lent to the others and to brute force, its 30 warped renderers 279 MB
+/// together). Beside them live the reference renderer and one renderer at a time that did not
+/// fit.
 pub const KEEP_BYTES: u64 = 1 << 30;
 
 /// The renderers kept for the rounds, the rows each times, and the last renderer that did not
