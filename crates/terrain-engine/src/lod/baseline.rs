@@ -51,9 +51,10 @@ fn default_k(atlas: &Atlas) -> u32 {
         .unwrap_or(0)
 }
 
-/// Cells a baked grid's side is a multiple of: the largest block but one (65), so that the
-/// grids of blocks of 17, 33 and 65 vertices are one grid and their renderers share one bake
-/// (`gpu::shared`); blocks of 129 round to their own 128.
+/// Cells a grid's side is a multiple of: the largest block but one (65), so that the grids of
+/// blocks of 17, 33 and 65 vertices are one grid and their renderers share one bake
+/// (`gpu::shared`); blocks of 129 round to their own 128. A grid over a tile pyramid is rounded
+/// alike: it is the grid the sketch held whole bakes at k = 0.
 const GRID_UNIT: usize = 64;
 
 /// The grid over the square enclosing the atlas at spacing d_atlas / 2^k, in blocks of `cells`
@@ -255,7 +256,7 @@ fn streamed_grid(
     }
     s.atlas_binding
         .check_vertex_marks(s.ctx, "render.mode", "GeoMipMap", "use warped mode")?;
-    let grid = grid_of(atlas, 0, cells, cells);
+    let grid = grid_of(atlas, 0, cells, GRID_UNIT);
     let per_side = grid.blocks_per_side();
     let stats =
         crate::sketch::tiles::blocks::block_stats_of(pyramid, cells, per_side, atlas.water_m)?;
