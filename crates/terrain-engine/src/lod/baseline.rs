@@ -202,8 +202,6 @@ pub struct Baselines {
     pub templates: Templates,
     /// The last frame's level of each block, and which blocks it drew.
     pub selection: Selection,
-    /// The baked grid's heights are still on their way back (in a browser): nothing is drawn.
-    pending: bool,
     /// τ, the exact bound, geomorphing: how GeoMipMap chooses levels.
     pub params: LodParams,
     /// Indices the last frame drew.
@@ -286,12 +284,9 @@ impl Baselines {
             None => {
                 let k = scene.geomipmap.k.unwrap_or_else(|| default_k(s.atlas));
                 let (grid, bake) = bake(s, key, k, cells)?;
-                // In a browser the heights arrive a few tasks later: no blocks until then
-                // (`ready`).
-                let blocks = match grid.heights.is_empty() {
-                    true => Blocks::from_stats(0, cells, grid.spacing, Vec::new(), Vec::new()),
-                    false => Blocks::new(&grid),
-                };
+                // Made from the heights by `ready`: natively below, in a browser once they
+                // arrive.
+                let blocks = Blocks::from_stats(0, cells, grid.spacing, Vec::new(), Vec::new());
                 (grid, blocks, Some(bake))
             }
         };
@@ -330,7 +325,6 @@ impl Baselines {
         let (width, height) = (scene.camera.width, scene.camera.height);
         let detailed = bake.as_ref().map(|b| &*b.detailed);
         let terrain = TerrainPass::new(device, s.frame, detailed, n, width, height, &variant)?;
-        let pending = bake.is_some() && grid.heights.is_empty();
         let g = &scene.geomipmap;
         let mut baselines = Baselines {
             kind,
@@ -346,7 +340,6 @@ impl Baselines {
             blocks,
             templates,
             selection: Selection::default(),
-            pending,
             indices: 0,
             written: None,
             block_buffer,
@@ -356,17 +349,14 @@ impl Baselines {
             terrain,
             ledger: s.alloc.ledger.clone(),
         };
-        if !pending {
-            baselines.place_all();
-        }
+        baselines.ready()?;
+        baselines.precompute_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(baselines)
     }
 
-    /// Brute force draws every block at level 0, always.
-    fn place_all(&mut self) {
-        if self.kind == Mode::Bruteforce {
-            self.selection.all_at(&self.grid, &self.blocks, 0);
-        }
+    /// The baked grid's heights are still on their way back (in a browser): nothing is drawn.
+    fn pending(&self) -> bool {
+        self.bake.is_some() && self.blocks.per_side == 0
     }
 }
 
@@ -434,7 +424,7 @@ impl Lod for Baselines {
 
     /// Whether the baked grid's heights are back, and the blocks made from them.
     fn ready(&mut self) -> Result<bool> {
-        if !self.pending {
+        if !self.pending() {
             return Ok(true);
         }
         let Some(heights) = self
@@ -448,8 +438,10 @@ impl Lod for Baselines {
         };
         self.grid.heights = heights;
         self.blocks = Blocks::new(&self.grid);
-        self.pending = false;
-        self.place_all();
+        // Brute force draws every block at level 0, always.
+        if self.kind == Mode::Bruteforce {
+            self.selection.all_at(&self.grid, &self.blocks, 0);
+        }
         Ok(true)
     }
 
@@ -466,7 +458,7 @@ impl Lod for Baselines {
     /// Chooses the blocks for `camera` (GeoMipMap; brute force draws all, always).
     fn prepare(&mut self, _: &Atlas, camera: &Camera) -> CpuTimes {
         let start = Instant::now();
-        if self.kind == Mode::Geomipmap && !self.pending {
+        if self.kind == Mode::Geomipmap && !self.pending() {
             self.selection
                 .select(&self.grid, &self.blocks, camera, &self.params);
         }
@@ -513,7 +505,11 @@ impl Lod for Baselines {
             self.templates.append(blocks, &mut indices);
             self.indices = indices.len();
             self.terrain.write_indices(&device, queue, &indices);
-            self.written = Some(blocks.clone());
+            // Kept in the allocation of the blocks written before.
+            match &mut self.written {
+                Some(written) => written.clone_from(blocks),
+                None => self.written = Some(blocks.clone()),
+            }
         }
         let draw = self.indices > 0;
         self.terrain.record(encoder, draw, probe);
