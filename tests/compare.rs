@@ -83,7 +83,7 @@ fn compare_reports_every_setting_with_every_column_filled() {
             };
             sweep.iter().filter(move |s| s.mode() == m).chain(extra)
         })
-        .copied()
+        .cloned()
         .collect();
     // Each GeoMipMap row has a warped row with the most triangles a fixed mesh can have within
     // its own.
@@ -400,12 +400,10 @@ fn the_warped_sweep_spans_the_budgets_where_geomipmap_competes() {
         assert_eq!(sweep.last(), Some(&own), "{sweep:?}");
         let meshes: Vec<u32> = sweep[..sweep.len() - 1]
             .iter()
-            .map(|s| match *s {
-                Setting::Warped {
-                    quad_px,
-                    mesh,
-                    budget: false,
-                } if quad_px == scene.warp.quad_px => mesh,
+            .map(|s| match (s.mode, &s.values[..]) {
+                (Mode::Warped, &[quad_px, mesh, 0.0]) if quad_px == scene.warp.quad_px => {
+                    mesh as u32
+                }
                 other => panic!("not a fixed warped mesh: {other:?}"),
             })
             .collect();

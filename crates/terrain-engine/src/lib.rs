@@ -29,6 +29,22 @@
     allow(dead_code, unused_imports, unused_variables)
 )]
 
+/// The [`gpu::Shader`] of WGSL file `shaders/<name>.wgsl`, whose bindings are `$bindings`.
+macro_rules! shader {
+    ($name:literal, $bindings:expr) => {
+        crate::gpu::Shader {
+            name: $name,
+            source: include_str!(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/shaders/",
+                $name,
+                ".wgsl"
+            )),
+            bindings: $bindings,
+        }
+    };
+}
+
 // The crate's own tests name it as its users do.
 #[cfg(test)]
 extern crate self as terrain_engine;
@@ -92,17 +108,17 @@ pub mod pass {
     /// The warp & zoom pass: the warped geometry image upsampled to the mesh.
     pub const WARP_ZOOM: &str = gpu::warp_zoom::WarpZoomPass::NAME;
     /// The mesh split pass: each vertex's split octave and its procedural displacement.
-    pub const MESH_SPLIT: &str = gpu::mesh_split::MeshSplitPass::NAME;
+    pub const MESH_SPLIT: &str = crate::lod::warped::mesh_split::MeshSplitPass::NAME;
     /// The normals pass of the warped mesh.
     pub const NORMALS: &str = gpu::normals::NormalsPass::NAME;
     /// The terrain pass: the mesh drawn and shaded, with the sky.
     pub const TERRAIN: &str = gpu::terrain::TerrainPass::NAME;
     /// The ray-marched reference.
-    pub const REFERENCE: &str = gpu::reference::ReferencePass::NAME;
+    pub const REFERENCE: &str = crate::lod::reference::pass::ReferencePass::NAME;
     /// The spherical clipmaps' mesh.
-    pub const CLIPMAPS: &str = gpu::clipmaps::ClipmapsPass::NAME;
+    pub const CLIPMAPS: &str = crate::lod::clipmaps::pass::ClipmapsPass::NAME;
     /// A planet's drawing pass.
-    pub const PLANET: &str = gpu::planet::PlanetPass::NAME;
+    pub const PLANET: &str = crate::lod::clipmaps::planet::PlanetPass::NAME;
     /// The output pass that resolves a frame into the host's colour target.
     pub const OUTPUT: &str = gpu::output::OutputPass::NAME;
 }

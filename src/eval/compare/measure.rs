@@ -47,7 +47,7 @@ pub(super) fn renderer(
     atlas: &Atlas,
     s: &Setting,
 ) -> Result<Renderer> {
-    let scene = s.apply(scene);
+    let scene = s.apply(scene)?;
     Renderer::with_context(ctx.clone(), &scene, atlas.clone(), s.mode(), View::Shaded)
 }
 
@@ -117,8 +117,8 @@ fn measure(
     Ok((row, last.rgba))
 }
 
-/// [`measure`] with `s`'s τ set first (GeoMipMap's settings of one block size share a
-/// renderer), then the LOD change per frame along `steps`.
+/// [`measure`] with what `s` sets frame by frame set first (GeoMipMap's τ: its settings of one
+/// block size share a renderer), then the LOD change per frame along `steps`.
 pub(super) fn measure_lod(
     r: &mut Renderer,
     s: &Setting,
@@ -128,7 +128,7 @@ pub(super) fn measure_lod(
     timed: u32,
     steps: &[Camera],
 ) -> Result<(Row, Vec<u8>)> {
-    s.set_tau(r);
+    s.retune(r);
     let (mut row, rgba) = measure(r, s, camera, truth, o, timed)?;
     row.lod_change_levels = lod_change_along(r, steps)?;
     Ok((row, rgba))

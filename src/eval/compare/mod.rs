@@ -164,7 +164,7 @@ impl Runs {
         match result {
             Ok((row, rgba)) => {
                 self.rows.push(row);
-                self.images.push((*s, rgba));
+                self.images.push((s.clone(), rgba));
             }
             Err(e) => self.skipped.push(Skipped {
                 mode: s.mode_name(),
@@ -238,7 +238,9 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
     };
     let storage_bytes = settings
         .iter()
-        .map(|s| terrain_engine::needs(&s.apply(&scene), s.mode(), &atlas).storage_bytes)
+        .map(|s| Ok(terrain_engine::needs(&s.apply(&scene)?, s.mode(), &atlas).storage_bytes))
+        .collect::<Result<Vec<u64>>>()?
+        .into_iter()
         .max()
         .unwrap_or(0)
         .max(atlas.bytes());
@@ -288,7 +290,7 @@ pub fn run(scene: &Scene, name: &str, o: &Options, out_dir: &Path) -> Result<Out
             |r, frames| measure_lod(r, s, &camera, &truth0, o, frames, steps),
         )?;
         if o.work {
-            let (scene, view) = (s.apply(&scene), terrain_engine::View::Shaded);
+            let (scene, view) = (s.apply(&scene)?, terrain_engine::View::Shaded);
             let work = crate::eval::counted_work(&ctx, &scene, &atlas, s.mode(), view, &camera)?;
             row.work_per_px = Some(work.per_px(row.covered_px));
         }

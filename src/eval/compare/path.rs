@@ -56,7 +56,8 @@ pub(super) fn path_series(
     let mut modes: Vec<(Setting, Renderer)> = Vec::new();
     for &m in &o.modes {
         if let Some(s) = Setting::of_scene(m, scene, atlas) {
-            modes.push((s, renderer(ctx, scene, atlas, &s)?));
+            let r = renderer(ctx, scene, atlas, &s)?;
+            modes.push((s, r));
         }
     }
     // Per mode: (time, PSNR, LOD change at this frame), and the screen-space errors.

@@ -48,7 +48,7 @@ pub(super) struct Rounds {
 }
 
 /// A row timed in the rounds.
-#[derive(Clone, Copy)]
+#[derive(Clone)]
 struct Entry {
     /// Its index among the rows measured.
     row: usize,
@@ -90,13 +90,13 @@ impl Rounds {
         build: impl FnOnce() -> Result<Renderer>,
         mut measure: impl FnMut(&mut Renderer, u32) -> Result<(Row, Vec<u8>)>,
     ) -> Result<(Row, Vec<u8>)> {
-        if let Some(i) = self.kept.iter().position(|(k, _)| same_renderer(k, s)) {
+        if let Some(i) = self.kept.iter().position(|(k, _)| k.shares_renderer(s)) {
             let measured = measure(&mut self.kept[i].1, 1);
             self.time_row(&measured, row, i, s);
             return measured;
         }
         let mut r = match self.spare.take() {
-            Some((k, r)) if same_renderer(&k, s) => r,
+            Some((k, r)) if k.shares_renderer(s) => r,
             // Dropped before the next is built: one large grid at a time.
             other => {
                 drop(other);
@@ -105,11 +105,11 @@ impl Rounds {
         };
         if self.bytes.saturating_add(r.gpu_bytes()) > self.cap {
             let measured = measure(&mut r, repeat);
-            self.spare = matches!(s, Setting::GeoMipMap { .. }).then_some((*s, r));
+            self.spare = (!s.mode.row().retuned.is_empty()).then(|| (s.clone(), r));
             return measured;
         }
         self.bytes += r.gpu_bytes();
-        self.kept.push((*s, r));
+        self.kept.push((s.clone(), r));
         let i = self.kept.len() - 1;
         let measured = measure(&mut self.kept[i].1, 1);
         if measured.is_err()
@@ -126,7 +126,7 @@ impl Rounds {
             self.rows.push(Entry {
                 row,
                 renderer: i,
-                setting: *s,
+                setting: s.clone(),
                 triangles: r.triangles,
             });
         }
@@ -153,14 +153,14 @@ impl Rounds {
             .iter()
             .map(|e| RowTimes {
                 row: e.row,
-                setting: e.setting,
+                setting: e.setting.clone(),
                 timed: Timed::default(),
                 failure: None,
             })
             .collect();
         for (e, t) in self.rows.iter().zip(&mut times) {
             let r = &mut self.kept[e.renderer].1;
-            e.setting.set_tau(r);
+            e.setting.retune(r);
             r.forget();
             if let Err(err) = r.render_settled(camera) {
                 t.failure = Some(format!("settling before the timing rounds: {err}"));
@@ -171,9 +171,9 @@ impl Rounds {
                 if times[k].failure.is_some() {
                     continue;
                 }
-                let e = self.rows[k];
+                let e = &self.rows[k];
                 let r = &mut self.kept[e.renderer].1;
-                e.setting.set_tau(r);
+                e.setting.retune(r);
                 r.forget();
                 match r.render(camera) {
                     Ok(frame) if frame.gpu.triangles == e.triangles => times[k].timed.push(&frame),
@@ -194,12 +194,6 @@ impl Rounds {
         }
         times
     }
-}
-
-/// Whether settings `a` and `b` draw with one renderer: GeoMipMap's of one block size (one
-/// baked grid, τ set per frame).
-fn same_renderer(a: &Setting, b: &Setting) -> bool {
-    matches!((*a, *b), (Setting::GeoMipMap { block: x, .. }, Setting::GeoMipMap { block: y, .. }) if x == y)
 }
 
 /// The rows' order in round `round`: as kept, reversed in odd rounds.

@@ -1,99 +1,60 @@
-//! The quality settings `compare` sweeps, one per report row.
+//! The quality settings `compare` sweeps, one per report row: a mode and the values of the scene
+//! keys its row in the mode table sweeps (`ModeRow::sweep`), the default sweep given by each
+//! mode's scheme (`Mode::default_sweep`: warped over the budget's ladder up to 8 triangles a
+//! pixel and the view's own mesh; GeoMipMap over τ 0.5–8 px at blocks of 17, 33 and 65; brute
+//! force over K up to the finest the device holds; clipmaps over φ steps and rings per level).
 //!
-//! Default sweep:
-//! - warped over the budgets where GeoMipMap competes: meshes of fixed size (`warp.budget`
-//!   off) on the budget's ladder (`stage::budget`: rungs about 2^(1/4) apart from 16², so
-//!   triangles about half an octave apart) up to 8 triangles a pixel, and the scene's own
-//!   setting, the mesh its view asks for (the rung it draws is not repeated as a fixed row).
-//! - then, where GeoMipMap ran too, warped at GeoMipMap's budgets: for each GeoMipMap row, the
-//!   largest fixed mesh with no more triangles than it drew ([`at_geomipmap_budgets`]), unless a
-//!   warped row drew as many already. The acceptance asks, row by row, whether warped has less
-//!   error at no more triangles; on the ladder alone a warped curve below GeoMipMap's misses rows
-//!   that fall just above a rung, so the answer would depend on the ladder's spacing
-//!   (docs/decisions.md, “Warped sweep”). A ladder twice as fine would double the warped rows
-//!   and still land beside GeoMipMap's counts, not on them.
-//! - GeoMipMap over τ 0.5, 1, 2, 4, 8 px at blocks of 17, 33 and 65 vertices;
-//! - brute force over grid spacings d_atlas/2^K for K = 0 up to the finest the device and the
-//!   vertex budget allow ([`Baselines::default_k`]);
-//! - on a planet, clipmaps over φ steps 128, 256, 512, 1024 at 20 rings per level, rings per
-//!   level 10 and 40 at 512 φ steps (the paper's n and m, 8× and 4× triangles end to end), and the
-//!   paper's triangles split the other ways: 256 × 40 and 128 × 80.
+//! After the default sweep, where GeoMipMap ran too, warped at GeoMipMap's budgets: for each
+//! GeoMipMap row, the largest fixed mesh with no more triangles than it drew
+//! ([`at_geomipmap_budgets`]), unless a warped row drew as many already. The acceptance asks, row
+//! by row, whether warped has less error at no more triangles; on the ladder alone a warped curve
+//! below GeoMipMap's misses rows that fall just above a rung, so the answer would depend on the
+//! ladder's spacing (docs/decisions.md, “Warped sweep”). A ladder twice as fine would double the
+//! warped rows and still land beside GeoMipMap's counts, not on them.
 //!
-//! Rejected alternatives:
-//! - A fixed list of mesh bounds (64² … 1024² at `quad_px` 2, and `quad_px` 1 and 4 at 512²):
-//!   every bound above the view's own demand draws the same mesh, and its steps are too coarse
-//!   to tell whether warped beats GeoMipMap between them (docs/decisions.md, “Warped sweep”).
-//! - Bounds up to the view's own mesh, then `quad_px` ÷√2, ÷2, ÷2√2 above it: with the
-//!   geometric-error term lowering `quad_px` raises only the part of the importance the error
-//!   term does not set, so the rows jump by octaves of triangles (docs/decisions.md, “Warped
-//!   sweep”).
-//! - The full product of `quad_px` and mesh size. `quad_px` scales the view importance
-//!   everywhere alike, and the warp normalises importance to the mesh it has, so at a fixed mesh
-//!   it changes Φ only where the surface bound `I_s` or the floor clip the importance.
+//! Rejected alternative: a setting type with a variant per mode, which mirrored the mode enum and
+//! had every mode's keys written again here; a mode's keys are its row's, its values its scheme's.
 
 use super::report::Row;
-use terrain_engine::Baselines;
-use terrain_engine::Camera;
 use terrain_engine::Result;
 use terrain_engine::scene::{Mode, Scene};
 use terrain_engine::sketch::Atlas;
-use terrain_engine::stage::Budget;
-use terrain_engine::stage::CpuStage;
+use terrain_engine::{Camera, Renderer, Warped};
 
-/// The largest mesh the sweep draws: 2M triangles.
-const MAX_MESH: u32 = 1024;
-/// The most triangles a pixel the sweep draws: GeoMipMap's τ = 0.5 reaches 6.4 on the bundled
-/// views at 256².
-const MAX_TRIANGLES_PER_PX: f64 = 8.0;
-/// The smallest: 450 triangles, below GeoMipMap's fewest on the bundled views from high up (512
-/// and 874 at 256²), where the budget's own smallest (`warp.min_mesh`, 32) would start at 1,922.
-const MIN_MESH: u32 = 16;
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Setting {
-    /// `budget`: the mesh the view asks for, up to `mesh` (`warp.budget`); else `mesh` itself.
-    Warped {
-        quad_px: f64,
-        mesh: u32,
-        budget: bool,
-    },
-    GeoMipMap {
-        tau: f64,
-        block: u32,
-    },
-    BruteForce {
-        k: u32,
-    },
-    Clipmaps {
-        phi_steps: u32,
-        rings_per_level: u32,
-    },
+/// One row's setting: a mode and the values of its row's swept keys.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Setting {
+    pub mode: Mode,
+    /// The values of [`ModeRow::sweep`](terrain_engine::scene::ModeRow::sweep)'s keys, in
+    /// order, a flag as 0 or 1.
+    pub values: Vec<f64>,
 }
 
 impl Setting {
     pub fn mode(&self) -> Mode {
-        match self {
-            Setting::Warped { .. } => Mode::Warped,
-            Setting::GeoMipMap { .. } => Mode::Geomipmap,
-            Setting::BruteForce { .. } => Mode::Bruteforce,
-            Setting::Clipmaps { .. } => Mode::Clipmaps,
-        }
+        self.mode
     }
 
     /// The mode's name in reports: `warped`, `geomipmap`, `bruteforce`.
     pub fn mode_name(&self) -> &'static str {
-        self.mode().name()
+        self.mode.name()
+    }
+
+    /// The swept keys with this setting's values.
+    fn keyed(&self) -> Vec<(&'static str, f64)> {
+        let keys = self.mode.row().sweep.iter().map(|&(key, _)| key);
+        keys.zip(self.values.iter().copied()).collect()
     }
 
     /// The row's label: each of the mode's swept keys as its row in the mode table names it
-    /// (`tau=0.5 block=17`); a warped mesh of fixed size is marked `fixed`.
+    /// (`tau=0.5 block=17`); a flag is named where it is off (`fixed`: `warp.budget` off).
     pub fn label(&self) -> String {
-        let keys = self.mode().row().sweep;
-        let values = self.values();
-        let words: Vec<String> = keys
-            .iter()
-            .zip(values)
-            .filter_map(|(&(key, name), v)| match key {
+        let names = self.mode.row().sweep.iter().map(|&(_, name)| name);
+        let words: Vec<String> = self
+            .keyed()
+            .into_iter()
+            .zip(names)
+            .filter_map(|((key, v), name)| match key {
                 "warp.budget" => (v == 0.0).then(|| name.to_string()),
                 _ => Some(format!("{name}={v}")),
             })
@@ -101,95 +62,40 @@ impl Setting {
         words.join(" ")
     }
 
-    /// The values of the mode's swept keys, in its row's order (a flag as 0 or 1).
-    fn values(&self) -> Vec<f64> {
-        match *self {
-            Setting::Warped {
-                quad_px,
-                mesh,
-                budget,
-            } => vec![quad_px, mesh as f64, budget as u8 as f64],
-            Setting::GeoMipMap { tau, block } => vec![tau, block as f64],
-            Setting::BruteForce { k } => vec![k as f64],
-            Setting::Clipmaps {
-                phi_steps,
-                rings_per_level,
-            } => vec![phi_steps as f64, rings_per_level as f64],
-        }
+    /// Sets what a renderer of this setting's mode takes frame by frame (GeoMipMap's τ: its
+    /// settings of one block size share a renderer).
+    pub fn retune(&self, r: &mut Renderer) {
+        r.retune(&self.values);
     }
 
-    /// Sets a GeoMipMap renderer's τ to this setting's (its settings of one block size share a
-    /// renderer).
-    pub fn set_tau(&self, r: &mut terrain_engine::Renderer) {
-        if let Setting::GeoMipMap { tau, .. } = *self
-            && let Some(b) = r.lod_mut::<Baselines>()
-        {
-            b.params.tau = tau;
-        }
+    /// Whether settings `self` and `other` draw with one renderer: one mode, differing in no
+    /// key but those its renderer takes frame by frame (`ModeRow::retuned`; GeoMipMap's of one
+    /// block size: one baked grid, τ set per frame).
+    pub fn shares_renderer(&self, other: &Setting) -> bool {
+        let retuned = self.mode.row().retuned;
+        self.mode == other.mode
+            && !retuned.is_empty()
+            && self
+                .keyed()
+                .iter()
+                .zip(&other.values)
+                .all(|(&(key, a), &b)| a == b || retuned.contains(&key))
     }
 
     /// The scene with this setting's keys set.
-    pub fn apply(&self, scene: &Scene) -> Scene {
-        let mut s = scene.clone();
-        match *self {
-            Setting::Warped {
-                quad_px,
-                mesh,
-                budget,
-            } => {
-                s.warp.quad_px = quad_px;
-                s.warp.mesh = mesh;
-                s.warp.budget = budget;
-            }
-            Setting::GeoMipMap { tau, block } => {
-                s.geomipmap.tau = tau;
-                s.geomipmap.block = block;
-            }
-            Setting::BruteForce { k } => s.geomipmap.k = Some(k),
-            Setting::Clipmaps {
-                phi_steps,
-                rings_per_level,
-            } => {
-                let mut p = s.planet().unwrap_or_default();
-                (p.phi_steps, p.rings_per_level) = (phi_steps, rings_per_level);
-                s.planet = Some(p);
-            }
-        }
-        s
+    pub fn apply(&self, scene: &Scene) -> Result<Scene> {
+        scene.with_values(&self.keyed())
     }
 
     /// The setting a mode runs with from the scene as given (the path's and the strip's).
     pub fn of_scene(mode: Mode, scene: &Scene, atlas: &Atlas) -> Option<Setting> {
-        Some(match mode {
-            Mode::Warped => Setting::Warped {
-                quad_px: scene.warp.quad_px,
-                mesh: scene.warp.mesh,
-                budget: scene.warp.budget,
-            },
-            Mode::Geomipmap => Setting::GeoMipMap {
-                tau: scene.geomipmap.tau,
-                block: scene.geomipmap.block,
-            },
-            Mode::Bruteforce => Setting::BruteForce {
-                k: scene
-                    .geomipmap
-                    .k
-                    .unwrap_or_else(|| Baselines::default_k(atlas)),
-            },
-            Mode::Clipmaps => {
-                let p = scene.planet()?;
-                Setting::Clipmaps {
-                    phi_steps: p.phi_steps,
-                    rings_per_level: p.rings_per_level,
-                }
-            }
-            Mode::Reference => return None,
-        })
+        let values = mode.setting_of(scene, atlas)?;
+        Some(Setting { mode, values })
     }
 }
 
 /// The default sweep of `modes` for `scene` seen by `camera` (the image size of the comparison):
-/// the warped rows depend on the mesh this view asks for.
+/// each mode's own ([`Mode::default_sweep`]).
 pub fn default_sweep(
     modes: &[Mode],
     scene: &Scene,
@@ -198,89 +104,30 @@ pub fn default_sweep(
 ) -> Result<Vec<Setting>> {
     let mut out = Vec::new();
     for &mode in modes {
-        match mode {
-            Mode::Warped => out.extend(warped_sweep(scene, atlas, camera)?),
-            Mode::Geomipmap => {
-                for block in [17, 33, 65] {
-                    for tau in [0.5, 1.0, 2.0, 4.0, 8.0] {
-                        out.push(Setting::GeoMipMap { tau, block });
-                    }
-                }
-            }
-            Mode::Bruteforce => {
-                for k in 0..=Baselines::default_k(atlas) {
-                    out.push(Setting::BruteForce { k });
-                }
-            }
-            Mode::Clipmaps => {
-                for phi_steps in [128, 256, 512, 1024] {
-                    out.push(Setting::Clipmaps {
-                        phi_steps,
-                        rings_per_level: 20,
-                    });
-                }
-                for rings_per_level in [10, 40] {
-                    out.push(Setting::Clipmaps {
-                        phi_steps: 512,
-                        rings_per_level,
-                    });
-                }
-                for (phi_steps, rings_per_level) in [(256, 40), (128, 80)] {
-                    out.push(Setting::Clipmaps {
-                        phi_steps,
-                        rings_per_level,
-                    });
-                }
-            }
-            Mode::Reference => {}
-        }
+        let rows = mode.default_sweep(scene, atlas, camera)?;
+        out.extend(rows.into_iter().map(|values| Setting { mode, values }));
     }
     Ok(out)
 }
 
-/// The warped rows (the module doc's rule).
-fn warped_sweep(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<Vec<Setting>> {
-    let w = &scene.warp;
-    let own = Setting::Warped {
-        quad_px: w.quad_px,
-        mesh: w.mesh,
-        budget: w.budget,
-    };
-    let drawn = if w.budget {
-        view_mesh(scene, atlas, camera)?.min(w.mesh)
-    } else {
-        w.mesh
-    };
-    let pixels = camera.width as f64 * camera.height as f64;
-    let fits = |m: u32| mesh_triangles(m) as f64 <= MAX_TRIANGLES_PER_PX * pixels;
-    let mut out: Vec<Setting> = Budget::new(MIN_MESH, MAX_MESH)
-        .rungs()
-        .iter()
-        .filter(|&&m| m != drawn && (m == MIN_MESH || fits(m)))
-        .map(|&mesh| Setting::Warped {
-            quad_px: w.quad_px,
-            mesh,
-            budget: false,
-        })
-        .collect();
-    out.push(own);
-    Ok(out)
+/// A warped mesh of `mesh`² vertices at `quad_px`, fixed (`warp.budget` off).
+fn warped_fixed(quad_px: f64, mesh: u32) -> Setting {
+    Setting {
+        mode: Mode::Warped,
+        values: vec![quad_px, mesh as f64, 0.0],
+    }
 }
 
 /// The warped rows at GeoMipMap's budgets (at `quad_px`, the scene's), run after the default
 /// sweep when both modes ran: for each GeoMipMap row, the largest fixed mesh (up to
-/// `MAX_MESH`) with no more triangles than the row drew, unless a warped row already drew as
+/// `Warped::SWEEP_MAX_MESH`) with no more triangles than the row drew, unless a warped row already drew as
 /// many (the module doc's rule).
 pub fn at_geomipmap_budgets(quad_px: f64, rows: &[Row]) -> Vec<Setting> {
     let drawn = |t: u64| rows.iter().any(|r| r.mode == "warped" && r.triangles == t);
     let mut out: Vec<Setting> = Vec::new();
     for g in rows.iter().filter(|r| r.mode == "geomipmap") {
         let mesh = mesh_within(g.triangles);
-        let setting = Setting::Warped {
-            quad_px,
-            mesh,
-            budget: false,
-        };
+        let setting = warped_fixed(quad_px, mesh);
         if mesh >= 2 && !drawn(mesh_triangles(mesh)) && !out.contains(&setting) {
             out.push(setting);
         }
@@ -293,19 +140,10 @@ fn mesh_triangles(mesh: u32) -> u64 {
     2 * (mesh as u64).saturating_sub(1).pow(2)
 }
 
-/// The largest mesh side with at most `triangles` triangles, up to [`MAX_MESH`] (1 below 2).
+/// The largest mesh side with at most `triangles` triangles, up to the sweep's largest (1 below
+/// 2).
 fn mesh_within(triangles: u64) -> u32 {
-    ((triangles / 2).isqrt() + 1).min(MAX_MESH as u64) as u32
-}
-
-/// The mesh side the view asks for at the scene's `quad_px`, up to [`MAX_MESH`].
-fn view_mesh(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<u32> {
-    let mut s = scene.clone();
-    s.warp.mesh = MAX_MESH.max(s.warp.mesh);
-    let detail = terrain_engine::scene::detail_for(&s, atlas, Mode::Warped);
-    let mut stage = CpuStage::new(&s, &detail)?;
-    stage.run(atlas, camera);
-    Ok(stage.mesh)
+    ((triangles / 2).isqrt() + 1).min(Warped::SWEEP_MAX_MESH as u64) as u32
 }
 
 #[cfg(test)]
@@ -320,46 +158,133 @@ mod tests {
         }
     }
 
+    fn setting(mode: Mode, values: &[f64]) -> Setting {
+        Setting {
+            mode,
+            values: values.to_vec(),
+        }
+    }
+
     /// A row's label names each swept key as the mode table does, in its order.
     #[test]
     fn labels_name_the_swept_keys_from_the_mode_table() {
         let cases = [
             (
-                Setting::Warped {
-                    quad_px: 2.0,
-                    mesh: 125,
-                    budget: false,
-                },
+                setting(Mode::Warped, &[2.0, 125.0, 0.0]),
                 "quad_px=2 mesh=125 fixed",
             ),
             (
-                Setting::Warped {
-                    quad_px: 1.5,
-                    mesh: 512,
-                    budget: true,
-                },
+                setting(Mode::Warped, &[1.5, 512.0, 1.0]),
                 "quad_px=1.5 mesh=512",
             ),
+            (setting(Mode::Geomipmap, &[0.5, 17.0]), "tau=0.5 block=17"),
+            (setting(Mode::Bruteforce, &[2.0]), "K=2"),
             (
-                Setting::GeoMipMap {
-                    tau: 0.5,
-                    block: 17,
-                },
-                "tau=0.5 block=17",
-            ),
-            (Setting::BruteForce { k: 2 }, "K=2"),
-            (
-                Setting::Clipmaps {
-                    phi_steps: 512,
-                    rings_per_level: 20,
-                },
+                setting(Mode::Clipmaps, &[512.0, 20.0]),
                 "phi_steps=512 rings=20",
             ),
         ];
         for (s, label) in cases {
             assert_eq!(s.label(), label);
-            assert_eq!(s.values().len(), s.mode().row().sweep.len());
         }
+    }
+
+    /// A setting sets its keys in the scene, each as the key is typed; a value the scene
+    /// refuses is an error naming the key.
+    #[test]
+    fn a_setting_sets_its_keys_in_the_scene() -> Result<()> {
+        let scene = Scene::parse("[sketch]\nsynthetic = \"gaussian\"\n", Default::default())
+            .map_err(|f| f.into_error(std::path::Path::new("test.toml")))?;
+        let s = setting(Mode::Warped, &[1.5, 300.0, 0.0]).apply(&scene)?;
+        assert_eq!(
+            (s.warp.quad_px, s.warp.mesh, s.warp.budget),
+            (1.5, 300, false)
+        );
+        let s = setting(Mode::Geomipmap, &[4.0, 33.0]).apply(&scene)?;
+        assert_eq!((s.geomipmap.tau, s.geomipmap.block), (4.0, 33));
+        assert_eq!(
+            setting(Mode::Bruteforce, &[2.0]).apply(&scene)?.geomipmap.k,
+            Some(2)
+        );
+        let planet = Scene::load(std::path::Path::new("sketches/planet-orbit.toml"))?;
+        let p = setting(Mode::Clipmaps, &[128.0, 80.0])
+            .apply(&planet)?
+            .planet();
+        let p = p.expect("a planet");
+        assert_eq!((p.phi_steps, p.rings_per_level), (128, 80));
+        assert_eq!(p.radius_m, planet.planet().expect("a planet").radius_m);
+        let atlas = terrain_engine::scene::load_atlas(&scene)?;
+        let k = setting(Mode::Bruteforce, &[1.0]).apply(&scene)?.geomipmap.k;
+        assert_eq!(
+            Mode::Bruteforce.setting_of(&scene, &atlas),
+            Some(vec![terrain_engine::Baselines::default_k(&atlas) as f64])
+        );
+        assert_eq!(k, Some(1));
+        // Everything else is the scene's: every bundled scene set to its own values is itself.
+        let mut scenes = 0;
+        for entry in std::fs::read_dir("sketches").expect("sketches/") {
+            let path = entry.expect("an entry of sketches/").path();
+            if path.extension().is_none_or(|e| e != "toml") {
+                continue;
+            }
+            // Jobs files beside the scenes are not scenes.
+            let Ok(scene) = Scene::load(&path) else {
+                continue;
+            };
+            scenes += 1;
+            for &mode in Mode::ALL {
+                // Brute force's K resolved for the atlas where the scene leaves it to the default.
+                let resolved = mode == Mode::Bruteforce && scene.geomipmap.k.is_none();
+                let Some(values) = mode.setting_of(&scene, &atlas).filter(|_| !resolved) else {
+                    continue;
+                };
+                let back = setting(mode, &values).apply(&scene)?;
+                assert_eq!(
+                    format!("{back:?}"),
+                    format!("{scene:?}"),
+                    "{path:?} {mode:?}"
+                );
+            }
+        }
+        assert!(scenes >= 9, "{scenes} bundled scenes");
+        let bad = setting(Mode::Geomipmap, &[1.0, 18.0])
+            .apply(&scene)
+            .unwrap_err();
+        assert!(bad.to_string().contains("geomipmap.block"), "{bad}");
+        let bad = setting(Mode::Warped, &[2.0, 64.5, 0.0])
+            .apply(&scene)
+            .unwrap_err();
+        assert!(bad.to_string().contains("warp.mesh"), "{bad}");
+        Ok(())
+    }
+
+    /// GeoMipMap's settings of one block size share a renderer (τ is set per frame); no other
+    /// two settings do.
+    #[test]
+    fn only_geomipmaps_of_one_block_share_a_renderer() {
+        let g = |tau, block| setting(Mode::Geomipmap, &[tau, block]);
+        assert!(g(0.5, 17.0).shares_renderer(&g(8.0, 17.0)));
+        assert!(!g(0.5, 17.0).shares_renderer(&g(0.5, 33.0)));
+        let w = setting(Mode::Warped, &[2.0, 64.0, 0.0]);
+        assert!(!w.shares_renderer(&w.clone()));
+        assert!(!g(0.5, 17.0).shares_renderer(&setting(Mode::Bruteforce, &[0.5])));
+    }
+
+    /// Every mode's default settings hold a value for each of its row's swept keys.
+    #[test]
+    fn default_settings_hold_every_swept_key() -> Result<()> {
+        let scene = Scene::parse("[sketch]\nsynthetic = \"gaussian\"\n", Default::default())
+            .map_err(|f| f.into_error(std::path::Path::new("test.toml")))?;
+        let atlas = terrain_engine::scene::load_atlas(&scene)?;
+        let camera = terrain_engine::scene::camera_of(&scene, &atlas)?;
+        for &mode in Mode::ALL {
+            let rows = mode.default_sweep(&scene, &atlas, &camera)?;
+            assert_eq!(rows.is_empty(), mode.row().sweep.is_empty(), "{mode:?}");
+            for values in rows {
+                assert_eq!(values.len(), mode.row().sweep.len(), "{mode:?}");
+            }
+        }
+        Ok(())
     }
 
     /// Each GeoMipMap row gets the largest mesh within its triangles, once, unless warped drew
@@ -373,12 +298,8 @@ mod tests {
             .collect();
         let meshes: Vec<u32> = at_geomipmap_budgets(2.0, &rows)
             .iter()
-            .map(|s| match *s {
-                Setting::Warped {
-                    mesh,
-                    budget: false,
-                    quad_px: 2.0,
-                } => mesh,
+            .map(|s| match (s.mode, &s.values[..]) {
+                (Mode::Warped, &[2.0, mesh, 0.0]) => mesh as u32,
                 other => panic!("not a fixed warped mesh: {other:?}"),
             })
             .collect();
@@ -388,6 +309,6 @@ mod tests {
         for (t, m) in [(12_836, 81), (3_300, 41), (3_199, 40)] {
             assert!(mesh_triangles(m) <= t && mesh_triangles(m + 1) > t);
         }
-        assert_eq!(mesh_within(u64::MAX), MAX_MESH);
+        assert_eq!(mesh_within(u64::MAX), Warped::SWEEP_MAX_MESH);
     }
 }

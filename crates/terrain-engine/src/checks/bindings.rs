@@ -2,7 +2,6 @@
 //! declares in every variant: the same group, index, name and kind, as naga reflects them from the
 //! composed source (no GPU needed).
 
-use terrain_engine::gpu::SHADERS;
 use terrain_engine::gpu::bindings::Kind;
 use terrain_engine::gpu::shaders::{FLAGS, Key, compose, tested_flags};
 
@@ -63,9 +62,9 @@ fn reflect(name: &str, source: &str) -> Declared {
 #[test]
 fn every_pass_declares_its_listed_bindings_in_every_variant() {
     let mut checked = 0;
-    for shader in &SHADERS {
+    for shader in terrain_engine::lod::shaders() {
         let (name, bindings) = (shader.name, shader.bindings);
-        let own = tested_flags(name).defs();
+        let own = tested_flags(shader).defs();
         let untested: Vec<&str> = FLAGS.iter().copied().filter(|f| !own.contains(f)).collect();
         for mask in super::shaders::variants(own.len()) {
             let flags: Vec<&str> = own
@@ -74,7 +73,8 @@ fn every_pass_declares_its_listed_bindings_in_every_variant() {
                 .filter(|(k, _)| mask & (1 << k) != 0)
                 .map(|(_, f)| *f)
                 .collect();
-            let source = compose(name, &flags).unwrap_or_else(|e| panic!("{name} {flags:?}: {e}"));
+            let source =
+                compose(shader, &flags).unwrap_or_else(|e| panic!("{name} {flags:?}: {e}"));
             let wgsl = reflect(name, &source);
             for extra in [&[][..], &untested[..]] {
                 let all: Vec<&str> = flags.iter().chain(extra).copied().collect();
@@ -93,5 +93,5 @@ fn every_pass_declares_its_listed_bindings_in_every_variant() {
             }
         }
     }
-    assert!(checked >= 2 * SHADERS.len());
+    assert!(checked >= 2 * terrain_engine::lod::shaders().count());
 }

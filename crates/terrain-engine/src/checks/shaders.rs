@@ -1,12 +1,39 @@
 //! Every WGSL pass, as combined by the import step in every variant, parses and validates with
 //! naga (no GPU needed), and the uniform block's Rust twin has the WGSL struct's size.
 
-use terrain_engine::gpu::SHADERS;
+use terrain_engine::gpu::Shader;
 use terrain_engine::gpu::shaders::{FLAGS, compose, tested_flags};
 
+/// The shader of pass `name`, among every pass's (`lod::shaders`).
+pub(super) fn shader(name: &str) -> &'static Shader {
+    terrain_engine::lod::shaders()
+        .find(|s| s.name == name)
+        .unwrap_or_else(|| panic!("no pass {name}"))
+}
+
 fn validate(name: &str, flags: &[&str]) -> naga::Module {
-    let source = compose(name, flags).unwrap_or_else(|e| panic!("{name} {flags:?}: {e}"));
+    let source = compose(shader(name), flags).unwrap_or_else(|e| panic!("{name} {flags:?}: {e}"));
     validate_source(name, flags, &source)
+}
+
+/// Every WGSL file of a pass in `shaders/` (the imported ones are in `shaders/shared/`) is the
+/// shader of one pass, and each pass's name is its own: none is left out of the checks.
+#[test]
+fn every_wgsl_file_is_one_pass_shader() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/shaders");
+    let mut files: Vec<String> = std::fs::read_dir(dir)
+        .expect("shaders/")
+        .filter_map(|e| {
+            let name = e.ok()?.file_name().into_string().ok()?;
+            Some(name.strip_suffix(".wgsl")?.to_string())
+        })
+        .collect();
+    let mut passes: Vec<String> = terrain_engine::lod::shaders()
+        .map(|s| s.name.into())
+        .collect();
+    files.sort();
+    passes.sort();
+    assert_eq!(passes, files);
 }
 
 fn validate_source(name: &str, flags: &[&str], source: &str) -> naga::Module {
@@ -30,12 +57,13 @@ fn validate_source(name: &str, flags: &[&str], source: &str) -> naga::Module {
 #[test]
 fn every_pass_validates_in_every_variant() {
     let mut count = 0;
-    for name in SHADERS.iter().map(|s| s.name) {
-        let tested = tested_flags(name);
+    for shader in terrain_engine::lod::shaders() {
+        let name = shader.name;
+        let tested = tested_flags(shader);
         let own = tested.defs();
         assert_eq!(
-            compose(name, &FLAGS).unwrap(),
-            compose(name, &own).unwrap(),
+            compose(shader, &FLAGS).unwrap(),
+            compose(shader, &own).unwrap(),
             "{name}: a flag outside {own:?} changes its source"
         );
         for mask in variants(own.len()) {
@@ -49,7 +77,7 @@ fn every_pass_validates_in_every_variant() {
             count += 1;
         }
     }
-    assert!(count >= SHADERS.len());
+    assert!(count >= terrain_engine::lod::shaders().count());
 }
 
 /// Passes testing this many flags or fewer are validated in all their variants.
@@ -299,7 +327,7 @@ fn uniform_structs_match_the_wgsl_field_by_field() {
 #[test]
 fn the_planet_block_matches_the_wgsl_field_by_field() {
     use std::mem::size_of;
-    use terrain_engine::gpu::clipmaps::*;
+    use terrain_engine::lod::clipmaps::pass::*;
     let module = validate("clipmaps", &["NOISE"]);
     let structs = [
         (

@@ -1,31 +1,19 @@
-//! The GPU half of a frame: warp & zoom → mesh split → normals → terrain (with the sky), one
-//! struct per pass, each owning its pipeline, bind-group layout and resources, each with a WGSL
-//! file of the same name in `shaders/`, and its bindings listed once ([`bindings`]).
-//! [`crate::render::Renderer`] runs them as a flat list.
-
-/// The [`Shader`] of WGSL file `shaders/<name>.wgsl`.
-macro_rules! shader {
-    ($name:literal, $bindings:expr) => {
-        Shader {
-            name: $name,
-            source: include_str!(concat!("../../shaders/", $name, ".wgsl")),
-            bindings: $bindings,
-        }
-    };
-}
+//! The GPU plumbing (device and its ledger, bindings, shader composition, read-back, counters,
+//! the tile cache's binding) and the passes more than one mode runs: warp & zoom, normals, the
+//! terrain pass (with the sky), the sun map and the output pass. A mode's own passes live in its
+//! folder under `lod/` (mesh split, the reference, clipmaps and the planet pass). Each pass is a
+//! struct owning its pipeline, bind-group layout and resources, with a WGSL file of the same name
+//! in `shaders/` and its bindings listed once ([`bindings`]), both in its [`Shader`];
+//! [`crate::render::Renderer`] runs the passes as a flat list.
 
 pub mod alloc;
 pub mod bindings;
-pub mod clipmaps;
 pub mod context;
 pub mod counters;
 pub mod formats;
 pub mod frame_io;
-pub mod mesh_split;
 pub mod normals;
 pub mod output;
-pub mod planet;
-pub mod reference;
 pub mod shaders;
 pub mod shared;
 pub mod snapshot;
@@ -51,31 +39,28 @@ pub struct Shader {
     pub bindings: &'static [Binding],
 }
 
-/// Every pass's shader, a row a pass: the one list `compose` finds a pass's WGSL in and the
-/// naga checks run over.
-pub const SHADERS: [Shader; 10] = [
-    shader!("warp_zoom", warp_zoom::BINDINGS),
-    shader!("mesh_split", mesh_split::BINDINGS),
-    shader!("normals", normals::BINDINGS),
-    shader!("terrain", terrain::BINDINGS),
-    shader!("reference", reference::BINDINGS),
-    shader!("clipmaps", clipmaps::BINDINGS),
-    shader!("planet", planet::BINDINGS),
-    shader!("planet_reference", reference::PLANET_BINDINGS),
-    shader!("output", output::BINDINGS),
-    shader!("sun_map", sun_map::BINDINGS),
+/// The shaders of the passes every mode may run, a row a pass; each scheme lists its own
+/// (`lod::Scheme::shaders`), and the naga checks run over both (`lod::shaders`).
+#[cfg(test)]
+pub const SHADERS: [Shader; 5] = [
+    warp_zoom::SHADER,
+    normals::SHADER,
+    terrain::SHADER,
+    output::SHADER,
+    sun_map::SHADER,
 ];
 
-/// A compute pipeline for pass `name` in variant `key`, entry point `main`, over `layout` (the
-/// pass's shared layout of that variant): made once per device.
+/// A compute pipeline for `shader`'s pass in variant `key`, entry point `main`, over `layout`
+/// (the pass's shared layout of that variant): made once per device.
 pub(crate) fn compute_pipeline(
     device: &Alloc,
-    name: &str,
+    shader: &Shader,
     key: Key,
     layout: &wgpu::BindGroupLayout,
 ) -> Result<wgpu::ComputePipeline> {
+    let name = shader.name;
     device.shared.compute(format!("{name} {key:?}"), || {
-        let module = shader_module(device, name, key)?;
+        let module = shader_module(device, shader, key)?;
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(name),
             bind_group_layouts: &[Some(layout)],
@@ -98,16 +83,16 @@ pub(crate) fn compute_pipeline(
 /// device needs it: a renderer whose pipelines are all shared parses no WGSL.
 pub(crate) struct Module<'a> {
     device: &'a wgpu::Device,
-    name: &'a str,
+    shader: &'a Shader,
     key: Key,
     made: std::cell::OnceCell<wgpu::ShaderModule>,
 }
 
 impl<'a> Module<'a> {
-    pub fn new(device: &'a wgpu::Device, name: &'a str, key: Key) -> Module<'a> {
+    pub fn new(device: &'a wgpu::Device, shader: &'a Shader, key: Key) -> Module<'a> {
         Module {
             device,
-            name,
+            shader,
             key,
             made: std::cell::OnceCell::new(),
         }
@@ -118,24 +103,24 @@ impl<'a> Module<'a> {
         if let Some(m) = self.made.get() {
             return Ok(m);
         }
-        let m = shader_module(self.device, self.name, self.key)?;
+        let m = shader_module(self.device, self.shader, self.key)?;
         Ok(self.made.get_or_init(|| m))
     }
 
     /// What it is made from (the WGSL file and the variant), keying the pipelines made with it.
     pub fn made_from(&self) -> String {
-        format!("{} {:?}", self.name, self.key)
+        format!("{} {:?}", self.shader.name, self.key)
     }
 }
 
 pub(crate) fn shader_module(
     device: &wgpu::Device,
-    name: &str,
+    shader: &Shader,
     key: Key,
 ) -> Result<wgpu::ShaderModule> {
-    let source = shaders::compose(name, &key.defs())?;
+    let source = shaders::compose(shader, &key.defs())?;
     Ok(device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(name),
+        label: Some(shader.name),
         source: wgpu::ShaderSource::Wgsl(source.into()),
     }))
 }

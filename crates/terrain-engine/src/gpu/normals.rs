@@ -7,6 +7,9 @@ use super::{compute_pipeline, dispatch_grid};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
 
+/// The pass's shader, `shaders/normals.wgsl`.
+pub const SHADER: crate::gpu::Shader = shader!("normals", BINDINGS);
+
 /// `shaders/normals.wgsl`'s bindings.
 pub const BINDINGS: &[Binding] = &[
     Binding::frame(S::COMPUTE),
@@ -24,7 +27,7 @@ pub struct NormalsPass {
 
 impl NormalsPass {
     /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
-    pub const NAME: &'static str = "normals";
+    pub const NAME: &'static str = SHADER.name;
 
     pub fn new(
         device: &Alloc,
@@ -34,7 +37,7 @@ impl NormalsPass {
     ) -> Result<NormalsPass> {
         let (name, key) = (Self::NAME, Key::NONE);
         let layout = layout(device, name, BINDINGS, 0, key);
-        let pipeline = compute_pipeline(device, name, key, &layout)?;
+        let pipeline = compute_pipeline(device, &SHADER, key, &layout)?;
         let normals = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("normals"),
             size: (mesh * mesh) as u64 * 16,

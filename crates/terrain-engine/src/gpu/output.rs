@@ -59,6 +59,9 @@ pub struct OutputUniforms {
     pub encode_srgb: u32,
 }
 
+/// The pass's shader, `shaders/output.wgsl`.
+pub const SHADER: crate::gpu::Shader = shader!("output", BINDINGS);
+
 /// `shaders/output.wgsl`'s bindings: the frame from the reference's buffers (`FROM_BUFFERS`) or
 /// from a mesh mode's targets.
 pub const BINDINGS: &[Binding] = &[
@@ -81,7 +84,7 @@ pub struct OutputPass {
 
 impl OutputPass {
     /// The pass's name: its WGSL file.
-    pub const NAME: &'static str = "output";
+    pub const NAME: &'static str = SHADER.name;
 
     /// For frames left in buffers (the reference, `FROM_BUFFERS` in the scheme's `key`) or in
     /// targets, written into `targets`.
@@ -95,7 +98,7 @@ impl OutputPass {
         let shared = format!("{} {key:?} {targets:?}", Self::NAME);
         let pipeline = device.shared.render(shared, || {
             // Parsed only where the device has no such pipeline yet.
-            let module = shader_module(device, Self::NAME, key)?;
+            let module = shader_module(device, &SHADER, key)?;
             Ok(
                 device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                     label: Some(Self::NAME),

@@ -9,6 +9,7 @@
 //! Rejected alternative: override constants for variants. A loop bounded by `octaves = 0` still
 //! ships the noise code to the driver; dropping the text is what "no noise code" means.
 
+use super::Shader;
 use crate::error::{Error, Result};
 use std::sync::LazyLock;
 
@@ -169,26 +170,18 @@ impl std::ops::BitOr for Key {
     }
 }
 
-/// The combined source of pass `name` with `flags` set.
-pub fn compose(name: &str, flags: &[&str]) -> Result<String> {
-    let source = super::SHADERS
-        .iter()
-        .find(|s| s.name == name)
-        .map(|s| s.source)
-        .ok_or_else(|| Error::Shader {
-            file: name.to_string(),
-            reason: "no such pass".into(),
-        })?;
+/// The combined source of `shader`'s pass with `flags` set.
+pub fn compose(shader: &Shader, flags: &[&str]) -> Result<String> {
     let mut out = String::new();
     let mut imported: Vec<&str> = Vec::new();
-    expand(name, source, flags, &mut imported, &mut out)?;
+    expand(shader.name, shader.source, flags, &mut imported, &mut out)?;
     Ok(out)
 }
 
 /// The flags pass `name`'s WGSL or any file it may import tests (`#ifdef`): every other flag
 /// leaves its source alone, which lets the checks compose each distinct variant once.
 #[cfg(test)]
-pub fn tested_flags(name: &str) -> Key {
+pub fn tested_flags(shader: &Shader) -> Key {
     fn walk<'a>(source: &'a str, seen: &mut Vec<&'a str>, names: &mut Vec<&'a str>) {
         for line in source.lines().map(str::trim) {
             if let Some(flag) = line.strip_prefix("#ifdef ") {
@@ -204,12 +197,8 @@ pub fn tested_flags(name: &str) -> Key {
             }
         }
     }
-    let source = super::SHADERS
-        .iter()
-        .find(|s| s.name == name)
-        .map(|s| s.source);
     let mut names = Vec::new();
-    walk(source.unwrap_or_default(), &mut Vec::new(), &mut names);
+    walk(shader.source, &mut Vec::new(), &mut names);
     Key::of(&names)
 }
 
@@ -283,8 +272,8 @@ mod tests {
 
     #[test]
     fn flags_drop_the_noise_code() {
-        let with = compose("warp_zoom", &["DETAIL"]).unwrap();
-        let without = compose("warp_zoom", &[]).unwrap();
+        let with = compose(&super::super::warp_zoom::SHADER, &["DETAIL"]).unwrap();
+        let without = compose(&super::super::warp_zoom::SHADER, &[]).unwrap();
         assert!(with.contains("fn gradient_noise") && with.contains("octave_local("));
         assert!(!without.contains("fn gradient_noise") && !without.contains("octave_local("));
         assert_eq!(with.matches("struct Frame").count(), 1);
@@ -363,15 +352,15 @@ mod tests {
 
     #[test]
     fn only_the_counting_variant_tallies() {
-        for shader in super::super::SHADERS {
-            let plain = compose(shader.name, &["NOISE", "DETAIL", "SHADOWS"]).unwrap();
+        for shader in crate::lod::shaders() {
+            let plain = compose(shader, &["NOISE", "DETAIL", "SHADOWS"]).unwrap();
             assert!(
                 !plain.contains("tally.") && !plain.contains("atomicAdd"),
                 "{}",
                 shader.name
             );
         }
-        let counting = compose("terrain", &["COUNT_WORK", "SHADOWS"]).unwrap();
+        let counting = compose(&super::super::terrain::SHADER, &["COUNT_WORK", "SHADOWS"]).unwrap();
         assert!(counting.contains("tally.y += 1u") && counting.contains("atomicAdd(&work"));
     }
 }

@@ -22,6 +22,9 @@ use crate::sketch::Atlas;
 use std::cell::Cell;
 use wgpu::ShaderStages as S;
 
+/// The pass's shader, `shaders/sun_map.wgsl`.
+pub const SHADER: crate::gpu::Shader = shader!("sun_map", BINDINGS);
+
 /// `shaders/sun_map.wgsl`'s bindings.
 pub const BINDINGS: &[Binding] = &[
     Binding::frame(S::COMPUTE),
@@ -48,7 +51,7 @@ pub struct SunMap {
 
 impl SunMap {
     /// The pass's name: its label and its WGSL file.
-    pub const NAME: &'static str = "sun_map";
+    pub const NAME: &'static str = SHADER.name;
 
     /// The map of `atlas` (whole, uploaded as `atlas_buffer`), read with the frame's uniforms.
     pub fn new(
@@ -60,7 +63,7 @@ impl SunMap {
         // The march alone: no detail, no tallies, the sketch read whole.
         let (name, key) = (Self::NAME, Key::SHADOWS);
         let layout = layout(device, name, BINDINGS, 0, key);
-        let pipeline = compute_pipeline(device, name, key, &layout)?;
+        let pipeline = compute_pipeline(device, &SHADER, key, &layout)?;
         let seen = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("sun seen"),
             size: atlas_buffer.size(),

@@ -1,5 +1,5 @@
 //! Warp & zoom (`shaders/warp_zoom.wgsl`): Φ upsampled to the mesh, heights from the atlas at Φ,
-//! split octaves, displacement up to them; for an adaptive triangulation (`gpu::mesh_split`),
+//! split octaves, displacement up to them; for an adaptive triangulation (`lod::warped::mesh_split`),
 //! also each cell's centre height. [`vertex_cpu`] and [`centre_cpu`] are its CPU twins, used by
 //! the tests to hold the GPU to the CPU stage's definitions.
 
@@ -20,6 +20,9 @@ use crate::sketch::cubic::catmull_rom;
 #[cfg(test)]
 use glam::{IVec2, Vec2, Vec3};
 use wgpu::ShaderStages as S;
+
+/// The pass's shader, `shaders/warp_zoom.wgsl`.
+pub const SHADER: crate::gpu::Shader = shader!("warp_zoom", BINDINGS);
 
 /// `shaders/warp_zoom.wgsl`'s bindings.
 pub const BINDINGS: &[Binding] = &[
@@ -47,7 +50,7 @@ pub struct WarpZoomPass {
 
 impl WarpZoomPass {
     /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
-    pub const NAME: &'static str = "warp_zoom";
+    pub const NAME: &'static str = SHADER.name;
 
     pub fn new(
         device: &Alloc,
@@ -60,7 +63,7 @@ impl WarpZoomPass {
         let centres = key.contains(Key::CENTRES);
         let name = Self::NAME;
         let layout = layout(device, name, BINDINGS, 0, key);
-        let pipeline = compute_pipeline(device, name, key, &layout)?;
+        let pipeline = compute_pipeline(device, &SHADER, key, &layout)?;
         let phi = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("phi"),
             size: (n * n) as u64 * 8,

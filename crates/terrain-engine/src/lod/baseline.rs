@@ -262,6 +262,45 @@ fn streamed_grid(
     Ok((grid, blocks))
 }
 
+/// GeoMipMap's scheme: `compare` sweeps τ 0.5, 1, 2, 4, 8 px at blocks of 17, 33 and 65
+/// vertices (`geomipmap.tau`, `geomipmap.block`); its settings of one block size share a
+/// renderer, τ set per frame ([`Lod::retune`]).
+pub(crate) const GEOMIPMAP: super::Scheme = super::Scheme {
+    build: |s| Ok(Box::new(Baselines::new(s, Mode::Geomipmap)?)),
+    needs: <Baselines as Lod>::needs,
+    flags,
+    sweep: |_, _, _| {
+        let taus = [0.5, 1.0, 2.0, 4.0, 8.0];
+        Ok([17.0, 33.0, 65.0]
+            .into_iter()
+            .flat_map(|block| taus.map(|tau| vec![tau, block]))
+            .collect())
+    },
+    shaders: &[],
+    setting: |scene, _| Some(vec![scene.geomipmap.tau, scene.geomipmap.block as f64]),
+};
+
+/// Brute force's scheme: `compare` sweeps grid spacings d_atlas/2^K for K = 0 up to the finest
+/// the device and the vertex budget allow ([`Baselines::default_k`]; `geomipmap.k`).
+pub(crate) const BRUTEFORCE: super::Scheme = super::Scheme {
+    build: |s| Ok(Box::new(Baselines::new(s, Mode::Bruteforce)?)),
+    needs: <Baselines as Lod>::needs,
+    flags,
+    shaders: &[],
+    sweep: |_, atlas, _| Ok((0..=default_k(atlas)).map(|k| vec![k as f64]).collect()),
+    setting: |scene, atlas| {
+        let k = scene.geomipmap.k.unwrap_or_else(|| default_k(atlas));
+        Some(vec![k as f64])
+    },
+};
+
+/// The flags of both: a mesh over a baked grid, or over the tile cache where no grid is baked.
+fn flags(s: &Shared, key: &mut Key) {
+    super::mesh_flags(s, key);
+    key.set(Key::GEOMIPMAP, true);
+    key.set(Key::GRID_STREAMED, s.atlas.pyramid.is_some());
+}
+
 impl Baselines {
     /// `geomipmap.k`'s default for `atlas`: the octaves baked into the grid, the finest grid (up
     /// to K = 3) within a vertex budget of 2^22.
@@ -443,6 +482,13 @@ impl Lod for Baselines {
             self.selection.all_at(&self.grid, &self.blocks, 0);
         }
         Ok(true)
+    }
+
+    /// τ chooses the blocks each frame: the grid and its δ stay.
+    fn retune(&mut self, key: &str, value: f64) {
+        if key == "geomipmap.tau" {
+            self.params.tau = value;
+        }
     }
 
     /// A fresh renderer uploads its blocks and indices with its first frame.

@@ -11,11 +11,16 @@
 //! the adapter ([`Lod::needs`], no default), so no mode is silently taken to need nothing.
 //!
 //! Adding a mode: its variant and its row in [`crate::scene::MODES`] (`scene/render.rs`: its
-//! names, what it draws, its chart colour, its window key, the keys compare sweeps), its module
-//! here with its arms in [`scheme`], [`needs`] and [`shader_key`] (exhaustive matches: the
-//! compiler lists them), its pass in `gpu/` with its [`crate::gpu::SHADERS`] row, its WGSL and
-//! its CPU twin's check in `checks/`, its settings in `compare`'s sweep (`Setting`, whose
-//! matches the compiler lists too), and its page in docs/modes.md.
+//! names, what it draws, its chart colour, its window key, the keys `compare` sweeps); its
+//! folder here, holding its [`Scheme`] (how it is built, what it needs, its shader flags, its
+//! default settings for `compare`, its passes' shaders), its passes with their CPU twins and the
+//! test holding them together; its module's line and its arm in [`of`] (an exhaustive match:
+//! the compiler asks for it); its WGSL in `shaders/`; its page in docs/modes.md. The tools,
+//! `compare`, `view` and the naga checks read the table and the schemes, nothing else about it.
+//!
+//! The mode's variant and row sit in the scene, below the schemes, since the scene parses
+//! `render.mode` and checks it against the sketch; a row holding its scheme would make the scene
+//! depend on the passes above it, so the one arm in [`of`] joins them.
 //!
 //! Rejected alternative: an enum of the modes with a `match` in every method (what this replaced:
 //! three renderer types each wrapped again, their submit–read–time code written three times). A
@@ -29,12 +34,13 @@ pub mod warped;
 use crate::camera::Camera;
 use crate::detail::Detail;
 use crate::error::Result;
+use crate::gpu::Shader;
 use crate::gpu::alloc::Alloc;
 use crate::gpu::context::GpuContext;
 use crate::gpu::counters::Probe;
 use crate::gpu::shaders::Key;
 use crate::gpu::uniforms::{FrameInputs, View};
-use crate::scene::{Mode, Scene, Triangulation};
+use crate::scene::{Mode, Scene};
 use crate::sketch::Atlas;
 use crate::stage::StageTimes;
 use std::any::Any;
@@ -59,47 +65,83 @@ pub struct Shared<'a> {
     pub deferred: bool,
 }
 
-/// The scheme of `mode`, built for `s`: one arm a mode, as in [`needs`] and [`shader_key`] (no
-/// wildcard, so a new mode answers all three here).
-pub fn scheme(mode: Mode, s: &Shared) -> Result<Box<dyn Lod>> {
-    Ok(match mode {
-        Mode::Warped => Box::new(warped::Warped::new(s)?),
-        Mode::Geomipmap | Mode::Bruteforce => Box::new(baseline::Baselines::new(s, mode)?),
-        Mode::Reference => Box::new(reference::Reference::new(s)?),
-        Mode::Clipmaps => Box::new(clipmaps::Clipmaps::new(s)?),
-    })
+/// `compare`'s settings of a mode: each the values of its row's swept keys, in order.
+pub(crate) type Settings = Vec<Vec<f64>>;
+
+/// What differs by mode beyond its row in [`crate::scene::MODES`], given by the mode's module and
+/// found by [`of`]: how its scheme is built, what it needs of the adapter, its flags in the shader
+/// variant of its passes, and `compare`'s settings of it.
+pub(crate) struct Scheme {
+    /// Builds the scheme for a renderer.
+    pub build: fn(&Shared) -> Result<Box<dyn Lod>>,
+    /// Bytes of its largest storage binding beyond the sketch's, for a scene ([`Lod::needs`]).
+    pub needs: fn(&Scene) -> u64,
+    /// Sets the flags of its own in the shader variant ([`shader_key`] sets those every mode
+    /// shares).
+    pub flags: fn(&Shared, &mut Key),
+    /// `compare`'s default settings for a scene seen by a camera ([`Mode::default_sweep`]).
+    pub sweep: fn(&Scene, &Atlas, &Camera) -> Result<Settings>,
+    /// The setting a scene draws with ([`Mode::setting_of`]).
+    pub setting: fn(&Scene, &Atlas) -> Option<Vec<f64>>,
+    /// The shaders of its own passes (those every mode may run are [`crate::gpu::SHADERS`]).
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub shaders: &'static [Shader],
 }
 
-/// Bytes of `mode`'s largest storage binding beyond the sketch's, for `scene` ([`Lod::needs`]).
-pub fn needs(mode: Mode, scene: &Scene) -> u64 {
+/// The scheme behind `mode`: one arm a mode, no wildcard, so a new mode's is asked for here.
+pub(crate) fn of(mode: Mode) -> &'static Scheme {
     match mode {
-        Mode::Warped => warped::Warped::needs(scene),
-        Mode::Geomipmap | Mode::Bruteforce => baseline::Baselines::needs(scene),
-        Mode::Reference => reference::Reference::needs(scene),
-        Mode::Clipmaps => clipmaps::Clipmaps::needs(scene),
+        Mode::Warped => &warped::SCHEME,
+        Mode::Geomipmap => &baseline::GEOMIPMAP,
+        Mode::Bruteforce => &baseline::BRUTEFORCE,
+        Mode::Reference => &reference::SCHEME,
+        Mode::Clipmaps => &clipmaps::SCHEME,
     }
 }
 
+impl Mode {
+    /// `compare`'s default settings of this mode for `scene` seen by `camera` (whose image size
+    /// is the comparison's): each the values of its row's swept keys
+    /// ([`ModeRow::sweep`](crate::scene::ModeRow::sweep)), in order, a flag as 0 or 1. None for
+    /// a mode that sweeps no key.
+    pub fn default_sweep(
+        self,
+        scene: &Scene,
+        atlas: &Atlas,
+        camera: &Camera,
+    ) -> Result<Vec<Vec<f64>>> {
+        (of(self).sweep)(scene, atlas, camera)
+    }
+
+    /// The values of this mode's swept keys that `scene` draws with, defaults resolved for
+    /// `atlas`; `None` where it sweeps none or cannot draw the scene.
+    pub fn setting_of(self, scene: &Scene, atlas: &Atlas) -> Option<Vec<f64>> {
+        (of(self).setting)(scene, atlas)
+    }
+}
+
+/// Every pass's shader: those every mode may run and each scheme's own, the list the naga checks
+/// run over.
+#[cfg(test)]
+pub(crate) fn shaders() -> impl Iterator<Item = &'static Shader> {
+    let own = crate::scene::MODES.iter().flat_map(|r| of(r.mode).shaders);
+    crate::gpu::SHADERS.iter().chain(own)
+}
+
+/// No settings: the mode of a scheme that `compare` measures against rather than sweeps.
+pub(crate) fn no_sweep(_: &Scene, _: &Atlas, _: &Camera) -> Result<Settings> {
+    Ok(Vec::new())
+}
+
 /// The shader variant every pass of `mode`'s scheme is composed with, for the scene and the
-/// renderer's choices in `s`: the one place a flag is derived.
+/// renderer's choices in `s`: the flags every mode shares here, the mode's own by its
+/// [`Scheme::flags`]; the one place a flag is derived.
 pub fn shader_key(s: &Shared, mode: Mode) -> Key {
     let (scene, mut key) = (s.scene, Key::NONE);
-    let noise = s.detail.octaves > 0;
-    let bump = noise && scene.detail.bump;
-    let shadows = |key: &mut Key| {
-        let on = scene.render.shadows;
-        key.set(Key::SHADOWS, on);
-        key.set(
-            Key::DETAIL_SHADOWS,
-            on && scene.render.detail_shadows && noise,
-        );
-    };
-    key.set(Key::NOISE, noise);
+    key.set(Key::NOISE, s.detail.octaves > 0);
     key.set(Key::STREAMED, s.atlas_binding.marks.is_some());
     // The counting variant: a renderer made to count gives its passes the tallies.
     key.set(Key::COUNT_WORK, s.atlas_binding.work.is_some());
-    // The sketch's shadow from its sun clearance map: a renderer made with one binds it.
-    let sun_map = s.atlas_binding.sun_seen.is_some();
     // The ground coloured by a ramp: a renderer made for one binds its stops.
     let ramp = s.atlas_binding.ramp.is_some();
     key.set(Key::RAMP, ramp);
@@ -108,46 +150,47 @@ pub fn shader_key(s: &Shared, mode: Mode) -> Key {
     // sketch or beyond it at or under the water's level, and no ramp (which colours the bed).
     let beyond = crate::beyond::Beyond::new(s.atlas, scene.outside(s.atlas));
     key.set(Key::SHORE, !ramp && beyond.meets_water(s.atlas));
-    match mode {
-        Mode::Warped | Mode::Geomipmap | Mode::Bruteforce => {
-            let pixel_normals = scene.render.pixel_normals;
-            // Warp & zoom's octaves: the warped mesh's, and the baselines' bake.
-            key.set(Key::DETAIL, noise);
-            key.set(Key::PIXEL_NORMALS, pixel_normals);
-            // Pixel normals hold every octave already: no bump on top of them.
-            let bump = bump && !pixel_normals;
-            key.set(Key::BUMP, bump);
-            key.set(Key::BUMP_FADE, bump && scene.detail.bump_fade);
-            shadows(&mut key);
-            key.set(Key::SUN_MAP, sun_map);
-            // The view distances the output pass reads: a second target of the frame's pass;
-            // multisampled, a pass of its own (`gpu::terrain`).
-            key.set(Key::POSITIONS, s.samples == 1);
-            key.set(Key::DEFERRED, s.deferred);
-            if mode == Mode::Warped {
-                let adaptive = scene.warp.triangulation == Triangulation::Adaptive;
-                key.set(Key::CENTRES, adaptive);
-                key.set(Key::IMPORTANCE_VIEW, s.view == View::Importance);
-            } else {
-                key.set(Key::GEOMIPMAP, true);
-                // No baked grid: the vertex shader evaluates the grid through the tile cache.
-                key.set(Key::GRID_STREAMED, s.atlas.pyramid.is_some());
-            }
-        }
-        Mode::Reference => {
-            // Its frame is left in buffers, which the output pass reads for a host.
-            key.set(Key::FROM_BUFFERS, true);
-            shadows(&mut key);
-            key.set(Key::SUPERSAMPLE, s.samples > 1 && scene.planet().is_none());
-        }
-        Mode::Clipmaps => {
-            key.set(Key::BUMP, bump);
-            key.set(Key::BUMP_FADE, bump && scene.detail.bump_fade);
-            // Its view distances, for the output pass, in the frame's own pass.
-            key.set(Key::POSITIONS, true);
-        }
-    }
+    (of(mode).flags)(s, &mut key);
     key
+}
+
+/// Whether the bump map is drawn: octaves to draw and `detail.bump`.
+pub(crate) fn bump(s: &Shared) -> bool {
+    s.detail.octaves > 0 && s.scene.detail.bump
+}
+
+/// The sketch's shadow and the detail's (`render.shadows`, `render.detail_shadows`).
+pub(crate) fn shadow_flags(s: &Shared, key: &mut Key) {
+    let on = s.scene.render.shadows;
+    key.set(Key::SHADOWS, on);
+    key.set(
+        Key::DETAIL_SHADOWS,
+        on && s.scene.render.detail_shadows && s.detail.octaves > 0,
+    );
+}
+
+/// The bump map and its fade, where drawn.
+pub(crate) fn bump_flags(s: &Shared, key: &mut Key, bump: bool) {
+    key.set(Key::BUMP, bump);
+    key.set(Key::BUMP_FADE, bump && s.scene.detail.bump_fade);
+}
+
+/// The flags of the modes the terrain pass draws as a mesh over a geometry image (warped,
+/// GeoMipMap, brute force).
+pub(crate) fn mesh_flags(s: &Shared, key: &mut Key) {
+    let pixel_normals = s.scene.render.pixel_normals;
+    // Warp & zoom's octaves: the warped mesh's, and the baselines' bake.
+    key.set(Key::DETAIL, s.detail.octaves > 0);
+    key.set(Key::PIXEL_NORMALS, pixel_normals);
+    // Pixel normals hold every octave already: no bump on top of them.
+    bump_flags(s, key, bump(s) && !pixel_normals);
+    shadow_flags(s, key);
+    // The sketch's shadow from its sun clearance map: a renderer made with one binds it.
+    key.set(Key::SUN_MAP, s.atlas_binding.sun_seen.is_some());
+    // The view distances the output pass reads: a second target of the frame's pass;
+    // multisampled, a pass of its own (`gpu::terrain`).
+    key.set(Key::POSITIONS, s.samples == 1);
+    key.set(Key::DEFERRED, s.deferred);
 }
 
 /// The CPU's part of a frame.
@@ -201,6 +244,10 @@ pub trait Lod: Any {
     fn precompute(&self) -> Option<(f64, u64)> {
         None
     }
+    /// Takes `value` for the swept key `key` ([`ModeRow::sweep`](crate::scene::ModeRow::sweep))
+    /// without being built again, where the scheme can (GeoMipMap's τ, one of its row's
+    /// `retuned` keys); others are left as built.
+    fn retune(&mut self, _key: &str, _value: f64) {}
     /// Forgets what earlier frames leave to the next (the warped mode's budget hysteresis), so the
     /// next frame is what a fresh renderer would draw: for snapshots of unrelated cameras.
     fn forget(&mut self) {}

@@ -94,7 +94,7 @@ pub(super) fn renderer(
             },
         ));
     }
-    let lod = crate::lod::scheme(mode, &shared)?;
+    let lod = (crate::lod::of(mode).build)(&shared)?;
     let deferred = shared.deferred;
     let shader_key = crate::lod::shader_key(&shared, mode);
     let outside = scene.outside(&atlas);

@@ -172,7 +172,7 @@ fn bind_output(ctx: &GpuContext, output: &OutputPass, lod: &dyn Lod) -> Result<w
 /// What a scene in `mode` needs of the adapter: the atlas, and the mode's own largest binding
 /// (the scheme's `Lod::needs`).
 pub fn needs(scene: &Scene, mode: Mode, atlas: &Atlas) -> Needs {
-    let largest = crate::lod::needs(mode, scene);
+    let largest = (crate::lod::of(mode).needs)(scene);
     // A streamed pyramid's pool fits itself to the adapter's binding limit.
     let sketch = if atlas.pyramid.is_some() {
         0
@@ -271,6 +271,19 @@ impl Renderer {
     /// The scheme, as its own type, to change (a test's or a tool's setting between frames).
     pub fn lod_mut<T: Lod>(&mut self) -> Option<&mut T> {
         self.lod.as_any_mut().downcast_mut()
+    }
+
+    /// Sets the swept keys its mode's scheme takes without being built again (the row's
+    /// [`retuned`](crate::scene::ModeRow::retuned) keys, GeoMipMap's τ) from `values`, the
+    /// values of the row's [`sweep`](crate::scene::ModeRow::sweep) keys in order: `compare`'s
+    /// settings of one renderer. The other keys are left as the renderer was built.
+    pub fn retune(&mut self, values: &[f64]) {
+        let row = self.mode.row();
+        for (&(key, _), &value) in row.sweep.iter().zip(values) {
+            if row.retuned.contains(&key) {
+                self.lod.retune(key, value);
+            }
+        }
     }
 
     /// The CPU work, then the GPU passes, for `camera`.

@@ -89,7 +89,7 @@ crate::names::named_enum! {
 }
 
 crate::names::named_enum! {
-    /// Which diagonal each cell of the warped mesh is split along; see `gpu::mesh_split`.
+    /// Which diagonal each cell of the warped mesh is split along; see `lod::warped::mesh_split`.
     pub enum Triangulation ("triangulation") {
         /// Every cell along (s, t)–(s+1, t+1).
         Fixed = "fixed",

@@ -148,6 +148,62 @@ impl Scene {
 }
 
 impl Scene {
+    /// This scene with each dotted key set to its value, as `compare`'s settings give them
+    /// ([`ModeRow::sweep`](super::ModeRow::sweep)): a flag as 0 or 1, a whole number where the key
+    /// holds one. The result is checked as a loaded scene is; an error names the key.
+    pub fn with_values(&self, values: &[(&'static str, f64)]) -> Result<Scene> {
+        let first = values.first().map_or("", |v| v.0);
+        let mut table =
+            toml::Table::try_from(self).map_err(|e| Error::value(first, e.to_string()))?;
+        for &(key, value) in values {
+            set_number(&mut table, key, value).map_err(|reason| Error::value(key, reason))?;
+        }
+        let mut scene: Scene = toml::Value::Table(table)
+            .try_into()
+            .map_err(|e: toml::de::Error| Error::value(first, e.message().replace('\n', " ")))?;
+        scene.base_dir = self.base_dir.clone();
+        scene.source = self.source.clone();
+        scene.check().map_err(|reason| {
+            let key = values
+                .iter()
+                .find(|(k, _)| reason.starts_with(k))
+                .map_or(first, |v| v.0);
+            Error::value(key, reason)
+        })?;
+        Ok(scene)
+    }
+}
+
+/// Sets the number at dotted `key` in `table`, as the value there is typed (a flag, a whole
+/// number or a float); a key not there yet takes a whole number where `value` is one.
+fn set_number(table: &mut toml::Table, key: &str, value: f64) -> std::result::Result<(), String> {
+    if !value.is_finite() {
+        return Err(format!("{value} is not a number"));
+    }
+    let parts: Vec<&str> = key.split('.').collect();
+    let (last, path) = parts.split_last().ok_or("empty key")?;
+    let mut here = table;
+    for p in path {
+        here = here
+            .entry(p.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            .as_table_mut()
+            .ok_or_else(|| format!("`{p}` is not a table"))?;
+    }
+    let whole = value.fract() == 0.0 && value.abs() < 2f64.powi(53);
+    let new = match here.get(*last) {
+        Some(toml::Value::Boolean(_)) => toml::Value::Boolean(value != 0.0),
+        Some(toml::Value::Float(_)) => toml::Value::Float(value),
+        Some(toml::Value::Integer(_)) | None if whole => toml::Value::Integer(value as i64),
+        Some(toml::Value::Integer(_)) => return Err(format!("{value} is not a whole number")),
+        None => toml::Value::Float(value),
+        Some(other) => return Err(format!("holds a {}, not a number", other.type_str())),
+    };
+    here.insert(last.to_string(), new);
+    Ok(())
+}
+
+impl Scene {
     /// A path a `--set` gives (`sketch.path`, `importance.max_map`) is the user's, typed in the
     /// working folder: it resolves there, not against the scene file's folder.
     fn rebase_overridden_paths(&mut self, overrides: &[String]) {

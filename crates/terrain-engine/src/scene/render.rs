@@ -129,8 +129,9 @@ pub enum Scenes {
 }
 
 /// A mode as everything around it knows it: the renderer, the tools, `compare`, `view` and the
-/// charts read its row in [`MODES`] and nothing else about it. The scheme behind it is built in
-/// `lod/` (`scheme`, `needs` and `shader_key`: exhaustive matches the compiler holds to the enum).
+/// charts read its row in [`MODES`] and its scheme, nothing else about it. The scheme behind it
+/// is its folder under `lod/`, found by `lod::of` (an exhaustive match the compiler holds to the
+/// enum).
 #[derive(Clone, Copy, Debug)]
 pub struct ModeRow {
     /// The mode (its key's value is [`Named::name`](crate::Named::name)).
@@ -152,8 +153,13 @@ pub struct ModeRow {
     pub colour: [u8; 3],
     /// The key that switches `view` to it, if the window switches to it.
     pub key: Option<char>,
-    /// The scene keys `compare`'s rows of it set, as its rows' labels name them.
+    /// The scene keys `compare`'s rows of it set, as its rows' labels name them; its module
+    /// gives the values ([`Mode::default_sweep`]).
     pub sweep: &'static [(&'static str, &'static str)],
+    /// Those of the swept keys a built renderer takes frame by frame
+    /// ([`Renderer::retune`](crate::Renderer::retune)): `compare`'s settings that differ in them
+    /// alone share a renderer.
+    pub retuned: &'static [&'static str],
 }
 
 /// Every mode, one row each.
@@ -172,6 +178,7 @@ pub const MODES: [ModeRow; 5] = [
             ("warp.mesh", "mesh"),
             ("warp.budget", "fixed"),
         ],
+        retuned: &[],
     },
     ModeRow {
         mode: Mode::Geomipmap,
@@ -183,6 +190,7 @@ pub const MODES: [ModeRow; 5] = [
         colour: [40, 100, 200],
         key: Some('2'),
         sweep: &[("geomipmap.tau", "tau"), ("geomipmap.block", "block")],
+        retuned: &["geomipmap.tau"],
     },
     ModeRow {
         mode: Mode::Bruteforce,
@@ -194,6 +202,7 @@ pub const MODES: [ModeRow; 5] = [
         colour: [40, 160, 70],
         key: Some('3'),
         sweep: &[("geomipmap.k", "K")],
+        retuned: &[],
     },
     ModeRow {
         mode: Mode::Reference,
@@ -205,6 +214,7 @@ pub const MODES: [ModeRow; 5] = [
         colour: [120, 120, 120],
         key: None,
         sweep: &[],
+        retuned: &[],
     },
     ModeRow {
         mode: Mode::Clipmaps,
@@ -219,6 +229,7 @@ pub const MODES: [ModeRow; 5] = [
             ("planet.phi_steps", "phi_steps"),
             ("planet.rings_per_level", "rings"),
         ],
+        retuned: &[],
     },
 ];
 

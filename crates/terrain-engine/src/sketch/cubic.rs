@@ -1,5 +1,5 @@
 //! The Catmull–Rom weights every CPU bicubic of the sketch uses: the f64 terrain function
-//! (`query`, `planet`) and the f32 twins of the shaders (`gpu::warp_zoom`, `gpu::clipmaps`,
+//! (`query`, `planet`) and the f32 twins of the shaders (`gpu::warp_zoom`, `lod::clipmaps::pass`,
 //! `tiles::blocks`). The WGSL twin is `catmull_rom` in `shaders/shared/atlas.wgsl`.
 //!
 //! Rule: one definition, generic over the float, so the f32 twins run the shader's operations in

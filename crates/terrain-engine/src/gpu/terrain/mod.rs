@@ -17,7 +17,7 @@ use crate::error::Result;
 use wgpu::ShaderStages as S;
 
 mod raster;
-pub(super) mod targets;
+pub(crate) mod targets;
 
 pub(crate) use raster::RasterPipeline;
 use raster::render_pass;
@@ -32,6 +32,9 @@ pub use super::formats::{COLOUR, DEPTH, DEPTH_COPY, GBUFFER};
 /// the sky (the world beyond the sketch, lit and hazed) and then for the ground
 /// (docs/decisions.md, “Sky after the ground”).
 pub const SKY_TEST: wgpu::CompareFunction = wgpu::CompareFunction::GreaterEqual;
+
+/// The pass's shader, `shaders/terrain.wgsl`.
+pub const SHADER: crate::gpu::Shader = shader!("terrain", BINDINGS);
 
 /// `shaders/terrain.wgsl`'s bindings: group 0 for every draw; group 1, the G-buffer the deferred
 /// shading reads, its targets in [`GBUFFER`]'s order.
@@ -141,7 +144,7 @@ pub struct Variant {
 
 impl TerrainPass {
     /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
-    pub const NAME: &'static str = "terrain";
+    pub const NAME: &'static str = SHADER.name;
 
     #[allow(clippy::too_many_arguments)]
     /// `detailed`: the geometry image; `None` for GeoMipMap over a streamed sketch, whose grid
@@ -169,10 +172,9 @@ impl TerrainPass {
         }
 
         let layout = bindings::layout(device, Self::NAME, BINDINGS, 0, key);
-        let module = Module::new(device, Self::NAME, key);
+        let module = Module::new(device, &SHADER, key);
         // Multisampled: the same shaders with the depth copy's entry point.
-        let depth_module =
-            multisampled.then(|| Module::new(device, Self::NAME, key | Key::POSITIONS));
+        let depth_module = multisampled.then(|| Module::new(device, &SHADER, key | Key::POSITIONS));
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("terrain"),
             bind_group_layouts: &[Some(&layout)],

@@ -10,7 +10,7 @@ use crate::gpu::bindings;
 use crate::gpu::shaders::Key;
 
 /// What the targets depend on besides the size: kept by the pass for a new size.
-pub(in crate::gpu) struct Sizing {
+pub(crate) struct Sizing {
     pub key: Key,
     pub samples: u32,
     /// Draws the depth copy of a multisampled frame.
@@ -20,7 +20,7 @@ pub(in crate::gpu) struct Sizing {
 }
 
 /// The targets [`make`] builds, with their views.
-pub(in crate::gpu) struct Targets {
+pub(crate) struct Targets {
     _colour: Texture,
     pub colour_view: wgpu::TextureView,
     pub depth_view: wgpu::TextureView,
@@ -43,7 +43,7 @@ impl Targets {
 }
 
 /// The targets of a `width` × `height` frame drawn as `sizing` says.
-pub(in crate::gpu) fn make(
+pub(crate) fn make(
     device: &Alloc,
     (width, height): (u32, u32),
     sizing: &Sizing,

@@ -178,7 +178,7 @@ mod x86 {
 }
 
 /// Positive when cell (s, t) is sound: neither of its two triangles (split along the diagonal
-/// from (s, t) to (s+1, t+1), as the mesh is drawn unless the cell is convex: `gpu::mesh_split`)
+/// from (s, t) to (s+1, t+1), as the mesh is drawn unless the cell is convex: `lod::warped::mesh_split`)
 /// is flipped or degenerate, and its bottom and
 /// top edges run east, so every row of Φ increases in x as every column increases in y.
 /// Only the sign means anything. f32 suffices: edges are at least 1/(n−1) of a texel long,

@@ -14,7 +14,7 @@
 //! - `Guarded` (the default) keeps both triangles of every cell counter-clockwise and every row of Φ
 //!   increasing in x. A cell split along its diagonal from (s, t) to (s+1, t+1) is then sound;
 //!   the GPU splits a convex cell along the other diagonal where that lies nearer the surface
-//!   (`gpu::mesh_split`), and a merely non-convex cell keeps this one. A flipped triangle is a
+//!   (`lod::warped::mesh_split`), and a merely non-convex cell keeps this one. A flipped triangle is a
 //!   fold on screen. The guard gives the columns on either side of a folded cell (and one more
 //!   each way) the *mean* column mapping `b̄`, that of the row-warped importance summed across
 //!   columns, and repeats until nothing folds. A cell between two columns that both follow `b̄`

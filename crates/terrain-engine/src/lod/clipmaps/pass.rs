@@ -3,15 +3,15 @@
 //! `shaders/planet.wgsl`); [`vertex_cpu`] is the pass's CPU twin, which the tests hold the GPU
 //! to and the f64 terrain function ([`crate::planet::Planet::ground`]) holds in turn.
 
-use super::alloc::{Alloc, Buffer};
-use super::bindings::{Binding, bind_group, buffer, layout};
-use super::compute_pipeline;
-use super::shaders::Key;
-use super::stream::AtlasBinding;
-use super::uniforms::MAX_OCTAVES;
 use crate::camera::Geo;
 use crate::detail::Detail;
 use crate::error::Result;
+use crate::gpu::alloc::{Alloc, Buffer};
+use crate::gpu::bindings::{Binding, bind_group, buffer, layout};
+use crate::gpu::compute_pipeline;
+use crate::gpu::shaders::Key;
+use crate::gpu::stream::AtlasBinding;
+use crate::gpu::uniforms::MAX_OCTAVES;
 #[cfg(test)]
 use crate::planet::noise::gradient_noise3;
 use crate::planet::noise::{SphereOctave, lattice_scale};
@@ -169,6 +169,9 @@ impl PlanetUniforms {
     }
 }
 
+/// The pass's shader, `shaders/clipmaps.wgsl`.
+pub const SHADER: crate::gpu::Shader = shader!("clipmaps", BINDINGS);
+
 /// `shaders/clipmaps.wgsl`'s bindings.
 pub const BINDINGS: &[Binding] = &[
     Binding::frame(S::COMPUTE),
@@ -196,7 +199,7 @@ pub struct ClipmapsPass {
 
 impl ClipmapsPass {
     /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
-    pub const NAME: &'static str = "clipmaps";
+    pub const NAME: &'static str = SHADER.name;
 
     pub fn new(
         device: &Alloc,
@@ -208,7 +211,7 @@ impl ClipmapsPass {
     ) -> Result<ClipmapsPass> {
         let name = Self::NAME;
         let layout = layout(device, name, BINDINGS, 0, key);
-        let pipeline = compute_pipeline(device, name, key, &layout)?;
+        let pipeline = compute_pipeline(device, &SHADER, key, &layout)?;
         let points: Vec<[f32; 4]> = rings.vertices.iter().map(|v| v.to_array()).collect();
         let hemisphere = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("hemisphere"),
@@ -242,7 +245,7 @@ impl ClipmapsPass {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         count: u32,
-        probe: super::counters::Probe,
+        probe: crate::gpu::counters::Probe,
     ) {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(Self::NAME),

@@ -1,15 +1,18 @@
 //! The reference pass (`shaders/reference.wgsl`): the terrain function ray-marched per pixel with
 //! every octave down to the pixel's footprint; linear colour and hit positions per pixel.
 
-use super::alloc::{Alloc, Buffer};
-use super::bindings::{Binding, bind_group, buffer, layout};
-use super::context::GpuContext;
-use super::frame_io::read_vec4;
-use super::shaders::Key;
-use super::stream::AtlasBinding;
-use super::{compute_pipeline, dispatch_grid};
 use crate::error::Result;
+use crate::gpu::alloc::{Alloc, Buffer};
+use crate::gpu::bindings::{Binding, bind_group, buffer, layout};
+use crate::gpu::context::GpuContext;
+use crate::gpu::frame_io::read_vec4;
+use crate::gpu::shaders::Key;
+use crate::gpu::stream::AtlasBinding;
+use crate::gpu::{compute_pipeline, dispatch_grid};
 use wgpu::ShaderStages as S;
+
+/// The pass's shader, `shaders/reference.wgsl`.
+pub const SHADER: crate::gpu::Shader = shader!("reference", BINDINGS);
 
 /// `shaders/reference.wgsl`'s bindings.
 pub const BINDINGS: &[Binding] = &[
@@ -23,6 +26,9 @@ pub const BINDINGS: &[Binding] = &[
     Binding::storage_rw(2, "colour_out", S::COMPUTE),
     Binding::storage_rw(3, "position_out", S::COMPUTE),
 ];
+
+/// The pass's shader on a planet, `shaders/planet_reference.wgsl`.
+pub const PLANET_SHADER: crate::gpu::Shader = shader!("planet_reference", PLANET_BINDINGS);
 
 /// `shaders/planet_reference.wgsl`'s bindings: the reference's, and the planet's block.
 pub const PLANET_BINDINGS: &[Binding] = &[
@@ -64,7 +70,7 @@ struct Inputs {
 
 impl ReferencePass {
     /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
-    pub const NAME: &'static str = "reference";
+    pub const NAME: &'static str = SHADER.name;
 
     /// The pass in variant `key`; with `planet`, a planet's uniform block, marching the sphere
     /// (`shaders/planet_reference.wgsl`).
@@ -78,13 +84,13 @@ impl ReferencePass {
         planet: Option<&wgpu::Buffer>,
     ) -> Result<ReferencePass> {
         let (shader, bindings) = match planet {
-            Some(_) => ("planet_reference", PLANET_BINDINGS),
-            None => ("reference", BINDINGS),
+            Some(_) => (&PLANET_SHADER, PLANET_BINDINGS),
+            None => (&SHADER, BINDINGS),
         };
-        let layout = layout(device, shader, bindings, 0, key);
+        let layout = layout(device, shader.name, bindings, 0, key);
         let pipeline = compute_pipeline(device, shader, key, &layout)?;
         let inputs = Inputs {
-            shader,
+            shader: shader.name,
             bindings,
             layout,
             key,
@@ -113,14 +119,14 @@ impl ReferencePass {
         Ok(())
     }
 
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, probe: super::counters::Probe) {
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, probe: crate::gpu::counters::Probe) {
         let (p, b) = (&self.pipeline, &self.bind_group);
         dispatch_grid(encoder, Self::NAME, p, b, [self.width, self.height], probe);
     }
 
     /// The frame's display colour and hit positions.
-    pub fn output(&self) -> super::output::Source<'_> {
-        super::output::Source::Buffers {
+    pub fn output(&self) -> crate::gpu::output::Source<'_> {
+        crate::gpu::output::Source::Buffers {
             colour: &self.colour,
             position: &self.position,
         }

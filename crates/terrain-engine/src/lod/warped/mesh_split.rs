@@ -12,7 +12,7 @@
 //!   convex would fold along b–d. Ties and such cells keep a–c, the fixed split.
 //! - The triangles are written in the fixed split's order, six indices a cell, row by row, so the
 //!   draw is the same call; with `warp.triangulation = "fixed"` neither the centres nor this
-//!   pass run, and the indices are [`super::terrain::quad_indices`].
+//!   pass run, and the indices are [`crate::gpu::terrain::quad_indices`].
 //!
 //! Why: the mesh is a piecewise-linear interpolant of the surface, and on a cell the error of
 //! either split is largest about its diagonal's midpoint, which is where the two differ. The
@@ -22,12 +22,15 @@
 //! fixed split: its blocks' triangles are the ones its δ was computed for. A cell's six indices
 //! are stored from one array, not one by one.
 
-use super::alloc::Alloc;
-use super::bindings::{Binding, bind_group, buffer, layout};
-use super::shaders::Key;
-use super::{compute_pipeline, dispatch_grid};
 use crate::error::Result;
+use crate::gpu::alloc::Alloc;
+use crate::gpu::bindings::{Binding, bind_group, buffer, layout};
+use crate::gpu::shaders::Key;
+use crate::gpu::{compute_pipeline, dispatch_grid};
 use wgpu::ShaderStages as S;
+
+/// The pass's shader, `shaders/mesh_split.wgsl`.
+pub const SHADER: crate::gpu::Shader = shader!("mesh_split", BINDINGS);
 
 /// `shaders/mesh_split.wgsl`'s bindings.
 pub const BINDINGS: &[Binding] = &[
@@ -45,7 +48,7 @@ pub struct MeshSplitPass {
 
 impl MeshSplitPass {
     /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
-    pub const NAME: &'static str = "mesh_split";
+    pub const NAME: &'static str = SHADER.name;
 
     /// The pass from `detailed` and `centres` (warp & zoom's) to `indices` (the terrain pass's
     /// index buffer, with STORAGE use), for meshes of up to `mesh`².
@@ -59,7 +62,7 @@ impl MeshSplitPass {
     ) -> Result<MeshSplitPass> {
         let (name, key) = (Self::NAME, Key::NONE);
         let layout = layout(device, name, BINDINGS, 0, key);
-        let pipeline = compute_pipeline(device, name, key, &layout)?;
+        let pipeline = compute_pipeline(device, &SHADER, key, &layout)?;
         let resources = [
             ("frame", buffer(frame)),
             ("detailed", buffer(detailed)),
@@ -80,7 +83,7 @@ impl MeshSplitPass {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         mesh: u32,
-        probe: super::counters::Probe,
+        probe: crate::gpu::counters::Probe,
     ) {
         let (p, b) = (&self.pipeline, &self.bind_group);
         let cells = mesh.min(self.mesh).saturating_sub(1);
@@ -128,7 +131,7 @@ mod tests {
 
     /// The fixed split: `quad_indices`, which a fixed triangulation draws.
     fn fixed() -> Vec<u32> {
-        super::super::terrain::quad_indices(2)
+        crate::gpu::terrain::quad_indices(2)
     }
 
     #[test]

@@ -3,6 +3,10 @@
 //! normals (unless lit per pixel), terrain (with the sky). Sky-only frames run the terrain pass
 //! alone.
 
+pub mod mesh_split;
+#[cfg(test)]
+mod tests;
+
 use super::{CpuTimes, Lod, Shared};
 use crate::camera::Camera;
 use crate::error::Result;
@@ -10,14 +14,16 @@ use crate::gpu::alloc::Buffer;
 use crate::gpu::context::GpuContext;
 use crate::gpu::counters::Probe;
 use crate::gpu::frame_io::{read_pod, read_vec4};
-use crate::gpu::mesh_split::MeshSplitPass;
 use crate::gpu::normals::NormalsPass;
+use crate::gpu::shaders::Key;
 use crate::gpu::terrain::{TerrainPass, Variant};
 use crate::gpu::uniforms::{FrameInputs, View};
 use crate::gpu::warp_zoom::WarpZoomPass;
-use crate::scene::{Mode, Triangulation};
+use crate::scene::{Mode, Scene, Triangulation};
 use crate::sketch::Atlas;
+use crate::stage::Budget;
 use crate::stage::CpuStage;
+use mesh_split::MeshSplitPass;
 use std::any::Any;
 
 /// The passes of a warped frame, in order, for each choice of (adaptive triangulation, mesh
@@ -33,6 +39,73 @@ const PASSES: [&[&str]; 4] = [
         TerrainPass::NAME,
     ],
 ];
+
+/// The warped mode's scheme.
+pub(crate) const SCHEME: super::Scheme = super::Scheme {
+    build: |s| Ok(Box::new(Warped::new(s)?)),
+    needs: <Warped as Lod>::needs,
+    flags: |s, key| {
+        super::mesh_flags(s, key);
+        let adaptive = s.scene.warp.triangulation == Triangulation::Adaptive;
+        key.set(Key::CENTRES, adaptive);
+        key.set(Key::IMPORTANCE_VIEW, s.view == View::Importance);
+    },
+    sweep,
+    shaders: &[mesh_split::SHADER],
+    setting: |scene, _| {
+        let w = &scene.warp;
+        Some(vec![w.quad_px, w.mesh as f64, w.budget as u8 as f64])
+    },
+};
+
+/// The largest mesh `compare` sweeps: 2M triangles.
+const SWEEP_MAX_MESH: u32 = 1024;
+/// The most triangles a pixel the sweep draws: GeoMipMap's τ = 0.5 reaches 6.4 on the bundled
+/// views at 256².
+const SWEEP_MAX_TRIANGLES_PER_PX: f64 = 8.0;
+/// The smallest: 450 triangles, below GeoMipMap's fewest on the bundled views from high up (512
+/// and 874 at 256²), where the budget's own smallest (`warp.min_mesh`, 32) would start at 1,922.
+const SWEEP_MIN_MESH: u32 = 16;
+
+/// `compare`'s warped rows (`warp.quad_px`, `warp.mesh`, `warp.budget`): meshes of fixed size
+/// (`warp.budget` off) on the budget's ladder (`stage::budget`: rungs about 2^(1/4) apart from
+/// 16², so triangles about half an octave apart) up to 8 triangles a pixel, and the scene's own
+/// setting, the mesh its view asks for (the rung it draws is not repeated as a fixed row).
+///
+/// Rejected: a fixed list of mesh bounds (every bound above the view's own demand draws the same
+/// mesh, and its steps are too coarse to tell whether warped beats GeoMipMap between them);
+/// `quad_px` ÷√2, ÷2, ÷2√2 above the view's mesh (with the geometric-error term the rows jump by
+/// octaves of triangles); the product of `quad_px` and mesh size (at a fixed mesh `quad_px`
+/// changes Φ only where the surface bound or the floor clip the importance). docs/decisions.md,
+/// “Warped sweep”.
+fn sweep(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<super::Settings> {
+    let w = &scene.warp;
+    let drawn = if w.budget {
+        view_mesh(scene, atlas, camera)?.min(w.mesh)
+    } else {
+        w.mesh
+    };
+    let pixels = camera.width as f64 * camera.height as f64;
+    let fits = |m: u32| 2.0 * (m as f64 - 1.0).powi(2) <= SWEEP_MAX_TRIANGLES_PER_PX * pixels;
+    let mut out: Vec<Vec<f64>> = Budget::new(SWEEP_MIN_MESH, SWEEP_MAX_MESH)
+        .rungs()
+        .iter()
+        .filter(|&&m| m != drawn && (m == SWEEP_MIN_MESH || fits(m)))
+        .map(|&mesh| vec![w.quad_px, mesh as f64, 0.0])
+        .collect();
+    out.push(vec![w.quad_px, w.mesh as f64, w.budget as u8 as f64]);
+    Ok(out)
+}
+
+/// The mesh side the view asks for at the scene's `quad_px`, up to [`SWEEP_MAX_MESH`].
+fn view_mesh(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<u32> {
+    let mut s = scene.clone();
+    s.warp.mesh = SWEEP_MAX_MESH.max(s.warp.mesh);
+    let detail = crate::scene::detail_for(&s, atlas, Mode::Warped);
+    let mut stage = CpuStage::new(&s, &detail)?;
+    stage.run(atlas, camera);
+    Ok(stage.mesh)
+}
 
 /// Geometry image warping (Dachsbacher & Stamminger, *Rendering Procedural Terrain by Geometry
 /// Image Warping*, 2004): the CPU stage's Φ upsampled to the mesh, split, lit and drawn.
@@ -51,6 +124,9 @@ pub struct Warped {
 }
 
 impl Warped {
+    /// The largest mesh side `compare` sweeps (2M triangles).
+    pub const SWEEP_MAX_MESH: u32 = SWEEP_MAX_MESH;
+
     /// The scheme of the scene: its stage and passes, sized for `warp.size` and `warp.mesh`.
     pub fn new(s: &Shared) -> Result<Warped> {
         let device = &s.alloc;

@@ -1,15 +1,18 @@
 //! The reference: no mesh, the terrain function ray-marched per pixel with every octave down to
-//! the pixel's footprint (`gpu::reference`). One named pass; it always writes positions, and it
+//! the pixel's footprint (`pass`). One named pass; it always writes positions, and it
 //! has one look whatever the view.
+
+pub mod pass;
 
 use super::{CpuTimes, Lod, Shared};
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::gpu::context::GpuContext;
 use crate::gpu::counters::Probe;
-use crate::gpu::reference::ReferencePass;
+use crate::gpu::shaders::Key;
 use crate::gpu::uniforms::{FrameInputs, View};
 use crate::sketch::Atlas;
+use pass::ReferencePass;
 use std::any::Any;
 
 /// The ray-marched reference: the exact terrain function, marched per pixel, that every mode is
@@ -30,8 +33,26 @@ struct PlanetMarch {
     detail: crate::detail::Detail,
     sun_world: glam::DVec3,
     buffer: crate::gpu::alloc::Buffer,
-    uniforms: Option<crate::gpu::clipmaps::PlanetUniforms>,
+    uniforms: Option<crate::lod::clipmaps::pass::PlanetUniforms>,
 }
+
+/// The reference's scheme: what `compare` measures every other mode against, sweeping none.
+pub(crate) const SCHEME: super::Scheme = super::Scheme {
+    build: |s| Ok(Box::new(Reference::new(s)?)),
+    needs: <Reference as Lod>::needs,
+    flags: |s, key| {
+        // Its frame is left in buffers, which the output pass reads for a host.
+        key.set(Key::FROM_BUFFERS, true);
+        super::shadow_flags(s, key);
+        key.set(
+            Key::SUPERSAMPLE,
+            s.samples > 1 && s.scene.planet().is_none(),
+        );
+    },
+    sweep: super::no_sweep,
+    shaders: &[pass::SHADER, pass::PLANET_SHADER],
+    setting: |_, _| None,
+};
 
 impl Reference {
     /// The reference of the scene, on a plane or a planet.
@@ -41,7 +62,7 @@ impl Reference {
             radius: p.radius_m,
             detail: s.detail.clone(),
             sun_world: crate::lod::clipmaps::sun_world(s.scene),
-            buffer: crate::gpu::clipmaps::PlanetUniforms::buffer(&s.alloc),
+            buffer: crate::lod::clipmaps::pass::PlanetUniforms::buffer(&s.alloc),
             uniforms: None,
         });
         let pass = ReferencePass::new(

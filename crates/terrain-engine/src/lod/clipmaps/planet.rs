@@ -5,17 +5,20 @@
 //! with an infinite far plane, so a view holds ground from a metre to 20,000 km away without
 //! z-fighting. Owns the colour and depth targets.
 
-use super::Module;
-use super::alloc::{Alloc, Buffer};
-use super::bindings::{Binding, bind_group, buffer, layout};
-use super::formats::{COLOUR, DEPTH_COPY};
-use super::shaders::Key;
-use super::stream::AtlasBinding;
-use super::terrain::RasterPipeline;
-use super::terrain::targets::{Sizing, Targets, make};
 use crate::error::Result;
+use crate::gpu::Module;
+use crate::gpu::alloc::{Alloc, Buffer};
+use crate::gpu::bindings::{Binding, bind_group, buffer, layout};
+use crate::gpu::formats::{COLOUR, DEPTH_COPY};
+use crate::gpu::shaders::Key;
+use crate::gpu::stream::AtlasBinding;
+use crate::gpu::terrain::RasterPipeline;
+use crate::gpu::terrain::targets::{Sizing, Targets, make};
 use crate::planet::rings::{Rings, Span};
 use wgpu::ShaderStages as S;
+
+/// The pass's shader, `shaders/planet.wgsl`.
+pub const SHADER: crate::gpu::Shader = shader!("planet", BINDINGS);
 
 /// `shaders/planet.wgsl`'s bindings.
 pub const BINDINGS: &[Binding] = &[
@@ -45,11 +48,11 @@ pub struct PlanetPass {
 impl PlanetPass {
     /// The pass's name: its timer key, its `passes_ms` key, its WGSL file.
     /// The frame's colour and view distances.
-    pub fn output(&self) -> super::output::Source<'_> {
+    pub fn output(&self) -> crate::gpu::output::Source<'_> {
         self.targets.output()
     }
 
-    pub const NAME: &'static str = "planet";
+    pub const NAME: &'static str = SHADER.name;
 
     #[allow(clippy::too_many_arguments)]
     pub fn new(
@@ -66,7 +69,7 @@ impl PlanetPass {
         // The view distances the output pass reads (`POSITIONS`, always set for a planet).
         let targets = [Some(COLOUR.into()), Some(DEPTH_COPY.into())];
         let layout = layout(device, Self::NAME, BINDINGS, 0, key);
-        let module = Module::new(device, Self::NAME, key);
+        let module = Module::new(device, &SHADER, key);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("planet"),
             bind_group_layouts: &[Some(&layout)],
@@ -83,7 +86,7 @@ impl PlanetPass {
             }
             .build(device)
         };
-        let sky = pipeline_of(("sky_vs", "sky_fs"), (false, super::terrain::SKY_TEST))?;
+        let sky = pipeline_of(("sky_vs", "sky_fs"), (false, crate::gpu::terrain::SKY_TEST))?;
         let planet_pipeline = pipeline_of(
             ("planet_vs", "planet_fs"),
             (true, wgpu::CompareFunction::Greater),
@@ -128,12 +131,13 @@ impl PlanetPass {
     /// tangent frame, w = 1 on ground), from the depth copy.
     pub fn read_positions(
         &self,
-        ctx: &super::context::GpuContext,
+        ctx: &crate::gpu::context::GpuContext,
         camera: &crate::camera::Camera,
     ) -> Result<Vec<[f32; 4]>> {
         let depth = &self.targets.depth_copy;
-        let view_proj = super::uniforms::view_proj(camera, super::uniforms::frame_origin(camera));
-        super::frame_io::positions_from_depth(ctx, depth, view_proj, camera.near)
+        let view_proj =
+            crate::gpu::uniforms::view_proj(camera, crate::gpu::uniforms::frame_origin(camera));
+        crate::gpu::frame_io::positions_from_depth(ctx, depth, view_proj, camera.near)
     }
 
     /// Records the rings of `span` with their fill, then the sky.
@@ -142,7 +146,7 @@ impl PlanetPass {
         encoder: &mut wgpu::CommandEncoder,
         rings: &Rings,
         span: Span,
-        probe: super::counters::Probe,
+        probe: crate::gpu::counters::Probe,
     ) {
         let attach = |view| {
             Some(wgpu::RenderPassColorAttachment {

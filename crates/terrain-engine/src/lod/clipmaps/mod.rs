@@ -8,20 +8,26 @@
 //! `light.sun_elevation_deg`), so a flight across the planet meets the terminator; a frame's
 //! positions are metres in the nadir's tangent frame, never a planet-sized f32.
 
+pub mod pass;
+pub mod planet;
+#[cfg(test)]
+mod tests;
+
 use super::{CpuTimes, Lod, Shared};
 use crate::camera::{Camera, Geo};
 use crate::detail::Detail;
 use crate::error::{Error, Result};
 use crate::gpu::alloc::Buffer;
-use crate::gpu::clipmaps::{ClipmapsPass, PlanetUniforms};
 use crate::gpu::context::GpuContext;
 use crate::gpu::counters::Probe;
-use crate::gpu::planet::PlanetPass;
+use crate::gpu::shaders::Key;
 use crate::gpu::uniforms::FrameInputs;
 use crate::planet::rings::{Rings, Span, visible_span};
 use crate::planet::{Planet, Tangent};
 use crate::sketch::Atlas;
 use glam::DVec3;
+use pass::{ClipmapsPass, PlanetUniforms};
+use planet::PlanetPass;
 use std::any::Any;
 use web_time::Instant;
 
@@ -47,6 +53,34 @@ pub struct Clipmaps {
     /// The nadir the last frame's rings stand around.
     geo: Option<Geo>,
 }
+
+/// Spherical clipmaps' scheme. `compare` sweeps φ steps 128, 256, 512, 1024 at 20 rings per
+/// level, rings per level 10 and 40 at 512 φ steps (the paper's n and m, 8× and 4× triangles end
+/// to end), and the paper's triangles split the other ways, 256 × 40 and 128 × 80
+/// (`planet.phi_steps`, `planet.rings_per_level`).
+pub(crate) const SCHEME: super::Scheme = super::Scheme {
+    build: |s| Ok(Box::new(Clipmaps::new(s)?)),
+    needs: <Clipmaps as Lod>::needs,
+    flags: |s, key| {
+        super::bump_flags(s, key, super::bump(s));
+        // Its view distances, for the output pass, in the frame's own pass.
+        key.set(Key::POSITIONS, true);
+    },
+    sweep: |_, _, _| {
+        let paper = [128, 256, 512, 1024].map(|phi| (phi, 20));
+        let other = [(512, 10), (512, 40), (256, 40), (128, 80)];
+        Ok(paper
+            .into_iter()
+            .chain(other)
+            .map(|(phi, rings)| vec![phi as f64, rings as f64])
+            .collect())
+    },
+    shaders: &[pass::SHADER, planet::SHADER],
+    setting: |scene, _| {
+        let p = scene.planet()?;
+        Some(vec![p.phi_steps as f64, p.rings_per_level as f64])
+    },
+};
 
 impl Clipmaps {
     /// The scheme of a planet scene; [`crate::Error::Value`] where the scene is no planet.
