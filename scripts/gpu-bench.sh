@@ -110,13 +110,14 @@ name_of() { local b; b=$(basename -- "$1"); printf '%s' "${b%.toml}"; }
 for v in "${VIEWS[@]}"; do
   [ -f "$(scene_of "$v")" ] || die "no scene $(scene_of "$v")"
 done
-# A planet draws with clipmaps and the reference alone; a plane with the other four modes.
+# The modes a view draws, from the binary's mode table (`terrain modes --json`): a planet's
+# (clipmaps and the reference), or a plane's (warped, GeoMipMap, brute force, the reference).
+MODES_JSON=$("$BIN" modes --json) || die "$BIN modes --json failed: a terrain binary older than its scripts?"
 modes_of() {
-  if grep -q '^\[planet\]' "$(scene_of "$1")"; then
-    echo clipmaps reference
-  else
-    echo warped geomipmap bruteforce reference
-  fi
+  local kind=flat
+  grep -q '^\[planet\]' "$(scene_of "$1")" && kind=planet
+  python3 -c 'import json, sys
+print(" ".join(m["name"] for m in json.loads(sys.argv[1])["modes"] if m["scenes"] in (sys.argv[2], "both")))' "$MODES_JSON" "$kind"
 }
 
 if [ -d "$OUT" ] && [ -n "$(ls -A -- "$OUT")" ]; then

@@ -86,6 +86,33 @@ fn info_reads_the_bundled_sketch() {
     assert!((spacing - 74.4).abs() < 0.5, "{spacing}");
 }
 
+/// `terrain modes --json` is the mode table, row by row in its order: what scripts iterate.
+#[test]
+fn modes_lists_the_mode_table() {
+    use terrain_engine::scene::{MODES, Scenes};
+    let (code, out, err) = terrain(&["modes", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let rows = v["modes"].as_array().expect("modes");
+    assert_eq!(rows.len(), MODES.len());
+    for (row, m) in rows.iter().zip(&MODES) {
+        assert_eq!(row["name"], m.mode.name());
+        assert_eq!(row["display"], m.display);
+        let scenes = match m.scenes {
+            Scenes::Flat => "flat",
+            Scenes::Planet => "planet",
+            Scenes::Both => "both",
+        };
+        assert_eq!(row["scenes"], scenes);
+        let sweep: Vec<&str> = m.sweep.iter().map(|&(key, _)| key).collect();
+        assert_eq!(row["sweep"], serde_json::json!(sweep));
+    }
+    let (code, table, _) = terrain(&["modes"]);
+    assert_eq!(code, 0);
+    assert_eq!(table.lines().count(), MODES.len() + 1, "{table}");
+    assert!(table.contains("geomipmap   GeoMipMap"), "{table}");
+}
+
 /// A reader that stops reading (`terrain info … | head -c 0`) ends the program quietly: exit 0,
 /// nothing on stderr. `println!` panicked there, on the broken pipe.
 #[cfg(unix)]

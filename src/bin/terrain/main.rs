@@ -25,6 +25,7 @@ mod compare;
 mod fly;
 mod height;
 mod info;
+mod modes;
 mod notes;
 mod render;
 mod scene;
@@ -52,6 +53,9 @@ struct Cli {
 enum Command {
     /// Reads a sketch and prints its size, spacing, height range and nodata count.
     Info(info::Args),
+    /// Lists the level-of-detail modes: `--mode`'s choices, the scenes each draws, what
+    /// `compare` sweeps.
+    Modes(modes::Args),
     /// Converts a sketch (a file or a glob of tiles) into a tile pyramid on disk, with bounded
     /// memory; resumable. Scenes name the pyramid's folder as their sketch.
     Tiles(tiles::Args),
@@ -120,6 +124,7 @@ fn main() {
     terrain_engine::sketch::tiles::set_keep_figures(true);
     let result = match cli.command {
         Command::Info(a) => info::run(a),
+        Command::Modes(a) => modes::run(a),
         Command::Tiles(a) => tiles::run(a),
         Command::Scene(a) => scene::run(a),
         Command::Warp(a) => warp::run(a),
