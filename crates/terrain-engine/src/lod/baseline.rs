@@ -298,6 +298,7 @@ pub(crate) const BRUTEFORCE: super::Scheme = super::Scheme {
 fn flags(s: &Shared, key: &mut Key) {
     super::mesh_flags(s, key);
     key.set(Key::GEOMIPMAP, true);
+    // No baked grid: the vertex shader evaluates the grid through the tile cache.
     key.set(Key::GRID_STREAMED, s.atlas.pyramid.is_some());
 }
 

@@ -7,8 +7,9 @@
 //! [`Lod`]: prepare on the CPU for a camera, fill its part of the frame's uniforms, record its
 //! passes (named, so the timer and the reports key them by name), make its targets for a new
 //! image size, give back its image. The shader variant of every pass is [`shader_key`]'s, per
-//! scene and mode: a flag is derived there and nowhere else. Each scheme states what it needs of
-//! the adapter ([`Lod::needs`], no default), so no mode is silently taken to need nothing.
+//! scene and mode: a flag is derived there or in its scheme's [`Scheme::flags`], nowhere else.
+//! Each scheme states what it needs of the adapter ([`Lod::needs`], no default), so no mode is
+//! silently taken to need nothing.
 //!
 //! Adding a mode: its variant and its row in [`crate::scene::MODES`] (`scene/render.rs`: its
 //! names, what it draws, its chart colour, its window key, the keys `compare` sweeps); its
@@ -102,8 +103,8 @@ pub(crate) fn of(mode: Mode) -> &'static Scheme {
 impl Mode {
     /// `compare`'s default settings of this mode for `scene` seen by `camera` (whose image size
     /// is the comparison's): each the values of its row's swept keys
-    /// ([`ModeRow::sweep`](crate::scene::ModeRow::sweep)), in order, a flag as 0 or 1. None for
-    /// a mode that sweeps no key.
+    /// ([`ModeRow::sweep`](crate::scene::ModeRow::sweep)), in order, a flag as 0 or 1; none for a
+    /// mode that sweeps no key.
     pub fn default_sweep(
         self,
         scene: &Scene,
