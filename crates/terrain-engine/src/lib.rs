@@ -29,10 +29,10 @@
     allow(dead_code, unused_imports, unused_variables)
 )]
 
-/// The [`gpu::Shader`] of WGSL file `shaders/<name>.wgsl`, whose bindings are `$bindings`.
+/// The [`gpu::pipeline::Shader`] of WGSL file `shaders/<name>.wgsl`, whose bindings are `$bindings`.
 macro_rules! shader {
     ($name:literal, $bindings:expr) => {
-        crate::gpu::Shader {
+        crate::gpu::pipeline::Shader {
             name: $name,
             source: include_str!(concat!(
                 env!("CARGO_MANIFEST_DIR"),

@@ -3,7 +3,7 @@
 //! composed source (no GPU needed).
 
 use terrain_engine::gpu::bindings::Kind;
-use terrain_engine::gpu::shaders::{FLAGS, Key, compose, tested_flags};
+use terrain_engine::gpu::shaders::{FLAGS, Key};
 
 type Declared = Vec<(u32, u32, String, Kind)>;
 
@@ -64,7 +64,7 @@ fn every_pass_declares_its_listed_bindings_in_every_variant() {
     let mut checked = 0;
     for shader in terrain_engine::lod::shaders() {
         let (name, bindings) = (shader.name, shader.bindings);
-        let own = tested_flags(shader).defs();
+        let own = shader.tested_flags().defs();
         let untested: Vec<&str> = FLAGS.iter().copied().filter(|f| !own.contains(f)).collect();
         for mask in super::shaders::variants(own.len()) {
             let flags: Vec<&str> = own
@@ -73,8 +73,9 @@ fn every_pass_declares_its_listed_bindings_in_every_variant() {
                 .filter(|(k, _)| mask & (1 << k) != 0)
                 .map(|(_, f)| *f)
                 .collect();
-            let source =
-                compose(shader, &flags).unwrap_or_else(|e| panic!("{name} {flags:?}: {e}"));
+            let source = shader
+                .compose(&flags)
+                .unwrap_or_else(|e| panic!("{name} {flags:?}: {e}"));
             let wgsl = reflect(name, &source);
             for extra in [&[][..], &untested[..]] {
                 let all: Vec<&str> = flags.iter().chain(extra).copied().collect();

@@ -1,8 +1,8 @@
 //! Every WGSL pass, as combined by the import step in every variant, parses and validates with
 //! naga (no GPU needed), and the uniform block's Rust twin has the WGSL struct's size.
 
-use terrain_engine::gpu::Shader;
-use terrain_engine::gpu::shaders::{FLAGS, compose, tested_flags};
+use terrain_engine::gpu::pipeline::Shader;
+use terrain_engine::gpu::shaders::FLAGS;
 
 /// The shader of pass `name`, among every pass's (`lod::shaders`).
 pub(super) fn shader(name: &str) -> &'static Shader {
@@ -12,7 +12,9 @@ pub(super) fn shader(name: &str) -> &'static Shader {
 }
 
 fn validate(name: &str, flags: &[&str]) -> naga::Module {
-    let source = compose(shader(name), flags).unwrap_or_else(|e| panic!("{name} {flags:?}: {e}"));
+    let source = shader(name)
+        .compose(flags)
+        .unwrap_or_else(|e| panic!("{name} {flags:?}: {e}"));
     validate_source(name, flags, &source)
 }
 
@@ -59,11 +61,11 @@ fn every_pass_validates_in_every_variant() {
     let mut count = 0;
     for shader in terrain_engine::lod::shaders() {
         let name = shader.name;
-        let tested = tested_flags(shader);
+        let tested = shader.tested_flags();
         let own = tested.defs();
         assert_eq!(
-            compose(shader, &FLAGS).unwrap(),
-            compose(shader, &own).unwrap(),
+            shader.compose(&FLAGS).unwrap(),
+            shader.compose(&own).unwrap(),
             "{name}: a flag outside {own:?} changes its source"
         );
         for mask in variants(own.len()) {
@@ -430,4 +432,29 @@ fn the_fades_constants_are_the_noises() {
     let model = 1.0
         / (terrain_engine::detail::LATTICE_PER_CYCLE * terrain_engine::detail::LATTICE_PER_CYCLE);
     assert_eq!(constant("FADE_MODEL"), model as f32);
+}
+
+#[test]
+fn flags_drop_the_noise_code() {
+    let with = shader("warp_zoom").compose(&["DETAIL"]).unwrap();
+    let without = shader("warp_zoom").compose(&[]).unwrap();
+    assert!(with.contains("fn gradient_noise") && with.contains("octave_local("));
+    assert!(!without.contains("fn gradient_noise") && !without.contains("octave_local("));
+    assert_eq!(with.matches("struct Frame").count(), 1);
+}
+
+#[test]
+fn only_the_counting_variant_tallies() {
+    for shader in terrain_engine::lod::shaders() {
+        let plain = shader.compose(&["NOISE", "DETAIL", "SHADOWS"]).unwrap();
+        assert!(
+            !plain.contains("tally.") && !plain.contains("atomicAdd"),
+            "{}",
+            shader.name
+        );
+    }
+    let counting = shader("terrain")
+        .compose(&["COUNT_WORK", "SHADOWS"])
+        .unwrap();
+    assert!(counting.contains("tally.y += 1u") && counting.contains("atomicAdd(&work"));
 }

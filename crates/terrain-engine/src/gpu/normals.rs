@@ -2,13 +2,13 @@
 
 use super::alloc::{Alloc, Buffer};
 use super::bindings::{Binding, bind_group, buffer, layout};
+use super::pipeline::{compute_pipeline, dispatch_grid};
 use super::shaders::Key;
-use super::{compute_pipeline, dispatch_grid};
 use crate::error::Result;
 use wgpu::ShaderStages as S;
 
 /// The pass's shader, `shaders/normals.wgsl`.
-pub const SHADER: crate::gpu::Shader = shader!("normals", BINDINGS);
+pub const SHADER: crate::gpu::pipeline::Shader = shader!("normals", BINDINGS);
 
 /// `shaders/normals.wgsl`'s bindings.
 pub const BINDINGS: &[Binding] = &[

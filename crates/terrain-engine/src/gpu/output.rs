@@ -14,7 +14,7 @@
 
 use super::alloc::{Alloc, Buffer};
 use super::bindings::{self, Binding, Kind, buffer};
-use super::shader_module;
+use super::pipeline::shader_module;
 use super::shaders::Key;
 use crate::error::Result;
 use wgpu::ShaderStages as S;
@@ -60,7 +60,7 @@ pub struct OutputUniforms {
 }
 
 /// The pass's shader, `shaders/output.wgsl`.
-pub const SHADER: crate::gpu::Shader = shader!("output", BINDINGS);
+pub const SHADER: crate::gpu::pipeline::Shader = shader!("output", BINDINGS);
 
 /// `shaders/output.wgsl`'s bindings: the frame from the reference's buffers (`FROM_BUFFERS`) or
 /// from a mesh mode's targets.

@@ -9,7 +9,6 @@
 //! Rejected alternative: override constants for variants. A loop bounded by `octaves = 0` still
 //! ships the noise code to the driver; dropping the text is what "no noise code" means.
 
-use super::Shader;
 use crate::error::{Error, Result};
 use std::sync::LazyLock;
 
@@ -40,10 +39,10 @@ static CONSTANTS: LazyLock<String> = LazyLock::new(|| {
     .join("\n")
 });
 
-/// The surface view's classes (`truth::SURFACE_CLASSES`): `CLASS_<NAME>` each its index,
+/// The surface view's classes (`surface::SURFACE_CLASSES`): `CLASS_<NAME>` each its index,
 /// `CLASS_COUNT`, and `CLASS_COLOURS`, their colours in order.
 fn surface_classes() -> Vec<String> {
-    let classes = &crate::truth::SURFACE_CLASSES;
+    let classes = &crate::surface::SURFACE_CLASSES;
     let colours: Vec<String> = classes
         .iter()
         .map(|(_, [r, g, b])| format!("vec3<f32>({r:?}, {g:?}, {b:?})"))
@@ -170,18 +169,18 @@ impl std::ops::BitOr for Key {
     }
 }
 
-/// The combined source of `shader`'s pass with `flags` set.
-pub fn compose(shader: &Shader, flags: &[&str]) -> Result<String> {
+/// The combined source of pass `name`'s WGSL `source` with `flags` set.
+pub fn compose(name: &str, source: &str, flags: &[&str]) -> Result<String> {
     let mut out = String::new();
     let mut imported: Vec<&str> = Vec::new();
-    expand(shader.name, shader.source, flags, &mut imported, &mut out)?;
+    expand(name, source, flags, &mut imported, &mut out)?;
     Ok(out)
 }
 
 /// The flags pass `name`'s WGSL or any file it may import tests (`#ifdef`): every other flag
 /// leaves its source alone, which lets the checks compose each distinct variant once.
 #[cfg(test)]
-pub fn tested_flags(shader: &Shader) -> Key {
+pub fn tested_flags(source: &str) -> Key {
     fn walk<'a>(source: &'a str, seen: &mut Vec<&'a str>, names: &mut Vec<&'a str>) {
         for line in source.lines().map(str::trim) {
             if let Some(flag) = line.strip_prefix("#ifdef ") {
@@ -198,7 +197,7 @@ pub fn tested_flags(shader: &Shader) -> Key {
         }
     }
     let mut names = Vec::new();
-    walk(shader.source, &mut Vec::new(), &mut names);
+    walk(source, &mut Vec::new(), &mut names);
     Key::of(&names)
 }
 
@@ -270,15 +269,6 @@ fn expand<'a>(
 mod tests {
     use super::*;
 
-    #[test]
-    fn flags_drop_the_noise_code() {
-        let with = compose(&super::super::warp_zoom::SHADER, &["DETAIL"]).unwrap();
-        let without = compose(&super::super::warp_zoom::SHADER, &[]).unwrap();
-        assert!(with.contains("fn gradient_noise") && with.contains("octave_local("));
-        assert!(!without.contains("fn gradient_noise") && !without.contains("octave_local("));
-        assert_eq!(with.matches("struct Frame").count(), 1);
-    }
-
     /// `#import constants` holds the Rust values, as naga reads them back.
     #[test]
     fn the_shared_constants_are_the_rust_values() {
@@ -320,7 +310,7 @@ mod tests {
         ] {
             assert_eq!(values(name), f32s(&[v]), "{name}");
         }
-        let classes = &crate::truth::SURFACE_CLASSES;
+        let classes = &crate::surface::SURFACE_CLASSES;
         for (i, (name, _)) in classes.iter().enumerate() {
             let name = format!("CLASS_{}", name.to_uppercase());
             assert_eq!(values(&name), [i as f64], "{name}");
@@ -348,19 +338,5 @@ mod tests {
             assert_eq!(Key::of(&[*name]), Key(1 << i), "{name}");
             assert_eq!(Key(1 << i).defs(), [*name]);
         }
-    }
-
-    #[test]
-    fn only_the_counting_variant_tallies() {
-        for shader in crate::lod::shaders() {
-            let plain = compose(shader, &["NOISE", "DETAIL", "SHADOWS"]).unwrap();
-            assert!(
-                !plain.contains("tally.") && !plain.contains("atomicAdd"),
-                "{}",
-                shader.name
-            );
-        }
-        let counting = compose(&super::super::terrain::SHADER, &["COUNT_WORK", "SHADOWS"]).unwrap();
-        assert!(counting.contains("tally.y += 1u") && counting.contains("atomicAdd(&work"));
     }
 }

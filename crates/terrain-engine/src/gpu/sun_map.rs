@@ -15,7 +15,7 @@
 
 use super::alloc::{Alloc, Buffer};
 use super::bindings::{Binding, bind_group, buffer, layout};
-use super::compute_pipeline;
+use super::pipeline::compute_pipeline;
 use super::shaders::Key;
 use crate::error::Result;
 use crate::sketch::Atlas;
@@ -23,7 +23,7 @@ use std::cell::Cell;
 use wgpu::ShaderStages as S;
 
 /// The pass's shader, `shaders/sun_map.wgsl`.
-pub const SHADER: crate::gpu::Shader = shader!("sun_map", BINDINGS);
+pub const SHADER: crate::gpu::pipeline::Shader = shader!("sun_map", BINDINGS);
 
 /// `shaders/sun_map.wgsl`'s bindings.
 pub const BINDINGS: &[Binding] = &[
@@ -94,7 +94,7 @@ impl SunMap {
         }
         let probe = super::counters::Probe::default();
         let (b, size) = (&self.bind_group, self.size);
-        super::dispatch_grid(encoder, Self::NAME, &self.pipeline, b, size, probe);
+        super::pipeline::dispatch_grid(encoder, Self::NAME, &self.pipeline, b, size, probe);
         self.made_for.set(Some(sun));
     }
 }

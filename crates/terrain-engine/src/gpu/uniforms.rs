@@ -213,7 +213,7 @@ crate::names::named_enum! {
         Normals = "normals",
         /// Terrain white, sky black: for finding holes.
         Coverage = "coverage",
-        /// Each pixel's surface class in its legend's colour (`truth::SURFACE_CLASSES`), unlit
+        /// Each pixel's surface class in its legend's colour (`surface::SURFACE_CLASSES`), unlit
         /// and unhazed: what `--outputs surface` reads back.
         Surface = "surface",
     }

@@ -5,11 +5,11 @@
 
 use super::alloc::{Alloc, Buffer};
 use super::bindings::{Binding, bind_group, buffer, layout};
+use super::pipeline::{compute_pipeline, dispatch_grid};
 use super::shaders::Key;
 use super::stream::AtlasBinding;
 #[cfg(test)]
 use super::uniforms::FrameUniforms;
-use super::{compute_pipeline, dispatch_grid};
 #[cfg(test)]
 use crate::detail::{OctaveFrame, gradient_noise};
 use crate::error::Result;
@@ -22,7 +22,7 @@ use glam::{IVec2, Vec2, Vec3};
 use wgpu::ShaderStages as S;
 
 /// The pass's shader, `shaders/warp_zoom.wgsl`.
-pub const SHADER: crate::gpu::Shader = shader!("warp_zoom", BINDINGS);
+pub const SHADER: crate::gpu::pipeline::Shader = shader!("warp_zoom", BINDINGS);
 
 /// `shaders/warp_zoom.wgsl`'s bindings.
 pub const BINDINGS: &[Binding] = &[

@@ -8,9 +8,9 @@
 //!   multisampled targets the hardware resolves, and the depth copy for positions in a second,
 //!   single-sampled pass of the terrain's depth alone.
 
-use super::Module;
 use super::alloc::{Alloc, Buffer, Texture};
 use super::bindings::{self, Binding, Kind, buffer};
+use super::pipeline::Module;
 use super::shaders::Key;
 use super::stream::AtlasBinding;
 use crate::error::Result;
@@ -34,7 +34,7 @@ pub use super::formats::{COLOUR, DEPTH, DEPTH_COPY, GBUFFER};
 pub const SKY_TEST: wgpu::CompareFunction = wgpu::CompareFunction::GreaterEqual;
 
 /// The pass's shader, `shaders/terrain.wgsl`.
-pub const SHADER: crate::gpu::Shader = shader!("terrain", BINDINGS);
+pub const SHADER: crate::gpu::pipeline::Shader = shader!("terrain", BINDINGS);
 
 /// `shaders/terrain.wgsl`'s bindings: group 0 for every draw; group 1, the G-buffer the deferred
 /// shading reads, its targets in [`GBUFFER`]'s order.

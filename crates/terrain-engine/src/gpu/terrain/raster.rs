@@ -3,8 +3,8 @@
 
 use super::DEPTH;
 use crate::error::Result;
-use crate::gpu::Module;
 use crate::gpu::alloc::Alloc;
+use crate::gpu::pipeline::Module;
 
 /// A render pass of the terrain's: no occlusion queries, one view.
 pub(super) fn render_pass<'e>(

@@ -8,7 +8,7 @@ use crate::detail::Detail;
 use crate::error::Result;
 use crate::gpu::alloc::{Alloc, Buffer};
 use crate::gpu::bindings::{Binding, bind_group, buffer, layout};
-use crate::gpu::compute_pipeline;
+use crate::gpu::pipeline::compute_pipeline;
 use crate::gpu::shaders::Key;
 use crate::gpu::stream::AtlasBinding;
 use crate::gpu::uniforms::MAX_OCTAVES;
@@ -170,7 +170,7 @@ impl PlanetUniforms {
 }
 
 /// The pass's shader, `shaders/clipmaps.wgsl`.
-pub const SHADER: crate::gpu::Shader = shader!("clipmaps", BINDINGS);
+pub const SHADER: crate::gpu::pipeline::Shader = shader!("clipmaps", BINDINGS);
 
 /// `shaders/clipmaps.wgsl`'s bindings.
 pub const BINDINGS: &[Binding] = &[

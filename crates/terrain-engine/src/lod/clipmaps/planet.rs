@@ -6,10 +6,10 @@
 //! z-fighting. Owns the colour and depth targets.
 
 use crate::error::Result;
-use crate::gpu::Module;
 use crate::gpu::alloc::{Alloc, Buffer};
 use crate::gpu::bindings::{Binding, bind_group, buffer, layout};
 use crate::gpu::formats::{COLOUR, DEPTH_COPY};
+use crate::gpu::pipeline::Module;
 use crate::gpu::shaders::Key;
 use crate::gpu::stream::AtlasBinding;
 use crate::gpu::terrain::RasterPipeline;
@@ -18,7 +18,7 @@ use crate::planet::rings::{Rings, Span};
 use wgpu::ShaderStages as S;
 
 /// The pass's shader, `shaders/planet.wgsl`.
-pub const SHADER: crate::gpu::Shader = shader!("planet", BINDINGS);
+pub const SHADER: crate::gpu::pipeline::Shader = shader!("planet", BINDINGS);
 
 /// `shaders/planet.wgsl`'s bindings.
 pub const BINDINGS: &[Binding] = &[

@@ -6,13 +6,13 @@ use crate::gpu::alloc::{Alloc, Buffer};
 use crate::gpu::bindings::{Binding, bind_group, buffer, layout};
 use crate::gpu::context::GpuContext;
 use crate::gpu::frame_io::read_vec4;
+use crate::gpu::pipeline::{compute_pipeline, dispatch_grid};
 use crate::gpu::shaders::Key;
 use crate::gpu::stream::AtlasBinding;
-use crate::gpu::{compute_pipeline, dispatch_grid};
 use wgpu::ShaderStages as S;
 
 /// The pass's shader, `shaders/reference.wgsl`.
-pub const SHADER: crate::gpu::Shader = shader!("reference", BINDINGS);
+pub const SHADER: crate::gpu::pipeline::Shader = shader!("reference", BINDINGS);
 
 /// `shaders/reference.wgsl`'s bindings.
 pub const BINDINGS: &[Binding] = &[
@@ -28,7 +28,8 @@ pub const BINDINGS: &[Binding] = &[
 ];
 
 /// The pass's shader on a planet, `shaders/planet_reference.wgsl`.
-pub const PLANET_SHADER: crate::gpu::Shader = shader!("planet_reference", PLANET_BINDINGS);
+pub const PLANET_SHADER: crate::gpu::pipeline::Shader =
+    shader!("planet_reference", PLANET_BINDINGS);
 
 /// `shaders/planet_reference.wgsl`'s bindings: the reference's, and the planet's block.
 pub const PLANET_BINDINGS: &[Binding] = &[

@@ -25,12 +25,12 @@
 use crate::error::Result;
 use crate::gpu::alloc::Alloc;
 use crate::gpu::bindings::{Binding, bind_group, buffer, layout};
+use crate::gpu::pipeline::{compute_pipeline, dispatch_grid};
 use crate::gpu::shaders::Key;
-use crate::gpu::{compute_pipeline, dispatch_grid};
 use wgpu::ShaderStages as S;
 
 /// The pass's shader, `shaders/mesh_split.wgsl`.
-pub const SHADER: crate::gpu::Shader = shader!("mesh_split", BINDINGS);
+pub const SHADER: crate::gpu::pipeline::Shader = shader!("mesh_split", BINDINGS);
 
 /// `shaders/mesh_split.wgsl`'s bindings.
 pub const BINDINGS: &[Binding] = &[
