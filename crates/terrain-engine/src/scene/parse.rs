@@ -180,18 +180,9 @@ fn set_number(table: &mut toml::Table, key: &str, value: f64) -> std::result::Re
     if !value.is_finite() {
         return Err(format!("{value} is not a number"));
     }
-    let parts: Vec<&str> = key.split('.').collect();
-    let (last, path) = parts.split_last().ok_or("empty key")?;
-    let mut here = table;
-    for p in path {
-        here = here
-            .entry(p.to_string())
-            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
-            .as_table_mut()
-            .ok_or_else(|| format!("`{p}` is not a table"))?;
-    }
+    let (here, last) = leaf_table(table, key)?;
     let whole = value.fract() == 0.0 && value.abs() < 2f64.powi(53);
-    let new = match here.get(*last) {
+    let new = match here.get(last) {
         Some(toml::Value::Boolean(_)) => toml::Value::Boolean(value != 0.0),
         Some(toml::Value::Float(_)) => toml::Value::Float(value),
         Some(toml::Value::Integer(_)) | None if whole => toml::Value::Integer(value as i64),
@@ -311,16 +302,28 @@ fn apply_override(table: &mut toml::Table, o: &str) -> std::result::Result<(), S
         .ok()
         .and_then(|mut t| t.remove("v"))
         .unwrap_or_else(|| toml::Value::String(value.trim().to_string()));
-    let parts: Vec<&str> = key.trim().split('.').collect();
-    let (last, path) = parts.split_last().ok_or_else(|| "empty key".to_string())?;
+    let (here, last) = leaf_table(table, key.trim())?;
+    here.insert(last.to_string(), value);
+    Ok(())
+}
+
+/// The table dotted `key`'s last part sits in (`a.b` of `a.b.c`), made on the way where missing,
+/// and that last part.
+fn leaf_table<'t, 'k>(
+    table: &'t mut toml::Table,
+    key: &'k str,
+) -> std::result::Result<(&'t mut toml::Table, &'k str), String> {
+    let (path, last) = match key.rsplit_once('.') {
+        Some((path, last)) => (Some(path), last),
+        None => (None, key),
+    };
     let mut here = table;
-    for p in path {
+    for p in path.into_iter().flat_map(|path| path.split('.')) {
         here = here
             .entry(p.to_string())
             .or_insert_with(|| toml::Value::Table(toml::Table::new()))
             .as_table_mut()
             .ok_or_else(|| format!("`{p}` is not a table"))?;
     }
-    here.insert(last.to_string(), value);
-    Ok(())
+    Ok((here, last))
 }

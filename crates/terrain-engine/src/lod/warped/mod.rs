@@ -52,11 +52,14 @@ pub(crate) const SCHEME: super::Scheme = super::Scheme {
     },
     sweep,
     shaders: &[mesh_split::SHADER],
-    setting: |scene, _| {
-        let w = &scene.warp;
-        Some(vec![w.quad_px, w.mesh as f64, w.budget as u8 as f64])
-    },
+    setting: |scene, _| Some(own_setting(scene)),
 };
+
+/// The values of the warped row's swept keys the scene draws with.
+fn own_setting(scene: &Scene) -> Vec<f64> {
+    let w = &scene.warp;
+    vec![w.quad_px, w.mesh as f64, w.budget as u8 as f64]
+}
 
 /// The largest mesh `compare` sweeps: 2M triangles.
 const SWEEP_MAX_MESH: u32 = 1024;
@@ -93,7 +96,7 @@ fn sweep(scene: &Scene, atlas: &Atlas, camera: &Camera) -> Result<super::Setting
         .filter(|&&m| m != drawn && (m == SWEEP_MIN_MESH || fits(m)))
         .map(|&mesh| vec![w.quad_px, mesh as f64, 0.0])
         .collect();
-    out.push(vec![w.quad_px, w.mesh as f64, w.budget as u8 as f64]);
+    out.push(own_setting(scene));
     Ok(out)
 }
 
